@@ -1,0 +1,166 @@
+"""`rtta bench capture|packing`: measured tables (median of frames, wall clock after glFinish).
+
+Only figures from the run are printed; BENCHMARKS.md records them with the command.
+"""
+
+from __future__ import annotations
+
+import json
+import platform
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .camera import Camera
+from .context import create_headless_context
+from .generate import TABLE1, random_scene, table1_scene
+from .packing import pack_shelves
+from .parameterize import parameterize
+from .renderer import Renderer
+
+
+def _median_ms(fn, frames: int, warmup: int = 2) -> float:
+    for _ in range(warmup):
+        fn()
+    times = []
+    for _ in range(frames):
+        t0 = time.perf_counter()
+        fn()
+        times.append((time.perf_counter() - t0) * 1e3)
+    return float(np.median(times))
+
+
+def _gl_timed(ctx, fn):
+    def run():
+        fn()
+        ctx.finish()
+    return run
+
+
+def capture_row(ctx, scene, viewport, frames: int, rtt: bool = True) -> dict:
+    r = Renderer(ctx, scene)
+    cam = Camera.orbit(scene.center, scene.radius, 30.0, 20.0, 2.2)
+    view, proj = r.matrices(cam, viewport)
+    corners, vpm = scene.box_corners(), proj @ view
+    row = {"objects": scene.count, "vertices": scene.vertex_count}
+    row["std_ms"] = _median_ms(_gl_timed(ctx, lambda: r.std(cam, viewport)), frames)
+    visible = np.flatnonzero(r.parameterize(cam, viewport).visible)
+    row["rtt_ms"] = (_median_ms(_gl_timed(ctx, lambda: r.rtt(cam, viewport, visible)), max(1, frames // 3), 1)
+                     if rtt else float("nan"))
+    row["rtta_gs_ms"] = _median_ms(_gl_timed(ctx, lambda: r.capture(cam, viewport, "gs")), frames)
+    row["rtta_vs_ms"] = (_median_ms(_gl_timed(ctx, lambda: r.capture(cam, viewport, "vs")), frames)
+                         if r.caps.vertex_layer else float("nan"))
+    row["param_ms"] = _median_ms(lambda: parameterize(corners, vpm, viewport, border=1), frames * 5)
+    row["atlas"] = list(r.parameterize(cam, viewport).atlas_size)
+    r.release()
+    return row
+
+
+def param_scaling(counts, viewport, frames: int) -> list[dict]:
+    out = []
+    for n in counts:
+        scene = random_scene(n, seed=7, spread=4.0 * np.cbrt(n))
+        cam = Camera.orbit(scene.center, scene.radius, 30.0, 20.0, 2.2)
+        vpm = cam.projection(viewport[0] / viewport[1]) @ cam.view(scene.origin)
+        corners = scene.box_corners()
+        out.append({"objects": n, "ms": _median_ms(lambda c=corners, m=vpm: parameterize(c, m, viewport), frames)})
+    return out
+
+
+def run_capture(viewport: tuple[int, int], quick: bool = False, json_path: str | None = None,
+                ctx=None) -> int:
+    ctx = ctx or create_headless_context()
+    renderer = str(ctx.info["GL_RENDERER"])
+    frames = 3 if quick else 15
+    rows = []
+    for objects, vertices in TABLE1:
+        if quick:
+            vertices = min(vertices, 60000)
+        rows.append(capture_row(ctx, table1_scene(objects, vertices), viewport, frames))
+    scaling = param_scaling([100, 1000] if quick else [100, 300, 1000, 3000, 10000], viewport,
+                            5 if quick else 21)
+    _print_capture(rows, scaling, renderer, viewport)
+    if json_path:
+        Path(json_path).write_text(json.dumps({"renderer": renderer, "viewport": list(viewport),
+                                               "scenes": rows, "param_scaling": scaling}, indent=1))
+    return 0
+
+
+def _print_capture(rows, scaling, renderer, viewport) -> None:
+    print(f"renderer: {renderer}; cpu: {platform.processor() or platform.machine()}; "
+          f"viewport {viewport[0]}x{viewport[1]}; median ms per frame")
+    print(f"{'objects':>8} {'vertices':>9} {'STD':>8} {'RTT':>9} {'RTTA-GS':>8} {'RTTA-VS':>8} "
+          f"{'param':>7} {'GS/STD':>7} {'VS/STD':>7} {'RTT/VS':>7}  atlas")
+    for r in rows:
+        print(f"{r['objects']:>8} {r['vertices']:>9} {r['std_ms']:>8.2f} {r['rtt_ms']:>9.2f} "
+              f"{r['rtta_gs_ms']:>8.2f} {r['rtta_vs_ms']:>8.2f} {r['param_ms']:>7.3f} "
+              f"{r['rtta_gs_ms'] / r['std_ms']:>7.2f} {r['rtta_vs_ms'] / r['std_ms']:>7.2f} "
+              f"{r['rtt_ms'] / r['rtta_vs_ms']:>7.2f}  {r['atlas']}")
+    print("parameterization + packing scaling:")
+    print(f"{'objects':>8} {'ms':>8} {'ms/(n log2 n) x1e3':>20}")
+    for s in scaling:
+        n = s["objects"]
+        print(f"{n:>8} {s['ms']:>8.3f} {s['ms'] / (n * np.log2(n)) * 1e3:>20.4f}")
+
+
+def _rectpack(w, h, W, H):
+    import rectpack
+
+    packer = rectpack.newPacker(rotation=False, pack_algo=rectpack.MaxRectsBssf)
+    for i, (a, b) in enumerate(zip(w, h, strict=True)):
+        packer.add_rect(int(a), int(b), rid=i)
+    packer.add_bin(int(W), int(H), count=float("inf"))
+    packer.pack()
+    rects = np.array(packer.rect_list())           # (bin, x, y, w, h, rid)
+    extent = (rects[:, 1] + rects[:, 3]).max() * (rects[:, 2] + rects[:, 4]).max()
+    return len(packer), float(extent) * len(packer)
+
+
+def _rpack(w, h, W, H):
+    import rpack
+
+    try:
+        pos = np.array(rpack.pack(list(zip(w.tolist(), h.tolist(), strict=True)),
+                                  max_width=int(W), max_height=int(H)))
+    except rpack.PackingImpossibleError:
+        return float("nan")
+    return float((pos[:, 0] + w).max() * (pos[:, 1] + h).max())
+
+
+def run_packing(quick: bool = False, json_path: str | None = None) -> int:
+    """Utilization (region area / allocated layers' area) and time per frame against n."""
+    rng = np.random.default_rng(3)
+    W = H = 1024
+    rows = []
+    counts = [10, 100, 1000] if quick else [10, 100, 1000, 3000, 10000]
+    for n in counts:
+        side = rng.lognormal(np.log(1024 / np.sqrt(n) / 1.6), 0.5, (n, 2))
+        w, h = (np.clip(side, 1, W).astype(np.int64).T)
+        area = float((w * h).sum())
+        frames = 5 if quick else 11
+        p = pack_shelves(w, h, W, H)
+        row = {"objects": n, "shelf_ms": _median_ms(lambda w=w, h=h: pack_shelves(w, h, W, H), frames),
+               "shelf_util": area / (p.width * p.height * p.layers), "shelf_layers": p.layers}
+        if n <= (100 if quick else 1000):
+            t0 = time.perf_counter()
+            bins, used = _rectpack(w, h, W, H)
+            row["rectpack_ms"] = (time.perf_counter() - t0) * 1e3
+            row["rectpack_util"] = area / used
+            row["rectpack_layers"] = bins
+            t0 = time.perf_counter()
+            used = _rpack(w, h, W, H)
+            row["rpack_ms"] = (time.perf_counter() - t0) * 1e3
+            row["rpack_util"] = area / used
+        rows.append(row)
+    print("packing into layers of at most 1024x1024; util = region area / (used width x height x layers)")
+    print(f"{'objects':>8} {'shelf ms':>9} {'util':>6} {'layers':>6} {'rectpack ms':>12} {'util':>6} "
+          f"{'layers':>6} {'rpack ms':>9} {'util':>6}")
+    for r in rows:
+        print(f"{r['objects']:>8} {r['shelf_ms']:>9.3f} {r['shelf_util']:>6.3f} {r['shelf_layers']:>6} "
+              f"{r.get('rectpack_ms', float('nan')):>12.1f} {r.get('rectpack_util', float('nan')):>6.3f} "
+              f"{r.get('rectpack_layers', '-'):>6} {r.get('rpack_ms', float('nan')):>9.1f} "
+              f"{r.get('rpack_util', float('nan')):>6.3f}")
+    if json_path:
+        Path(json_path).write_text(json.dumps({"rows": rows}, indent=1))
+    return 0

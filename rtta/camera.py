@@ -1,0 +1,85 @@
+"""Perspective camera with orbit parameters; matrices in float64, relative to the scene origin."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import RttaError
+
+DEFAULT_ORBIT = (35.0, 25.0, 2.2)
+
+
+def parse_orbit(text: str) -> tuple[float, float, float]:
+    """'AZ,EL,DIST' -> floats; DIST in units of the scene's bounding-sphere radius."""
+    try:
+        az, el, dist = (float(x) for x in text.split(","))
+    except ValueError:
+        raise RttaError(f"--camera expects AZ,EL,DIST (three numbers), got '{text}'") from None
+    if not all(np.isfinite([az, el, dist])) or dist <= 0:
+        raise RttaError(f"--camera '{text}': values must be finite and DIST > 0")
+    return az, el, dist
+
+
+@dataclass
+class Camera:
+    """eye/target are world-space float64; fov_y in degrees; near/far in world units."""
+
+    eye: np.ndarray
+    target: np.ndarray
+    up: np.ndarray
+    fov_y: float = 45.0
+    near: float = 0.1
+    far: float = 100.0
+
+    @classmethod
+    def orbit(cls, center, radius: float, az: float, el: float, dist: float,
+              fov_y: float = 45.0) -> Camera:
+        """Azimuth about +Y starting at +Z, elevation up from the XZ plane; dist in radii."""
+        a, e = np.radians(az), np.radians(el)
+        direction = np.array([np.sin(a) * np.cos(e), np.sin(e), np.cos(a) * np.cos(e)])
+        up = np.array([-np.sin(a) * np.sin(e), np.cos(e), -np.cos(a) * np.sin(e)])  # d/d(el): never degenerate
+        center = np.asarray(center, np.float64)
+        cam = cls(eye=center + direction * dist * radius, target=center, up=up, fov_y=fov_y)
+        return cam.fit_depth(center, radius)
+
+    def fit_depth(self, center, radius: float) -> Camera:
+        """Near/far tight around the bounding sphere so depth keeps its precision."""
+        d = float(np.linalg.norm(np.asarray(center, np.float64) - self.eye))
+        far = (d + radius) * 1.01
+        near = max(d - radius * 1.01, far * 1e-5)
+        self.near, self.far = near, far
+        return self
+
+    def view(self, origin) -> np.ndarray:
+        """World-to-eye matrix for positions given relative to `origin`."""
+        eye = self.eye - np.asarray(origin, np.float64)
+        f = self.target - self.eye
+        n = np.linalg.norm(f)
+        if not np.isfinite(n) or n == 0:
+            raise RttaError("camera eye and target coincide")
+        f = f / n
+        s = np.cross(f, self.up)
+        if np.linalg.norm(s) < 1e-12:
+            s = np.cross(f, [1.0, 0.0, 0.0] if abs(f[0]) < 0.9 else [0.0, 0.0, 1.0])
+        s /= np.linalg.norm(s)
+        u = np.cross(s, f)
+        m = np.identity(4)
+        m[0, :3], m[1, :3], m[2, :3] = s, u, -f
+        m[:3, 3] = -m[:3, :3] @ eye
+        return m
+
+    def projection(self, aspect: float) -> np.ndarray:
+        """OpenGL perspective matrix (clip z in [-w, w])."""
+        if not (0.0 < self.fov_y < 180.0):
+            raise RttaError(f"field of view must be in (0, 180) degrees, got {self.fov_y}")
+        t = 1.0 / np.tan(np.radians(self.fov_y) / 2.0)
+        n, f = self.near, self.far
+        p = np.zeros((4, 4))
+        p[0, 0] = t / aspect
+        p[1, 1] = t
+        p[2, 2] = -(f + n) / (f - n)
+        p[2, 3] = -2.0 * f * n / (f - n)
+        p[3, 2] = -1.0
+        return p

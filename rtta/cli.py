@@ -1,0 +1,131 @@
+"""The `rtta` command: export, info, bench. Expected failures print one line and exit 2."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from .errors import RttaError
+
+
+def parse_size(text: str, what: str = "--size") -> tuple[int, int]:
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise RttaError(f"{what} expects WxH (e.g. 1024x768), got '{text}'") from None
+    if not (1 <= w <= 16384 and 1 <= h <= 16384):
+        raise RttaError(f"{what} {text}: width and height must be between 1 and 16384")
+    return w, h
+
+
+def _scene_arg(p: argparse.ArgumentParser) -> None:
+    p.add_argument("scene", nargs="?", help="glTF/GLB/OBJ/STL/PLY/3MF/OFF file (default: the built-in demo)")
+
+
+def _view_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--camera", default=None, help="AZ,EL,DIST orbit (degrees, degrees, scene radii)")
+    p.add_argument("--size", default="1024x768", help="viewport WxH")
+    p.add_argument("--fov", type=float, default=45.0, help="vertical field of view in degrees")
+    p.add_argument("--border", type=int, default=1, help="border around each atlas region in pixels")
+    p.add_argument("--atlas-max", default=None, help="maximum atlas layer size WxH (default: viewport + border)")
+    p.add_argument("--max-layers", type=int, default=None, help="cap on atlas layers")
+    p.add_argument("--capture-path", choices=("auto", "vs", "gs"), default="auto")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="rtta", description="Render-to-texture-atlas for ghosted views.")
+    sub = parser.add_subparsers(dest="command", required=True)
+    p = sub.add_parser("export", help="write per-object amodal images (atlas) and the direct render")
+    _scene_arg(p)
+    _view_args(p)
+    p.add_argument("--out", required=True, help="output folder (replaced atomically)")
+    p = sub.add_parser("info", help="list the objects of a scene")
+    _scene_arg(p)
+    p = sub.add_parser("bench", help="benchmarks that print tables")
+    bsub = p.add_subparsers(dest="bench", required=True)
+    b = bsub.add_parser("capture", help="STD / RTT / RTTA frame times on the paper's Table 1 sizes")
+    b.add_argument("--size", default="1024x1024")
+    b.add_argument("--quick", action="store_true", help="short run (fewer frames, smaller scenes)")
+    b.add_argument("--json", default=None, help="also write the figures as JSON")
+    b = bsub.add_parser("packing", help="our packer against rectpack and rectangle-packer")
+    b.add_argument("--quick", action="store_true")
+    b.add_argument("--json", default=None)
+    return parser
+
+
+def _load(arg: str | None):
+    from .demo import demo_path
+    from .loader import load_scene
+
+    return load_scene(arg if arg else demo_path())
+
+
+def _settings(args):
+    from .renderer import Settings
+
+    if args.border < 0 or args.border > 64:
+        raise RttaError(f"--border must be between 0 and 64, got {args.border}")
+    if args.max_layers is not None and args.max_layers < 1:
+        raise RttaError(f"--max-layers must be at least 1, got {args.max_layers}")
+    atlas_max = parse_size(args.atlas_max, "--atlas-max") if args.atlas_max else None
+    return Settings(border=args.border, atlas_max=atlas_max, max_layers=args.max_layers,
+                    capture_path=args.capture_path)
+
+
+def cmd_export(args) -> int:
+    from .camera import DEFAULT_ORBIT, Camera, parse_orbit
+    from .context import create_headless_context
+    from .export import export
+    from .renderer import Renderer
+
+    scene = _load(args.scene)
+    viewport = parse_size(args.size)
+    orbit = parse_orbit(args.camera) if args.camera else DEFAULT_ORBIT
+    settings = _settings(args)
+    ctx = create_headless_context()
+    renderer = Renderer(ctx, scene, settings)
+    camera = Camera.orbit(scene.center, scene.radius, *orbit, fov_y=args.fov)
+    try:
+        out = export(renderer, camera, viewport, args.out)
+    except ValueError as exc:
+        raise RttaError(str(exc), args.out) from None
+    finally:
+        renderer.release()
+    print(f"wrote {out} ({scene.count} objects, renderer: {renderer.caps.renderer})")
+    return 0
+
+
+def cmd_info(args) -> int:
+    scene = _load(args.scene)
+    lo, hi = scene.bounds
+    print(f"{scene.source}: {scene.count} objects, {scene.vertex_count} vertices, "
+          f"{len(scene.indices) // 3} triangles, bounds {lo.round(4).tolist()} .. {hi.round(4).tolist()}")
+    for oid, name in enumerate(scene.names):
+        first, count = scene.index_ranges[oid]
+        print(f"{oid:5d}  {name}  ({count // 3} triangles)")
+    return 0
+
+
+def cmd_bench(args) -> int:
+    from . import bench
+
+    if args.bench == "capture":
+        return bench.run_capture(parse_size(args.size), quick=args.quick, json_path=args.json)
+    return bench.run_packing(quick=args.quick, json_path=args.json)
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    handler = {"export": cmd_export, "info": cmd_info, "bench": cmd_bench}[args.command]
+    try:
+        return handler(args)
+    except RttaError as exc:
+        print(f"rtta: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("rtta: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,100 @@
+"""The few raw OpenGL calls moderngl does not expose: depth texture arrays,
+per-attachment clears and clip-distance enables.
+
+moderngl can attach 2D texture arrays to a framebuffer but cannot create a depth
+texture array, which layered rendering needs (every attachment must be layered).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import ctypes.util
+from functools import lru_cache
+
+import numpy as np
+
+GL_FRAMEBUFFER = 0x8D40
+GL_DEPTH_ATTACHMENT = 0x8D00
+GL_TEXTURE_2D_ARRAY = 0x8C1A
+GL_DEPTH_COMPONENT = 0x1902
+GL_DEPTH_COMPONENT32F = 0x8CAC
+GL_FLOAT = 0x1406
+GL_COLOR = 0x1800
+GL_DEPTH = 0x1801
+GL_TEXTURE_MIN_FILTER = 0x2801
+GL_TEXTURE_MAG_FILTER = 0x2800
+GL_NEAREST = 0x2600
+GL_CLIP_DISTANCE0 = 0x3000
+GL_PACK_ALIGNMENT = 0x0D05
+
+
+@lru_cache(maxsize=1)
+def _lib() -> ctypes.CDLL:
+    """libOpenGL (GLVND) dispatches core entry points to the current context (EGL or GLX)."""
+    for name in ("libOpenGL.so.0", "libGL.so.1", ctypes.util.find_library("GL") or ""):
+        if not name:
+            continue
+        try:
+            lib = ctypes.CDLL(name)
+            lib.glGetError.restype = ctypes.c_uint
+            return lib
+        except OSError:
+            continue
+    raise OSError("no OpenGL library (libOpenGL.so.0 or libGL.so.1) found")
+
+
+class DepthArray:
+    """A GL_DEPTH_COMPONENT32F 2D texture array (immutable storage)."""
+
+    def __init__(self, width: int, height: int, layers: int) -> None:
+        gl = _lib()
+        tex = ctypes.c_uint(0)
+        gl.glGenTextures(1, ctypes.byref(tex))
+        self.glo = tex.value
+        self.size = (width, height, layers)
+        gl.glBindTexture(GL_TEXTURE_2D_ARRAY, self.glo)
+        gl.glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, GL_DEPTH_COMPONENT32F, width, height, layers)
+        gl.glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST)
+        gl.glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST)
+        gl.glBindTexture(GL_TEXTURE_2D_ARRAY, 0)
+
+    def attach_to_bound_framebuffer(self) -> None:
+        """Attach as the layered depth attachment of the currently bound framebuffer."""
+        _lib().glFramebufferTexture(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, self.glo, 0)
+
+    def read(self) -> np.ndarray:
+        """All layers as float32 [layers, height, width]; row 0 is the bottom row."""
+        w, h, n = self.size
+        out = np.empty((n, h, w), np.float32)
+        gl = _lib()
+        gl.glPixelStorei(GL_PACK_ALIGNMENT, 4)
+        gl.glBindTexture(GL_TEXTURE_2D_ARRAY, self.glo)
+        gl.glGetTexImage(GL_TEXTURE_2D_ARRAY, 0, GL_DEPTH_COMPONENT, GL_FLOAT,
+                         out.ctypes.data_as(ctypes.c_void_p))
+        gl.glBindTexture(GL_TEXTURE_2D_ARRAY, 0)
+        return out
+
+    def release(self) -> None:
+        if self.glo:
+            tex = ctypes.c_uint(self.glo)
+            _lib().glDeleteTextures(1, ctypes.byref(tex))
+            self.glo = 0
+
+
+def clear_depth(value: float = 1.0) -> None:
+    """Clear the depth attachment of the bound framebuffer (all layers)."""
+    _lib().glClearBufferfv(GL_DEPTH, 0, (ctypes.c_float * 1)(value))
+
+
+def clear_color_float(draw_buffer: int, rgba: tuple[float, float, float, float]) -> None:
+    _lib().glClearBufferfv(GL_COLOR, draw_buffer, (ctypes.c_float * 4)(*rgba))
+
+
+def clear_color_int(draw_buffer: int, value: int) -> None:
+    _lib().glClearBufferiv(GL_COLOR, draw_buffer, (ctypes.c_int * 4)(value, value, value, value))
+
+
+def set_clip_distances(count: int, enabled: bool) -> None:
+    gl = _lib()
+    for i in range(count):
+        (gl.glEnable if enabled else gl.glDisable)(GL_CLIP_DISTANCE0 + i)

@@ -1,0 +1,48 @@
+"""The one GLSL loader: files shipped in the package `rtta.shaders`, cached,
+`#include "file"` resolved, defines injected after `#version`; unknown defines rejected.
+
+Each shader file declares the defines it understands on a line `// defines: A B C`.
+"""
+
+from __future__ import annotations
+
+import re
+from functools import cache
+from importlib import resources
+
+_INCLUDE = re.compile(r'^\s*#include\s+"([^"]+)"\s*$', re.MULTILINE)
+_DECLARED = re.compile(r"^//\s*defines:(.*)$", re.MULTILINE)
+
+
+@cache
+def read_source(name: str) -> str:
+    """Raw text of a shader file, with includes expanded (one level deep is enough here)."""
+    text = resources.files("rtta.shaders").joinpath(name).read_text(encoding="utf-8")
+    return _INCLUDE.sub(lambda m: read_source(m.group(1)), text)
+
+
+def declared_defines(name: str) -> set[str]:
+    out: set[str] = set()
+    for m in _DECLARED.finditer(read_source(name)):
+        out.update(m.group(1).split())
+    return out
+
+
+@cache
+def _load(name: str, defines: tuple[tuple[str, str], ...]) -> str:
+    known = declared_defines(name)
+    unknown = sorted(k for k, _ in defines if k not in known)
+    if unknown:
+        raise ValueError(f"shader {name}: unknown define(s) {', '.join(unknown)}; known: {sorted(known)}")
+    text = read_source(name)
+    first, _, rest = text.partition("\n")
+    if not first.startswith("#version"):
+        raise ValueError(f"shader {name}: first line must be #version")
+    extra = "".join(f"#define {k} {v}\n" for k, v in defines)
+    return f"{first}\n{extra}#line 2\n{rest}"
+
+
+def load(name: str, **defines: object) -> str:
+    """Shader source with `defines` (name=value; True means 1) injected after #version."""
+    items = tuple(sorted((k, "1" if v is True else str(v)) for k, v in defines.items() if v is not False))
+    return _load(name, items)

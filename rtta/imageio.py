@@ -1,0 +1,30 @@
+"""PNG writing: GL arrays (row 0 = bottom) to images (top row first), atomically."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+from PIL import Image
+
+
+def to_image(rgba_gl: np.ndarray) -> Image.Image:
+    return Image.fromarray(np.ascontiguousarray(rgba_gl[::-1]))
+
+
+def save_png(path: str | Path, rgba_gl: np.ndarray, *, overwrite: bool = True) -> Path:
+    """Write a GL-convention array as PNG; with overwrite=False an existing file is an error."""
+    path = Path(path)
+    if not overwrite and path.exists():
+        raise FileExistsError(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".png", dir=path.parent)
+    os.close(fd)
+    try:
+        to_image(rgba_gl).save(tmp, format="PNG")
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path

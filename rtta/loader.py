@@ -1,0 +1,116 @@
+"""Load glTF/GLB/OBJ/STL/PLY/3MF/OFF through trimesh into a batched Scene.
+
+Every scene-graph node with triangle geometry is one object (instances are separate
+objects). Expected failures raise RttaError naming the file and the problem.
+"""
+
+from __future__ import annotations
+
+import logging
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from .errors import RttaError
+from .scene import SUPPORTED, Scene, from_meshes
+
+MAX_FILE_BYTES = 2 * 1024**3
+
+
+def load_scene(path: str | Path) -> Scene:
+    """Read a scene file; see the module docstring for the rules."""
+    path = Path(path)
+    if not path.exists():
+        raise RttaError("no such file", path)
+    if path.is_dir():
+        raise RttaError("is a directory, expected a scene file", path)
+    suffix = path.suffix.lower()
+    if suffix not in SUPPORTED:
+        raise RttaError(f"unsupported file type '{suffix or '(none)'}'; "
+                        f"supported: {', '.join(SUPPORTED)}", path)
+    size = path.stat().st_size
+    if size == 0:
+        raise RttaError("file is empty", path)
+    if size > MAX_FILE_BYTES:
+        raise RttaError(f"file is larger than the {MAX_FILE_BYTES >> 30} GiB limit", path)
+    loaded = _trimesh_load(path, suffix)
+    parts, colors = _parts(loaded, path)
+    return from_meshes(parts, colors, source=str(path))
+
+
+def _trimesh_load(path: Path, suffix: str):
+    import trimesh
+
+    logging.getLogger("trimesh").setLevel(logging.ERROR)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return trimesh.load(str(path), file_type=suffix[1:], force="scene", process=False)
+    except RttaError:
+        raise
+    except Exception as exc:  # trimesh raises many types for corrupt files
+        reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise RttaError(f"cannot read {suffix[1:].upper()} file ({reason[:160]})", path) from None
+
+
+def _parts(loaded, path: Path) -> tuple[list, list]:
+    import trimesh
+
+    parts, colors = [], []
+    graph = loaded.graph
+    for node in graph.nodes_geometry:
+        transform, geom_name = graph[node]
+        mesh = loaded.geometry.get(geom_name)
+        if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
+            continue
+        v = np.asarray(mesh.vertices, np.float64)
+        if not np.isfinite(v).all():
+            raise RttaError(f"object '{node}' has NaN or infinite vertex coordinates", path)
+        f = np.asarray(mesh.faces, np.int64)
+        if f.min() < 0 or f.max() >= len(v):
+            raise RttaError(f"object '{node}' has face indices out of range", path)
+        m = np.asarray(transform, np.float64)
+        world = v @ m[:3, :3].T + m[:3, 3]
+        normals = _world_normals(mesh, m)
+        if not np.isfinite(world).all():
+            raise RttaError(f"object '{node}' has a transform that makes coordinates non-finite", path)
+        parts.append((str(node), world, f, normals))
+        colors.append(_color(mesh))
+    if not parts:
+        raise RttaError("scene has no objects with triangle geometry", path)
+    return parts, colors
+
+
+def _world_normals(mesh, m: np.ndarray) -> np.ndarray | None:
+    """File normals (or trimesh's computed ones) by the inverse transpose; None if unusable."""
+    try:
+        n = np.asarray(mesh.vertex_normals, np.float64)
+    except Exception:
+        return None
+    if n.shape != mesh.vertices.shape or not np.isfinite(n).all():
+        return None
+    try:
+        normal_matrix = np.linalg.inv(m[:3, :3]).T
+    except np.linalg.LinAlgError:
+        return None
+    n = n @ normal_matrix.T
+    length = np.linalg.norm(n, axis=1, keepdims=True)
+    return (n / np.where(length > 0, length, 1.0)).astype(np.float32)
+
+
+def _color(mesh) -> list[float] | None:
+    """Base colour from the material or visual, RGBA in [0, 1]; None for the palette."""
+    visual = mesh.visual
+    material = getattr(visual, "material", None)
+    factor = getattr(material, "baseColorFactor", None)
+    if factor is not None:
+        c = np.asarray(factor, np.float64).reshape(-1)
+        return list((c / 255.0 if c.max() > 1 else c)[:4]) + [1.0] * (4 - min(4, c.size))
+    main = getattr(material, "main_color", None)
+    if main is None and getattr(visual, "kind", None) in ("face", "vertex"):
+        main = getattr(visual, "main_color", None)
+    if main is not None:
+        c = np.asarray(main, np.float64).reshape(-1)[:4] / 255.0
+        return list(c) + [1.0] * (4 - c.size)
+    return None

@@ -1,0 +1,116 @@
+"""Render passes, one class each, with explicit inputs and outputs.
+
+- `CapturePass` (RTTA): the whole batch in ONE draw call into the layered atlas; each
+  vertex displaced by its object's T and routed to its layer (vertex- or geometry-shader path).
+- `StdPass`: the scene drawn normally into one target (baseline STD).
+- `RttPass`: each object drawn alone into its own full-viewport target (baseline RTT).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import moderngl
+import numpy as np
+
+from . import glraw, glsl
+from .gpu import GpuScene
+from .parameterize import Records
+from .targets import LayeredTarget
+
+
+def _mat(m: np.ndarray) -> bytes:
+    """Row-major float64 4x4 -> column-major float32 bytes for a GLSL mat4."""
+    return np.ascontiguousarray(np.asarray(m, np.float64).T, np.float32).tobytes()
+
+
+class _ScenePass:
+    """Shared setup: a program from scene.vert (+ optional geometry shader) and scene.frag."""
+
+    def __init__(self, ctx: moderngl.Context, geometry: str | None = None, **defines: object) -> None:
+        self.ctx = ctx
+        self.program = ctx.program(
+            vertex_shader=glsl.load("scene.vert", **defines),
+            geometry_shader=glsl.load(geometry) if geometry else None,
+            fragment_shader=glsl.load("scene.frag"))
+
+    def _setup(self, gpu: GpuScene, view: np.ndarray, proj: np.ndarray) -> moderngl.VertexArray:
+        self.program["u_view"].write(_mat(view))
+        self.program["u_proj"].write(_mat(proj))
+        gpu.bind_storage()
+        self.ctx.enable_only(moderngl.DEPTH_TEST)
+        self.ctx.depth_func = "<"
+        return gpu.vao(self.program)
+
+    def release(self) -> None:
+        self.program.release()
+
+
+class CapturePass(_ScenePass):
+    """RTTA capture. path: 'vs' (GL_ARB_shader_viewport_layer_array) or 'gs' (the paper's)."""
+
+    def __init__(self, ctx: moderngl.Context, path: str) -> None:
+        if path not in ("vs", "gs"):
+            raise ValueError(f"capture path must be 'vs' or 'gs', got {path!r}")
+        self.path = path
+        if path == "vs":
+            super().__init__(ctx, CAPTURE_VS=True)
+        else:
+            super().__init__(ctx, geometry="capture.geom", CAPTURE_GS=True)
+
+    def render(self, *, gpu: GpuScene, records: Records, view: np.ndarray, proj: np.ndarray,
+               atlas: LayeredTarget) -> None:
+        """Upload R, then draw the whole batch once into `atlas` (sized to records.atlas_size)."""
+        tw, th, td = records.atlas_size
+        atlas.ensure((tw, th), td)
+        atlas.clear((tw, th))
+        if td == 0:
+            return
+        gpu.upload_records(records)
+        vao = self._setup(gpu, view, proj)
+        atlas.bind((0, 0, tw, th))
+        glraw.set_clip_distances(4, True)
+        try:
+            vao.render(moderngl.TRIANGLES)
+        finally:
+            glraw.set_clip_distances(4, False)
+
+
+class StdPass(_ScenePass):
+    """STD: the scene drawn normally into a one-layer target of the viewport's size."""
+
+    def __init__(self, ctx: moderngl.Context) -> None:
+        super().__init__(ctx)
+
+    def render(self, *, gpu: GpuScene, view: np.ndarray, proj: np.ndarray,
+               target: LayeredTarget, viewport: tuple[int, int]) -> None:
+        target.ensure(viewport, 1)
+        target.clear(viewport)
+        vao = self._setup(gpu, view, proj)
+        target.bind((0, 0, *viewport))
+        vao.render(moderngl.TRIANGLES)
+
+
+class RttPass(_ScenePass):
+    """RTT: every listed object drawn alone into its own full-viewport target.
+
+    One target is reused: after each object is drawn, `consume(object_id, target)` is
+    called (read it back, composite it...), as an application of plain RTT would.
+    """
+
+    def __init__(self, ctx: moderngl.Context) -> None:
+        super().__init__(ctx)
+
+    def render(self, *, gpu: GpuScene, view: np.ndarray, proj: np.ndarray,
+               target: LayeredTarget, viewport: tuple[int, int], objects,
+               consume: Callable[[int, LayeredTarget], None] | None = None) -> None:
+        target.ensure(viewport, 1)
+        vao = self._setup(gpu, view, proj)
+        ranges = gpu.scene.index_ranges
+        for oid in objects:
+            target.clear(viewport)
+            target.bind((0, 0, *viewport))
+            first, count = ranges[oid]
+            vao.render(moderngl.TRIANGLES, vertices=int(count), first=int(first))
+            if consume is not None:
+                consume(int(oid), target)

@@ -1,0 +1,102 @@
+"""One frame of RTTA for a scene: parameterize (CPU), capture (GPU), plus the baselines.
+
+The renderer owns the GPU resources of a scene and reuses them across frames; `release()`
+frees them. It never creates a context: it takes a moderngl.Context.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import moderngl
+import numpy as np
+
+from .camera import Camera
+from .context import Capabilities
+from .gpu import GpuScene
+from .parameterize import Records, parameterize
+from .passes import CapturePass, RttPass, StdPass
+from .scene import Scene
+from .targets import LayeredTarget
+
+
+@dataclass
+class Settings:
+    """What a user can choose per frame."""
+
+    border: int = 1
+    atlas_max: tuple[int, int] | None = None   # None: viewport + 2 * border
+    max_layers: int | None = None              # None: GL_MAX_ARRAY_TEXTURE_LAYERS
+    capture_path: str = "auto"                 # 'auto', 'vs' or 'gs'
+
+
+class Renderer:
+    def __init__(self, ctx: moderngl.Context, scene: Scene, settings: Settings | None = None) -> None:
+        self.ctx = ctx
+        self.caps = Capabilities.of(ctx)
+        self.scene = scene
+        self.settings = settings or Settings()
+        self.gpu = GpuScene(ctx, scene)
+        self._capture: dict[str, CapturePass] = {}
+        self._std: StdPass | None = None
+        self._rtt: RttPass | None = None
+        self.atlas = LayeredTarget(ctx, (64, 64), 1)
+        self._single: LayeredTarget | None = None
+
+    def matrices(self, camera: Camera, viewport: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+        return camera.view(self.scene.origin), camera.projection(viewport[0] / viewport[1])
+
+    def parameterize(self, camera: Camera, viewport: tuple[int, int]) -> Records:
+        view, proj = self.matrices(camera, viewport)
+        s = self.settings
+        atlas_max = s.atlas_max
+        if atlas_max is not None:
+            atlas_max = (min(atlas_max[0], self.caps.max_texture), min(atlas_max[1], self.caps.max_texture))
+        max_layers = min(s.max_layers or self.caps.max_layers, self.caps.max_layers)
+        return parameterize(self.scene.box_corners(), proj @ view, viewport, border=s.border,
+                            atlas_max=atlas_max, max_layers=max_layers)
+
+    def capture_pass(self, path: str | None = None) -> CapturePass:
+        path = self.caps.capture_path(path or self.settings.capture_path)
+        if path not in self._capture:
+            self._capture[path] = CapturePass(self.ctx, path)
+        return self._capture[path]
+
+    def capture(self, camera: Camera, viewport: tuple[int, int], path: str | None = None) -> Records:
+        """Parameterize and capture every visible object into the atlas; returns R."""
+        records = self.parameterize(camera, viewport)
+        view, proj = self.matrices(camera, viewport)
+        self.capture_pass(path).render(gpu=self.gpu, records=records, view=view, proj=proj,
+                                       atlas=self.atlas)
+        return records
+
+    @property
+    def single_target(self) -> LayeredTarget:
+        if self._single is None:
+            self._single = LayeredTarget(self.ctx, (64, 64), 1)
+        return self._single
+
+    def std(self, camera: Camera, viewport: tuple[int, int]) -> LayeredTarget:
+        if self._std is None:
+            self._std = StdPass(self.ctx)
+        view, proj = self.matrices(camera, viewport)
+        self._std.render(gpu=self.gpu, view=view, proj=proj, target=self.single_target, viewport=viewport)
+        return self.single_target
+
+    def rtt(self, camera: Camera, viewport: tuple[int, int], objects, consume=None) -> None:
+        if self._rtt is None:
+            self._rtt = RttPass(self.ctx)
+        view, proj = self.matrices(camera, viewport)
+        self._rtt.render(gpu=self.gpu, view=view, proj=proj, target=self.single_target,
+                         viewport=viewport, objects=objects, consume=consume)
+
+    def release(self) -> None:
+        for p in [*self._capture.values(), self._std, self._rtt]:
+            if p is not None:
+                p.release()
+        self._capture.clear()
+        self._std = self._rtt = None
+        for t in (self.atlas, self._single):
+            if t is not None:
+                t.release()
+        self.gpu.release()

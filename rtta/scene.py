@@ -1,0 +1,146 @@
+"""Scenes: every scene-graph node with geometry is one object; all objects are batched
+into ONE vertex/index buffer carrying a per-vertex object id.
+
+Positions are stored in float32 relative to `origin` (the bounds centre, float64), so a
+scene far from the world origin keeps full precision on the GPU.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .errors import RttaError
+
+SUPPORTED = (".glb", ".gltf", ".obj", ".stl", ".ply", ".3mf", ".off")
+
+# Corner i of a box has bit 0 -> x max, bit 1 -> y max, bit 2 -> z max.
+BOX_EDGES = np.array([(0, 1), (2, 3), (4, 5), (6, 7), (0, 2), (1, 3), (4, 6), (5, 7),
+                      (0, 4), (1, 5), (2, 6), (3, 7)], dtype=np.intp)
+_BITS = np.array([[(i >> k) & 1 for k in range(3)] for i in range(8)], dtype=bool)
+
+
+@dataclass
+class Scene:
+    """A batched scene. Per object: name, colour, index range, vertex range, world AABB."""
+
+    names: list[str]
+    positions: np.ndarray      # float32 [V, 3], relative to origin
+    normals: np.ndarray        # float32 [V, 3]
+    object_ids: np.ndarray     # uint32 [V]
+    indices: np.ndarray        # uint32 [F*3]
+    index_ranges: np.ndarray   # int64 [N, 2]: (first, count) into indices
+    colors: np.ndarray         # float32 [N, 4]
+    aabb_min: np.ndarray       # float64 [N, 3], world (B_world)
+    aabb_max: np.ndarray       # float64 [N, 3]
+    origin: np.ndarray         # float64 [3]
+    source: str = "<memory>"
+    _corners: dict = field(default_factory=dict, repr=False)
+
+    @property
+    def count(self) -> int:
+        return len(self.names)
+
+    @property
+    def vertex_count(self) -> int:
+        return int(self.positions.shape[0])
+
+    @property
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        return self.aabb_min.min(axis=0), self.aabb_max.max(axis=0)
+
+    @property
+    def center(self) -> np.ndarray:
+        lo, hi = self.bounds
+        return (lo + hi) / 2.0
+
+    @property
+    def radius(self) -> float:
+        """Bounding-sphere radius about the bounds centre (never zero)."""
+        lo, hi = self.bounds
+        r = float(np.linalg.norm(hi - lo) / 2.0)
+        return r if r > 0 else max(1e-6, float(np.abs(lo).max()) * 1e-7)
+
+    def box_corners(self) -> np.ndarray:
+        """B_world as 8 corners per object, relative to origin: float64 [N, 8, 3]."""
+        if "aabb" not in self._corners:
+            lo = (self.aabb_min - self.origin)[:, None, :]
+            hi = (self.aabb_max - self.origin)[:, None, :]
+            self._corners["aabb"] = np.where(_BITS[None], hi, lo)
+        return self._corners["aabb"]
+
+    def index(self, name: str) -> int:
+        return self.names.index(name)
+
+
+def unique_names(raw: list[str]) -> list[str]:
+    """Names as given, with `_2`, `_3`, ... appended to repeats (instances, duplicates)."""
+    seen: dict[str, int] = {}
+    out = []
+    taken = set(raw)
+    for name in raw:
+        name = name or "object"
+        if name not in seen:
+            seen[name] = 1
+            out.append(name)
+            continue
+        k = seen[name]
+        while True:
+            k += 1
+            candidate = f"{name}_{k}"
+            if candidate not in taken:
+                break
+        seen[name] = k
+        taken.add(candidate)
+        out.append(candidate)
+    return out
+
+
+PALETTE = np.array([
+    [0.80, 0.36, 0.30], [0.30, 0.56, 0.80], [0.45, 0.72, 0.38], [0.86, 0.70, 0.30],
+    [0.62, 0.45, 0.78], [0.35, 0.75, 0.72], [0.85, 0.50, 0.65], [0.60, 0.60, 0.62],
+], dtype=np.float32)
+
+
+def from_meshes(parts: list[tuple[str, np.ndarray, np.ndarray, np.ndarray | None]],
+                colors: list | None = None, source: str = "<memory>") -> Scene:
+    """Batch (name, vertices float64 [V,3] world, faces int [F,3], normals or None) parts."""
+    if not parts:
+        raise RttaError("scene has no objects with geometry", source)
+    names = unique_names([p[0] for p in parts])
+    lo = np.array([p[1].min(axis=0) for p in parts], dtype=np.float64)
+    hi = np.array([p[1].max(axis=0) for p in parts], dtype=np.float64)
+    origin = (lo.min(axis=0) + hi.max(axis=0)) / 2.0
+    pos, nrm, ids, idx, ranges = [], [], [], [], []
+    base = 0
+    first = 0
+    for i, (_, v, f, n) in enumerate(parts):
+        pos.append((np.asarray(v, np.float64) - origin).astype(np.float32))
+        nrm.append(_vertex_normals(v, f) if n is None else np.asarray(n, np.float32))
+        ids.append(np.full(len(v), i, np.uint32))
+        idx.append(np.asarray(f, np.int64).reshape(-1) + base)
+        ranges.append((first, f.size))
+        base += len(v)
+        first += f.size
+    cols = np.empty((len(parts), 4), np.float32)
+    for i in range(len(parts)):
+        c = None if colors is None else colors[i]
+        cols[i] = (*PALETTE[i % len(PALETTE)], 1.0) if c is None else c
+    return Scene(names=names, positions=np.concatenate(pos), normals=np.concatenate(nrm),
+                 object_ids=np.concatenate(ids), indices=np.concatenate(idx).astype(np.uint32),
+                 index_ranges=np.array(ranges, np.int64), colors=cols, aabb_min=lo,
+                 aabb_max=hi, origin=origin, source=source)
+
+
+def _vertex_normals(v: np.ndarray, f: np.ndarray) -> np.ndarray:
+    """Area-weighted vertex normals (for parts that come without any)."""
+    v = np.asarray(v, np.float64)
+    f = np.asarray(f, np.int64)
+    fn = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
+    out = np.zeros_like(v)
+    for k in range(3):
+        np.add.at(out, f[:, k], fn)
+    length = np.linalg.norm(out, axis=1, keepdims=True)
+    return (out / np.where(length > 0, length, 1.0)).astype(np.float32)
+

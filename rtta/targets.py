@@ -1,0 +1,122 @@
+"""Layered render targets: colour, normal, id and depth 2D texture arrays in one framebuffer.
+
+The atlas uses `LayeredTarget.ensure` each frame; it grows at once when the packing needs
+more, and shrinks only after the need has stayed well below the allocation for a number of
+frames (the paper's lazy update), so textures are reused, never reallocated per frame.
+"""
+
+from __future__ import annotations
+
+import moderngl
+import numpy as np
+
+from . import glraw
+
+SHRINK_AFTER_FRAMES = 60
+
+
+def _round_up(v: int, step: int) -> int:
+    return max(step, -(-v // step) * step)
+
+
+class LayeredTarget:
+    """Colour RGBA8, normal RGBA16F, id R32I (-1 = empty) and depth 32F, `layers` deep."""
+
+    def __init__(self, ctx: moderngl.Context, size: tuple[int, int], layers: int = 1) -> None:
+        self.ctx = ctx
+        self.size = (0, 0)
+        self.layers = 0
+        self.allocations = 0
+        self._small_frames = 0
+        self._fbo = None
+        self._unbound = None
+        self._textures: list = []
+        self._allocate(size, layers)
+
+    def _allocate(self, size: tuple[int, int], layers: int) -> None:
+        self._free()
+        w, h = max(1, int(size[0])), max(1, int(size[1]))
+        n = max(1, int(layers))
+        ctx = self.ctx
+        self.color = ctx.texture_array((w, h, n), 4, dtype="f1")
+        self.normal = ctx.texture_array((w, h, n), 4, dtype="f2")
+        self.ids = ctx.texture_array((w, h, n), 1, dtype="i4")
+        for tex in (self.color, self.normal, self.ids):
+            tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        self.depth = glraw.DepthArray(w, h, n)
+        self._fbo = ctx.framebuffer(color_attachments=[self.color, self.normal, self.ids])
+        self._fbo.depth_mask = True
+        self._fbo.use()
+        self.depth.attach_to_bound_framebuffer()
+        self.size, self.layers = (w, h), n
+        self._textures = [self.color, self.normal, self.ids]
+        self.allocations += 1
+
+    def ensure(self, size: tuple[int, int], layers: int) -> bool:
+        """Make room for `size` x `layers`; returns True when textures were reallocated."""
+        need_w, need_h, need_l = max(1, size[0]), max(1, size[1]), max(1, layers)
+        w, h = self.size
+        if need_w > w or need_h > h or need_l > self.layers:
+            self._small_frames = 0
+            self._allocate((max(w, _round_up(need_w, 64)), max(h, _round_up(need_h, 64))),
+                           max(self.layers, need_l))
+            return True
+        if need_w * need_h * need_l * 4 < w * h * self.layers:
+            self._small_frames += 1
+            if self._small_frames >= SHRINK_AFTER_FRAMES:
+                self._small_frames = 0
+                self._allocate((_round_up(need_w, 64), _round_up(need_h, 64)), need_l)
+                return True
+        else:
+            self._small_frames = 0
+        return False
+
+    def bind(self, viewport: tuple[int, int, int, int] | None = None) -> None:
+        """Bind for drawing, with the GL viewport set (default: the whole allocation)."""
+        self._fbo.viewport = viewport or (0, 0, *self.size)
+        self._fbo.use()
+
+    def clear(self, size: tuple[int, int] | None = None) -> None:
+        """Clear every layer (within `size` from the origin, default all): colour/normal 0,
+        id -1, depth 1 (far)."""
+        self._fbo.viewport = (0, 0, *self.size)
+        self._fbo.scissor = (0, 0, *size) if size else None
+        self._fbo.use()
+        glraw.clear_color_float(0, (0.0, 0.0, 0.0, 0.0))
+        glraw.clear_color_float(1, (0.0, 0.0, 0.0, 0.0))
+        glraw.clear_color_int(2, -1)
+        glraw.clear_depth(1.0)
+        self._fbo.scissor = None
+        self._fbo.use()
+
+    def read(self, size: tuple[int, int] | None = None, layers: int | None = None) -> dict[str, np.ndarray]:
+        """Layers as numpy [layers, H, W(, C)], cropped to `size`; row 0 is the bottom row."""
+        w, h = self.size
+        n = self.layers
+        cw, ch = size or (w, h)
+        cl = n if layers is None else max(1, layers)
+        full = {
+            "color": np.frombuffer(self.color.read(), np.uint8).reshape(n, h, w, 4),
+            "normal": np.frombuffer(self.normal.read(), np.float16).reshape(n, h, w, 4),
+            "id": np.frombuffer(self.ids.read(), np.int32).reshape(n, h, w),
+            "depth": self.depth.read(),
+        }
+        return {k: np.ascontiguousarray(v[:cl, :ch, :cw]) for k, v in full.items()}
+
+    def _free(self) -> None:
+        if self._fbo is not None:
+            # never leave a deleted framebuffer bound: moderngl rebinds the last one it used
+            if self._unbound is None:
+                self._unbound = self.ctx.detect_framebuffer(0)
+            self._unbound.use()
+            self._fbo.release()
+            self._fbo = None
+        for tex in self._textures:
+            tex.release()
+        self._textures = []
+        if getattr(self, "depth", None) is not None:
+            self.depth.release()
+            self.depth = None
+
+    def release(self) -> None:
+        self._free()

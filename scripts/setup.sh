@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# Set up a fresh Debian machine for rtta: system GL libraries (Mesa llvmpipe through EGL)
+# when missing, a virtual environment in .venv, and rtta installed into it (not editable,
+# so the tests exercise the wheel with its shaders and demo scene).
+# Usage: scripts/setup.sh [EXTRA]   (EXTRA: pip extras, e.g. "test" or "viewer")
+set -euo pipefail
+cd "$(dirname "$0")/.."
+extras="${1:-}"
+
+need_apt=()
+ldconfig -p 2>/dev/null | grep -q 'libEGL.so.1 ' || need_apt+=(libegl1)
+ldconfig -p 2>/dev/null | grep -q 'libEGL_mesa.so.0' || need_apt+=(libegl-mesa0)
+ldconfig -p 2>/dev/null | grep -q 'libOpenGL.so.0' || need_apt+=(libopengl0)
+ldconfig -p 2>/dev/null | grep -q 'libGL.so.1 ' || need_apt+=(libgl1)
+ls /usr/lib/*/dri/swrast_dri.so >/dev/null 2>&1 || need_apt+=(libgl1-mesa-dri)
+python3 -c 'import venv, ensurepip' 2>/dev/null || need_apt+=(python3-venv)
+if [ ${#need_apt[@]} -gt 0 ]; then
+  echo "setup: installing system packages: ${need_apt[*]}"
+  SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${need_apt[@]}"
+fi
+
+PY=python3
+if ! $PY -c 'import sys; sys.exit(sys.version_info < (3, 11))'; then
+  echo "setup: Python 3.11 or newer is required (found $($PY --version))" >&2
+  exit 1
+fi
+[ -x .venv/bin/python ] || $PY -m venv .venv
+.venv/bin/python -m pip install -q --disable-pip-version-check --upgrade pip
+spec="."
+[ -n "$extras" ] && spec=".[$extras]"
+.venv/bin/python -m pip install -q --disable-pip-version-check --force-reinstall --no-deps "$spec"
+.venv/bin/python -m pip install -q --disable-pip-version-check "$spec"

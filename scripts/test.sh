@@ -1,0 +1,7 @@
+#!/usr/bin/env bash
+# Set up, then run the whole test suite (GL tests run headless on Mesa llvmpipe through EGL).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/setup.sh test
+.venv/bin/ruff check rtta viewer tests scripts
+exec .venv/bin/pytest "$@"

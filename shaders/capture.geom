@@ -1,0 +1,28 @@
+#version 430
+// defines:
+// The paper's path (Figure 4): displace each triangle into its atlas region and route it to its layer.
+#include "records.glsl"
+
+layout(triangles) in;
+layout(triangle_strip, max_vertices = 3) out;
+
+in VertexData { vec3 normal; flat int object; } gs_in[];
+out VertexData { vec3 normal; flat int object; } gs_out;
+out float gl_ClipDistance[4];
+
+void main() {
+    Record r = records[gs_in[0].object];
+    if (r.info.y == 0) return;  // culled: not packed, emits nothing
+    for (int i = 0; i < 3; ++i) {
+        vec4 clip_pos = gl_in[i].gl_Position;
+        float d[4];
+        region_clip_distances(clip_pos, r.clip, d);
+        for (int k = 0; k < 4; ++k) gl_ClipDistance[k] = d[k];
+        gl_Layer = r.info.x;
+        gl_Position = displace(clip_pos, r.transform);
+        gs_out.normal = gs_in[i].normal;
+        gs_out.object = gs_in[i].object;
+        EmitVertex();
+    }
+    EndPrimitive();
+}

@@ -1,0 +1,40 @@
+#version 430
+// defines: CAPTURE_VS CAPTURE_GS
+// One vertex shader for STD/RTT (no define), the RTTA vertex-shader path (CAPTURE_VS,
+// needs GL_ARB_shader_viewport_layer_array) and the RTTA geometry-shader path (CAPTURE_GS).
+#ifdef CAPTURE_VS
+#extension GL_ARB_shader_viewport_layer_array : require
+#endif
+#include "records.glsl"
+
+layout(location = 0) in vec3 in_position;
+layout(location = 1) in vec3 in_normal;
+layout(location = 2) in uint in_object;
+
+uniform mat4 u_view;
+uniform mat4 u_proj;
+
+out VertexData {
+    vec3 normal;
+    flat int object;
+} vs_out;
+
+#ifdef CAPTURE_VS
+out float gl_ClipDistance[4];
+#endif
+
+void main() {
+    vec4 clip_pos = u_proj * (u_view * vec4(in_position, 1.0));
+    vs_out.normal = mat3(u_view) * in_normal;
+    vs_out.object = int(in_object);
+#ifdef CAPTURE_VS
+    Record r = records[in_object];
+    float d[4];
+    region_clip_distances(clip_pos, r.clip, d);
+    for (int i = 0; i < 4; ++i) gl_ClipDistance[i] = r.info.y != 0 ? d[i] : -1.0;
+    gl_Layer = r.info.x;
+    gl_Position = displace(clip_pos, r.transform);
+#else
+    gl_Position = clip_pos;
+#endif
+}

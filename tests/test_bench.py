@@ -1,0 +1,37 @@
+"""Benchmarks run (quick) and print/write their tables; no timing assertions."""
+
+import json
+import math
+import os
+
+import rtta
+from rtta import bench
+
+
+def test_capture_bench_quick(gl, tmp_path, capsys):
+    out = tmp_path / "cap.json"
+    assert bench.run_capture((256, 256), quick=True, json_path=str(out), ctx=gl) == 0
+    data = json.loads(out.read_text())
+    assert data["renderer"] == gl.info["GL_RENDERER"]
+    assert [s["objects"] for s in data["scenes"]] == [5, 21, 580, 269]
+    for s in data["scenes"]:
+        for key in ("std_ms", "rtt_ms", "rtta_gs_ms", "rtta_vs_ms", "param_ms"):
+            assert math.isfinite(s[key]) and s[key] > 0
+    assert [p["objects"] for p in data["param_scaling"]] == [100, 1000]
+    printed = capsys.readouterr().out
+    assert "RTTA-VS" in printed and gl.info["GL_RENDERER"] in printed
+
+
+def test_packing_bench_quick(tmp_path, capsys):
+    out = tmp_path / "pack.json"
+    assert bench.run_packing(quick=True, json_path=str(out)) == 0
+    rows = json.loads(out.read_text())["rows"]
+    assert [r["objects"] for r in rows] == [10, 100, 1000]
+    assert all(0 < r["shelf_util"] <= 1 for r in rows)
+    assert "rectpack_util" in rows[1]
+
+
+def test_ci_tests_the_installed_wheel():
+    """In CI the package under test is the one pip installed, with shaders and demo inside."""
+    if os.environ.get("CI"):
+        assert "site-packages" in rtta.__file__

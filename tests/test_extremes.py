@@ -1,0 +1,113 @@
+"""Extreme cameras and scenes: no NaN, no GL error, and the core equalities still hold."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+from checks import check_frame
+from conftest import near_edges
+
+from rtta.camera import Camera
+from rtta.generate import random_scene
+from rtta.scene import from_meshes
+
+PATHS = ("vs", "gs")
+
+
+def _box(size, center):
+    m = trimesh.creation.box(extents=np.full(3, size))
+    return np.asarray(m.vertices) + center, np.asarray(m.faces)
+
+
+def _look(eye, target, center, radius, fov=45.0) -> Camera:
+    cam = Camera(eye=np.asarray(eye, float), target=np.asarray(target, float), up=np.array([0.0, 1, 0]), fov_y=fov)
+    return cam.fit_depth(center, radius)
+
+
+@pytest.mark.parametrize("path", PATHS)
+def test_camera_inside_an_object(make_renderer, path):
+    parts = [("room", *_box(20.0, np.zeros(3)), None)]
+    rng = np.random.default_rng(1)
+    for i in range(8):
+        parts.append((f"crate{i}", *_box(rng.uniform(0.5, 2), rng.uniform(-6, 6, 3)), None))
+    scene = from_meshes(parts)
+    r = make_renderer(scene)
+    target = (scene.aabb_min[1] + scene.aabb_max[1]) / 2      # look at a crate from inside the room
+    cam = _look([0.3, 0.2, 0.1], target, scene.center, scene.radius)
+    out = check_frame(r, cam, (200, 150), path)
+    rec = r.parameterize(cam, (200, 150))
+    assert rec.visible[0] and list(rec.viewport_rect[0]) == [0, 0, 200, 150]   # surrounds the camera
+    assert out["visible"] >= 2
+
+
+@pytest.mark.parametrize("path", PATHS)
+def test_objects_crossing_the_near_plane(make_renderer, demo_scene, path):
+    r = make_renderer(demo_scene)
+    cam = Camera.orbit(demo_scene.center, demo_scene.radius, 30, 15, 1.2)
+    cam.near = float(np.linalg.norm(cam.eye - demo_scene.center)) * 0.9   # cuts through the assembly
+    rec = r.parameterize(cam, (240, 180))
+    corners = demo_scene.box_corners()
+    view = cam.view(demo_scene.origin)
+    z = (np.concatenate([corners, np.ones((*corners.shape[:2], 1))], 2) @ view.T)[..., 2]
+    crossing = (z.max(1) > -cam.near) & (z.min(1) < -cam.near)
+    assert crossing.sum() >= 3, "the view must cut several objects"
+    assert rec.visible[crossing].any()
+    check_frame(r, cam, (240, 180), path)
+
+
+@pytest.mark.parametrize("path", PATHS)
+def test_objects_behind_the_camera(make_renderer, path):
+    scene = random_scene(60, seed=4, spread=20.0)
+    r = make_renderer(scene)
+    cam = _look([0, 0, 0], [0, 0, -1], scene.center, scene.radius)
+    rec = r.parameterize(cam, (200, 150))
+    behind = scene.aabb_min[:, 2] > 0.5
+    assert behind.sum() >= 10 and not rec.visible[behind].any()
+    check_frame(r, cam, (200, 150), path)
+
+
+def test_scene_far_from_the_origin(make_renderer):
+    near_scene = random_scene(25, seed=9)
+    far_scene = random_scene(25, seed=9, offset=(1e6, -1e6, 1e6))
+    frames = []
+    for scene in (near_scene, far_scene):
+        r = make_renderer(scene)
+        cam = Camera.orbit(scene.center, scene.radius, 30, 20, 1.8)
+        check_frame(r, cam, (220, 160), "vs")
+        frames.append(r.std(cam, (220, 160)).read((220, 160), 1))
+    a, b = frames
+    inner = ~near_edges(a["id"][0])
+    assert (a["id"][0] != b["id"][0])[inner].mean() < 0.002
+    same = inner & (a["id"][0] == b["id"][0]) & (a["id"][0] >= 0)
+    assert np.abs(a["depth"][0] - b["depth"][0])[same].max() < 1e-5
+
+
+@pytest.mark.parametrize("path", PATHS)
+def test_tiny_and_huge_objects_in_one_scene(make_renderer, path):
+    parts = [("huge", *_box(1e4, np.zeros(3)), None), ("tiny", *_box(1e-4, np.array([6e3, 0, 0])), None),
+             ("mid", *_box(1.0, np.array([6e3, 0, 2.0])), None)]
+    scene = from_meshes(parts)
+    r = make_renderer(scene)
+    check_frame(r, Camera.orbit(scene.center, scene.radius, 60, 10, 1.5), (200, 200), path)
+    close = _look([6e3 + 3e-4, 1e-4, 2e-4], [6e3, 0, 0], np.array([6e3, 0, 0]), 1e-3)
+    out = check_frame(r, close, (200, 200), path)
+    assert out["visible"] >= 1
+
+
+@pytest.mark.parametrize("path", PATHS)
+@pytest.mark.parametrize("fov", [5.0, 150.0])
+def test_extreme_fields_of_view(make_renderer, demo_scene, path, fov):
+    r = make_renderer(demo_scene)
+    cam = Camera.orbit(demo_scene.center, demo_scene.radius, 40, 20, 2.0 if fov > 90 else 12.0, fov_y=fov)
+    out = check_frame(r, cam, (200, 150), path)
+    assert out["visible"] >= 10
+
+
+@pytest.mark.parametrize("path", PATHS)
+@pytest.mark.parametrize("viewport", [(1, 512), (4096, 16)])
+def test_extreme_viewports(make_renderer, demo_scene, path, viewport):
+    r = make_renderer(demo_scene)
+    cam = Camera.orbit(demo_scene.center, demo_scene.radius, 40, 20, 2.2)
+    out = check_frame(r, cam, viewport, path)
+    assert out["visible"] >= 1

@@ -1,0 +1,115 @@
+"""Packing and parameterization properties (numpy only, hypothesis)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from rtta.camera import Camera
+from rtta.generate import random_scene
+from rtta.packing import overlaps, pack_shelves
+from rtta.parameterize import parameterize
+
+sizes = st.integers(1, 64)
+
+
+@st.composite
+def rect_sets(draw):
+    W = draw(st.integers(1, 128))
+    H = draw(st.integers(1, 128))
+    n = draw(st.integers(0, 80))
+    w = np.array(draw(st.lists(st.integers(1, W), min_size=n, max_size=n)), np.int64)
+    h = np.array(draw(st.lists(st.integers(1, H), min_size=n, max_size=n)), np.int64)
+    return w, h, W, H
+
+
+@given(rect_sets())
+@settings(max_examples=300, deadline=None)
+def test_shelf_packing_is_valid(case):
+    w, h, W, H = case
+    p = pack_shelves(w, h, W, H)
+    assert len(p.x) == len(w)
+    if len(w) == 0:
+        assert p.layers == 0
+        return
+    assert (p.x >= 0).all() and (p.y >= 0).all()
+    assert (p.x + w <= p.width).all() and (p.y + h <= p.height).all()
+    assert p.width <= W and p.height <= H
+    assert set(np.unique(p.layer)) == set(range(p.layers))
+    assert not overlaps(p, w, h)
+
+
+def test_full_size_and_unit_rectangles():
+    p = pack_shelves(np.array([100, 1, 1, 100]), np.array([50, 1, 1, 50]), 100, 50)
+    assert p.layers == 3 and not overlaps(p, np.array([100, 1, 1, 100]), np.array([50, 1, 1, 50]))
+
+
+def test_packing_rejects_oversized():
+    with pytest.raises(ValueError):
+        pack_shelves(np.array([11]), np.array([1]), 10, 10)
+
+
+@given(st.integers(0, 300), st.integers(0, 3), st.sampled_from([(64, 64), (200, 120), (37, 300)]),
+       st.integers(1, 4), st.floats(0, 359), st.floats(-89, 89), st.floats(0.3, 4.0))
+@settings(max_examples=60, deadline=None)
+def test_parameterization_regions(n, border, atlas_max, max_layers, az, el, dist):
+    """No overlap, inside the atlas, every visible object present, layers <= cap (scaled if needed)."""
+    scene = random_scene(max(n, 1), seed=n)
+    vp = (160, 120)
+    cam = Camera.orbit(scene.center, scene.radius, az, el, dist)
+    vpm = cam.projection(vp[0] / vp[1]) @ cam.view(scene.origin)
+    try:
+        rec = parameterize(scene.box_corners(), vpm, vp, border=border, atlas_max=atlas_max, max_layers=max_layers)
+    except ValueError as exc:  # only when even 1-pixel regions cannot fit
+        assert "do not fit" in str(exc)
+        assert rec_min_area(scene, vpm, vp, border) > atlas_max[0] * atlas_max[1] * max_layers * 0.5
+        return
+    for key in ("transform", "clip_ndc", "scale"):
+        assert np.isfinite(getattr(rec, key)).all()
+    vis = rec.visible
+    tw, th, td = rec.atlas_size
+    assert td <= max_layers and tw <= atlas_max[0] and th <= atlas_max[1]
+    r = rec.atlas_rect[vis]
+    assert (r[:, 2] >= 1 + 2 * border).all() and (r[:, 3] >= 1 + 2 * border).all()
+    assert (r[:, 0] >= 0).all() and (r[:, 0] + r[:, 2] <= tw).all() and (r[:, 1] + r[:, 3] <= th).all()
+    from rtta.packing import Packing
+    p = Packing(r[:, 0], r[:, 1], rec.layer[vis], tw, th, td)
+    assert not overlaps(p, r[:, 2], r[:, 3])
+    assert ((rec.scale[vis] > 0) & (rec.scale[vis] <= 1)).all()
+
+
+def rec_min_area(scene, vpm, vp, border):
+    from rtta.parameterize import project_bounds
+    vis, _, _ = project_bounds(scene.box_corners(), vpm)
+    return vis.sum() * (1 + 2 * border) ** 2
+
+
+def test_more_objects_than_fit_are_scaled_not_dropped():
+    scene = random_scene(200, seed=3, spread=6.0)
+    vp = (400, 300)
+    cam = Camera.orbit(scene.center, scene.radius, 30, 20, 1.5)
+    vpm = cam.projection(vp[0] / vp[1]) @ cam.view(scene.origin)
+    free = parameterize(scene.box_corners(), vpm, vp, border=1)
+    capped = parameterize(scene.box_corners(), vpm, vp, border=1, atlas_max=(256, 256), max_layers=1)
+    assert free.atlas_size[2] > 1 or free.atlas_size[0] > 256
+    assert capped.atlas_size[2] == 1
+    assert np.array_equal(capped.visible, free.visible)
+    assert (capped.scale[capped.visible] < 1).all()
+
+
+def test_transform_maps_viewport_rect_onto_atlas_rect():
+    scene = random_scene(30, seed=1)
+    vp = (300, 200)
+    cam = Camera.orbit(scene.center, scene.radius, 10, 10, 2.0)
+    vpm = cam.projection(1.5) @ cam.view(scene.origin)
+    for cap in (None, (128, 128)):
+        rec = parameterize(scene.box_corners(), vpm, vp, border=2, atlas_max=cap, max_layers=4)
+        tw, th, _ = rec.atlas_size
+        for i in np.flatnonzero(rec.visible):
+            x0, y0, x1, y1 = rec.viewport_rect[i]
+            sx, sy, tx, ty = rec.transform[i]
+            ndc = np.array([x0, y0]) / vp * 2 - 1
+            atlas_px = ((np.array([sx, sy]) * ndc + [tx, ty]) + 1) / 2 * [tw, th]
+            np.testing.assert_allclose(atlas_px, rec.atlas_rect[i, :2] + 2, atol=1e-6)

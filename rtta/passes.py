@@ -63,7 +63,7 @@ class CapturePass(_ScenePass):
         """Upload R, then draw the whole batch once into `atlas` (sized to records.atlas_size)."""
         tw, th, td = records.atlas_size
         atlas.ensure((tw, th), td)
-        atlas.clear((tw, th))
+        atlas.clear()
         if td == 0:
             return
         gpu.upload_records(records)
@@ -85,7 +85,7 @@ class StdPass(_ScenePass):
     def render(self, *, gpu: GpuScene, view: np.ndarray, proj: np.ndarray,
                target: LayeredTarget, viewport: tuple[int, int]) -> None:
         target.ensure(viewport, 1)
-        target.clear(viewport)
+        target.clear()
         vao = self._setup(gpu, view, proj)
         target.bind((0, 0, *viewport))
         vao.render(moderngl.TRIANGLES)
@@ -108,7 +108,7 @@ class RttPass(_ScenePass):
         vao = self._setup(gpu, view, proj)
         ranges = gpu.scene.index_ranges
         for oid in objects:
-            target.clear(viewport)
+            target.clear()
             target.bind((0, 0, *viewport))
             first, count = ranges[oid]
             vao.render(moderngl.TRIANGLES, vertices=int(count), first=int(first))

@@ -61,7 +61,7 @@ class LayeredTarget:
             self._allocate((max(w, _round_up(need_w, 64)), max(h, _round_up(need_h, 64))),
                            max(self.layers, need_l))
             return True
-        if need_w * need_h * need_l * 4 < w * h * self.layers:
+        if need_w * need_h * need_l * 2 < w * h * self.layers:
             self._small_frames += 1
             if self._small_frames >= SHRINK_AFTER_FRAMES:
                 self._small_frames = 0
@@ -76,18 +76,16 @@ class LayeredTarget:
         self._fbo.viewport = viewport or (0, 0, *self.size)
         self._fbo.use()
 
-    def clear(self, size: tuple[int, int] | None = None) -> None:
-        """Clear every layer (within `size` from the origin, default all): colour/normal 0,
-        id -1, depth 1 (far)."""
+    def clear(self) -> None:
+        """Clear every layer whole: colour/normal 0, id -1, depth 1 (far). Unscissored on
+        purpose: on llvmpipe any scissor makes layered clears ~2x slower (BENCHMARKS.md)."""
         self._fbo.viewport = (0, 0, *self.size)
-        self._fbo.scissor = (0, 0, *size) if size else None
+        self._fbo.scissor = None
         self._fbo.use()
         glraw.clear_color_float(0, (0.0, 0.0, 0.0, 0.0))
         glraw.clear_color_float(1, (0.0, 0.0, 0.0, 0.0))
         glraw.clear_color_int(2, -1)
         glraw.clear_depth(1.0)
-        self._fbo.scissor = None
-        self._fbo.use()
 
     def read(self, size: tuple[int, int] | None = None, layers: int | None = None) -> dict[str, np.ndarray]:
         """Layers as numpy [layers, H, W(, C)], cropped to `size`; row 0 is the bottom row."""

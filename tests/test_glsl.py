@@ -25,3 +25,18 @@ def test_every_shader_compiles(gl):
                    {"vertex_shader": glsl.load("scene.vert", CAPTURE_GS=True),
                     "geometry_shader": glsl.load("capture.geom"), "fragment_shader": glsl.load("scene.frag")}):
         gl.program(**stages).release()
+
+
+def test_capture_path_falls_back_without_the_layer_extension(gl):
+    """Forcing a context 'without' GL_ARB_shader_viewport_layer_array: auto picks the GS path,
+    an explicit 'vs' request is a clear error naming the extension."""
+    import dataclasses
+
+    from rtta.context import LAYER_EXTENSION, Capabilities
+    from rtta.errors import RttaError
+
+    caps = dataclasses.replace(Capabilities.of(gl), vertex_layer=False)
+    assert caps.capture_path("auto") == "gs"
+    with pytest.raises(RttaError, match=LAYER_EXTENSION):
+        caps.capture_path("vs")
+    assert Capabilities.of(gl).capture_path("auto") == ("vs" if LAYER_EXTENSION in gl.extensions else "gs")

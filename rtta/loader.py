@@ -47,8 +47,6 @@ def _trimesh_load(path: Path, suffix: str):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             return trimesh.load(str(path), file_type=suffix[1:], force="scene", process=False)
-    except RttaError:
-        raise
     except Exception as exc:  # trimesh raises many types for corrupt files
         reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         raise RttaError(f"cannot read {suffix[1:].upper()} file ({reason[:160]})", path) from None

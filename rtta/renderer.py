@@ -46,8 +46,8 @@ class Renderer:
     def matrices(self, camera: Camera, viewport: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
         return camera.view(self.scene.origin), camera.projection(viewport[0] / viewport[1])
 
-    def parameterize(self, camera: Camera, viewport: tuple[int, int]) -> Records:
-        view, proj = self.matrices(camera, viewport)
+    def parameterize(self, camera: Camera, viewport: tuple[int, int], matrices=None) -> Records:
+        view, proj = matrices or self.matrices(camera, viewport)
         s = self.settings
         atlas_max = s.atlas_max
         if atlas_max is not None:
@@ -64,8 +64,8 @@ class Renderer:
 
     def capture(self, camera: Camera, viewport: tuple[int, int], path: str | None = None) -> Records:
         """Parameterize and capture every visible object into the atlas; returns R."""
-        records = self.parameterize(camera, viewport)
         view, proj = self.matrices(camera, viewport)
+        records = self.parameterize(camera, viewport, (view, proj))
         self.capture_pass(path).render(gpu=self.gpu, records=records, view=view, proj=proj,
                                        atlas=self.atlas)
         return records

@@ -1,9 +1,10 @@
-"""The `rtta` command: export, info, bench. Expected failures print one line and exit 2."""
+"""The `rtta` command: export, snapshot, info, bench. Expected failures print one line and exit 2."""
 
 from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 from .errors import RttaError
 
@@ -39,6 +40,16 @@ def build_parser() -> argparse.ArgumentParser:
     _scene_arg(p)
     _view_args(p)
     p.add_argument("--out", required=True, help="output folder (replaced atomically)")
+    p = sub.add_parser("snapshot", help="render STD or a composite mode to PNG, headless")
+    _scene_arg(p)
+    _view_args(p)
+    p.add_argument("--mode", default="ghosted-ao", help="std, sprites, transparent, ghosted or ghosted-ao")
+    p.add_argument("--focus", nargs="+", default=[], metavar="NAME", help="objects shown opaque in ghosted modes")
+    p.add_argument("--opacity", nargs="+", default=[], metavar="NAME=A", help="per-object opacity in [0, 1]")
+    p.add_argument("--context-opacity", type=float, default=None, help="opacity of non-focus objects (ghosted)")
+    out = p.add_mutually_exclusive_group(required=True)
+    out.add_argument("--out", help="PNG file to write")
+    out.add_argument("--all-modes", metavar="DIR", help="write <mode>.png for every mode into DIR")
     p = sub.add_parser("info", help="list the objects of a scene")
     _scene_arg(p)
     p = sub.add_parser("bench", help="benchmarks that print tables")
@@ -95,6 +106,51 @@ def cmd_export(args) -> int:
     return 0
 
 
+def cmd_snapshot(args) -> int:
+    from .camera import DEFAULT_ORBIT, Camera, parse_orbit
+    from .composite import Style
+    from .context import create_headless_context
+    from .renderer import Renderer
+    from .snapshot import SNAPSHOT_MODES, parse_opacities, render_modes, resolve_names, write_pngs
+
+    if args.mode not in SNAPSHOT_MODES:
+        raise RttaError(f"--mode must be one of {', '.join(SNAPSHOT_MODES)}, got '{args.mode}'")
+    scene = _load(args.scene)
+    viewport = parse_size(args.size)
+    orbit = parse_orbit(args.camera) if args.camera else DEFAULT_ORBIT
+    style = Style(focus=set(resolve_names(scene, args.focus, "--focus")), opacity=parse_opacities(scene, args.opacity))
+    if args.context_opacity is not None:
+        if not 0.0 <= args.context_opacity <= 1.0:
+            raise RttaError(f"--context-opacity must be in [0, 1], got {args.context_opacity}")
+        style.context_opacity = args.context_opacity
+    if args.out:
+        out = Path(args.out)
+        if out.suffix.lower() != ".png":
+            raise RttaError("--out must name a .png file", out)
+        targets = {args.mode: out}
+    else:
+        folder = Path(args.all_modes)
+        if folder.exists() and not folder.is_dir():
+            raise RttaError("exists and is not a directory", folder)
+        targets = {m: folder / f"{m}.png" for m in SNAPSHOT_MODES}
+    parent = out.parent if args.out else folder.parent
+    if not parent.is_dir():
+        raise RttaError("parent directory does not exist", parent)
+    renderer = Renderer(create_headless_context(), scene, _settings(args))
+    camera = Camera.orbit(scene.center, scene.radius, *orbit, fov_y=args.fov)
+    try:
+        images = render_modes(renderer, camera, viewport, list(targets), style)
+    except ValueError as exc:
+        raise RttaError(str(exc)) from None
+    finally:
+        renderer.release()
+    if args.all_modes:
+        Path(args.all_modes).mkdir(parents=True, exist_ok=True)
+    for path in write_pngs(images, targets):
+        print(f"wrote {path}")
+    return 0
+
+
 def cmd_info(args) -> int:
     scene = _load(args.scene)
     lo, hi = scene.bounds
@@ -116,7 +172,7 @@ def cmd_bench(args) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    handler = {"export": cmd_export, "info": cmd_info, "bench": cmd_bench}[args.command]
+    handler = {"export": cmd_export, "snapshot": cmd_snapshot, "info": cmd_info, "bench": cmd_bench}[args.command]
     try:
         return handler(args)
     except RttaError as exc:

@@ -98,3 +98,14 @@ def set_clip_distances(count: int, enabled: bool) -> None:
     gl = _lib()
     for i in range(count):
         (gl.glEnable if enabled else gl.glDisable)(GL_CLIP_DISTANCE0 + i)
+
+
+GL_TEXTURE0 = 0x84C0
+
+
+def bind_texture_array(unit: int, glo: int) -> None:
+    """Bind a raw 2D texture array (e.g. a DepthArray) to a texture unit for sampling."""
+    gl = _lib()
+    gl.glActiveTexture(GL_TEXTURE0 + unit)
+    gl.glBindTexture(GL_TEXTURE_2D_ARRAY, glo)
+    gl.glActiveTexture(GL_TEXTURE0)

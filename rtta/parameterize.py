@@ -45,6 +45,7 @@ class Records:
         out["info"][:, 0] = self.layer
         out["info"][:, 1] = self.visible
         out["info"][:, 2] = self.border
+        out["info"][:, 3] = self.scale.astype(np.float32).view(np.int32)
         return out
 
     @property

@@ -53,6 +53,7 @@ class CapturePass(_ScenePass):
         if path not in ("vs", "gs"):
             raise ValueError(f"capture path must be 'vs' or 'gs', got {path!r}")
         self.path = path
+        self.frames = 0
         if path == "vs":
             super().__init__(ctx, CAPTURE_VS=True)
         else:
@@ -62,6 +63,7 @@ class CapturePass(_ScenePass):
                atlas: LayeredTarget) -> None:
         """Upload R, then draw the whole batch once into `atlas` (sized to records.atlas_size)."""
         tw, th, td = records.atlas_size
+        self.frames += 1
         atlas.ensure((tw, th), td)
         atlas.clear()
         if td == 0:

@@ -12,10 +12,12 @@ import moderngl
 import numpy as np
 
 from .camera import Camera
+from .composite import CompositePass, CompositeTarget, Style
 from .context import Capabilities
 from .gpu import GpuScene
 from .parameterize import Records, parameterize
 from .passes import CapturePass, RttPass, StdPass
+from .post import AtlasPostPass
 from .scene import Scene
 from .targets import LayeredTarget
 
@@ -42,6 +44,10 @@ class Renderer:
         self._rtt: RttPass | None = None
         self.atlas = LayeredTarget(ctx, (64, 64), 1)
         self._single: LayeredTarget | None = None
+        self._composite: CompositePass | None = None
+        self._post: AtlasPostPass | None = None
+        self.target = CompositeTarget(ctx)
+        self.last: tuple | None = None     # (camera, viewport, records) of the last capture
 
     def matrices(self, camera: Camera, viewport: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
         return camera.view(self.scene.origin), camera.projection(viewport[0] / viewport[1])
@@ -68,7 +74,31 @@ class Renderer:
         records = self.parameterize(camera, viewport, (view, proj))
         self.capture_pass(path).render(gpu=self.gpu, records=records, view=view, proj=proj,
                                        atlas=self.atlas)
+        self.last = (camera, viewport, records, view)
         return records
+
+    def composite(self, mode: str, style: Style | None = None) -> CompositeTarget:
+        """Composite the last capture; re-run it alone when only the style or mode changes."""
+        if self.last is None:
+            raise RuntimeError("composite() needs a capture() first")
+        _, _, records, view = self.last
+        if self._composite is None:
+            self._composite = CompositePass(self.ctx)
+        centers = (self.scene.aabb_min + self.scene.aabb_max) / 2 - self.scene.origin
+        view_depth = -(centers @ view[2, :3] + view[2, 3])
+        post = self.post_process(style or Style()) if mode == "ghosted-ao" else None
+        self._composite.render(atlas=self.atlas, records=records, gpu=self.gpu, style=style or Style(),
+                               mode=mode, view_depth=view_depth, target=self.target, post=post)
+        return self.target
+
+    def post_process(self, style: Style) -> AtlasPostPass:
+        """Ambient occlusion and edges on the atlas (ghosted-ao only)."""
+        camera, viewport, records, _ = self.last
+        if self._post is None:
+            self._post = AtlasPostPass(self.ctx)
+        self._post.render(atlas=self.atlas, records=records, gpu=self.gpu,
+                          proj=camera.projection(viewport[0] / viewport[1]), style=style)
+        return self._post
 
     @property
     def single_target(self) -> LayeredTarget:
@@ -91,11 +121,12 @@ class Renderer:
                          viewport=viewport, objects=objects, consume=consume)
 
     def release(self) -> None:
-        for p in [*self._capture.values(), self._std, self._rtt]:
+        for p in [*self._capture.values(), self._std, self._rtt, self._composite, self._post]:
             if p is not None:
                 p.release()
         self._capture.clear()
         self._std = self._rtt = None
+        self.target.release()
         for t in (self.atlas, self._single):
             if t is not None:
                 t.release()

@@ -4,7 +4,7 @@ struct Record {
     vec4 clip;        // inner B_viewport in viewport NDC (x0, y0, x1, y1): the clip planes
     vec4 atlas;       // B_atlas in texels (x, y, w, h), border included
     vec4 viewport;    // inner B_viewport in pixels (x0, y0, x1, y1)
-    ivec4 info;       // (layer, visible, border, unused)
+    ivec4 info;       // (layer, visible, border, floatBitsToInt(scale))
 };
 layout(std430, binding = 0) readonly buffer RecordBuffer { Record records[]; };
 layout(std430, binding = 1) readonly buffer ObjectBuffer { vec4 object_colors[]; };

@@ -1,0 +1,189 @@
+"""Compositing from the atlas (RTTA paper, section 3.2, Figure 3): one point per object,
+expanded into a quad over its B_viewport, reading its own unoccluded atlas images.
+
+Modes: `sprites` (depth sprites, reconstruct STD), `transparent` (every object blended
+with its opacity, back to front), `ghosted` (focus opaque and visible through the faded,
+desaturated context, with silhouettes), `ghosted-ao` (ghosted, shaded with ambient
+occlusion and edges computed on each object's own atlas images).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import moderngl
+import numpy as np
+
+from . import glraw, glsl
+from .gpu import GpuScene
+from .parameterize import Records
+from .targets import LayeredTarget
+
+MODES = ("sprites", "transparent", "ghosted", "ghosted-ao")
+BACKGROUND = (0.93, 0.93, 0.95, 1.0)
+
+
+@dataclass
+class Style:
+    """What compositing needs besides the atlas; changing it never re-runs the capture."""
+
+    opacity: dict[int, float] = field(default_factory=dict)   # per object id
+    default_opacity: float = 0.5       # `transparent`: objects not in `opacity`
+    focus: set[int] = field(default_factory=set)
+    context_opacity: float = 0.3
+    desaturate: float = 0.8
+    edge_color: tuple[float, float, float, float] = (0.05, 0.05, 0.08, 1.0)
+    outline_color: tuple[float, float, float, float] = (1.0, 0.75, 0.1, 1.0)
+    outline_width: int = 1
+    edge_width: int = 1
+    ao_radius: float = 6.0
+    ao_strength: float = 1.0
+
+
+class CompositeTarget:
+    """RGBA8 colour + 32-bit float depth of the composite, reallocated only on resize."""
+
+    def __init__(self, ctx: moderngl.Context) -> None:
+        self.ctx = ctx
+        self.size = (0, 0)
+        self.fbo = None
+        self._parts: list = []
+
+    def ensure(self, size: tuple[int, int]) -> None:
+        if tuple(size) == self.size:
+            return
+        self.release()
+        self.color = self.ctx.texture(size, 4)
+        self.depth = self.ctx.depth_texture(size)
+        self.fbo = self.ctx.framebuffer([self.color], self.depth)
+        self._parts = [self.fbo, self.color, self.depth]
+        self.size = tuple(size)
+
+    def read(self) -> tuple[np.ndarray, np.ndarray]:
+        """(rgba uint8 [H, W, 4], depth float32 [H, W]); row 0 is the bottom row."""
+        w, h = self.size
+        rgba = np.frombuffer(self.fbo.read(components=4), np.uint8).reshape(h, w, 4)
+        depth = np.frombuffer(self.depth.read(), np.float32).reshape(h, w)
+        return rgba, depth
+
+    def release(self) -> None:
+        if self.fbo is not None:
+            self.ctx.detect_framebuffer(0).use()
+        for obj in self._parts:
+            obj.release()
+        self._parts = []
+        self.fbo = None
+        self.size = (0, 0)
+
+
+def back_to_front(records: Records, view_depth: np.ndarray, ids: np.ndarray) -> np.ndarray:
+    """`ids` ordered farthest first by the view depth of their bounds centre; ties by id,
+    so the order is stable and intersecting parts do not flicker."""
+    ids = np.asarray(ids, np.int64)
+    ids = ids[records.visible[ids]]
+    return ids[np.lexsort((ids, -view_depth[ids]))]
+
+
+class CompositePass:
+    """`render(*, atlas, records, gpu, style, mode, target)`; needs `post` for ghosted-ao."""
+
+    def __init__(self, ctx: moderngl.Context) -> None:
+        self.ctx = ctx
+        self._programs: dict[tuple, moderngl.Program] = {}
+        self._vaos: dict[tuple, moderngl.VertexArray] = {}
+        self.styles = ctx.buffer(reserve=16)
+        self.order = ctx.buffer(reserve=16)
+        self.passes: list[str] = []        # the draws of the last render, for inspection
+
+    def _program(self, **defines) -> tuple[moderngl.Program, moderngl.VertexArray]:
+        key = tuple(sorted(defines.items()))
+        if key not in self._programs:
+            prog = self.ctx.program(vertex_shader=glsl.load("composite.vert"),
+                                    geometry_shader=glsl.load("composite.geom"),
+                                    fragment_shader=glsl.load("composite.frag", **defines))
+            self._programs[key] = prog
+            self._vaos[key] = self.ctx.vertex_array(prog, [])
+        return self._programs[key], self._vaos[key]
+
+    def _upload(self, buf: moderngl.Buffer, data: bytes) -> None:
+        if buf.size < len(data):
+            buf.orphan(max(len(data), 2 * buf.size))
+        buf.write(data)
+
+    def render(self, *, atlas: LayeredTarget, records: Records, gpu: GpuScene, style: Style, mode: str,
+               view_depth: np.ndarray, target: CompositeTarget, post=None) -> None:
+        """Composite the captured atlas into `target` (sized to the records' viewport)."""
+        if mode not in MODES:
+            raise ValueError(f"unknown mode {mode!r}; modes: {', '.join(MODES)}")
+        n = len(records.visible)
+        params = np.zeros((max(n, 1), 4), np.float32)
+        params[:n, 0] = style.default_opacity if mode == "transparent" else 1.0
+        for oid, a in style.opacity.items():
+            params[oid, 0] = float(np.clip(a, 0.0, 1.0))
+        focus = np.array(sorted(o for o in style.focus if 0 <= o < n), np.int64)
+        params[focus, 1] = 1.0
+        self._upload(self.styles, params.tobytes())
+        self.passes = []
+        target.ensure(records.viewport)
+        target.fbo.use()
+        target.fbo.clear(*BACKGROUND, depth=1.0)
+        gpu.bind_storage()
+        self.styles.bind_to_storage_buffer(2)
+        atlas.color.use(0)
+        glraw.bind_texture_array(1, atlas.depth.glo)
+        atlas.ids.use(2)
+        everyone = np.arange(n)
+        if mode == "sprites":
+            self._draw(everyone, style, records, sprite=True)
+        elif mode == "transparent":
+            self._draw(back_to_front(records, view_depth, everyone), style, records, blend=True, desaturate=0.0)
+        else:
+            with_ao = mode == "ghosted-ao"
+            if with_ao:
+                post.texture.use(3)
+            context = np.setdiff1d(everyone, focus)
+            self._draw(focus, style, records, sprite=True, ao=with_ao)
+            params[context, 0] = style.context_opacity * params[context, 0]
+            self._upload(self.styles, params.tobytes())
+            self._draw(back_to_front(records, view_depth, context), style, records, blend=True,
+                       desaturate=style.desaturate, depth_test=True, ao=with_ao)
+            self._draw(focus, style, records, outline=True)
+
+    def _draw(self, ids, style: Style, records: Records, *, sprite=False, blend=False, outline=False,
+              desaturate=0.0, depth_test=False, ao=False) -> None:
+        ids = np.asarray(ids, np.int32)
+        ids = ids[records.visible[ids]] if len(ids) else ids
+        if len(ids) == 0:
+            return
+        self._upload(self.order, ids.astype(np.int32).tobytes())
+        self.order.bind_to_storage_buffer(3)
+        mode = {"MODE_SPRITE": sprite, "MODE_BLEND": blend, "MODE_OUTLINE": outline, "WITH_AO": ao and not outline}
+        on = [k for k, v in mode.items() if v]
+        self.passes.append("+".join(k.removeprefix("MODE_").lower() for k in on))
+        prog, vao = self._program(**{k: True for k in on})
+        prog["u_viewport"].value = tuple(float(v) for v in records.viewport)
+        for name, value in (("u_desaturate", desaturate), ("u_edge_color", style.edge_color),
+                            ("u_outline_width", style.outline_width)):
+            if name in prog:
+                prog[name].value = value
+        if outline and "u_edge_color" in prog:
+            prog["u_edge_color"].value = style.outline_color
+        flags = moderngl.NOTHING
+        if sprite or depth_test:
+            flags |= moderngl.DEPTH_TEST
+        if blend:
+            flags |= moderngl.BLEND
+        self.ctx.enable_only(flags)
+        self.ctx.depth_func = "<"
+        self.ctx.blend_func = moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA
+        fbo = self.ctx.fbo
+        fbo.depth_mask = bool(sprite)
+        fbo.use()
+        vao.render(moderngl.POINTS, vertices=len(ids))
+        fbo.depth_mask = True
+
+    def release(self) -> None:
+        for obj in [*self._vaos.values(), *self._programs.values(), self.styles, self.order]:
+            obj.release()
+        self._vaos.clear()
+        self._programs.clear()

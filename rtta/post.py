@@ -1,0 +1,68 @@
+"""`AtlasPostPass`: ambient occlusion and edge strength per atlas texel, computed on each
+object's own unoccluded images (the `ghosted-ao` mode only)."""
+
+from __future__ import annotations
+
+import moderngl
+import numpy as np
+
+from . import glraw, glsl
+from .gpu import GpuScene
+from .parameterize import Records
+from .targets import LayeredTarget
+
+
+class AtlasPostPass:
+    """render(*, atlas, records, gpu, proj, style) -> an RGBA8 texture array (ao, edge) like the atlas."""
+
+    def __init__(self, ctx: moderngl.Context) -> None:
+        self.ctx = ctx
+        self.program = ctx.program(vertex_shader=glsl.load("post.vert"), geometry_shader=glsl.load("post.geom"),
+                                   fragment_shader=glsl.load("post.frag"))
+        self.vao = ctx.vertex_array(self.program, [])
+        self.texture = None
+        self.fbo = None
+        self._shape = None
+
+    def _ensure(self, atlas: LayeredTarget) -> None:
+        shape = (*atlas.size, atlas.layers)
+        if shape == self._shape:
+            return
+        self._free()
+        self.texture = self.ctx.texture_array(shape, 4, dtype="f1")
+        self.texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        self.fbo = self.ctx.framebuffer([self.texture])
+        self._shape = shape
+
+    def render(self, *, atlas: LayeredTarget, records: Records, gpu: GpuScene, proj: np.ndarray, style) -> None:
+        self._ensure(atlas)
+        tw, th, td = records.atlas_size
+        if td == 0:
+            return
+        gpu.bind_storage()
+        glraw.bind_texture_array(0, atlas.depth.glo)
+        atlas.normal.use(1)
+        atlas.ids.use(2)
+        p = self.program
+        p["u_inv_proj"].write(np.ascontiguousarray(np.linalg.inv(proj).T, np.float32).tobytes())
+        p["u_viewport"].value = tuple(float(v) for v in records.viewport)
+        p["u_ao_radius"].value = float(style.ao_radius)
+        p["u_ao_strength"].value = float(style.ao_strength)
+        p["u_edge_width"].value = int(style.edge_width)
+        self.ctx.enable_only(moderngl.NOTHING)
+        self.fbo.viewport = (0, 0, tw, th)
+        self.fbo.use()
+        self.vao.render(moderngl.TRIANGLES, vertices=3, instances=td)
+
+    def _free(self) -> None:
+        if self.fbo is not None:
+            self.ctx.detect_framebuffer(0).use()
+            self.fbo.release()
+            self.texture.release()
+        self.fbo = self.texture = None
+        self._shape = None
+
+    def release(self) -> None:
+        self._free()
+        self.vao.release()
+        self.program.release()

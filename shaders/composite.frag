@@ -1,0 +1,61 @@
+#version 430
+// defines: MODE_SPRITE MODE_BLEND MODE_OUTLINE WITH_AO
+// Per-object compositing from the atlas:
+//   MODE_SPRITE  depth sprite: atlas colour, gl_FragDepth = atlas depth (focus objects, `sprites`)
+//   MODE_BLEND   premultiplied blend with the object's opacity (`transparent`, ghosted context)
+//   MODE_OUTLINE the object's silhouette from its own unoccluded id image (ghosted focus)
+//   WITH_AO      shade with the atlas post-process (ambient occlusion, edges) of `ghosted-ao`
+#include "composite.glsl"
+
+layout(binding = 0) uniform sampler2DArray u_color;
+layout(binding = 1) uniform sampler2DArray u_depth;
+layout(binding = 2) uniform isampler2DArray u_ids;
+layout(binding = 3) uniform sampler2DArray u_post;   // (ao, edge) per atlas texel, WITH_AO only
+
+uniform float u_desaturate;     // context desaturation in [0, 1] (MODE_BLEND)
+uniform vec4 u_edge_color;
+uniform int u_outline_width;    // pixels (MODE_OUTLINE)
+
+flat in int g_object;
+layout(location = 0) out vec4 out_color;
+
+vec3 shade(vec3 rgb, ivec3 t) {
+#ifdef WITH_AO
+    vec2 post = texelFetch(u_post, t, 0).rg;
+    rgb *= post.r;
+    rgb = mix(rgb, u_edge_color.rgb, post.g * u_edge_color.a);
+#endif
+    return rgb;
+}
+
+void main() {
+    Record r = records[g_object];
+    ivec3 t = atlas_texel(r, gl_FragCoord.xy);
+    int id = texelFetch(u_ids, t, 0).r;
+#ifdef MODE_OUTLINE
+    // a silhouette texel: the object's own, with a neighbour within the width that is not
+    bool inside = id == g_object;
+    bool near_other = false;
+    ivec2 size = textureSize(u_ids, 0).xy;
+    for (int dy = -u_outline_width; dy <= u_outline_width && !near_other; ++dy)
+        for (int dx = -u_outline_width; dx <= u_outline_width; ++dx)
+            if (texelFetch(u_ids, ivec3(clamp(t.xy + ivec2(dx, dy), ivec2(0), size - 1), t.z), 0).r
+                    != g_object) { near_other = true; break; }
+    if (!inside || !near_other) discard;
+    out_color = vec4(u_edge_color.rgb, 1.0);
+#else
+    if (id != g_object) discard;
+    vec4 c = texelFetch(u_color, t, 0);
+    vec3 rgb = shade(c.rgb, t);
+#ifdef MODE_SPRITE
+    gl_FragDepth = texelFetch(u_depth, t, 0).r;
+    out_color = vec4(rgb, 1.0);
+#else
+    float a = styles[g_object].params.x;
+    float grey = dot(rgb, vec3(0.299, 0.587, 0.114));
+    rgb = mix(rgb, vec3(grey), u_desaturate);
+    gl_FragDepth = texelFetch(u_depth, t, 0).r;
+    out_color = vec4(rgb * a, a);
+#endif
+#endif
+}

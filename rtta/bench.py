@@ -104,6 +104,55 @@ def _print_capture(rows, scaling, renderer, viewport) -> None:
         print(f"{n:>8} {s['ms']:>8.3f} {s['ms'] / (n * np.log2(n)) * 1e3:>20.4f}")
 
 
+def composite_row(ctx, name, scene, viewport, frames: int) -> dict:
+    """Full frame per mode (capture + post + composite) against STD, and a re-composite
+    after a focus change (compositing only) against the full ghosted-ao frame."""
+    from .composite import MODES, Style
+
+    r = Renderer(ctx, scene)
+    cam = Camera.orbit(scene.center, scene.radius, 30.0, 20.0, 2.2)
+    focus = {0, scene.count // 2}
+    row = {"name": name, "objects": scene.count, "vertices": scene.vertex_count,
+           "std_ms": _median_ms(_gl_timed(ctx, lambda: r.std(cam, viewport)), frames), "modes": {}}
+    for mode in MODES:
+        def frame(mode=mode):
+            r.capture(cam, viewport)
+            r.composite(mode, Style(focus=focus))
+        row["modes"][mode] = _median_ms(_gl_timed(ctx, frame), frames)
+    styles = [Style(focus={k % scene.count}) for k in range(frames + 2)]
+    it = iter(styles)
+    row["recomposite_ms"] = _median_ms(_gl_timed(ctx, lambda: r.composite("ghosted-ao", next(it))), frames)
+    r.release()
+    return row
+
+
+def run_composite(viewport: tuple[int, int], quick: bool = False, json_path: str | None = None,
+                  ctx=None) -> int:
+    from .demo import demo_path
+    from .loader import load_scene
+
+    ctx = ctx or create_headless_context()
+    renderer = str(ctx.info["GL_RENDERER"])
+    frames = 3 if quick else 11
+    scenes = [("demo", load_scene(demo_path()))]
+    for objects, vertices in (TABLE1[:2] if quick else TABLE1):
+        scenes.append((f"table1-{objects}", table1_scene(objects, vertices)))
+    rows = [composite_row(ctx, name, scene, viewport, frames) for name, scene in scenes]
+    print(f"renderer: {renderer}; viewport {viewport[0]}x{viewport[1]}; median ms per full frame "
+          f"(capture + post + composite); ratio to STD in brackets")
+    modes = list(rows[0]["modes"])
+    print(f"{'scene':>13} {'STD':>8} " + " ".join(f"{m:>18}" for m in modes) + f" {'recomposite':>16}")
+    for r in rows:
+        cells = " ".join(f"{r['modes'][m]:>9.2f} ({r['modes'][m] / r['std_ms']:>5.2f}x)" for m in modes)
+        rc = r["recomposite_ms"]
+        print(f"{r['name']:>13} {r['std_ms']:>8.2f} {cells} {rc:>8.2f} ({rc / r['modes']['ghosted-ao']:.2f}x)")
+    print("recomposite: ghosted-ao after a focus change, compositing only; ratio to a full ghosted-ao frame")
+    if json_path:
+        Path(json_path).write_text(json.dumps({"renderer": renderer, "viewport": list(viewport),
+                                               "scenes": rows}, indent=1))
+    return 0
+
+
 def _rectpack(w, h, W, H):
     import rectpack
 

@@ -58,6 +58,10 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--size", default="1024x1024")
     b.add_argument("--quick", action="store_true", help="short run (fewer frames, smaller scenes)")
     b.add_argument("--json", default=None, help="also write the figures as JSON")
+    b = bsub.add_parser("composite", help="per-mode frame time against STD, and re-composite time")
+    b.add_argument("--size", default="1024x1024")
+    b.add_argument("--quick", action="store_true")
+    b.add_argument("--json", default=None)
     b = bsub.add_parser("packing", help="our packer against rectpack and rectangle-packer")
     b.add_argument("--quick", action="store_true")
     b.add_argument("--json", default=None)
@@ -167,6 +171,8 @@ def cmd_bench(args) -> int:
 
     if args.bench == "capture":
         return bench.run_capture(parse_size(args.size), quick=args.quick, json_path=args.json)
+    if args.bench == "composite":
+        return bench.run_composite(parse_size(args.size), quick=args.quick, json_path=args.json)
     return bench.run_packing(quick=args.quick, json_path=args.json)
 
 

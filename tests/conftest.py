@@ -8,6 +8,11 @@ import pytest
 from rtta.context import create_headless_context
 
 
+def pytest_addoption(parser):
+    parser.addoption("--regenerate-references", action="store_true", default=False,
+                     help="rewrite tests/references/*.png from this run instead of comparing")
+
+
 @pytest.fixture(scope="session")
 def ctx():
     context = create_headless_context()

@@ -35,3 +35,15 @@ def test_ci_tests_the_installed_wheel():
     """In CI the package under test is the one pip installed, with shaders and demo inside."""
     if os.environ.get("CI"):
         assert "site-packages" in rtta.__file__
+
+
+def test_composite_bench_quick(gl, tmp_path, capsys):
+    out = tmp_path / "comp.json"
+    assert bench.run_composite((200, 160), quick=True, json_path=str(out), ctx=gl) == 0
+    data = json.loads(out.read_text())
+    assert data["renderer"] == gl.info["GL_RENDERER"]
+    assert [s["name"] for s in data["scenes"]] == ["demo", "table1-5", "table1-21"]
+    for s in data["scenes"]:
+        assert set(s["modes"]) == {"sprites", "transparent", "ghosted", "ghosted-ao"}
+        assert all(v > 0 for v in s["modes"].values()) and s["std_ms"] > 0 and s["recomposite_ms"] > 0
+    assert "recomposite" in capsys.readouterr().out

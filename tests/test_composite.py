@@ -1,0 +1,160 @@
+"""Compositing from the atlas, checked against renders made in the same test and numpy."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+
+from rtta.camera import DEFAULT_ORBIT, Camera
+from rtta.composite import BACKGROUND, Style
+from rtta.generate import random_scene
+from rtta.scene import from_meshes
+from rtta.snapshot import over_background
+
+VP = (240, 180)
+
+
+def _std(r, cam):
+    std = r.std(cam, VP).read(VP, 1)
+    return over_background(std["color"][0]), std["depth"][0], std["id"][0]
+
+
+def _assert_matches_std(rgba, depth, std_rgba, std_depth, std_id):
+    close = np.abs(rgba[..., :3].astype(int) - std_rgba[..., :3].astype(int)).max(-1) <= 3
+    assert close.mean() >= 0.995, f"only {close.mean():.4f} of pixels within 3/255"
+    cov = std_id >= 0
+    if depth is not None:
+        assert np.abs(depth[cov] - std_depth[cov]).max() <= 1e-5
+        assert (depth[~cov] == 1.0).all()
+
+
+@pytest.mark.parametrize("orbit", [DEFAULT_ORBIT, (200, -30, 1.5), (80, 60, 3.0)])
+def test_sprites_reconstruct_std_demo(make_renderer, demo_scene, orbit):
+    r = make_renderer(demo_scene)
+    cam = Camera.orbit(demo_scene.center, demo_scene.radius, *orbit)
+    r.capture(cam, VP)
+    rgba, depth = r.composite("sprites").read()
+    _assert_matches_std(rgba, depth, *_std(r, cam))
+
+
+@pytest.mark.parametrize("n", [1, 40, 500])
+def test_sprites_reconstruct_std_generated(make_renderer, n):
+    scene = random_scene(n, seed=n, spread=3.0 * np.cbrt(n) + 2)
+    r = make_renderer(scene)
+    cam = Camera.orbit(scene.center, scene.radius, 30, 20, 1.7)
+    r.capture(cam, VP)
+    rgba, depth = r.composite("sprites").read()
+    _assert_matches_std(rgba, depth, *_std(r, cam))
+
+
+def _separated_scene(n=12, seed=0):
+    """Small boxes on a grid: no two intersect, so back-to-front order is well defined."""
+    rng = np.random.default_rng(seed)
+    parts = []
+    for i in range(n):
+        box = trimesh.creation.box(extents=rng.uniform(0.3, 0.8, 3))
+        center = np.array([i % 4, (i // 4) % 3, i // 12], float) * 1.6 + rng.uniform(-0.2, 0.2, 3)
+        parts.append((f"b{i}", np.asarray(box.vertices) + center, np.asarray(box.faces), None))
+    scene = from_meshes(parts)
+    lo, hi = scene.aabb_min, scene.aabb_max
+    overlap = (lo[:, None] < hi[None]).all(-1) & (lo[None] < hi[:, None]).all(-1)
+    assert overlap.sum() == n    # only each box with itself
+    return scene
+
+
+def test_transparent_with_opacity_one_equals_std(make_renderer):
+    scene = _separated_scene()
+    r = make_renderer(scene)
+    cam = Camera.orbit(scene.center, scene.radius, 25, 15, 2.0)
+    r.capture(cam, VP)
+    rgba, _ = r.composite("transparent", Style(default_opacity=1.0)).read()
+    _assert_matches_std(rgba, None, *_std(r, cam))
+
+
+@pytest.mark.parametrize("alpha", [0.2, 0.65])
+def test_one_object_alpha_blend_over_background(make_renderer, alpha):
+    box = trimesh.creation.icosphere(subdivisions=2)
+    scene = from_meshes([("ball", np.asarray(box.vertices), np.asarray(box.faces), None)])
+    r = make_renderer(scene)
+    cam = Camera.orbit(scene.center, scene.radius, 10, 10, 2.5)
+    r.capture(cam, VP)
+    rgba, _ = r.composite("transparent", Style(opacity={0: alpha})).read()
+    std = r.std(cam, VP).read(VP, 1)
+    cov = std["id"][0] >= 0
+    src = std["color"][0][..., :3].astype(np.float64)
+    expected = np.where(cov[..., None], alpha * src + (1 - alpha) * np.array(BACKGROUND[:3]) * 255,
+                        np.array(BACKGROUND[:3]) * 255)
+    assert np.abs(rgba[..., :3] - expected).max() <= 3.0
+
+
+def _hidden_pair():
+    """A small box entirely behind a large one, seen from +Z."""
+    big = trimesh.creation.box(extents=(4, 4, 0.5))
+    small = trimesh.creation.box(extents=(1, 1, 1))
+    return from_meshes([("wall", np.asarray(big.vertices), np.asarray(big.faces), None),
+                        ("hidden", np.asarray(small.vertices) + [0, 0, -3], np.asarray(small.faces), None)])
+
+
+@pytest.mark.parametrize("mode", ["ghosted", "ghosted-ao"])
+def test_ghosted_shows_a_hidden_focus_object(make_renderer, mode):
+    scene = _hidden_pair()
+    r = make_renderer(scene)
+    cam = Camera.orbit(scene.center, scene.radius, 0, 0, 2.5)
+    assert not (r.std(cam, VP).read(VP, 1)["id"][0] == 1).any()      # hidden in STD
+    records = r.capture(cam, VP)
+    plain, _ = r.composite(mode, Style()).read()
+    plain = plain.copy()
+    style = Style(focus={1})
+    focused, _ = r.composite(mode, style).read()
+    x0, y0, x1, y1 = records.viewport_rect[1]
+    region = (slice(y0, y1), slice(x0, x1))
+    changed = np.abs(focused[region].astype(int) - plain[region].astype(int)).max(-1) > 10
+    assert changed.mean() > 0.5
+    outline = (np.abs(focused[..., :3].astype(int) - np.array(style.outline_color[:3]) * 255).max(-1) <= 3)
+    assert outline[region].sum() >= 2 * ((x1 - x0) + (y1 - y0)) * 0.8        # its silhouette is drawn
+    assert not outline[~_in_rect(focused.shape, records.viewport_rect[1])].any()
+
+
+def _in_rect(shape, rect):
+    m = np.zeros(shape[:2], bool)
+    x0, y0, x1, y1 = rect
+    m[y0:y1, x0:x1] = True
+    return m
+
+
+def test_style_changes_recomposite_only(make_renderer, demo_scene):
+    r = make_renderer(demo_scene)
+    cam = Camera.orbit(demo_scene.center, demo_scene.radius, *DEFAULT_ORBIT)
+    r.capture(cam, VP)
+    frames = r.capture_pass().frames
+    a = r.composite("ghosted", Style(focus={0})).read()[0].copy()
+    b = r.composite("ghosted", Style(focus={0, 5}, context_opacity=0.6)).read()[0].copy()
+    assert r.capture_pass().frames == frames and not np.array_equal(a, b)
+
+
+def test_only_needed_passes_run(make_renderer, demo_scene):
+    r = make_renderer(demo_scene)
+    cam = Camera.orbit(demo_scene.center, demo_scene.radius, *DEFAULT_ORBIT)
+    r.capture(cam, VP)
+    expected = {"sprites": ["sprite"], "transparent": ["blend"], "ghosted": ["sprite", "blend", "outline"]}
+    for mode, passes in expected.items():
+        r.composite(mode, Style(focus={1}))
+        assert r._composite.passes == passes and r._post is None
+    r.composite("ghosted-ao", Style(focus={1}))
+    assert r._composite.passes == ["sprite+with_ao", "blend+with_ao", "outline"] and r._post is not None
+
+
+def test_borders_are_marked_empty(make_renderer, demo_scene):
+    from rtta.renderer import Settings
+    r = make_renderer(demo_scene, Settings(border=2))
+    cam = Camera.orbit(demo_scene.center, demo_scene.radius, *DEFAULT_ORBIT)
+    rec = r.capture(cam, VP)
+    atlas = r.atlas.read(rec.atlas_size[:2], rec.atlas_size[2])
+    for oid in np.flatnonzero(rec.visible):
+        x, y, w, h = rec.atlas_rect[oid]
+        ids = atlas["id"][rec.layer[oid], y:y + h, x:x + w]
+        alpha = atlas["color"][rec.layer[oid], y:y + h, x:x + w, 3]
+        ring = np.ones(ids.shape, bool)
+        ring[2:-2, 2:-2] = False
+        assert (ids[ring] == -1).all() and (alpha[ring] == 0).all()

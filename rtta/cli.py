@@ -47,6 +47,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--focus", nargs="+", default=[], metavar="NAME", help="objects shown opaque in ghosted modes")
     p.add_argument("--opacity", nargs="+", default=[], metavar="NAME=A", help="per-object opacity in [0, 1]")
     p.add_argument("--context-opacity", type=float, default=None, help="opacity of non-focus objects (ghosted)")
+    p.add_argument("--edge-width", type=int, default=1, help="edge detection distance in pixels (ghosted-ao)")
+    p.add_argument("--ao-radius", type=float, default=6.0, help="ambient occlusion radius in pixels (ghosted-ao)")
+    p.add_argument("--ao-strength", type=float, default=1.0, help="ambient occlusion strength (ghosted-ao)")
     out = p.add_mutually_exclusive_group(required=True)
     out.add_argument("--out", help="PNG file to write")
     out.add_argument("--all-modes", metavar="DIR", help="write <mode>.png for every mode into DIR")
@@ -123,6 +126,9 @@ def cmd_snapshot(args) -> int:
     viewport = parse_size(args.size)
     orbit = parse_orbit(args.camera) if args.camera else DEFAULT_ORBIT
     style = Style(focus=set(resolve_names(scene, args.focus, "--focus")), opacity=parse_opacities(scene, args.opacity))
+    if not (1 <= args.edge_width <= 8 and 0 < args.ao_radius <= 64 and 0 <= args.ao_strength <= 4):
+        raise RttaError("--edge-width must be 1..8, --ao-radius in (0, 64], --ao-strength in [0, 4]")
+    style.edge_width, style.ao_radius, style.ao_strength = args.edge_width, args.ao_radius, args.ao_strength
     if args.context_opacity is not None:
         if not 0.0 <= args.context_opacity <= 1.0:
             raise RttaError(f"--context-opacity must be in [0, 1], got {args.context_opacity}")

@@ -43,12 +43,13 @@ class AtlasPostPass:
         glraw.bind_texture_array(0, atlas.depth.glo)
         atlas.normal.use(1)
         atlas.ids.use(2)
-        p = self.program
-        p["u_inv_proj"].write(np.ascontiguousarray(np.linalg.inv(proj).T, np.float32).tobytes())
-        p["u_viewport"].value = tuple(float(v) for v in records.viewport)
-        p["u_ao_radius"].value = float(style.ao_radius)
-        p["u_ao_strength"].value = float(style.ao_strength)
-        p["u_edge_width"].value = int(style.edge_width)
+        uniforms = {"u_proj": (float(proj[0, 0]), float(proj[1, 1]), float(proj[2, 2]), float(proj[2, 3])),
+                    "u_viewport": tuple(float(v) for v in records.viewport),
+                    "u_ao_radius": float(style.ao_radius), "u_ao_strength": float(style.ao_strength),
+                    "u_edge_width": int(style.edge_width)}
+        for name, value in uniforms.items():
+            if name in self.program:      # the compiler may drop unused ones
+                self.program[name].value = value
         self.ctx.enable_only(moderngl.NOTHING)
         self.fbo.viewport = (0, 0, tw, th)
         self.fbo.use()

@@ -46,6 +46,8 @@ class Renderer:
         self._single: LayeredTarget | None = None
         self._composite: CompositePass | None = None
         self._post: AtlasPostPass | None = None
+        self._post_key: tuple | None = None
+        self._captures = 0
         self.target = CompositeTarget(ctx)
         self.last: tuple | None = None     # (camera, viewport, records) of the last capture
 
@@ -75,6 +77,7 @@ class Renderer:
         self.capture_pass(path).render(gpu=self.gpu, records=records, view=view, proj=proj,
                                        atlas=self.atlas)
         self.last = (camera, viewport, records, view)
+        self._captures += 1
         return records
 
     def composite(self, mode: str, style: Style | None = None) -> CompositeTarget:
@@ -92,12 +95,16 @@ class Renderer:
         return self.target
 
     def post_process(self, style: Style) -> AtlasPostPass:
-        """Ambient occlusion and edges on the atlas (ghosted-ao only)."""
+        """Ambient occlusion and edges on the atlas (ghosted-ao only). They depend on the
+        capture and the AO/edge parameters, not on focus or opacity: re-run only when those change."""
         camera, viewport, records, _ = self.last
         if self._post is None:
             self._post = AtlasPostPass(self.ctx)
-        self._post.render(atlas=self.atlas, records=records, gpu=self.gpu,
-                          proj=camera.projection(viewport[0] / viewport[1]), style=style)
+        key = (self._captures, style.ao_radius, style.ao_strength, style.edge_width)
+        if key != self._post_key:
+            self._post.render(atlas=self.atlas, records=records, gpu=self.gpu,
+                              proj=camera.projection(viewport[0] / viewport[1]), style=style)
+            self._post_key = key
         return self._post
 
     @property

@@ -9,7 +9,7 @@ layout(binding = 0) uniform sampler2DArray u_depth;
 layout(binding = 1) uniform sampler2DArray u_normal;
 layout(binding = 2) uniform isampler2DArray u_ids;
 
-uniform mat4 u_inv_proj;
+uniform vec4 u_proj;           // (P00, P11, P22, P23) of the perspective projection
 uniform vec2 u_viewport;
 uniform float u_ao_radius;     // pixels
 uniform float u_ao_strength;
@@ -17,50 +17,63 @@ uniform int u_edge_width;      // pixels
 
 layout(location = 0) out vec4 out_post;   // (ao, edge, 0, 1)
 
-vec3 view_position(ivec3 t, Record r) {
-    float scale = intBitsToFloat(r.info.w);
-    vec2 px = r.viewport.xy + (vec2(t.xy) + 0.5 - r.atlas.xy - float(r.info.z)) / scale;
-    float d = texelFetch(u_depth, t, 0).r;
-    vec4 v = u_inv_proj * vec4(px / u_viewport * 2.0 - 1.0, d * 2.0 - 1.0, 1.0);
-    return v.xyz / v.w;
+// texel -> view-space position: `origin` and `step` map atlas texels to viewport NDC
+vec3 view_position(ivec3 t, vec2 origin, vec2 step) {
+    vec2 ndc = origin + (vec2(t.xy) + 0.5) * step;
+    float z = -u_proj.w / (texelFetch(u_depth, t, 0).r * 2.0 - 1.0 + u_proj.z);
+    return vec3(-z * ndc.x / u_proj.x, -z * ndc.y / u_proj.y, z);
+}
+
+// Globals of the texel being shaded (set once in main, read by the unrolled helpers).
+int g_id;
+ivec3 g_t;
+ivec2 g_size;
+vec2 g_origin, g_step;
+vec3 g_p, g_n;
+
+ivec3 neighbour(ivec2 o) { return ivec3(clamp(g_t.xy + o, ivec2(0), g_size - 1), g_t.z); }
+
+// one AO sample at offset `o` (texels); returns (occlusion, used)
+vec2 ao_sample(vec2 o) {
+    ivec3 s = neighbour(ivec2(round(o)));
+    if (texelFetch(u_ids, s, 0).r != g_id) return vec2(0.0);
+    vec3 v = view_position(s, g_origin, g_step) - g_p;
+    float dist = length(v) + 1e-12;
+    return vec2(max(0.0, dot(v, g_n) - 0.002 * abs(g_p.z)) / dist, 1.0);
+}
+
+// edge strength towards offset `o`: silhouette, depth discontinuity or crease
+float edge_towards(ivec2 o) {
+    ivec3 s = neighbour(o);
+    if (texelFetch(u_ids, s, 0).r != g_id) return 1.0;
+    vec3 q = view_position(s, g_origin, g_step);
+    float jump = abs(q.z - g_p.z) / max(abs(g_p.z), 1e-12);
+    float bend = 1.0 - dot(g_n, normalize(texelFetch(u_normal, s, 0).xyz));
+    return max(smoothstep(0.01, 0.03, jump), smoothstep(0.2, 0.5, bend));
 }
 
 void main() {
-    ivec3 t = ivec3(gl_FragCoord.xy, gl_Layer);
-    int id = texelFetch(u_ids, t, 0).r;
-    if (id < 0) { out_post = vec4(1.0, 0.0, 0.0, 1.0); return; }
-    Record r = records[id];
+    g_t = ivec3(gl_FragCoord.xy, gl_Layer);
+    g_id = texelFetch(u_ids, g_t, 0).r;
+    if (g_id < 0) { out_post = vec4(1.0, 0.0, 0.0, 1.0); return; }
+    Record r = records[g_id];
     float scale = intBitsToFloat(r.info.w);
-    vec3 p = view_position(t, r);
-    vec3 n = normalize(texelFetch(u_normal, t, 0).xyz);
-    ivec2 size = textureSize(u_ids, 0).xy;
+    g_step = 2.0 / (scale * u_viewport);
+    g_origin = (r.viewport.xy - (r.atlas.xy + float(r.info.z)) / scale) / u_viewport * 2.0 - 1.0;
+    g_size = textureSize(u_ids, 0).xy;
+    g_p = view_position(g_t, g_origin, g_step);
+    g_n = normalize(texelFetch(u_normal, g_t, 0).xyz);
 
-    // ambient occlusion: 16 samples on a spiral, own object only
-    float occlusion = 0.0;
-    int used = 0;
-    for (int i = 0; i < 16; ++i) {
-        float a = float(i) * 2.39996 + 0.5;
-        float rad = u_ao_radius * scale * (float(i) + 0.5) / 16.0;
-        ivec2 o = ivec2(round(vec2(cos(a), sin(a)) * rad));
-        ivec3 s = ivec3(clamp(t.xy + o, ivec2(0), size - 1), t.z);
-        if (texelFetch(u_ids, s, 0).r != id) continue;
-        vec3 v = view_position(s, r) - p;
-        float dist2 = dot(v, v) + 1e-12;
-        occlusion += max(0.0, dot(v, n) - 0.002 * abs(p.z)) / dist2 * sqrt(dist2);
-        used += 1;
-    }
-    float ao = used > 0 ? clamp(1.0 - u_ao_strength * occlusion / float(used), 0.0, 1.0) : 1.0;
+    // ambient occlusion: 8 samples on a golden-angle spiral (unrolled: no dynamic indexing)
+    float R = u_ao_radius * scale;
+    vec2 acc = ao_sample(R * vec2(0.0548, 0.0300)) + ao_sample(R * vec2(-0.1821, 0.0449))
+             + ao_sample(R * vec2(0.1732, -0.2601)) + ao_sample(R * vec2(0.0672, 0.4323))
+             + ao_sample(R * vec2(-0.4391, -0.3515)) + ao_sample(R * vec2(0.6860, -0.0457))
+             + ao_sample(R * vec2(-0.5613, 0.5875)) + ao_sample(R * vec2(0.0196, -0.9373));
+    float ao = acc.y > 0.0 ? clamp(1.0 - u_ao_strength * acc.x / acc.y, 0.0, 1.0) : 1.0;
 
-    // edges: object silhouette, depth discontinuity or crease within the edge width
-    float edge = 0.0;
-    ivec2 dirs[4] = ivec2[](ivec2(1, 0), ivec2(-1, 0), ivec2(0, 1), ivec2(0, -1));
-    for (int k = 0; k < 4; ++k) {
-        ivec3 s = ivec3(clamp(t.xy + dirs[k] * u_edge_width, ivec2(0), size - 1), t.z);
-        if (texelFetch(u_ids, s, 0).r != id) { edge = 1.0; break; }
-        vec3 q = view_position(s, r);
-        float jump = abs(q.z - p.z) / max(abs(p.z), 1e-12);
-        float bend = 1.0 - dot(n, normalize(texelFetch(u_normal, s, 0).xyz));
-        edge = max(edge, max(smoothstep(0.01, 0.03, jump), smoothstep(0.2, 0.5, bend)));
-    }
+    int w = u_edge_width;
+    float edge = max(max(edge_towards(ivec2(w, 0)), edge_towards(ivec2(-w, 0))),
+                     max(edge_towards(ivec2(0, w)), edge_towards(ivec2(0, -w))));
     out_post = vec4(ao, edge, 0.0, 1.0);
 }

@@ -132,3 +132,24 @@ def test_runs_from_another_directory(tmp_path):
     assert (tmp_path / "x" / "atlas_color_0.png").exists()
     res = _run(["info"], tmp_path)
     assert res.returncode == 0 and "rotor" in res.stdout
+
+
+def test_snapshot_all_modes(tmp_path):
+    res = _run(["snapshot", "--all-modes", "shots", "--size", "96x72", "--focus", "pad_inner"], tmp_path)
+    assert res.returncode == 0, res.stderr
+    names = sorted(p.name for p in (tmp_path / "shots").iterdir())
+    assert names == sorted(f"{m}.png" for m in ("std", "sprites", "transparent", "ghosted", "ghosted-ao"))
+    assert Image.open(tmp_path / "shots" / "ghosted.png").size == (96, 72)
+
+
+@pytest.mark.parametrize("args,needle", [
+    (["snapshot", "--out", "a.png", "--focus", "pad_iner"], "did you mean pad_inner"),
+    (["snapshot", "--out", "a.png", "--mode", "xray"], "--mode must be one of"),
+    (["snapshot", "--out", "a.png", "--opacity", "rotor=2"], "--opacity expects NAME=A"),
+    (["snapshot", "--out", "a.jpg"], "--out must name a .png"),
+    (["snapshot", "--out", "nowhere/a.png"], "parent directory does not exist"),
+])
+def test_snapshot_bad_input(tmp_path, args, needle):
+    res = _run(args, tmp_path)
+    assert res.returncode == 2 and needle in res.stderr and "Traceback" not in res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1

@@ -5,6 +5,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
+mkdir -p out
 .venv/bin/rtta snapshot --all-modes out/demo --focus pad_inner pad_outer piston_1 piston_2 "$@"
 .venv/bin/rtta export --out out/demo/atlas "$@"
 echo "open out/demo/*.png (std, sprites, transparent, ghosted, ghosted-ao) and out/demo/atlas/"

@@ -155,7 +155,7 @@ def cmd_snapshot(args) -> int:
     finally:
         renderer.release()
     if args.all_modes:
-        Path(args.all_modes).mkdir(parents=True, exist_ok=True)
+        folder.mkdir(exist_ok=True)
     for path in write_pngs(images, targets):
         print(f"wrote {path}")
     return 0

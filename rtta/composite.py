@@ -17,7 +17,7 @@ import numpy as np
 from . import glraw, glsl
 from .gpu import GpuScene
 from .parameterize import Records
-from .targets import LayeredTarget
+from .targets import LayeredTarget, release_framebuffer
 
 MODES = ("sprites", "transparent", "ghosted", "ghosted-ao")
 BACKGROUND = (0.93, 0.93, 0.95, 1.0)
@@ -56,7 +56,7 @@ class CompositeTarget:
         self.color = self.ctx.texture(size, 4)
         self.depth = self.ctx.depth_texture(size)
         self.fbo = self.ctx.framebuffer([self.color], self.depth)
-        self._parts = [self.fbo, self.color, self.depth]
+        self._parts = [self.color, self.depth]
         self.size = tuple(size)
 
     def read(self) -> tuple[np.ndarray, np.ndarray]:
@@ -68,7 +68,7 @@ class CompositeTarget:
 
     def release(self) -> None:
         if self.fbo is not None:
-            self.ctx.detect_framebuffer(0).use()
+            release_framebuffer(self.ctx, self.fbo)
         for obj in self._parts:
             obj.release()
         self._parts = []
@@ -162,12 +162,11 @@ class CompositePass:
         self.passes.append("+".join(k.removeprefix("MODE_").lower() for k in on))
         prog, vao = self._program(**{k: True for k in on})
         prog["u_viewport"].value = tuple(float(v) for v in records.viewport)
-        for name, value in (("u_desaturate", desaturate), ("u_edge_color", style.edge_color),
+        edge_color = style.outline_color if outline else style.edge_color
+        for name, value in (("u_desaturate", desaturate), ("u_edge_color", edge_color),
                             ("u_outline_width", style.outline_width)):
-            if name in prog:
+            if name in prog:       # the compiler drops what a variant does not use
                 prog[name].value = value
-        if outline and "u_edge_color" in prog:
-            prog["u_edge_color"].value = style.outline_color
         flags = moderngl.NOTHING
         if sprite or depth_test:
             flags |= moderngl.DEPTH_TEST

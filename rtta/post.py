@@ -9,7 +9,7 @@ import numpy as np
 from . import glraw, glsl
 from .gpu import GpuScene
 from .parameterize import Records
-from .targets import LayeredTarget
+from .targets import LayeredTarget, release_framebuffer
 
 
 class AtlasPostPass:
@@ -57,8 +57,7 @@ class AtlasPostPass:
 
     def _free(self) -> None:
         if self.fbo is not None:
-            self.ctx.detect_framebuffer(0).use()
-            self.fbo.release()
+            release_framebuffer(self.ctx, self.fbo)
             self.texture.release()
         self.fbo = self.texture = None
         self._shape = None

@@ -49,7 +49,7 @@ class Renderer:
         self._post_key: tuple | None = None
         self._captures = 0
         self.target = CompositeTarget(ctx)
-        self.last: tuple | None = None     # (camera, viewport, records) of the last capture
+        self.last: tuple | None = None     # (records, view, proj) of the last capture
 
     def matrices(self, camera: Camera, viewport: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
         return camera.view(self.scene.origin), camera.projection(viewport[0] / viewport[1])
@@ -76,7 +76,7 @@ class Renderer:
         records = self.parameterize(camera, viewport, (view, proj))
         self.capture_pass(path).render(gpu=self.gpu, records=records, view=view, proj=proj,
                                        atlas=self.atlas)
-        self.last = (camera, viewport, records, view)
+        self.last = (records, view, proj)
         self._captures += 1
         return records
 
@@ -84,26 +84,26 @@ class Renderer:
         """Composite the last capture; re-run it alone when only the style or mode changes."""
         if self.last is None:
             raise RuntimeError("composite() needs a capture() first")
-        _, _, records, view = self.last
+        records, view, _ = self.last
+        style = style or Style()
         if self._composite is None:
             self._composite = CompositePass(self.ctx)
         centers = (self.scene.aabb_min + self.scene.aabb_max) / 2 - self.scene.origin
         view_depth = -(centers @ view[2, :3] + view[2, 3])
-        post = self.post_process(style or Style()) if mode == "ghosted-ao" else None
-        self._composite.render(atlas=self.atlas, records=records, gpu=self.gpu, style=style or Style(),
+        post = self.post_process(style) if mode == "ghosted-ao" else None
+        self._composite.render(atlas=self.atlas, records=records, gpu=self.gpu, style=style,
                                mode=mode, view_depth=view_depth, target=self.target, post=post)
         return self.target
 
     def post_process(self, style: Style) -> AtlasPostPass:
         """Ambient occlusion and edges on the atlas (ghosted-ao only). They depend on the
         capture and the AO/edge parameters, not on focus or opacity: re-run only when those change."""
-        camera, viewport, records, _ = self.last
+        records, _, proj = self.last
         if self._post is None:
             self._post = AtlasPostPass(self.ctx)
         key = (self._captures, style.ao_radius, style.ao_strength, style.edge_width)
         if key != self._post_key:
-            self._post.render(atlas=self.atlas, records=records, gpu=self.gpu,
-                              proj=camera.projection(viewport[0] / viewport[1]), style=style)
+            self._post.render(atlas=self.atlas, records=records, gpu=self.gpu, proj=proj, style=style)
             self._post_key = key
         return self._post
 

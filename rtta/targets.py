@@ -15,6 +15,13 @@ from . import glraw
 SHRINK_AFTER_FRAMES = 60
 
 
+def release_framebuffer(ctx: moderngl.Context, fbo) -> None:
+    """Release `fbo` after binding the default framebuffer: moderngl rebinds the framebuffer
+    it used last, and binding a deleted one is a GL error."""
+    ctx.detect_framebuffer(0).use()
+    fbo.release()
+
+
 def _round_up(v: int, step: int) -> int:
     return max(step, -(-v // step) * step)
 
@@ -29,7 +36,6 @@ class LayeredTarget:
         self.allocations = 0
         self._small_frames = 0
         self._fbo = None
-        self._unbound = None
         self._textures: list = []
         self._allocate(size, layers)
 
@@ -103,11 +109,7 @@ class LayeredTarget:
 
     def _free(self) -> None:
         if self._fbo is not None:
-            # never leave a deleted framebuffer bound: moderngl rebinds the last one it used
-            if self._unbound is None:
-                self._unbound = self.ctx.detect_framebuffer(0)
-            self._unbound.use()
-            self._fbo.release()
+            release_framebuffer(self.ctx, self._fbo)
             self._fbo = None
         for tex in self._textures:
             tex.release()

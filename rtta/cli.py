@@ -44,7 +44,8 @@ def build_parser() -> argparse.ArgumentParser:
     _scene_arg(p)
     _view_args(p)
     p.add_argument("--mode", default="ghosted-ao", help="std, sprites, transparent, ghosted or ghosted-ao")
-    p.add_argument("--focus", nargs="+", default=[], metavar="NAME", help="objects shown opaque in ghosted modes")
+    p.add_argument("--focus", nargs="+", default=[], metavar="NAME",
+                   help="objects highlighted: opaque in ghosted modes, outlined in sprites/transparent")
     p.add_argument("--opacity", nargs="+", default=[], metavar="NAME=A", help="per-object opacity in [0, 1]")
     p.add_argument("--context-opacity", type=float, default=None, help="opacity of non-focus objects (ghosted)")
     p.add_argument("--edge-width", type=int, default=1, help="edge detection distance in pixels (ghosted-ao)")

@@ -2,7 +2,8 @@
 expanded into a quad over its B_viewport, reading its own unoccluded atlas images.
 
 Modes: `sprites` (depth sprites, reconstruct STD), `transparent` (every object blended
-with its opacity, back to front), `ghosted` (focus opaque and visible through the faded,
+with its opacity, back to front); in both, highlighted (focus) objects get their silhouette
+drawn over everything. `ghosted` (focus opaque and visible through the faded,
 desaturated context, with silhouettes), `ghosted-ao` (ghosted, shaded with ambient
 occlusion and edges computed on each object's own atlas images).
 """
@@ -135,8 +136,10 @@ class CompositePass:
         everyone = np.arange(n)
         if mode == "sprites":
             self._draw(everyone, style, records, sprite=True)
+            self._draw(focus, style, records, outline=True)      # highlights, seen through
         elif mode == "transparent":
             self._draw(back_to_front(records, view_depth, everyone), style, records, blend=True, desaturate=0.0)
+            self._draw(focus, style, records, outline=True)
         else:
             with_ao = mode == "ghosted-ao"
             if with_ao:

@@ -109,3 +109,21 @@ def bind_texture_array(unit: int, glo: int) -> None:
     gl.glActiveTexture(GL_TEXTURE0 + unit)
     gl.glBindTexture(GL_TEXTURE_2D_ARRAY, glo)
     gl.glActiveTexture(GL_TEXTURE0)
+
+
+GL_BACK = 0x0405
+GL_RGBA = 0x1908
+GL_UNSIGNED_BYTE = 0x1401
+GL_READ_FRAMEBUFFER = 0x8CA8
+
+
+def read_window(width: int, height: int) -> np.ndarray:
+    """The default framebuffer's back buffer as RGBA8 [H, W, 4], row 0 at the bottom.
+    moderngl reads the default framebuffer through GL_COLOR_ATTACHMENT0, an error there."""
+    gl = _lib()
+    out = np.empty((height, width, 4), np.uint8)
+    gl.glBindFramebuffer(GL_READ_FRAMEBUFFER, 0)
+    gl.glReadBuffer(GL_BACK)
+    gl.glPixelStorei(GL_PACK_ALIGNMENT, 1)
+    gl.glReadPixels(0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE, out.ctypes.data_as(ctypes.c_void_p))
+    return out

@@ -15,7 +15,9 @@ def to_image(rgba_gl: np.ndarray) -> Image.Image:
 
 
 def save_png(path: str | Path, rgba_gl: np.ndarray, *, overwrite: bool = True) -> Path:
-    """Write a GL-convention array as PNG; with overwrite=False an existing file is an error."""
+    """Write a GL-convention array as PNG, atomically. With overwrite=False an existing file
+    is a FileExistsError, checked atomically (hard link), so a file that appears meanwhile
+    is never replaced either."""
     path = Path(path)
     if not overwrite and path.exists():
         raise FileExistsError(path)
@@ -23,8 +25,10 @@ def save_png(path: str | Path, rgba_gl: np.ndarray, *, overwrite: bool = True) -
     os.close(fd)
     try:
         to_image(rgba_gl).save(tmp, format="PNG")
-        os.replace(tmp, path)
-    except BaseException:
+        if overwrite:
+            os.replace(tmp, path)
+        else:
+            os.link(tmp, path)
+    finally:
         Path(tmp).unlink(missing_ok=True)
-        raise
     return path

@@ -12,14 +12,20 @@ from .parameterize import Records
 EMPTY = {"color": 0, "normal": 0.0, "id": -1, "depth": 1.0}
 
 
+def to_atlas(records: Records, oid: int, x, y) -> tuple[np.ndarray, np.ndarray]:
+    """The transform T: atlas texel column/row (nearest) of viewport pixels x, y of one object."""
+    x0, y0 = records.viewport_rect[oid, :2]
+    ax, ay = records.atlas_rect[oid, :2] + records.border
+    s = records.scale[oid]
+    tx = np.floor(ax + s * (np.asarray(x) + 0.5 - x0)).astype(np.int64)
+    ty = np.floor(ay + s * (np.asarray(y) + 0.5 - y0)).astype(np.int64)
+    return tx, ty
+
+
 def region_texels(records: Records, oid: int) -> tuple[np.ndarray, np.ndarray]:
     """Atlas texel column/row for every viewport pixel of the object's inner B_viewport."""
     x0, y0, x1, y1 = records.viewport_rect[oid]
-    ax, ay = records.atlas_rect[oid, :2] + records.border
-    s = records.scale[oid]
-    tx = np.floor(ax + s * (np.arange(x0, x1) + 0.5 - x0)).astype(np.int64)
-    ty = np.floor(ay + s * (np.arange(y0, y1) + 0.5 - y0)).astype(np.int64)
-    return tx, ty
+    return to_atlas(records, oid, np.arange(x0, x1), np.arange(y0, y1))
 
 
 def map_back(atlas: dict[str, np.ndarray], records: Records, oid: int) -> dict[str, np.ndarray]:

@@ -6,6 +6,8 @@ frees them. It never creates a context: it takes a moderngl.Context.
 
 from __future__ import annotations
 
+import time
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import moderngl
@@ -50,6 +52,19 @@ class Renderer:
         self._captures = 0
         self.target = CompositeTarget(ctx)
         self.last: tuple | None = None     # (records, view, proj) of the last capture
+        self.measure = False               # time each stage (waits for the GPU after each)
+        self.timings: dict[str, float] = {}  # stage -> ms of its last run, when measuring
+
+    @contextmanager
+    def _timed(self, stage: str):
+        """Record the stage's wall time in `timings` (with ctx.finish(), so GPU work counts)."""
+        if not self.measure:
+            yield
+            return
+        t0 = time.perf_counter()
+        yield
+        self.ctx.finish()
+        self.timings[stage] = (time.perf_counter() - t0) * 1e3
 
     def matrices(self, camera: Camera, viewport: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
         return camera.view(self.scene.origin), camera.projection(viewport[0] / viewport[1])
@@ -73,9 +88,11 @@ class Renderer:
     def capture(self, camera: Camera, viewport: tuple[int, int], path: str | None = None) -> Records:
         """Parameterize and capture every visible object into the atlas; returns R."""
         view, proj = self.matrices(camera, viewport)
-        records = self.parameterize(camera, viewport, (view, proj))
-        self.capture_pass(path).render(gpu=self.gpu, records=records, view=view, proj=proj,
-                                       atlas=self.atlas)
+        with self._timed("parameterize"):
+            records = self.parameterize(camera, viewport, (view, proj))
+        with self._timed("capture"):
+            self.capture_pass(path).render(gpu=self.gpu, records=records, view=view, proj=proj,
+                                           atlas=self.atlas)
         self.last = (records, view, proj)
         self._captures += 1
         return records
@@ -91,8 +108,9 @@ class Renderer:
         centers = (self.scene.aabb_min + self.scene.aabb_max) / 2 - self.scene.origin
         view_depth = -(centers @ view[2, :3] + view[2, 3])
         post = self.post_process(style) if mode == "ghosted-ao" else None
-        self._composite.render(atlas=self.atlas, records=records, gpu=self.gpu, style=style,
-                               mode=mode, view_depth=view_depth, target=self.target, post=post)
+        with self._timed("composite"):
+            self._composite.render(atlas=self.atlas, records=records, gpu=self.gpu, style=style,
+                                   mode=mode, view_depth=view_depth, target=self.target, post=post)
         return self.target
 
     def post_process(self, style: Style) -> AtlasPostPass:
@@ -103,7 +121,8 @@ class Renderer:
             self._post = AtlasPostPass(self.ctx)
         key = (self._captures, style.ao_radius, style.ao_strength, style.edge_width)
         if key != self._post_key:
-            self._post.render(atlas=self.atlas, records=records, gpu=self.gpu, proj=proj, style=style)
+            with self._timed("post"):
+                self._post.render(atlas=self.atlas, records=records, gpu=self.gpu, proj=proj, style=style)
             self._post_key = key
         return self._post
 
@@ -117,7 +136,8 @@ class Renderer:
         if self._std is None:
             self._std = StdPass(self.ctx)
         view, proj = self.matrices(camera, viewport)
-        self._std.render(gpu=self.gpu, view=view, proj=proj, target=self.single_target, viewport=viewport)
+        with self._timed("std"):
+            self._std.render(gpu=self.gpu, view=view, proj=proj, target=self.single_target, viewport=viewport)
         return self.single_target
 
     def rtt(self, camera: Camera, viewport: tuple[int, int], objects, consume=None) -> None:

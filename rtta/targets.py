@@ -93,19 +93,21 @@ class LayeredTarget:
         glraw.clear_color_int(2, -1)
         glraw.clear_depth(1.0)
 
-    def read(self, size: tuple[int, int] | None = None, layers: int | None = None) -> dict[str, np.ndarray]:
-        """Layers as numpy [layers, H, W(, C)], cropped to `size`; row 0 is the bottom row."""
+    def read(self, size: tuple[int, int] | None = None, layers: int | None = None,
+             parts: tuple[str, ...] = ("color", "normal", "id", "depth")) -> dict[str, np.ndarray]:
+        """Layers as numpy [layers, H, W(, C)], cropped to `size`; row 0 is the bottom row.
+        `parts` picks which attachments are read (picking needs only id and depth)."""
         w, h = self.size
         n = self.layers
         cw, ch = size or (w, h)
         cl = n if layers is None else max(1, layers)
-        full = {
-            "color": np.frombuffer(self.color.read(), np.uint8).reshape(n, h, w, 4),
-            "normal": np.frombuffer(self.normal.read(), np.float16).reshape(n, h, w, 4),
-            "id": np.frombuffer(self.ids.read(), np.int32).reshape(n, h, w),
-            "depth": self.depth.read(),
+        readers = {
+            "color": lambda: np.frombuffer(self.color.read(), np.uint8).reshape(n, h, w, 4),
+            "normal": lambda: np.frombuffer(self.normal.read(), np.float16).reshape(n, h, w, 4),
+            "id": lambda: np.frombuffer(self.ids.read(), np.int32).reshape(n, h, w),
+            "depth": self.depth.read,
         }
-        return {k: np.ascontiguousarray(v[:cl, :ch, :cw]) for k, v in full.items()}
+        return {k: np.ascontiguousarray(readers[k]()[:cl, :ch, :cw]) for k in parts}
 
     def _free(self) -> None:
         if self._fbo is not None:

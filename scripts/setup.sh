@@ -2,7 +2,7 @@
 # Set up a fresh Debian machine for rtta: system GL libraries (Mesa llvmpipe through EGL)
 # when missing, a virtual environment in .venv, and rtta installed into it (not editable,
 # so the tests exercise the wheel with its shaders and demo scene).
-# Usage: scripts/setup.sh [EXTRA]   (EXTRA: pip extras, e.g. "test" or "viewer")
+# Usage: scripts/setup.sh [EXTRAS]   (pip extras, comma-separated, e.g. "test,viewer")
 set -euo pipefail
 cd "$(dirname "$0")/.."
 extras="${1:-}"
@@ -14,6 +14,12 @@ ldconfig -p 2>/dev/null | grep -q 'libOpenGL.so.0' || need_apt+=(libopengl0)
 ldconfig -p 2>/dev/null | grep -q 'libGL.so.1 ' || need_apt+=(libgl1)
 ls /usr/lib/*/dri/swrast_dri.so >/dev/null 2>&1 || need_apt+=(libgl1-mesa-dri)
 python3 -c 'import venv, ensurepip' 2>/dev/null || need_apt+=(python3-venv)
+case ",$extras," in
+  *,viewer,*|*,test,*)   # the viewer's window: X libraries, and Xvfb for tests and headless runs
+    command -v Xvfb >/dev/null 2>&1 || need_apt+=(xvfb)
+    ldconfig -p 2>/dev/null | grep -q 'libGLX.so.0' || need_apt+=(libglx0)
+    ;;
+esac
 if [ ${#need_apt[@]} -gt 0 ]; then
   echo "setup: installing system packages: ${need_apt[*]}"
   SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# Set up, then run the whole test suite (GL tests run headless on Mesa llvmpipe through EGL).
+# Set up, then run the whole test suite (GL tests run headless on Mesa llvmpipe through EGL;
+# the viewer's window tests start their own Xvfb).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/setup.sh test
+bash scripts/setup.sh test,viewer
 .venv/bin/ruff check rtta viewer tests scripts
 exec .venv/bin/pytest "$@"

@@ -140,7 +140,11 @@ def test_only_needed_passes_run(make_renderer, demo_scene):
     expected = {"sprites": ["sprite"], "transparent": ["blend"], "ghosted": ["sprite", "blend", "outline"]}
     for mode, passes in expected.items():
         r.composite(mode, Style(focus={1}))
-        assert r._composite.passes == passes and r._post is None
+        highlight = ["outline"] if mode != "ghosted" else []     # sprites/transparent: highlight outlines
+        assert r._composite.passes == passes + highlight and r._post is None
+        if highlight:
+            r.composite(mode, Style())
+            assert r._composite.passes == passes
     r.composite("ghosted-ao", Style(focus={1}))
     assert r._composite.passes == ["sprite+with_ao", "blend+with_ao", "outline"] and r._post is not None
 

@@ -1,1 +1,54 @@
-"""The desktop viewer (moderngl-window + imgui-bundle) built on the rtta library; see issue 4."""
+"""rtta-view: the desktop viewer (moderngl-window + pyglet, imgui-bundle panels)."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from pathlib import Path
+
+NO_DISPLAY = ("rtta-view: no display found (DISPLAY and WAYLAND_DISPLAY are not set); "
+              "for images without a display use `rtta snapshot`")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    from rtta.snapshot import SNAPSHOT_MODES
+
+    p = argparse.ArgumentParser(prog="rtta-view", description="Interactive ghosted views of multi-part models.")
+    p.add_argument("scene", nargs="?", help="scene file (default: the built-in demo)")
+    p.add_argument("--scene", dest="scene_opt", metavar="FILE", help="scene file (same as the positional)")
+    p.add_argument("--size", default="1280x720", help="window size WxH")
+    p.add_argument("--mode", default="ghosted-ao", choices=SNAPSHOT_MODES)
+    p.add_argument("--screenshot-dir", default=".", help="folder for screenshots (F12)")
+    p.add_argument("--bench", type=int, default=0, metavar="FRAMES",
+                   help="orbit for FRAMES frames per mode and print frame times, then exit")
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    from rtta.cli import parse_size
+    from rtta.errors import RttaError
+
+    args = build_parser().parse_args(argv)
+    if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        print(NO_DISPLAY, file=sys.stderr)
+        return 2
+    try:
+        import moderngl_window  # noqa: F401
+        from imgui_bundle import imgui  # noqa: F401
+    except ImportError as exc:
+        print(f"rtta-view: the viewer needs its extra: pip install 'rtta[viewer]' ({exc})", file=sys.stderr)
+        return 2
+    from .run import run
+
+    try:
+        size = parse_size(args.size)
+        return run(args.scene_opt or args.scene, size=size, mode=args.mode,
+                   screenshot_dir=Path(args.screenshot_dir), bench=args.bench)
+    except RttaError as exc:
+        print(f"rtta-view: {exc}", file=sys.stderr)
+        return 2
+
+
+def cli() -> None:
+    sys.exit(main())

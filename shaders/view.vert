@@ -1,0 +1,10 @@
+#version 430
+// defines:
+// Full-screen triangle over the GL viewport (no vertex buffer); v_uv spans [0, 1] on it.
+out vec2 v_uv;
+
+void main() {
+    vec2 p = vec2((gl_VertexID << 1) & 2, gl_VertexID & 2);
+    v_uv = p;
+    gl_Position = vec4(p * 2.0 - 1.0, 0.0, 1.0);
+}

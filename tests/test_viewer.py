@@ -1,0 +1,237 @@
+"""The viewer: orbit maths, panel state and layout in numpy; picking against the atlas on
+EGL; and the real window under Xvfb driven with synthetic input (tests/viewer_driver.py)."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from rtta.camera import DEFAULT_ORBIT, Camera
+from rtta.picking import objects_at, pick
+from rtta.readback import front_most
+from viewer.orbit import MAX_ELEVATION, Orbit
+from viewer.state import ViewerState
+from viewer.views import Layout, atlas_rects_on_screen, layer_tiles
+
+HERE = Path(__file__).parent
+
+
+def project(cam: Camera, p, aspect: float) -> np.ndarray:
+    clip = cam.projection(aspect) @ cam.view(np.zeros(3)) @ np.append(p, 1.0)
+    return clip[:2] / clip[3]
+
+
+def test_orbit_never_flips_at_the_poles():
+    o = Orbit.default(np.zeros(3), 1.0)
+    for _ in range(50):
+        o.rotate(0, 100)                       # far past the pole
+        cam = o.camera()
+        assert o.el <= MAX_ELEVATION and np.dot(cam.up, [0, 1, 0]) > 0
+    assert np.all(np.isfinite(o.camera().view(np.zeros(3))))
+
+
+def test_zoom_keeps_the_point_under_the_cursor():
+    o = Orbit.default(np.array([1.0, 2.0, 3.0]), 2.0)
+    aspect, ndc = 1.5, (0.4, -0.3)
+    cam = o.camera()
+    right, up = o._axes()
+    half = o.dist * np.tan(np.radians(o.fov_y) / 2)
+    p = o.target + (ndc[0] * aspect * right + ndc[1] * up) * half
+    assert np.allclose(project(cam, p, aspect), ndc)
+    o.zoom(3, ndc, aspect)
+    assert o.dist < 2.2 * 2.0 * 0.7
+    assert np.allclose(project(o.camera(), p, aspect), ndc, atol=1e-9)
+
+
+def test_pan_moves_the_scene_with_the_cursor():
+    o = Orbit.default(np.zeros(3), 1.0)
+    height = 600
+    before = project(o.camera(), np.zeros(3), 1.0)
+    o.pan(30, -60, height)                     # right 30 px, up 60 px (y down)
+    after = project(o.camera(), np.zeros(3), 1.0)
+    assert np.allclose((after - before) * height / 2, [30, 60], atol=1e-6)
+
+
+def test_frame_and_orbit_around():
+    o = Orbit.default(np.zeros(3), 1.0)
+    o.zoom(-20)
+    o.frame()
+    cam = o.camera()
+    for axis in np.eye(3):                     # the bounding sphere's extreme points are in view
+        for p in (axis, -axis):
+            assert np.all(np.abs(project(cam, p, 1.0)) <= 1.0)
+    eye = cam.eye.copy()
+    o.orbit_around([0.5, 0.2, -0.1])
+    assert np.allclose(o.camera().eye, eye) and np.allclose(o.target, [0.5, 0.2, -0.1])
+
+
+def test_state_filter_and_bulk_selection():
+    s = ViewerState(["pad_inner", "pad_outer", "disc", "Piston_1"])
+    s.filter = "PAD"
+    assert s.filtered() == [0, 1]
+    s.select("all")
+    assert s.highlighted == {0, 1}
+    s.toggle(3)
+    s.select("invert")
+    assert s.highlighted == {3}
+    s.filter = ""
+    s.select("none")
+    assert s.highlighted == set()
+    key = s.style_key()
+    s.style.opacity[2] = 0.2
+    assert s.style_key() != key
+    with pytest.raises(ValueError):
+        ViewerState([], mode="nope")
+
+
+def test_layout_and_atlas_tiles():
+    lay = Layout.of((1280, 720), True)
+    assert lay.panel[2] + lay.composite[2] + lay.atlas[2] == 1280
+    assert Layout.of((1280, 720), False).atlas[2] == 0 and Layout.of((0, 0), True).composite[2] == 0
+    tiles = layer_tiles((900, 20, 380, 700), (600, 700), 3, -1)
+    assert [k for k, _ in tiles] == [0, 1, 2]
+    boxes = [(x, y, x + w, y + h) for _, (x, y, w, h) in tiles]
+    for i, a in enumerate(boxes):           # inside the view, not overlapping
+        assert a[0] >= 900 and a[1] >= 20 and a[2] <= 1280 and a[3] <= 720
+        for b in boxes[i + 1:]:
+            assert a[2] <= b[0] or b[2] <= a[0] or a[3] <= b[1] or b[3] <= a[1]
+    # a full-extent region covers its whole tile; y flips (atlas rows count from the bottom)
+    (_, rect), = layer_tiles((0, 0, 100, 100), (50, 100), 1, 0)
+    assert np.allclose(atlas_rects_on_screen([[0, 0, 50, 100]], (50, 100), rect), [[25, 0, 75, 100]])
+    assert np.allclose(atlas_rects_on_screen([[0, 0, 10, 10]], (50, 100), rect), [[25, 90, 35, 100]])
+
+
+def test_picking_finds_hidden_objects_and_front_most(make_renderer, demo_scene):
+    """objects_at's nearest hit equals the front-most id mapped back from the whole atlas;
+    a preferred (highlighted) object behind it is found too."""
+    r = make_renderer(demo_scene)
+    cam = Camera.orbit(demo_scene.center, demo_scene.radius, *DEFAULT_ORBIT)
+    rec = r.capture(cam, (160, 120))
+    atlas = r.atlas.read(rec.atlas_size[:2], rec.atlas_size[2], parts=("id", "depth"))
+    front = front_most(atlas, rec)["id"]
+    rng = np.random.default_rng(3)
+    occluded = 0
+    for x, y in zip(rng.integers(0, 160, 300), rng.integers(0, 120, 300), strict=True):
+        hits = objects_at(atlas, rec, int(x), int(y))
+        assert (hits[0][0] if hits else -1) == front[y, x]
+        assert [h[1] for h in hits] == sorted(h[1] for h in hits)
+        if len(hits) > 1:
+            occluded += 1
+            assert pick(hits, {hits[-1][0]}) == hits[-1][0] and pick(hits) == hits[0][0]
+    assert occluded > 20
+    assert objects_at(atlas, rec, -1, 5) == [] and pick([]) is None
+
+
+@pytest.fixture(scope="module")
+def display():
+    """An X display: the one given, or a fresh Xvfb (the test starts it; CI has none)."""
+    if os.environ.get("DISPLAY"):
+        yield os.environ["DISPLAY"]
+        return
+    xvfb = shutil.which("Xvfb")
+    assert xvfb, "Xvfb is missing: scripts/setup.sh installs it (package xvfb)"
+    r, w = os.pipe()
+    proc = subprocess.Popen([xvfb, "-displayfd", str(w), "-screen", "0", "1920x1080x24", "-nolisten", "tcp"],
+                            pass_fds=(w,), stderr=subprocess.DEVNULL)
+    os.close(w)
+    with os.fdopen(r) as f:
+        number = f.readline().strip()
+    assert number, "Xvfb did not start"
+    yield f":{number}"
+    proc.terminate()
+    proc.wait(10)
+
+
+def _env(display: str | None) -> dict:
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    if display:
+        env["DISPLAY"] = display
+    return env
+
+
+def _region(img: np.ndarray, rect) -> np.ndarray:
+    x, y, w, h = rect
+    return img[y:y + h, x:x + w, :3].astype(int)
+
+
+@pytest.fixture(scope="module")
+def driven(display, tmp_path_factory):
+    out = tmp_path_factory.mktemp("viewer")
+    proc = subprocess.run([sys.executable, str(HERE / "viewer_driver.py"), str(out)], env=_env(display),
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    result = json.loads((out / "result.json").read_text())
+    shots = {p.stem: np.asarray(Image.open(p).convert("RGB")) for p in out.glob("*.png")}
+    return result, shots
+
+
+def test_window_draws_panel_and_both_views(driven):
+    result, shots = driven
+    lay, img = result["layout"], shots["start"]
+    panel, comp, atlas = (_region(img, lay[k]) for k in ("panel", "composite", "atlas"))
+    assert panel.std() > 20                                   # text and widgets on the panel
+    bg = np.array([0.93, 0.93, 0.95]) * 255
+    assert (np.abs(comp - bg).max(-1) > 10).mean() > 0.1      # the scene over the background
+    atlas_bg = np.array([0.16, 0.16, 0.18]) * 255
+    assert (np.abs(atlas - atlas_bg).max(-1) > 10).mean() > 0.1   # captured objects in the atlas
+    assert result["gl_errors"] == []
+
+
+def test_dragging_changes_the_view(driven):
+    result, shots = driven
+    rect = result["layout"]["composite"]
+    changed = np.abs(_region(shots["start"], rect) - _region(shots["dragged"], rect)).max(-1) > 10
+    assert changed.mean() > 0.05
+    assert result["az1"] != result["az0"]
+
+
+def test_highlight_toggles_change_the_composite(driven):
+    result, shots = driven
+    rect = result["layout"]["composite"]
+    assert result["focus_after_checkbox"] == [result["checkbox_target"]]
+    changed = np.abs(_region(shots["dragged"], rect) - _region(shots["highlight"], rect)).max(-1) > 10
+    assert changed.sum() > 50
+    # the click lands on the highlighted piston seen through the part in front of it
+    assert result["front_most_at_piston"] != result["picked"] and result["focus_after_pick"] == []
+
+
+def test_keys_wheel_files_and_resizes(driven):
+    result, _ = driven
+    assert all(result["keys_changed"].values()), result["keys_changed"]
+    assert result["zoomed"] and result["mode_after_cycle"] == "ghosted-ao"
+    assert len(result["screenshots"]) == 4 and len(set(result["screenshots"])) == 4
+    assert result["open_bad"] is False and result["scene_kept"] and "broken.glb" in result["message"]
+    assert result["after_resize"] == [1280, 720] and result["gl_errors"] == []
+
+
+def test_no_display_says_so_in_one_line():
+    proc = subprocess.run([sys.executable, "-m", "viewer"], env=_env(None), capture_output=True, text=True)
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and "rtta snapshot" in lines[0] and "Traceback" not in proc.stderr
+
+
+def test_bad_scene_on_the_command_line(display, tmp_path):
+    bad = tmp_path / "scene.glb"
+    bad.write_text("not a model")
+    proc = subprocess.run([sys.executable, "-m", "viewer", str(bad)], env=_env(display),
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2 and "scene.glb" in proc.stderr and "Traceback" not in proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1
+
+
+def test_bench_prints_every_mode(display):
+    proc = subprocess.run([sys.executable, "-m", "viewer", "--bench", "1", "--size", "640x360"],
+                          env=_env(display), capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    rows = [ln for ln in proc.stdout.splitlines() if ln.startswith("| ") and not ln.startswith("| mode")]
+    assert [r.split("|")[1].strip() for r in rows] == ["std", "sprites", "transparent", "ghosted", "ghosted-ao"]
+    assert all(float(r.split("|")[2]) > 0 for r in rows)

@@ -1,0 +1,222 @@
+"""The viewer: one window, the rtta renderer, and what is drawn each frame.
+
+Per frame: build the panel, capture again only when the camera, the viewport or the
+capture settings changed, composite again only when the mode or style changed, then show
+the composite and the atlas layer side by side with the panel on the left.
+"""
+
+from __future__ import annotations
+
+import itertools
+import time
+from pathlib import Path
+
+import moderngl
+import numpy as np
+from imgui_bundle import imgui, implot
+from moderngl_window.integrations.imgui_bundle import ModernglWindowRenderer
+
+from rtta.errors import RttaError
+from rtta.imageio import save_png
+from rtta.loader import load_scene
+from rtta.renderer import Renderer
+from rtta.scene import Scene
+from rtta.snapshot import over_background
+
+from . import overlay, panels
+from .controls import Controls
+from .files import FileBrowser, Stats
+from .orbit import Orbit
+from .state import ViewerState
+from .views import ATLAS_BACKGROUND, Layout, ViewPass, layer_tiles
+
+WINDOW_CLEAR = (0.11, 0.11, 0.12)
+LABEL_HEIGHT = 22
+
+
+class Viewer:
+    def __init__(self, wnd, scene: Scene, *, screenshot_dir: Path | None = None, mode: str = "ghosted-ao") -> None:
+        self.wnd = wnd
+        self.ctx: moderngl.Context = wnd.ctx
+        imgui.create_context()
+        implot.create_context()
+        imgui.get_io().set_ini_filename("")          # never write imgui.ini into the user's folder
+        self.imgui = ModernglWindowRenderer(wnd)
+        self.view_pass = ViewPass(self.ctx)
+        self.files = FileBrowser(self.open_scene)
+        self.controls = Controls(self)
+        self.stats = Stats()
+        self.screenshot_dir = Path(screenshot_dir or Path.cwd())
+        self.message, self.message_is_error = "", False
+        self.item_rects: dict[int, tuple] = {}       # object list checkboxes on screen (tests click them)
+        self.renderer: Renderer | None = None
+        self.layout = Layout.of(wnd.buffer_size, True)
+        self.set_scene(scene, mode=mode)
+        self.controls.attach(wnd)
+
+    # ---- scene -------------------------------------------------------------------------
+    def set_scene(self, scene: Scene, mode: str | None = None) -> None:
+        old = self.state if self.renderer is not None else None
+        state = ViewerState(scene.names, mode=mode or old.mode)
+        if old is not None:
+            state.settings, state.atlas_max, state.show_atlas = old.settings, old.atlas_max, old.show_atlas
+            self.renderer.release()
+        self.state = state
+        self.renderer = Renderer(self.ctx, scene, state.settings)
+        self.renderer.measure = True
+        self.orbit = Orbit.default(scene.center, scene.radius)
+        self.records = None
+        self.scene_label = Path(scene.source).name
+        self.scene_dir = Path(scene.source).parent if Path(scene.source).exists() else Path.cwd()
+        self._capture_key = self._composite_key = None
+
+    def open_scene(self, path) -> bool:
+        """Load `path`; on failure show the error in the panel and keep the current scene."""
+        try:
+            scene = load_scene(str(path))
+        except RttaError as exc:
+            return self.say(str(exc), error=True)
+        except Exception as exc:      # a broken file must never take the session down
+            return self.say(f"{Path(path).name}: cannot open ({type(exc).__name__}: {exc})", error=True)
+        self.set_scene(scene)
+        self.say(f"opened {Path(path).name}")
+        return True
+
+    def say(self, text: str, error: bool = False) -> bool:
+        self.message, self.message_is_error = text, error
+        return not error
+
+    @property
+    def capture_paths(self) -> list[str]:
+        caps = self.renderer.caps
+        return ["vs", "gs"] if caps.vertex_layer else ["gs"]
+
+    # ---- frame -------------------------------------------------------------------------
+    def frame(self) -> None:
+        """One frame into the window's framebuffer (call swap_buffers after it)."""
+        self.stats.tick()
+        minimized = self.wnd.width <= 0 or self.wnd.height <= 0
+        size = (0, 0) if minimized else self.wnd.buffer_size
+        self.layout = Layout.of(size, self.state.show_atlas)
+        self.imgui.io.display_size = imgui.ImVec2(*self.wnd.size)
+        t0 = time.perf_counter()
+        imgui.new_frame()
+        panels.draw(self)
+        ui_ms = (time.perf_counter() - t0) * 1e3
+        self.wnd.fbo.viewport = (0, 0, *size)
+        self.wnd.use()
+        self.ctx.clear(*WINDOW_CLEAR, 1.0)
+        if size[0] > 0 and size[1] > 0:
+            self.renderer.timings.clear()
+            self._draw_composite()
+            self._draw_atlas()
+            self.stats.stage_ms = dict(self.renderer.timings)     # what ran this frame
+            self.stats.last_ms.update(self.renderer.timings)      # for the panel: the last run of each
+        overlay.draw(self)
+        t1 = time.perf_counter()
+        imgui.render()
+        self.wnd.fbo.viewport = (0, 0, *size)
+        self.imgui.render(imgui.get_draw_data())
+        self.ctx.finish()
+        self.stats.stage_ms["ui"] = self.stats.last_ms["ui"] = ui_ms + (time.perf_counter() - t1) * 1e3
+
+    @property
+    def viewport(self) -> tuple[int, int]:
+        """Composite viewport size, capped at the largest texture the GL allows."""
+        cap = self.renderer.caps.max_texture
+        _, _, w, h = self.layout.composite
+        return min(w, cap), min(h, cap)
+
+    def _capture(self, camera) -> None:
+        vp = self.viewport
+        key = (tuple(camera.eye), tuple(camera.target), vp, self.state.capture_key())
+        if key != self._capture_key:
+            self.records = self.renderer.capture(camera, vp)
+            self._capture_key, self._composite_key = key, None
+
+    def _draw_composite(self) -> None:
+        vp, s, r = self.viewport, self.state, self.renderer
+        if vp[0] < 1 or vp[1] < 1:
+            return                    # minimized or no room: nothing to draw, nothing to capture
+        camera = self.orbit.camera()
+        atlas_visible = s.show_atlas and self.layout.atlas[2] > 0
+        if s.mode != "std" or atlas_visible:
+            self._capture(camera)
+        if s.mode == "std":
+            target = r.std(camera, vp)
+            extent = (vp[0] / target.size[0], vp[1] / target.size[1])
+            self.view_pass.render(texture=target.color, layer=0, extent=extent, rect=self._rect(vp),
+                                  window_height=self.wnd.buffer_size[1], target=self.wnd.fbo)
+            return
+        key = (self._capture_key, s.style_key())
+        if key != self._composite_key:
+            r.composite(s.mode, s.style)
+            self._composite_key = key
+        self.view_pass.render(texture=r.target.color, rect=self._rect(vp),
+                              window_height=self.wnd.buffer_size[1], target=self.wnd.fbo)
+
+    def _rect(self, vp: tuple[int, int]) -> tuple[int, int, int, int]:
+        x, y, _, _ = self.layout.composite
+        return (x, y, vp[0], vp[1])
+
+    def atlas_tiles(self) -> list[tuple[int, tuple]]:
+        """(layer, screen rect) of each atlas layer shown, below the atlas view's label."""
+        x, y, w, h = self.layout.atlas
+        rec = self.records
+        if not self.state.show_atlas or rec is None:
+            return []
+        return layer_tiles((x, y + LABEL_HEIGHT, w, h - LABEL_HEIGHT), rec.atlas_size[:2],
+                           rec.atlas_size[2], self.state.atlas_layer)
+
+    def _draw_atlas(self) -> None:
+        atlas, rec = self.renderer.atlas, self.records
+        for layer, rect in self.atlas_tiles():
+            self.view_pass.render(texture=atlas.color, layer=layer, rect=rect,
+                                  extent=(rec.atlas_size[0] / atlas.size[0], rec.atlas_size[1] / atlas.size[1]),
+                                  background=ATLAS_BACKGROUND, window_height=self.wnd.buffer_size[1],
+                                  target=self.wnd.fbo)
+
+    # ---- screenshots -------------------------------------------------------------------
+    def screenshot(self) -> list[Path]:
+        """PNGs of the composite and the atlas (layers side by side); never overwrites."""
+        images = {"composite": self.composite_image(), "atlas": self.atlas_image()}
+        images = {k: v for k, v in images.items() if v is not None}
+        stem = Path(self.scene_label).stem
+        for n in itertools.count(1):
+            paths = {k: self.screenshot_dir / f"rtta-{stem}-{n:03d}-{k}.png" for k in images}
+            if any(p.exists() for p in paths.values()):
+                continue
+            try:
+                written = [save_png(paths[k], img, overwrite=False) for k, img in images.items()]
+            except FileExistsError:
+                continue
+            except OSError as exc:
+                self.say(f"screenshot not written: {exc}", error=True)
+                return []
+            self.say("saved " + ", ".join(p.name for p in written))
+            return written
+
+    def composite_image(self) -> np.ndarray | None:
+        vp = self.viewport
+        if vp[0] < 1 or vp[1] < 1:
+            return None
+        if self.state.mode == "std":
+            return over_background(self.renderer.std(self.orbit.camera(), vp).read(vp, 1)["color"][0])
+        return self.renderer.target.read()[0].copy()
+
+    def atlas_image(self) -> np.ndarray | None:
+        rec = self.records
+        if rec is None or rec.atlas_size[2] == 0:
+            return None
+        tw, th, td = rec.atlas_size
+        color = self.renderer.atlas.read((tw, th), td, parts=("color",))["color"]
+        bg = np.array([*ATLAS_BACKGROUND, 1.0]) * 255
+        a = color[..., 3:4] / 255.0
+        rgba = np.rint(color * a + bg * (1 - a)).astype(np.uint8)
+        rgba[..., 3] = 255
+        return np.concatenate(list(rgba), axis=1)      # layers left to right
+
+    def release(self) -> None:
+        self.renderer.release()
+        self.view_pass.release()
+        self.imgui.shutdown()

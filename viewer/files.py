@@ -1,0 +1,97 @@
+"""A small imgui file browser (folders and supported scene files), so opening a scene
+needs no desktop dialog program; and the per-frame statistics the panel shows."""
+
+from __future__ import annotations
+
+import time
+from collections import deque
+from collections.abc import Callable
+from pathlib import Path
+
+from imgui_bundle import imgui
+
+from rtta.scene import SUPPORTED
+
+POPUP = "Open scene"
+
+
+def listing(folder: Path) -> tuple[list[Path], list[Path]]:
+    """(sub-folders, scene files) of `folder`, sorted by name, hidden entries left out."""
+    dirs, files = [], []
+    try:
+        entries = sorted(folder.iterdir(), key=lambda p: p.name.lower())
+    except OSError:
+        return [], []
+    for p in entries:
+        if p.name.startswith("."):
+            continue
+        try:
+            if p.is_dir():
+                dirs.append(p)
+            elif p.suffix.lower() in SUPPORTED:
+                files.append(p)
+        except OSError:
+            continue
+    return dirs, files
+
+
+class FileBrowser:
+    """`open(folder)` shows the popup; a chosen file is passed to `on_choose`."""
+
+    def __init__(self, on_choose: Callable[[Path], None]) -> None:
+        self.on_choose = on_choose
+        self.folder = Path.cwd()
+        self._want_open = False
+        self.visible = False
+
+    def open(self, folder: Path) -> None:
+        self.folder = Path(folder)
+        self._want_open = True
+
+    def draw(self) -> None:
+        if self._want_open:
+            imgui.open_popup(POPUP)
+            self._want_open = False
+        imgui.set_next_window_size(imgui.ImVec2(520, 420), imgui.Cond_.appearing)
+        self.visible, _ = imgui.begin_popup_modal(POPUP, None)
+        if not self.visible:
+            return
+        imgui.text_wrapped(str(self.folder))
+        imgui.begin_child("entries", imgui.ImVec2(0, -30), imgui.ChildFlags_.borders)
+        dirs, files = listing(self.folder)
+        if self.folder.parent != self.folder and imgui.selectable("../", False)[0]:
+            self.folder = self.folder.parent
+        for d in dirs:
+            if imgui.selectable(d.name + "/", False)[0]:
+                self.folder = d
+        for f in files:
+            if imgui.selectable(f.name, False)[0]:
+                imgui.close_current_popup()
+                self.on_choose(f)
+        imgui.end_child()
+        if imgui.button("Cancel") or imgui.is_key_pressed(imgui.Key.escape):
+            imgui.close_current_popup()
+        imgui.end_popup()
+
+
+class Stats:
+    """Frame times (a history for the plot) and the last time of each stage in ms."""
+
+    def __init__(self, keep: int = 240) -> None:
+        self.history: deque[float] = deque(maxlen=keep)
+        self.stage_ms: dict[str, float] = {}    # stages run in the last frame
+        self.last_ms: dict[str, float] = {}     # the last time each stage ran
+        self._last = time.perf_counter()
+
+    def tick(self) -> None:
+        now = time.perf_counter()
+        self.history.append((now - self._last) * 1e3)
+        self._last = now
+
+    def mean_ms(self, frames: int = 30) -> float:
+        recent = list(self.history)[-frames:]
+        return sum(recent) / len(recent) if recent else 0.0
+
+    def fps(self) -> float:
+        ms = self.mean_ms()
+        return 1e3 / ms if ms > 0 else 0.0

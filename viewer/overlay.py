@@ -1,0 +1,65 @@
+"""Drawn over the views with imgui's background draw list: atlas region outlines (the
+highlighted ones in the outline colour), the name of the region under the cursor, and
+the atlas size, layers and utilization."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+from imgui_bundle import imgui
+
+from .views import atlas_rects_on_screen, contains
+
+if TYPE_CHECKING:
+    from .app import Viewer
+
+REGION = imgui.IM_COL32(120, 200, 255, 140)
+TEXT = imgui.IM_COL32(235, 235, 240, 255)
+
+
+def _col(rgba) -> int:
+    r, g, b, a = (int(np.clip(v, 0, 1) * 255) for v in rgba)
+    return imgui.IM_COL32(r, g, b, a)
+
+
+def regions(app: Viewer):
+    """(object ids, screen boxes x0, y0, x1, y1) of every atlas region shown, per tile."""
+    rec = app.records
+    for layer, rect in app.atlas_tiles():
+        ids = np.flatnonzero(rec.visible & (rec.layer == layer))
+        yield layer, ids, atlas_rects_on_screen(rec.atlas_rect[ids], rec.atlas_size[:2], rect)
+
+
+def region_under(app: Viewer, x: float, y: float) -> int | None:
+    """The object whose atlas region is under window point (x, y), if any."""
+    if not contains(app.layout.atlas, x, y):
+        return None
+    for _, ids, boxes in regions(app):
+        hit = (boxes[:, 0] <= x) & (x < boxes[:, 2]) & (boxes[:, 1] <= y) & (y < boxes[:, 3])
+        if hit.any():
+            return int(ids[np.flatnonzero(hit)[0]])
+    return None
+
+
+def draw(app: Viewer) -> None:
+    rec = app.records
+    if not app.state.show_atlas or rec is None or app.layout.atlas[2] <= 0:
+        return
+    dl = imgui.get_background_draw_list()
+    focus_col = _col(app.state.style.outline_color)
+    for _, ids, boxes in regions(app):
+        for oid, (x0, y0, x1, y1) in zip(ids, boxes, strict=True):
+            on = int(oid) in app.state.highlighted
+            dl.add_rect(imgui.ImVec2(x0, y0), imgui.ImVec2(x1, y1), focus_col if on else REGION,
+                        0.0, 0, 2.0 if on else 1.0)
+    tw, th, td = rec.atlas_size
+    shown = "all layers" if app.state.atlas_layer < 0 else f"layer {app.state.atlas_layer}"
+    label = f"atlas {tw}x{th}, {td} layers ({shown})  utilization {100 * rec.utilization:.0f}%"
+    ax, ay, _, _ = app.layout.atlas
+    dl.add_text(imgui.ImVec2(ax + 6, ay + 4), TEXT, label)
+    oid = region_under(app, *app.controls.mouse)
+    if oid is not None and not imgui.get_io().want_capture_mouse:
+        x, y, w, h = rec.atlas_rect[oid]
+        imgui.set_tooltip(f"{app.renderer.scene.names[oid]}\nregion {w}x{h} at ({x}, {y}), layer "
+                          f"{rec.layer[oid]}\nscale {rec.scale[oid]:.2f} texels/pixel")

@@ -1,0 +1,158 @@
+"""The imgui side panel: scene, mode, highlights, style, atlas settings and stats.
+
+Each section is one short function reading and writing the viewer's state; the viewer
+decides what to re-run from the state afterwards (capture or compositing only).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+from imgui_bundle import imgui, implot
+
+from .state import ATLAS_MAX_CHOICES, VIEW_MODES
+
+if TYPE_CHECKING:
+    from .app import Viewer
+
+ERROR_COLOR = imgui.ImVec4(1.0, 0.45, 0.4, 1.0)
+LIST_HEIGHT = 170
+STAGES = ("parameterize", "capture", "post", "composite", "std", "ui")
+
+
+def draw(app: Viewer) -> None:
+    x, y, w, h = app.layout.panel
+    if w <= 0 or h <= 0:
+        return
+    imgui.set_next_window_pos(imgui.ImVec2(x, y))
+    imgui.set_next_window_size(imgui.ImVec2(w, h))
+    flags = imgui.WindowFlags_.no_move | imgui.WindowFlags_.no_resize | imgui.WindowFlags_.no_collapse
+    imgui.begin("rtta", None, flags)
+    _scene(app)
+    _mode(app)
+    imgui.push_item_width(-120)
+    _objects(app)
+    _stats(app)
+    _style(app)
+    _atlas(app)
+    imgui.pop_item_width()
+    imgui.end()
+    app.files.draw()
+
+
+def _scene(app: Viewer) -> None:
+    imgui.text(f"{app.scene_label}  ({app.renderer.scene.count} objects)")
+    if imgui.button("Open... (O)"):
+        app.files.open(app.scene_dir)
+    imgui.same_line()
+    if imgui.button("Screenshot (F12)"):
+        app.screenshot()
+    if app.message:
+        imgui.push_text_wrap_pos(0.0)
+        imgui.text_colored(ERROR_COLOR if app.message_is_error else imgui.ImVec4(0.6, 0.9, 0.6, 1), app.message)
+        imgui.pop_text_wrap_pos()
+
+
+def _mode(app: Viewer) -> None:
+    s = app.state
+    changed, i = imgui.combo("mode (M)", VIEW_MODES.index(s.mode), VIEW_MODES)
+    if changed:
+        s.mode = VIEW_MODES[i]
+    _, s.show_atlas = imgui.checkbox("atlas view (A)", s.show_atlas)
+    imgui.same_line()
+    if imgui.button("frame all (F)"):
+        app.orbit.frame()
+    if s.mode == "std":
+        imgui.text_disabled("STD draws the scene directly: no highlights")
+
+
+def _objects(app: Viewer) -> None:
+    s = app.state
+    if not imgui.collapsing_header("Objects", imgui.TreeNodeFlags_.default_open):
+        return
+    _, s.filter = imgui.input_text_with_hint("##filter", "filter by name", s.filter)
+    for how in ("all", "none", "invert"):
+        imgui.same_line()
+        if imgui.small_button(how):
+            s.select(how)
+    imgui.begin_child("objects", imgui.ImVec2(0, LIST_HEIGHT), imgui.ChildFlags_.borders)
+    app.item_rects.clear()
+    slider_x = imgui.get_cursor_pos_x() + imgui.get_content_region_avail().x - 90
+    for oid in s.filtered():
+        imgui.push_id(oid)
+        changed, on = imgui.checkbox(app.renderer.scene.names[oid], oid in s.highlighted)
+        app.item_rects[oid] = (*imgui.get_item_rect_min(), *imgui.get_item_rect_max())
+        if changed:
+            s.toggle(oid)
+        if s.mode == "transparent":
+            imgui.same_line(slider_x)
+            imgui.set_next_item_width(90)
+            changed, a = imgui.slider_float("##a", s.opacity(oid), 0.0, 1.0, "%.2f")
+            if changed:
+                s.style.opacity[oid] = a
+        imgui.pop_id()
+    imgui.end_child()
+
+
+def _style(app: Viewer) -> None:
+    st = app.state.style
+    if not imgui.collapsing_header("Style", imgui.TreeNodeFlags_.default_open):
+        return
+    _, st.context_opacity = imgui.slider_float("context opacity", st.context_opacity, 0.0, 1.0)
+    _, st.desaturate = imgui.slider_float("desaturate", st.desaturate, 0.0, 1.0)
+    _, st.default_opacity = imgui.slider_float("opacity (transp.)", st.default_opacity, 0.0, 1.0)
+    _, st.edge_width = imgui.slider_int("edge width", st.edge_width, 1, 4)
+    _, st.edge_color = _color("edge colour", st.edge_color)
+    _, st.outline_width = imgui.slider_int("outline width", st.outline_width, 1, 4)
+    _, st.outline_color = _color("outline colour", st.outline_color)
+    _, st.ao_radius = imgui.slider_float("AO radius (px)", st.ao_radius, 1.0, 16.0)
+    _, st.ao_strength = imgui.slider_float("AO strength", st.ao_strength, 0.0, 2.0)
+
+
+def _color(label: str, rgba) -> tuple[bool, tuple]:
+    changed, col = imgui.color_edit4(label, list(rgba), imgui.ColorEditFlags_.no_inputs)
+    return changed, tuple(col)
+
+
+def _atlas(app: Viewer) -> None:
+    s = app.state
+    if not imgui.collapsing_header("Atlas", imgui.TreeNodeFlags_.default_open):
+        return
+    _, s.settings.border = imgui.slider_int("border (px)", s.settings.border, 0, 4)
+    changed, i = imgui.combo("max size", ATLAS_MAX_CHOICES.index(s.atlas_max), ATLAS_MAX_CHOICES)
+    if changed:
+        s.set_atlas_max(ATLAS_MAX_CHOICES[i])
+    paths = app.capture_paths
+    current = app.renderer.caps.capture_path(s.settings.capture_path)
+    changed, i = imgui.combo("capture path", paths.index(current), paths)
+    if changed:
+        s.settings.capture_path = paths[i]
+    layers = app.records.atlas_size[2] if app.records is not None else 0
+    if layers > 0:
+        _, s.atlas_layer = imgui.slider_int("layer (L)", min(s.atlas_layer, layers - 1), -1, layers - 1,
+                                            "all" if s.atlas_layer < 0 else "%d")
+
+
+def _stats(app: Viewer) -> None:
+    if not imgui.collapsing_header("Stats", imgui.TreeNodeFlags_.default_open):
+        return
+    st = app.stats
+    imgui.text(f"frame {st.mean_ms():6.1f} ms  ({st.fps():5.1f} fps)")
+    for k in STAGES:
+        if k in st.last_ms:
+            ran = k in st.stage_ms
+            imgui.text(f"  {k:<13}{st.last_ms[k]:7.1f} ms" + ("" if ran else "  (reused)"))
+    r = app.records
+    if r is not None:
+        n, vis = len(r.visible), int(r.visible.sum())
+        imgui.text(f"visible {vis}  culled {n - vis}")
+        imgui.text(f"atlas {r.atlas_size[0]}x{r.atlas_size[1]} x {r.atlas_size[2]} layers")
+        imgui.text(f"utilization {100 * r.utilization:.0f}%")
+    history = np.asarray(st.history, np.float32)
+    if len(history) and implot.begin_plot("##frametime", imgui.ImVec2(-1, 110)):
+        implot.setup_axes("frame", "ms")
+        implot.setup_axis_limits(implot.ImAxis_.y1, 0, max(50.0, float(history.max()) * 1.1), implot.Cond_.always)
+        implot.setup_axis_limits(implot.ImAxis_.x1, 0, st.history.maxlen, implot.Cond_.always)
+        implot.plot_line("frame ms", history)
+        implot.end_plot()

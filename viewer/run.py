@@ -1,0 +1,87 @@
+"""Window creation and the main loop; `--bench` orbits through every mode and prints a table."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+
+from rtta.errors import RttaError
+
+from .state import VIEW_MODES
+
+STAGE_COLUMNS = ("parameterize", "capture", "post", "composite", "std", "ui")
+
+
+def create_window(size: tuple[int, int], visible: bool = True):
+    """A pyglet window with an OpenGL 4.3 core context, made current for moderngl."""
+    import moderngl_window as mglw
+    from moderngl_window.context.pyglet import Window
+
+    try:
+        wnd = Window(title="rtta", gl_version=(4, 3), size=size, vsync=False, resizable=True, visible=visible)
+    except Exception as exc:
+        raise RttaError(f"cannot open a window with OpenGL 4.3 ({type(exc).__name__}: {exc})") from None
+    mglw.activate_context(window=wnd)
+    return wnd
+
+
+def load(path: str | None):
+    from rtta.demo import demo_path
+    from rtta.loader import load_scene
+
+    return load_scene(path or str(demo_path()))
+
+
+def run(scene_path: str | None, *, size: tuple[int, int], mode: str, screenshot_dir: Path, bench: int = 0) -> int:
+    from .app import Viewer
+
+    scene = load(scene_path)          # a bad file on the command line: one line, exit 2
+    wnd = create_window(size)
+    app = Viewer(wnd, scene, screenshot_dir=screenshot_dir, mode=mode)
+    try:
+        if bench:
+            print_bench(app, bench)
+            return 0
+        while not wnd.is_closing:
+            app.frame()
+            wnd.swap_buffers()
+    finally:
+        app.release()
+        wnd.destroy()
+    return 0
+
+
+def bench_mode(app, mode: str, frames: int, warmup: int = 5) -> dict:
+    """Frame time (swap included) while the camera orbits, so every frame re-captures."""
+    app.state.mode = mode
+    stages = {k: [] for k in STAGE_COLUMNS}
+    times = []
+    for i in range(warmup + frames):
+        app.orbit.rotate(3.0, 0.0)
+        t0 = time.perf_counter()
+        app.frame()
+        app.wnd.swap_buffers()
+        if i >= warmup:
+            times.append(time.perf_counter() - t0)
+            for k in STAGE_COLUMNS:
+                stages[k].append(app.stats.stage_ms.get(k, 0.0))
+    ms = 1e3 * float(np.mean(times))
+    return {"mode": mode, "ms": ms, "fps": 1e3 / ms, **{k: float(np.mean(v)) for k, v in stages.items()}}
+
+
+def print_bench(app, frames: int) -> list[dict]:
+    w, h = app.wnd.buffer_size
+    vp = app.viewport
+    print(f"renderer: {app.ctx.info['GL_RENDERER']}")
+    print(f"scene: {app.scene_label} ({app.renderer.scene.count} objects, {app.renderer.scene.vertex_count} "
+          f"vertices); window {w}x{h}, composite {vp[0]}x{vp[1]}, atlas view shown; {frames} frames per mode")
+    print("| mode | fps | frame ms | " + " | ".join(STAGE_COLUMNS) + " |")
+    print("|---" * (3 + len(STAGE_COLUMNS)) + "|")
+    rows = []
+    for mode in VIEW_MODES:
+        r = bench_mode(app, mode, frames)
+        rows.append(r)
+        print(f"| {mode} | {r['fps']:.1f} | {r['ms']:.1f} | " + " | ".join(f"{r[k]:.1f}" for k in STAGE_COLUMNS) + " |")
+    return rows

@@ -1,0 +1,74 @@
+"""What the user chose in the viewer: mode, highlights, opacities, style and atlas settings.
+
+Plain data and the operations the panel offers (toggle, all / none / invert over the
+filtered list); no GL and no imgui, so it is tested directly.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from rtta.composite import MODES, Style
+from rtta.renderer import Settings
+
+VIEW_MODES = ("std", *MODES)
+ATLAS_MAX_CHOICES = ("viewport", "512", "1024", "2048", "4096")
+
+
+@dataclass
+class ViewerState:
+    names: list[str]
+    mode: str = "ghosted-ao"
+    style: Style = field(default_factory=Style)
+    settings: Settings = field(default_factory=Settings)
+    atlas_max: str = "viewport"
+    show_atlas: bool = True
+    atlas_layer: int = -1          # -1: all layers side by side
+    filter: str = ""
+
+    def __post_init__(self) -> None:
+        if self.mode not in VIEW_MODES:
+            raise ValueError(f"unknown mode {self.mode!r}; modes: {', '.join(VIEW_MODES)}")
+
+    @property
+    def highlighted(self) -> set[int]:
+        return self.style.focus
+
+    def filtered(self) -> list[int]:
+        """Object ids whose name contains the filter text (case-insensitive)."""
+        f = self.filter.strip().lower()
+        return [i for i, n in enumerate(self.names) if f in n.lower()]
+
+    def toggle(self, oid: int) -> None:
+        self.style.focus ^= {oid}
+
+    def select(self, how: str) -> None:
+        """'all', 'none' or 'invert', applied to the filtered objects only."""
+        ids = set(self.filtered())
+        if how == "all":
+            self.style.focus |= ids
+        elif how == "none":
+            self.style.focus -= ids
+        elif how == "invert":
+            self.style.focus ^= ids
+        else:
+            raise ValueError(how)
+
+    def opacity(self, oid: int) -> float:
+        return self.style.opacity.get(oid, self.style.default_opacity)
+
+    def set_atlas_max(self, choice: str) -> None:
+        self.atlas_max = choice
+        self.settings.atlas_max = None if choice == "viewport" else (int(choice), int(choice))
+
+    def style_key(self) -> tuple:
+        """Changes whenever compositing must re-run (the capture need not)."""
+        s = self.style
+        return (self.mode, tuple(sorted(s.focus)), tuple(sorted(s.opacity.items())), s.default_opacity,
+                s.context_opacity, s.desaturate, tuple(s.edge_color), tuple(s.outline_color),
+                s.outline_width, s.edge_width, s.ao_radius, s.ao_strength)
+
+    def capture_key(self) -> tuple:
+        """Changes whenever the atlas must be captured again (besides camera and viewport)."""
+        s = self.settings
+        return (s.border, s.atlas_max, s.max_layers, s.capture_path)

@@ -23,6 +23,9 @@ def save_png(path: str | Path, rgba_gl: np.ndarray, *, overwrite: bool = True) -
         raise FileExistsError(path)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".png", dir=path.parent)
     os.close(fd)
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(tmp, 0o666 & ~umask)          # mkstemp makes 0600; a saved image is the user's usual mode
     try:
         to_image(rgba_gl).save(tmp, format="PNG")
         if overwrite:

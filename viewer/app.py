@@ -60,10 +60,11 @@ class Viewer:
         state = ViewerState(scene.names, mode=mode or old.mode)
         if old is not None:
             state.settings, state.atlas_max, state.show_atlas = old.settings, old.atlas_max, old.show_atlas
+            state.measure = old.measure
             self.renderer.release()
         self.state = state
         self.renderer = Renderer(self.ctx, scene, state.settings)
-        self.renderer.measure = True
+        self.renderer.measure = state.measure
         self.orbit = Orbit.default(scene.center, scene.radius)
         self.records = None
         self.scene_label = Path(scene.source).name
@@ -117,8 +118,10 @@ class Viewer:
         imgui.render()
         self.wnd.fbo.viewport = (0, 0, *size)
         self.imgui.render(imgui.get_draw_data())
-        self.ctx.finish()
-        self.stats.stage_ms["ui"] = self.stats.last_ms["ui"] = ui_ms + (time.perf_counter() - t1) * 1e3
+        self.renderer.measure = self.state.measure
+        if self.state.measure:
+            self.ctx.finish()
+            self.stats.stage_ms["ui"] = self.stats.last_ms["ui"] = ui_ms + (time.perf_counter() - t1) * 1e3
 
     @property
     def viewport(self) -> tuple[int, int]:

@@ -139,6 +139,7 @@ def _stats(app: Viewer) -> None:
         return
     st = app.stats
     imgui.text(f"frame {st.mean_ms():6.1f} ms  ({st.fps():5.1f} fps)")
+    _, app.state.measure = imgui.checkbox("time stages (syncs the GPU)", app.state.measure)
     for k in STAGES:
         if k in st.last_ms:
             ran = k in st.stage_ms

@@ -7,8 +7,10 @@ from pathlib import Path
 
 import numpy as np
 
+from rtta.camera import DEFAULT_ORBIT
 from rtta.errors import RttaError
 
+from .orbit import DEGREES_PER_PIXEL
 from .state import VIEW_MODES
 
 STAGE_COLUMNS = ("parameterize", "capture", "post", "composite", "std", "ui")
@@ -53,21 +55,35 @@ def run(scene_path: str | None, *, size: tuple[int, int], mode: str, screenshot_
     return 0
 
 
-def bench_mode(app, mode: str, frames: int, warmup: int = 5) -> dict:
-    """Frame time (swap included) while the camera orbits, so every frame re-captures."""
-    app.state.mode = mode
-    stages = {k: [] for k in STAGE_COLUMNS}
+def _orbit_frames(app, frames: int, turn: float = 360.0) -> list[float]:
+    """Seconds per frame (swap included) while the camera orbits by `turn` degrees in all,
+    so every frame re-captures."""
     times = []
-    for i in range(warmup + frames):
-        app.orbit.rotate(3.0, 0.0)
+    for _ in range(frames):
+        app.orbit.rotate(turn / frames / DEGREES_PER_PIXEL, 0.0)
         t0 = time.perf_counter()
         app.frame()
         app.wnd.swap_buffers()
-        if i >= warmup:
-            times.append(time.perf_counter() - t0)
-            for k in STAGE_COLUMNS:
-                stages[k].append(app.stats.stage_ms.get(k, 0.0))
-    ms = 1e3 * float(np.mean(times))
+        times.append(time.perf_counter() - t0)
+    return times
+
+
+def bench_mode(app, mode: str, frames: int, warmup: int = 5) -> dict:
+    """Frames per second as a user gets them (stage timing off), then the split of a frame
+    into stages from a second run with stage timing on (which waits for the GPU per stage)."""
+    app.state.mode = mode
+    app.state.measure = False
+    _orbit_frames(app, warmup)
+    app.orbit.az = DEFAULT_ORBIT[0]        # every mode sees the same views: one full turn
+    ms = 1e3 * float(np.mean(_orbit_frames(app, frames)))
+    app.state.measure = True
+    _orbit_frames(app, 2)
+    app.orbit.az = DEFAULT_ORBIT[0]
+    stages = {k: [] for k in STAGE_COLUMNS}
+    for _ in range(frames):
+        _orbit_frames(app, 1, 360.0 / frames)
+        for k in STAGE_COLUMNS:
+            stages[k].append(app.stats.stage_ms.get(k, 0.0))
     return {"mode": mode, "ms": ms, "fps": 1e3 / ms, **{k: float(np.mean(v)) for k, v in stages.items()}}
 
 
@@ -76,7 +92,9 @@ def print_bench(app, frames: int) -> list[dict]:
     vp = app.viewport
     print(f"renderer: {app.ctx.info['GL_RENDERER']}")
     print(f"scene: {app.scene_label} ({app.renderer.scene.count} objects, {app.renderer.scene.vertex_count} "
-          f"vertices); window {w}x{h}, composite {vp[0]}x{vp[1]}, atlas view shown; {frames} frames per mode")
+          f"vertices); window {w}x{h}, composite {vp[0]}x{vp[1]}, atlas view shown; {frames} frames per mode, "
+          "one full orbit")
+    print("stage columns: ms per stage from a second run that waits for the GPU after each stage")
     print("| mode | fps | frame ms | " + " | ".join(STAGE_COLUMNS) + " |")
     print("|---" * (3 + len(STAGE_COLUMNS)) + "|")
     rows = []

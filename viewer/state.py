@@ -25,6 +25,7 @@ class ViewerState:
     show_atlas: bool = True
     atlas_layer: int = -1          # -1: all layers side by side
     filter: str = ""
+    measure: bool = True           # time each stage (waits for the GPU after each: costs a little)
 
     def __post_init__(self) -> None:
         if self.mode not in VIEW_MODES:

@@ -73,10 +73,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _load(arg: str | None):
-    from .demo import demo_path
-    from .loader import load_scene
+    from .loader import load_scene_or_demo
 
-    return load_scene(arg if arg else demo_path())
+    return load_scene_or_demo(arg)
 
 
 def _settings(args):

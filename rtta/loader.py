@@ -112,3 +112,10 @@ def _color(mesh) -> list[float] | None:
         c = np.asarray(main, np.float64).reshape(-1)[:4] / 255.0
         return list(c) + [1.0] * (4 - c.size)
     return None
+
+
+def load_scene_or_demo(path: str | None) -> Scene:
+    """The scene at `path`, or the built-in demo assembly when no path is given."""
+    from .demo import demo_path
+
+    return load_scene(path or str(demo_path()))

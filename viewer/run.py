@@ -9,6 +9,7 @@ import numpy as np
 
 from rtta.camera import DEFAULT_ORBIT
 from rtta.errors import RttaError
+from rtta.loader import load_scene_or_demo
 
 from .orbit import DEGREES_PER_PIXEL
 from .state import VIEW_MODES
@@ -29,17 +30,10 @@ def create_window(size: tuple[int, int], visible: bool = True):
     return wnd
 
 
-def load(path: str | None):
-    from rtta.demo import demo_path
-    from rtta.loader import load_scene
-
-    return load_scene(path or str(demo_path()))
-
-
 def run(scene_path: str | None, *, size: tuple[int, int], mode: str, screenshot_dir: Path, bench: int = 0) -> int:
     from .app import Viewer
 
-    scene = load(scene_path)          # a bad file on the command line: one line, exit 2
+    scene = load_scene_or_demo(scene_path)   # a bad file on the command line: one line, exit 2
     wnd = create_window(size)
     app = Viewer(wnd, scene, screenshot_dir=screenshot_dir, mode=mode)
     try:

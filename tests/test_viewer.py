@@ -22,6 +22,7 @@ from viewer.state import ViewerState
 from viewer.views import Layout, atlas_rects_on_screen, layer_tiles
 
 HERE = Path(__file__).parent
+RTTA_VIEW = str(Path(sys.executable).with_name("rtta-view"))   # the installed entry point users run
 
 
 def project(cam: Camera, p, aspect: float) -> np.ndarray:
@@ -213,7 +214,7 @@ def test_keys_wheel_files_and_resizes(driven):
 
 
 def test_no_display_says_so_in_one_line():
-    proc = subprocess.run([sys.executable, "-m", "viewer"], env=_env(None), capture_output=True, text=True)
+    proc = subprocess.run([RTTA_VIEW], env=_env(None), capture_output=True, text=True)
     assert proc.returncode == 2
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and "rtta snapshot" in lines[0] and "Traceback" not in proc.stderr
@@ -222,14 +223,14 @@ def test_no_display_says_so_in_one_line():
 def test_bad_scene_on_the_command_line(display, tmp_path):
     bad = tmp_path / "scene.glb"
     bad.write_text("not a model")
-    proc = subprocess.run([sys.executable, "-m", "viewer", str(bad)], env=_env(display),
+    proc = subprocess.run([RTTA_VIEW, str(bad)], env=_env(display),
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode == 2 and "scene.glb" in proc.stderr and "Traceback" not in proc.stderr
     assert len(proc.stderr.strip().splitlines()) == 1
 
 
 def test_bench_prints_every_mode(display):
-    proc = subprocess.run([sys.executable, "-m", "viewer", "--bench", "1", "--size", "640x360"],
+    proc = subprocess.run([RTTA_VIEW, "--bench", "1", "--size", "640x360"],
                           env=_env(display), capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr[-2000:]
     rows = [ln for ln in proc.stdout.splitlines() if ln.startswith("| ") and not ln.startswith("| mode")]

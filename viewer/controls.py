@@ -35,7 +35,6 @@ class Controls:
         self._press = None            # (x, y, button, in composite)
         self._moved = 0.0
         self._last_click = (0.0, None)   # (time, object) of the last click, for double-clicks
-        self._undo = None
 
     def attach(self, wnd) -> None:
         wnd.exit_key = None            # Esc closes popups; Ctrl+Q quits
@@ -48,9 +47,6 @@ class Controls:
         wnd.unicode_char_entered_func = self.app.imgui.unicode_char_entered
         wnd.resize_func = self.app.imgui.resize
         wnd.files_dropped_event_func = self.on_drop
-
-    def _ui_has_mouse(self) -> bool:
-        return imgui.get_io().want_capture_mouse and self._press is None
 
     def on_move(self, x, y, dx, dy) -> None:
         self.mouse = (x, y)

@@ -44,10 +44,10 @@ def parse_opacities(scene: Scene, items: list[str]) -> dict[int, float]:
     return out
 
 
-def over_background(rgba: np.ndarray) -> np.ndarray:
-    """STD colour (alpha 0 where empty) over the composite background, as opaque RGBA8."""
+def over_background(rgba: np.ndarray, background=BACKGROUND[:3]) -> np.ndarray:
+    """Colour with alpha 0 where empty (STD, atlas layers) over a background, as opaque RGBA8."""
     a = rgba[..., 3:4].astype(np.float64) / 255.0
-    bg = np.array(BACKGROUND[:3]) * 255.0
+    bg = np.array(background) * 255.0
     rgb = rgba[..., :3] * a + bg * (1.0 - a)
     return np.concatenate([np.rint(rgb), np.full(a.shape, 255.0)], -1).astype(np.uint8)
 

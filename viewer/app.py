@@ -69,7 +69,7 @@ class Viewer:
         self.records = None
         self.scene_label = Path(scene.source).name
         self.scene_dir = Path(scene.source).parent if Path(scene.source).exists() else Path.cwd()
-        self._capture_key = self._composite_key = None
+        self._capture_key = self._composite_key = self._std_key = None
 
     def open_scene(self, path) -> bool:
         """Load `path`; on failure show the error in the panel and keep the current scene."""
@@ -146,7 +146,11 @@ class Viewer:
         if s.mode != "std" or atlas_visible:
             self._capture(camera)
         if s.mode == "std":
-            target = r.std(camera, vp)
+            key = (tuple(camera.eye), tuple(camera.target), vp)
+            if key != self._std_key:          # a static view is not drawn again
+                r.std(camera, vp)
+                self._std_key = key
+            target = r.single_target
             extent = (vp[0] / target.size[0], vp[1] / target.size[1])
             self.view_pass.render(texture=target.color, layer=0, extent=extent, rect=self._rect(vp),
                                   window_height=self.wnd.buffer_size[1], target=self.wnd.fbo)
@@ -213,11 +217,7 @@ class Viewer:
             return None
         tw, th, td = rec.atlas_size
         color = self.renderer.atlas.read((tw, th), td, parts=("color",))["color"]
-        bg = np.array([*ATLAS_BACKGROUND, 1.0]) * 255
-        a = color[..., 3:4] / 255.0
-        rgba = np.rint(color * a + bg * (1 - a)).astype(np.uint8)
-        rgba[..., 3] = 255
-        return np.concatenate(list(rgba), axis=1)      # layers left to right
+        return np.concatenate(list(over_background(color, ATLAS_BACKGROUND)), axis=1)   # layers left to right
 
     def release(self) -> None:
         self.renderer.release()

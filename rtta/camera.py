@@ -9,6 +9,7 @@ import numpy as np
 from .errors import RttaError
 
 DEFAULT_ORBIT = (35.0, 25.0, 2.2)
+NEAR_RATIO = 1e-3   # near >= far * NEAR_RATIO: float32 depth keeps ~1e-4 relative precision at far
 
 
 def parse_orbit(text: str) -> tuple[float, float, float]:
@@ -45,10 +46,12 @@ class Camera:
         return cam.fit_depth(center, radius)
 
     def fit_depth(self, center, radius: float) -> Camera:
-        """Near/far tight around the bounding sphere so depth keeps its precision."""
+        """Near/far tight around the bounding sphere so depth keeps its precision. Inside the
+        sphere the near plane stays at far * NEAR_RATIO: closer geometry is clipped rather
+        than letting distant surfaces z-fight."""
         d = float(np.linalg.norm(np.asarray(center, np.float64) - self.eye))
         far = (d + radius) * 1.01
-        near = max(d - radius * 1.01, far * 1e-5)
+        near = max(d - radius * 1.01, far * NEAR_RATIO)
         self.near, self.far = near, far
         return self
 

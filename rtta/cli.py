@@ -66,6 +66,11 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--size", default="1024x1024")
     b.add_argument("--quick", action="store_true")
     b.add_argument("--json", default=None)
+    b = bsub.add_parser("reliability", help="random extreme cameras against STD, and a soak (RELIABILITY.md)")
+    b.add_argument("--sweep", type=int, default=10000, help="random cameras per scene")
+    b.add_argument("--soak", type=int, default=20000, help="soak frames per scene")
+    b.add_argument("--quick", action="store_true", help="200 cameras, 500 soak frames, a 200-object scene")
+    b.add_argument("--json", default=None)
     b = bsub.add_parser("packing", help="our packer against rectpack and rectangle-packer")
     b.add_argument("--quick", action="store_true")
     b.add_argument("--json", default=None)
@@ -75,7 +80,10 @@ def build_parser() -> argparse.ArgumentParser:
 def _load(arg: str | None):
     from .loader import load_scene_or_demo
 
-    return load_scene_or_demo(arg)
+    scene = load_scene_or_demo(arg)
+    for note in scene.warnings:
+        print(f"rtta: warning: {scene.source}: {note}", file=sys.stderr)
+    return scene
 
 
 def _settings(args):
@@ -90,18 +98,29 @@ def _settings(args):
                     capture_path=args.capture_path)
 
 
+def _renderer(ctx, scene, settings):
+    """A Renderer; what the driver lacks and the fallback used are said once on stderr."""
+    from .context import Capabilities
+    from .renderer import Renderer
+
+    caps = Capabilities.of(ctx)
+    caps.capture_path(settings.capture_path)     # a path the driver lacks is an error, before any work
+    for note in caps.notes if settings.capture_path == "auto" else []:
+        print(f"rtta: note: {note}", file=sys.stderr)
+    return Renderer(ctx, scene, settings)
+
+
 def cmd_export(args) -> int:
     from .camera import DEFAULT_ORBIT, Camera, parse_orbit
-    from .context import create_headless_context
+    from .context import shared_context
     from .export import export
-    from .renderer import Renderer
 
     scene = _load(args.scene)
     viewport = parse_size(args.size)
     orbit = parse_orbit(args.camera) if args.camera else DEFAULT_ORBIT
     settings = _settings(args)
-    ctx = create_headless_context()
-    renderer = Renderer(ctx, scene, settings)
+    ctx = shared_context()
+    renderer = _renderer(ctx, scene, settings)
     camera = Camera.orbit(scene.center, scene.radius, *orbit, fov_y=args.fov)
     try:
         out = export(renderer, camera, viewport, args.out)
@@ -116,8 +135,7 @@ def cmd_export(args) -> int:
 def cmd_snapshot(args) -> int:
     from .camera import DEFAULT_ORBIT, Camera, parse_orbit
     from .composite import Style
-    from .context import create_headless_context
-    from .renderer import Renderer
+    from .context import shared_context
     from .snapshot import SNAPSHOT_MODES, parse_opacities, render_modes, resolve_names, write_pngs
 
     if args.mode not in SNAPSHOT_MODES:
@@ -146,7 +164,7 @@ def cmd_snapshot(args) -> int:
     parent = out.parent if args.out else folder.parent
     if not parent.is_dir():
         raise RttaError("parent directory does not exist", parent)
-    renderer = Renderer(create_headless_context(), scene, _settings(args))
+    renderer = _renderer(shared_context(), scene, _settings(args))
     camera = Camera.orbit(scene.center, scene.radius, *orbit, fov_y=args.fov)
     try:
         images = render_modes(renderer, camera, viewport, list(targets), style)
@@ -179,11 +197,21 @@ def cmd_bench(args) -> int:
         return bench.run_capture(parse_size(args.size), quick=args.quick, json_path=args.json)
     if args.bench == "composite":
         return bench.run_composite(parse_size(args.size), quick=args.quick, json_path=args.json)
+    if args.bench == "reliability":
+        from .bench_reliability import run_reliability
+
+        sweep, soak = (200, 500) if args.quick else (args.sweep, args.soak)
+        if sweep < 1 or soak < 2:
+            raise RttaError("--sweep must be at least 1 and --soak at least 2")
+        return run_reliability(sweep, soak, quick=args.quick, json_path=args.json)
     return bench.run_packing(quick=args.quick, json_path=args.json)
 
 
 def main(argv: list[str] | None = None) -> int:
+    from .memory import steady_heap
+
     args = build_parser().parse_args(argv)
+    steady_heap()
     handler = {"export": cmd_export, "snapshot": cmd_snapshot, "info": cmd_info, "bench": cmd_bench}[args.command]
     try:
         return handler(args)

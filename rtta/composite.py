@@ -18,7 +18,7 @@ import numpy as np
 from . import glraw, glsl
 from .gpu import GpuScene
 from .parameterize import Records
-from .targets import LayeredTarget, release_framebuffer
+from .targets import SHRINK_AFTER_FRAMES, LayeredTarget, release_framebuffer, round_up
 
 MODES = ("sprites", "transparent", "ghosted", "ghosted-ao")
 BACKGROUND = (0.93, 0.93, 0.95, 1.0)
@@ -42,30 +42,57 @@ class Style:
 
 
 class CompositeTarget:
-    """RGBA8 colour + 32-bit float depth of the composite, reallocated only on resize."""
+    """RGBA8 colour + 32-bit float depth of the composite. `viewport` is the part in use;
+    the allocation (`size`) grows in steps of 64 and shrinks only after SHRINK_AFTER_FRAMES
+    frames of needing less than half, so resizing a window does not reallocate per frame."""
 
     def __init__(self, ctx: moderngl.Context) -> None:
         self.ctx = ctx
         self.size = (0, 0)
+        self.viewport = (0, 0)
         self.fbo = None
         self._parts: list = []
+        self._small_frames = 0
 
-    def ensure(self, size: tuple[int, int]) -> None:
-        if tuple(size) == self.size:
-            return
+    def ensure(self, viewport: tuple[int, int]) -> None:
+        vw, vh = max(1, int(viewport[0])), max(1, int(viewport[1]))
+        w, h = self.size
+        self.viewport = (vw, vh)
+        if vw > w or vh > h:
+            self._allocate((max(w, round_up(vw, 64)), max(h, round_up(vh, 64))))
+        elif 2 * vw * vh < w * h:
+            self._small_frames += 1
+            if self._small_frames >= SHRINK_AFTER_FRAMES:
+                self._allocate((round_up(vw, 64), round_up(vh, 64)))
+        else:
+            self._small_frames = 0
+        self.fbo.viewport = (0, 0, vw, vh)
+
+    def _allocate(self, size: tuple[int, int]) -> None:
+        viewport = self.viewport
         self.release()
         self.color = self.ctx.texture(size, 4)
         self.depth = self.ctx.depth_texture(size)
         self.fbo = self.ctx.framebuffer([self.color], self.depth)
         self._parts = [self.color, self.depth]
-        self.size = tuple(size)
+        self.size, self.viewport, self._small_frames = tuple(size), viewport, 0
+
+    @property
+    def nbytes(self) -> int:
+        return self.size[0] * self.size[1] * (4 + 4)
+
+    @property
+    def extent(self) -> tuple[float, float]:
+        """The used part as a fraction of the texture (for drawing `color` to a screen)."""
+        return self.viewport[0] / self.size[0], self.viewport[1] / self.size[1]
 
     def read(self) -> tuple[np.ndarray, np.ndarray]:
-        """(rgba uint8 [H, W, 4], depth float32 [H, W]); row 0 is the bottom row."""
+        """(rgba uint8 [H, W, 4], depth float32 [H, W]) of the viewport; row 0 is the bottom row."""
         w, h = self.size
-        rgba = np.frombuffer(self.fbo.read(components=4), np.uint8).reshape(h, w, 4)
-        depth = np.frombuffer(self.depth.read(), np.float32).reshape(h, w)
-        return rgba, depth
+        vw, vh = self.viewport
+        rgba = np.frombuffer(self.fbo.read(viewport=(0, 0, vw, vh), components=4), np.uint8).reshape(vh, vw, 4)
+        depth = np.frombuffer(self.depth.read(), np.float32).reshape(h, w)[:vh, :vw]
+        return rgba, np.ascontiguousarray(depth)
 
     def release(self) -> None:
         if self.fbo is not None:

@@ -16,9 +16,38 @@ def create_headless_context() -> moderngl.Context:
     try:
         ctx = moderngl.create_standalone_context(backend="egl", require=430)
     except Exception as exc:
+        offered = _offered_version()
+        if offered:
+            raise RttaError(f"OpenGL 4.3 is required (storage buffers, layered rendering); this driver "
+                            f"offers only {offered}") from None
         raise RttaError(f"cannot create an OpenGL 4.3 context through EGL ({exc}); "
                         "install Mesa (libegl1 libgl1-mesa-dri) or a GPU driver") from None
     return ctx
+
+
+def _offered_version() -> str | None:
+    """'3.3 (llvmpipe ...)' for the best context EGL gives without a version demand, or None."""
+    try:
+        probe = moderngl.create_standalone_context(backend="egl")
+    except Exception:
+        return None
+    try:
+        code = probe.version_code
+        return f"{code // 100}.{code // 10 % 10} ({probe.info['GL_RENDERER']})"
+    finally:
+        probe.release()
+
+
+_shared: moderngl.Context | None = None
+
+
+def shared_context() -> moderngl.Context:
+    """One headless context per process, made on first use (contexts are costly and
+    creating many leaks driver memory): the CLI and the tests share it."""
+    global _shared
+    if _shared is None:
+        _shared = create_headless_context()
+    return _shared
 
 
 @dataclass(frozen=True)
@@ -39,6 +68,14 @@ class Capabilities:
                    geometry_shader=True, vertex_layer=LAYER_EXTENSION in ctx.extensions,
                    max_layers=int(ctx.info["GL_MAX_ARRAY_TEXTURE_LAYERS"]),
                    max_texture=int(ctx.info["GL_MAX_TEXTURE_SIZE"]))
+
+    @property
+    def notes(self) -> list[str]:
+        """What is missing and which fallback is used instead (empty on a full GL 4.5 driver)."""
+        if self.vertex_layer:
+            return []
+        return [f"{LAYER_EXTENSION} is missing on {self.renderer}: capturing through the "
+                "geometry-shader path (the paper's) instead"]
 
     def capture_path(self, requested: str = "auto") -> str:
         """'vs' where the layer extension exists, else the paper's 'gs' path."""

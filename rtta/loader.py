@@ -13,9 +13,11 @@ from pathlib import Path
 import numpy as np
 
 from .errors import RttaError
+from .precheck import check_size, precheck
 from .scene import SUPPORTED, Scene, from_meshes
 
 MAX_FILE_BYTES = 2 * 1024**3
+MAX_COORDINATE = 1e15    # float64 keeps ~0.1 units of precision there; float32 offsets stay finite
 
 
 def load_scene(path: str | Path) -> Scene:
@@ -34,9 +36,17 @@ def load_scene(path: str | Path) -> Scene:
         raise RttaError("file is empty", path)
     if size > MAX_FILE_BYTES:
         raise RttaError(f"file is larger than the {MAX_FILE_BYTES >> 30} GiB limit", path)
-    loaded = _trimesh_load(path, suffix)
-    parts, colors = _parts(loaded, path)
-    return from_meshes(parts, colors, source=str(path))
+    with warnings.catch_warnings(), np.errstate(all="ignore"):
+        warnings.simplefilter("ignore")
+        notes = precheck(path)
+        loaded = _trimesh_load(path, suffix)
+        parts, colors, dropped = _parts(loaded, path)
+    if dropped:
+        notes.append(f"{len(dropped)} object(s) with only degenerate (zero-area) triangles left out: "
+                     + ", ".join(dropped[:5]) + (" ..." if len(dropped) > 5 else ""))
+    scene = from_meshes(parts, colors, source=str(path))
+    scene.warnings = notes
+    return scene
 
 
 def _trimesh_load(path: Path, suffix: str):
@@ -44,18 +54,20 @@ def _trimesh_load(path: Path, suffix: str):
 
     logging.getLogger("trimesh").setLevel(logging.ERROR)
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            return trimesh.load(str(path), file_type=suffix[1:], force="scene", process=False)
+        options = {"split_objects": True, "group_material": False} if suffix == ".obj" else {}
+        return trimesh.load(str(path), file_type=suffix[1:], force="scene", process=False, **options)
     except Exception as exc:  # trimesh raises many types for corrupt files
         reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         raise RttaError(f"cannot read {suffix[1:].upper()} file ({reason[:160]})", path) from None
 
 
-def _parts(loaded, path: Path) -> tuple[list, list]:
+def _parts(loaded, path: Path) -> tuple[list, list, list]:
+    """(name, world vertices, faces, normals) per object, their colours, and the names of
+    objects left out because every triangle is degenerate."""
     import trimesh
 
-    parts, colors = [], []
+    parts, colors, dropped = [], [], []
+    vertices = triangles = 0
     graph = loaded.graph
     for node in graph.nodes_geometry:
         transform, geom_name = graph[node]
@@ -73,11 +85,28 @@ def _parts(loaded, path: Path) -> tuple[list, list]:
         normals = _world_normals(mesh, m)
         if not np.isfinite(world).all():
             raise RttaError(f"object '{node}' has a transform that makes coordinates non-finite", path)
+        if np.abs(world).max() > MAX_COORDINATE:
+            raise RttaError(f"object '{node}' has coordinates up to {np.abs(world).max():.3g}, beyond "
+                            f"the ±{MAX_COORDINATE:.0e} this program handles", path)
+        vertices, triangles = vertices + len(v), triangles + len(f)
+        check_size(vertices, triangles, path)
+        if not _has_area(world, f):
+            dropped.append(str(node))
+            continue
         parts.append((str(node), world, f, normals))
         colors.append(_color(mesh))
+    if not parts and dropped:
+        raise RttaError("every triangle of the scene is degenerate (zero area)", path)
     if not parts:
         raise RttaError("scene has no objects with triangle geometry", path)
-    return parts, colors
+    return parts, colors, dropped
+
+
+def _has_area(v: np.ndarray, f: np.ndarray) -> bool:
+    """Whether any triangle has a non-zero area (relative to the object's size)."""
+    cross = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
+    extent = float(np.ptp(v, axis=0).max()) if len(v) else 0.0
+    return bool(extent > 0 and (np.linalg.norm(cross, axis=1) > (extent * 1e-12) ** 2).any())
 
 
 def _world_normals(mesh, m: np.ndarray) -> np.ndarray | None:

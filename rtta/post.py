@@ -30,6 +30,10 @@ class _LayerTarget:
             self.fbo = self.ctx.framebuffer([self.texture])
             self.shape = shape
 
+    @property
+    def nbytes(self) -> int:
+        return 0 if self.shape is None else self.shape[0] * self.shape[1] * self.shape[2] * 4
+
     def release(self) -> None:
         if self.fbo is not None:
             release_framebuffer(self.ctx, self.fbo)
@@ -53,6 +57,10 @@ class AtlasPostPass:
     @property
     def texture(self):
         return self._out.texture
+
+    @property
+    def nbytes(self) -> int:
+        return self._ao.nbytes + self._out.nbytes
 
     def render(self, *, atlas: LayeredTarget, records: Records, gpu: GpuScene, proj: np.ndarray, style) -> None:
         w, h = atlas.size

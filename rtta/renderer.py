@@ -147,6 +147,13 @@ class Renderer:
         self._rtt.render(gpu=self.gpu, view=view, proj=proj, target=self.single_target,
                          viewport=viewport, objects=objects, consume=consume)
 
+    @property
+    def target_bytes(self) -> int:
+        """Texture memory of the render targets as allocated now (they grow and shrink lazily
+        with the views; a memory soak subtracts them to see what else changes)."""
+        parts = [self.atlas, self._single, self.target, self._post]
+        return sum(p.nbytes for p in parts if p is not None)
+
     def release(self) -> None:
         for p in [*self._capture.values(), self._std, self._rtt, self._composite, self._post]:
             if p is not None:

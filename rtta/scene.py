@@ -36,6 +36,7 @@ class Scene:
     aabb_max: np.ndarray       # float64 [N, 3]
     origin: np.ndarray         # float64 [3]
     source: str = "<memory>"
+    warnings: list[str] = field(default_factory=list)   # problems loading worked around
     _corners: dict = field(default_factory=dict, repr=False)
 
     @property

@@ -22,7 +22,7 @@ def release_framebuffer(ctx: moderngl.Context, fbo) -> None:
     fbo.release()
 
 
-def _round_up(v: int, step: int) -> int:
+def round_up(v: int, step: int) -> int:
     return max(step, -(-v // step) * step)
 
 
@@ -64,18 +64,23 @@ class LayeredTarget:
         w, h = self.size
         if need_w > w or need_h > h or need_l > self.layers:
             self._small_frames = 0
-            self._allocate((max(w, _round_up(need_w, 64)), max(h, _round_up(need_h, 64))),
+            self._allocate((max(w, round_up(need_w, 64)), max(h, round_up(need_h, 64))),
                            max(self.layers, need_l))
             return True
         if need_w * need_h * need_l * 2 < w * h * self.layers:
             self._small_frames += 1
             if self._small_frames >= SHRINK_AFTER_FRAMES:
                 self._small_frames = 0
-                self._allocate((_round_up(need_w, 64), _round_up(need_h, 64)), need_l)
+                self._allocate((round_up(need_w, 64), round_up(need_h, 64)), need_l)
                 return True
         else:
             self._small_frames = 0
         return False
+
+    @property
+    def nbytes(self) -> int:
+        """Texture memory: RGBA8 + RGBA16F + R32I + D32F per texel."""
+        return self.size[0] * self.size[1] * self.layers * (4 + 8 + 4 + 4)
 
     def bind(self, viewport: tuple[int, int, int, int] | None = None) -> None:
         """Bind for drawing, with the GL viewport set (default: the whole allocation)."""

@@ -3,42 +3,19 @@
 from __future__ import annotations
 
 import numpy as np
-from conftest import near_edges, near_silhouettes
 
+from rtta.compare import crease_limit, depth_mismatch, depth_tolerance, near_edges
 from rtta.readback import front_most, map_back
-
-DEPTH_TOL = 1e-5
-SNAP_PX = 2.0 / 256.0   # two steps of the rasterizer's sub-pixel grid (8 bits on llvmpipe)
-
-
-def depth_tolerance(*depths: np.ndarray) -> np.ndarray:
-    """1e-5, plus the local depth slope (the larger of the images') times two sub-pixel steps:
-    on grazing triangles and self-occlusion edges a displaced vertex may snap to the
-    neighbouring sub-pixel position (float32 rounding of T)."""
-    slope = np.zeros(depths[0].shape)
-    for depth in depths:
-        d = depth.astype(np.float64)
-        for axis in (0, 1):
-            if d.shape[axis] >= 2:
-                slope = np.maximum(slope, np.abs(np.gradient(d, axis=axis)))
-    return DEPTH_TOL + np.minimum(slope, 1.0) * SNAP_PX
 
 
 def assert_depth_close(depth, reference, where, ids, what: str) -> None:
     """Depth within tolerance on `where`; the only exceptions allowed lie on depth creases
     (edges between surfaces of one object, where the edge tie-break may pick the other
-    triangle) and are rare: at most 0.1% of the compared pixels (and at least 2 allowed)."""
-    if not where.any():
-        return
-    over = (np.abs(depth - reference) - depth_tolerance(reference, depth)) > 0
-    over &= where
-    if not over.any():
-        return
-    creases = near_silhouettes(ids, reference, depth)
-    off_crease = over & ~creases
-    assert not off_crease.any(), f"{what}: depth differs beyond tolerance at {int(off_crease.sum())} px"
-    limit = max(2, int(0.001 * where.sum()))
-    assert over.sum() <= limit, f"{what}: {int(over.sum())} crease pixels differ in depth (limit {limit})"
+    triangle) and are rare: see rtta.compare.depth_mismatch."""
+    off_crease, on_crease = depth_mismatch(depth, reference, where, ids)
+    assert not off_crease, f"{what}: depth differs beyond tolerance at {off_crease} px"
+    limit = crease_limit(where)
+    assert on_crease <= limit, f"{what}: {on_crease} crease pixels differ in depth (limit {limit})"
 
 
 def check_frame(renderer, camera, viewport, path: str, rtt_objects=None) -> dict:

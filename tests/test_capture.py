@@ -6,9 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from checks import assert_depth_close, check_frame
-from conftest import near_edges, near_silhouettes
 
 from rtta.camera import DEFAULT_ORBIT, Camera
+from rtta.compare import near_edges, near_silhouettes
 from rtta.generate import random_scene
 
 PATHS = ("vs", "gs")

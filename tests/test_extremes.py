@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 import trimesh
 from checks import check_frame
-from conftest import near_edges
 
 from rtta.camera import Camera
+from rtta.compare import near_edges
 from rtta.generate import random_scene
 from rtta.scene import from_meshes
 

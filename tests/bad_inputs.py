@@ -1,0 +1,196 @@
+"""The bad-input corpus: writes every case into a folder and says what each must give.
+
+    python tests/bad_inputs.py DIR     writes the corpus into DIR and lists the cases
+
+A case expects either an error (exit 2, one line naming the file and containing `says`)
+or a load that works (exit 0), possibly with a warning line containing `says`.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import struct
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import trimesh
+
+TRI = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"
+
+
+@dataclass
+class Case:
+    name: str
+    path: Path           # what the CLI is given
+    error: bool          # True: exit 2 and one error line; False: exit 0
+    says: str            # text the error (or the warning) must contain
+
+
+def _glb(mesh_names=("a",), positions=None, indices=None) -> bytes:
+    """A GLB with one node per name; the first mesh's positions and/or indices can be
+    overwritten with one value (e.g. NaN, or an index past the end)."""
+    scene = trimesh.Scene()
+    for i, name in enumerate(mesh_names):
+        box = trimesh.creation.box(extents=(1, 1, 1))
+        box.apply_translation((i * 1.5, 0, 0))
+        scene.add_geometry(box, node_name=name, geom_name=f"g{i}")
+    data = scene.export(file_type="glb")
+    if positions is None and indices is None:
+        return data
+    return _patch_glb(data, positions, indices)
+
+
+def _renamed_glb(data: bytes, names: list[str]) -> bytes:
+    """The GLB with its nodes renamed (trimesh keeps node names unique; files need not)."""
+    length = struct.unpack_from("<I", data, 12)[0]
+    doc = json.loads(data[20:20 + length])
+    for node, name in zip([n for n in doc["nodes"] if "mesh" in n], names, strict=True):
+        node["name"] = name
+    text = json.dumps(doc).encode()
+    text += b" " * (-len(text) % 4)
+    rest = data[20 + length:]
+    head = struct.pack("<4sIIII", b"glTF", 2, 20 + len(text) + len(rest), len(text), 0x4E4F534A)
+    return head + text + rest
+
+
+def _patch_glb(data: bytes, positions, indices) -> bytes:
+    """Overwrite the first mesh's position (or index) accessor bytes in place."""
+    length = struct.unpack_from("<I", data, 12)[0]
+    doc = json.loads(data[20:20 + length])
+    binary_start = 20 + length + 8
+    out = bytearray(data)
+    prim = doc["meshes"][0]["primitives"][0]
+    for acc_id, values in ((prim["attributes"]["POSITION"], positions), (prim.get("indices"), indices)):
+        if values is None or acc_id is None:
+            continue
+        acc = doc["accessors"][acc_id]
+        view = doc["bufferViews"][acc["bufferView"]]
+        start = binary_start + view.get("byteOffset", 0) + acc.get("byteOffset", 0)
+        dtype = np.float32 if acc["componentType"] == 5126 else {5125: np.uint32, 5123: np.uint16}[acc["componentType"]]
+        width = {"VEC3": 3, "SCALAR": 1}[acc["type"]]
+        raw = np.full(acc["count"] * width, values, dtype).tobytes()
+        out[start:start + len(raw)] = raw
+    return bytes(out)
+
+
+def _gltf(buffer_uri: str, image_uri: str | None = None, name: str = "tri") -> str:
+    """A .gltf with one triangle whose buffer (and optional texture) live at the URIs."""
+    doc = {
+        "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0, "name": name}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2}]}],
+        "buffers": [{"uri": buffer_uri, "byteLength": 66}],
+        "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36},
+                        {"buffer": 0, "byteOffset": 36, "byteLength": 24},
+                        {"buffer": 0, "byteOffset": 60, "byteLength": 6}],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+             "min": [0, 0, 0], "max": [1, 1, 0]},
+            {"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2"},
+            {"bufferView": 2, "componentType": 5123, "count": 3, "type": "SCALAR"}],
+    }
+    if image_uri is not None:
+        doc["images"] = [{"uri": image_uri}]
+        doc["textures"] = [{"source": 0}]
+        doc["materials"] = [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0},
+                                                      "baseColorFactor": [0.2, 0.6, 0.9, 1.0]}}]
+        doc["meshes"][0]["primitives"][0]["material"] = 0
+    return json.dumps(doc)
+
+
+def _gltf_buffer() -> bytes:
+    pos = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32)
+    uv = np.array([[0, 0], [1, 0], [0, 1]], np.float32)
+    return pos.tobytes() + uv.tobytes() + np.array([0, 1, 2], np.uint16).tobytes()
+
+
+def _png() -> bytes:
+    from PIL import Image
+
+    buf = io.BytesIO()
+    Image.new("RGB", (4, 4), (200, 30, 30)).save(buf, format="PNG")
+    return buf.getvalue()
+
+
+def _stl_header(count: int, body_triangles: int) -> bytes:
+    body = np.zeros(body_triangles * 50, np.uint8).tobytes()
+    return b"\0" * 80 + struct.pack("<I", count) + body
+
+
+def make_corpus(folder: str | Path) -> list[Case]:
+    """Write every case into `folder` (which must exist and be empty) and return them."""
+    d = Path(folder)
+    cases: list[Case] = []
+
+    def add(name: str, content: bytes | str | None, error: bool, says: str, *, path: str | None = None) -> None:
+        p = d / (path or name)
+        if content is not None:
+            p.parent.mkdir(parents=True, exist_ok=True)
+            p.write_bytes(content.encode("latin-1") if isinstance(content, str) else content)
+        cases.append(Case(name, p, error, says))
+
+    good = _glb(("a", "b"))
+    add("empty.glb", b"", True, "empty")
+    add("empty.obj", b"", True, "empty")
+    add("truncated.glb", good[: len(good) // 2], True, "GLB")
+    add("truncated_header.glb", good[:10], True, "GLB")
+    add("random_bytes.glb", np.random.default_rng(0).bytes(4096), True, "GLB")
+    add("text.glb", "this is not a model\n", True, "GLB")
+    add("text.obj", "hello world\nthis is text\n", True, "no objects")
+    add("text.stl", "just some words, not an STL\n", True, "STL")
+    add("ascii_stl_garbage.stl", "solid x\n facet normal a b c\n outer loop\n vertex 1 2\n", True, "no objects")
+    add("wrong_extension.png", _png(), True, "unsupported file type")
+    add("no_extension", TRI, True, "unsupported file type")
+    add("glb_named.obj", good, True, "no objects")
+    add("nan_vertices.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n", True, "NaN")
+    add("inf_vertices.obj", "v 0 0 0\nv inf 0 0\nv 0 1 0\nf 1 2 3\n", True, "NaN or infinite")
+    add("nan_vertices.glb", _glb(("a",), positions=np.nan), True, "NaN")
+    add("huge_coordinates.obj", "v 0 0 0\nv 1e300 0 0\nv 0 1 0\nf 1 2 3\n", True, "coordinates")
+    add("zero_faces.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n", True, "no objects")
+    add("points.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+        "property float z\nend_header\n0 0 0\n1 0 0\n0 1 0\n", True, "no objects")
+    add("degenerate.obj", "v 0 0 0\nv 1 1 1\nv 2 2 2\nv 5 5 5\nf 1 2 3\nf 1 1 4\nf 2 3 4\n", True,
+        "degenerate")
+    add("face_index_out_of_range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 30\n", True, "index")
+    add("index_out_of_range.glb", _glb(("a",), indices=60000), True, "index")
+    add("stl_claims_2g_triangles.stl", _stl_header(2**31 - 1, 2), True, "memory limit")
+    add("stl_truncated_body.stl", _stl_header(1000, 10), True, "STL")
+    add("ply_claims_too_many.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 900000000\n"
+        "property float x\nproperty float y\nproperty float z\nelement face 900000000\n"
+        "property list uchar int vertex_indices\nend_header\n", True, "memory limit")
+    big = trimesh.creation.icosphere(subdivisions=6)     # 81,920 triangles: over RTTA_MEMORY_LIMIT_MB=1
+    add("too_large_for_limit.glb", big.export(file_type="glb"), True, "memory limit")
+    add("off_bad_counts.off", "OFF\n8 12 0\n0 0 0\n1 0 0\n", True, "OFF")
+    add("garbage.3mf", b"PK\x03\x04" + b"\0" * 64, True, "3MF")
+    (d / "sub").mkdir()
+    (d / "secret.bin").write_bytes(_gltf_buffer())
+    add("buffer_outside_folder.gltf", _gltf("../secret.bin"), True, "outside", path="sub/buffer_outside_folder.gltf")
+    add("buffer_absolute_path.gltf", _gltf(str((d / "secret.bin").resolve())), True, "outside")
+    add("buffer_url.gltf", _gltf("https://example.com/tri.bin"), True, "URL")
+    add("buffer_missing.gltf", _gltf("missing.bin"), True, "missing.bin")
+    add("invalid_json.gltf", '{"asset": {"version": "2.0"}, "nodes": [', True, "JSON")
+    add("non_utf8.gltf", _gltf("secret.bin").replace('"tri"', '"caf\xe9"'), True, "UTF-8")
+    add("is_a_directory.glb", None, True, "directory")
+    (d / "is_a_directory.glb").mkdir()
+    add("does_not_exist.glb", None, True, "no such file")
+    # cases that load: the problem is reported as a warning, or repaired
+    add("duplicate_names.glb", _renamed_glb(_glb(("a", "b", "c")), ["part"] * 3), False, "")
+    add("non_utf8_names.obj", "o caf\xe9\n" + TRI + "o na\xefve\nv 0 0 1\nv 1 0 1\nv 0 1 1\nf 4 5 6\n", False, "")
+    add("missing_texture.gltf", _gltf("secret.bin", "no_such_texture.png"), False, "no_such_texture.png")
+    add("unreadable_texture.gltf", _gltf("secret.bin", "broken.png"), False, "broken.png")
+    (d / "broken.png").write_bytes(b"\x89PNG\r\n\x1a\nnot really a png")
+    if os.geteuid() != 0:        # root reads any file: the case cannot fail there
+        add("no_permission.glb", good, True, "permission")
+        os.chmod(d / "no_permission.glb", 0)
+    return cases
+
+
+if __name__ == "__main__":
+    target = Path(sys.argv[1])
+    target.mkdir(parents=True, exist_ok=True)
+    for case in make_corpus(target):
+        print(f"{'error' if case.error else 'loads'}  {case.path}  {case.says}")

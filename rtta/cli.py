@@ -51,6 +51,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--edge-width", type=int, default=1, help="edge detection distance in pixels (ghosted-ao)")
     p.add_argument("--ao-radius", type=float, default=6.0, help="ambient occlusion radius in pixels (ghosted-ao)")
     p.add_argument("--ao-strength", type=float, default=1.0, help="ambient occlusion strength (ghosted-ao)")
+    p.add_argument("--projector", default=None, metavar="IMAGE[,AZ,EL,DIST]",
+                   help="paint the scene with IMAGE ('default': the shipped grid) from an orbit position "
+                        "(as --camera); without one the projector sits at the camera")
+    p.add_argument("--projector-fov", type=float, default=30.0, help="projector field of view in degrees")
+    p.add_argument("--no-projector-shadows", action="store_true", help="let the image pass through objects")
     out = p.add_mutually_exclusive_group(required=True)
     out.add_argument("--out", help="PNG file to write")
     out.add_argument("--all-modes", metavar="DIR", help="write <mode>.png for every mode into DIR")
@@ -166,6 +171,8 @@ def cmd_snapshot(args) -> int:
         raise RttaError("parent directory does not exist", parent)
     renderer = _renderer(shared_context(), scene, _settings(args))
     camera = Camera.orbit(scene.center, scene.radius, *orbit, fov_y=args.fov)
+    if args.projector:
+        renderer.projector = _projector(args, scene, camera)
     try:
         images = render_modes(renderer, camera, viewport, list(targets), style)
     except ValueError as exc:
@@ -177,6 +184,29 @@ def cmd_snapshot(args) -> int:
     for path in write_pngs(images, targets):
         print(f"wrote {path}")
     return 0
+
+
+def _projector(args, scene, camera):
+    """--projector IMAGE[,AZ,EL,DIST]: the image file (or 'default') and where it stands."""
+    from .camera import parse_orbit
+    from .projector import Projector, default_image, load_image
+
+    text = args.projector
+    name, orbit = text, None
+    parts = text.rsplit(",", 3)
+    if len(parts) == 4:
+        try:
+            orbit = parse_orbit(",".join(parts[1:]))
+            name = parts[0]
+        except RttaError:
+            orbit = None
+    if not 0.5 <= args.projector_fov <= 170:
+        raise RttaError(f"--projector-fov must be in [0.5, 170] degrees, got {args.projector_fov}")
+    image = default_image() if name == "default" else load_image(name)
+    kw = {"image": image, "fov_y": args.projector_fov, "shadows": not args.no_projector_shadows}
+    if orbit is None:
+        return Projector.at_camera(camera, scene.center, scene.radius, **kw)
+    return Projector.orbit(scene.center, scene.radius, *orbit, **kw)
 
 
 def cmd_info(args) -> int:

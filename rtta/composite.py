@@ -122,6 +122,7 @@ class CompositePass:
         self.styles = ctx.buffer(reserve=16)
         self.order = ctx.buffer(reserve=16)
         self.passes: list[str] = []        # the draws of the last render, for inspection
+        self._projection = None
 
     def _program(self, **defines) -> tuple[moderngl.Program, moderngl.VertexArray]:
         key = tuple(sorted(defines.items()))
@@ -139,8 +140,10 @@ class CompositePass:
         buf.write(data)
 
     def render(self, *, atlas: LayeredTarget, records: Records, gpu: GpuScene, style: Style, mode: str,
-               view_depth: np.ndarray, target: CompositeTarget, post=None) -> None:
-        """Composite the captured atlas into `target` (sized to the records' viewport)."""
+               view_depth: np.ndarray, target: CompositeTarget, post=None, projection=None) -> None:
+        """Composite the captured atlas into `target` (sized to the records' viewport).
+        `projection`: (ProjectorPass, Projector, view-projection matrix) to paint with, or None."""
+        self._projection = projection
         if mode not in MODES:
             raise ValueError(f"unknown mode {mode!r}; modes: {', '.join(MODES)}")
         n = len(records.visible)
@@ -160,6 +163,8 @@ class CompositePass:
         atlas.color.use(0)
         glraw.bind_texture_array(1, atlas.depth.glo)
         atlas.ids.use(2)
+        if projection is not None:
+            atlas.normal.use(4)
         everyone = np.arange(n)
         if mode == "sprites":
             self._draw(everyone, style, records, sprite=True)
@@ -187,11 +192,17 @@ class CompositePass:
             return
         self._upload(self.order, ids.astype(np.int32).tobytes())
         self.order.bind_to_storage_buffer(3)
-        mode = {"MODE_SPRITE": sprite, "MODE_BLEND": blend, "MODE_OUTLINE": outline, "WITH_AO": ao and not outline}
+        projection = None if outline else self._projection
+        mode = {"MODE_SPRITE": sprite, "MODE_BLEND": blend, "MODE_OUTLINE": outline, "WITH_AO": ao and not outline,
+                "PROJECTOR": projection is not None}
         on = [k for k, v in mode.items() if v]
         self.passes.append("+".join(k.removeprefix("MODE_").lower() for k in on))
         prog, vao = self._program(**{k: True for k in on})
         prog["u_viewport"].value = tuple(float(v) for v in records.viewport)
+        if projection is not None:
+            pass_, projector, view_proj, origin = projection
+            prog["u_inv_view_proj"].write(np.ascontiguousarray(np.linalg.inv(view_proj).T, np.float32).tobytes())
+            pass_.bind(prog, projector, origin)
         edge_color = style.outline_color if outline else style.edge_color
         for name, value in (("u_desaturate", desaturate), ("u_edge_color", edge_color),
                             ("u_outline_width", style.outline_width)):

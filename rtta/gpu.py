@@ -9,8 +9,7 @@ import numpy as np
 from .parameterize import RECORD_DTYPE, Records
 from .scene import Scene
 
-VERTEX_FORMAT = "3f 3f u4"
-VERTEX_ATTRS = ("in_position", "in_normal", "in_object")
+VERTEX_LAYOUT = (("in_position", "3f", "12x"), ("in_normal", "3f", "12x"), ("in_object", "u4", "4x"))
 
 
 class GpuScene:
@@ -32,9 +31,12 @@ class GpuScene:
     def vao(self, program: moderngl.Program) -> moderngl.VertexArray:
         key = program.glo
         if key not in self._vaos:
+            # attributes a program does not use (optimized out) are skipped in the layout
+            used = [(name, fmt if name in program else skip) for name, fmt, skip in VERTEX_LAYOUT]
+            layout = " ".join(fmt for _, fmt in used)
+            names = [name for name, fmt in used if not fmt.endswith("x")]
             self._vaos[key] = self.ctx.vertex_array(
-                program, [(self.vbo, VERTEX_FORMAT, *VERTEX_ATTRS)], index_buffer=self.ibo,
-                index_element_size=4)
+                program, [(self.vbo, layout, *names)], index_buffer=self.ibo, index_element_size=4)
         return self._vaos[key]
 
     def upload_records(self, records: Records) -> None:

@@ -32,7 +32,7 @@ class _ScenePass:
         self.program = ctx.program(
             vertex_shader=glsl.load("scene.vert", **defines),
             geometry_shader=glsl.load(geometry) if geometry else None,
-            fragment_shader=glsl.load("scene.frag"))
+            fragment_shader=glsl.load("scene.frag", PROJECTOR=defines.get("PROJECTOR", False)))
 
     def _setup(self, gpu: GpuScene, view: np.ndarray, proj: np.ndarray) -> moderngl.VertexArray:
         self.program["u_view"].write(_mat(view))
@@ -79,18 +79,33 @@ class CapturePass(_ScenePass):
 
 
 class StdPass(_ScenePass):
-    """STD: the scene drawn normally into a one-layer target of the viewport's size."""
+    """STD: the scene drawn normally into a one-layer target of the viewport's size;
+    with `projection` (ProjectorPass, Projector) painted by the projector per fragment."""
 
     def __init__(self, ctx: moderngl.Context) -> None:
         super().__init__(ctx)
+        self._painted: _ScenePass | None = None
 
     def render(self, *, gpu: GpuScene, view: np.ndarray, proj: np.ndarray,
-               target: LayeredTarget, viewport: tuple[int, int]) -> None:
+               target: LayeredTarget, viewport: tuple[int, int], projection=None) -> None:
         target.ensure(viewport, 1)
         target.clear()
-        vao = self._setup(gpu, view, proj)
+        scene_pass: _ScenePass = self
+        if projection is not None:
+            if self._painted is None:
+                self._painted = _ScenePass(self.ctx, PROJECTOR=True)
+            scene_pass = self._painted
+        vao = scene_pass._setup(gpu, view, proj)
+        if projection is not None:
+            pass_, projector = projection
+            pass_.bind(scene_pass.program, projector, gpu.scene.origin)
         target.bind((0, 0, *viewport))
         vao.render(moderngl.TRIANGLES)
+
+    def release(self) -> None:
+        super().release()
+        if self._painted is not None:
+            self._painted.release()
 
 
 class RttPass(_ScenePass):

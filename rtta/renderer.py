@@ -52,6 +52,8 @@ class Renderer:
         self._captures = 0
         self.target = CompositeTarget(ctx)
         self.last: tuple | None = None     # (records, view, proj) of the last capture
+        self.projector = None              # a Projector painting the scene, or None
+        self._projector_pass = None
         self.measure = False               # time each stage (waits for the GPU after each)
         self.timings: dict[str, float] = {}  # stage -> ms of its last run, when measuring
 
@@ -108,10 +110,27 @@ class Renderer:
         centers = (self.scene.aabb_min + self.scene.aabb_max) / 2 - self.scene.origin
         view_depth = -(centers @ view[2, :3] + view[2, 3])
         post = self.post_process(style) if mode == "ghosted-ao" else None
+        _, view, proj = self.last
+        projection = self._projection()
+        if projection is not None:
+            projection = (*projection, proj @ view, self.scene.origin)
         with self._timed("composite"):
             self._composite.render(atlas=self.atlas, records=records, gpu=self.gpu, style=style,
-                                   mode=mode, view_depth=view_depth, target=self.target, post=post)
+                                   mode=mode, view_depth=view_depth, target=self.target, post=post,
+                                   projection=projection)
         return self.target
+
+    def _projection(self):
+        """(ProjectorPass, Projector) with the shadow map up to date, or None without a projector."""
+        if self.projector is None:
+            return None
+        if self._projector_pass is None:
+            from .projector import ProjectorPass
+
+            self._projector_pass = ProjectorPass(self.ctx)
+        with self._timed("projector"):
+            self._projector_pass.render(gpu=self.gpu, projector=self.projector)
+        return self._projector_pass, self.projector
 
     def post_process(self, style: Style) -> AtlasPostPass:
         """Ambient occlusion and edges on the atlas (ghosted-ao only). They depend on the
@@ -136,8 +155,10 @@ class Renderer:
         if self._std is None:
             self._std = StdPass(self.ctx)
         view, proj = self.matrices(camera, viewport)
+        projection = self._projection()
         with self._timed("std"):
-            self._std.render(gpu=self.gpu, view=view, proj=proj, target=self.single_target, viewport=viewport)
+            self._std.render(gpu=self.gpu, view=view, proj=proj, target=self.single_target, viewport=viewport,
+                             projection=projection)
         return self.single_target
 
     def rtt(self, camera: Camera, viewport: tuple[int, int], objects, consume=None) -> None:
@@ -155,7 +176,7 @@ class Renderer:
         return sum(p.nbytes for p in parts if p is not None)
 
     def release(self) -> None:
-        for p in [*self._capture.values(), self._std, self._rtt, self._composite, self._post]:
+        for p in [*self._capture.values(), self._std, self._rtt, self._composite, self._post, self._projector_pass]:
             if p is not None:
                 p.release()
         self._capture.clear()

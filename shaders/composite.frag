@@ -1,16 +1,20 @@
 #version 430
-// defines: MODE_SPRITE MODE_BLEND MODE_OUTLINE WITH_AO
+// defines: MODE_SPRITE MODE_BLEND MODE_OUTLINE WITH_AO PROJECTOR
 // Per-object compositing from the atlas:
 //   MODE_SPRITE  depth sprite: atlas colour, gl_FragDepth = atlas depth (focus objects, `sprites`)
 //   MODE_BLEND   premultiplied blend with the object's opacity (`transparent`, ghosted context)
 //   MODE_OUTLINE the object's silhouette from its own unoccluded id image (ghosted focus)
 //   WITH_AO      shade with the atlas post-process (ambient occlusion, edges) of `ghosted-ao`
+//   PROJECTOR    paint with the projector at the world position reconstructed from the atlas depth
 #include "composite.glsl"
+#include "projector.glsl"
 
 layout(binding = 0) uniform sampler2DArray u_color;
 layout(binding = 1) uniform sampler2DArray u_depth;
 layout(binding = 2) uniform isampler2DArray u_ids;
 layout(binding = 3) uniform sampler2DArray u_post;   // (ao, edge) per atlas texel, WITH_AO only
+layout(binding = 4) uniform sampler2DArray u_normal;  // view-space normal per atlas texel, PROJECTOR only
+uniform mat4 u_inv_view_proj;   // (P V)^-1: viewport NDC + depth -> world relative to the origin (PROJECTOR)
 
 uniform float u_desaturate;     // context desaturation in [0, 1] (MODE_BLEND)
 uniform vec4 u_edge_color;
@@ -46,15 +50,22 @@ void main() {
 #else
     if (id != g_object) discard;
     vec4 c = texelFetch(u_color, t, 0);
-    vec3 rgb = shade(c.rgb, t);
+    float depth = texelFetch(u_depth, t, 0).r;
+    vec3 rgb = c.rgb;
+#ifdef PROJECTOR
+    vec4 ndc = vec4(gl_FragCoord.xy / u_viewport * 2.0 - 1.0, depth * 2.0 - 1.0, 1.0);
+    vec4 world = u_inv_view_proj * ndc;
+    rgb = painted(rgb, surface_light(texelFetch(u_normal, t, 0).xyz), world.xyz / world.w);
+#endif
+    rgb = shade(rgb, t);
 #ifdef MODE_SPRITE
-    gl_FragDepth = texelFetch(u_depth, t, 0).r;
+    gl_FragDepth = depth;
     out_color = vec4(rgb, 1.0);
 #else
     float a = styles[g_object].params.x;
     float grey = dot(rgb, vec3(0.299, 0.587, 0.114));
     rgb = mix(rgb, vec3(grey), u_desaturate);
-    gl_FragDepth = texelFetch(u_depth, t, 0).r;
+    gl_FragDepth = depth;
     out_color = vec4(rgb * a, a);
 #endif
 #endif

@@ -1,9 +1,16 @@
 #version 430
-// defines:
+// defines: PROJECTOR
 // Multiple render targets: shaded colour, view-space normal, object id (depth is the depth attachment).
 #include "records.glsl"
+#include "projector.glsl"
 
-in VertexData { vec3 normal; flat int object; } fs_in;
+in VertexData {
+    vec3 normal;
+    flat int object;
+#ifdef PROJECTOR
+    vec3 world;
+#endif
+} fs_in;
 
 layout(location = 0) out vec4 out_color;
 layout(location = 1) out vec4 out_normal;
@@ -14,9 +21,12 @@ void main() {
     vec3 n = len_n > 1e-20 ? fs_in.normal / len_n : vec3(0.0, 0.0, 1.0);
     if (!gl_FrontFacing) n = -n;
     // headlight: light from the camera, two-sided
-    float diffuse = abs(n.z);
-    vec3 base = object_colors[fs_in.object].rgb;
-    out_color = vec4(base * (0.25 + 0.75 * diffuse), 1.0);
+    float light = surface_light(n);
+    vec3 rgb = object_colors[fs_in.object].rgb * light;
+#ifdef PROJECTOR
+    rgb = painted(rgb, light, fs_in.world);
+#endif
+    out_color = vec4(rgb, 1.0);
     out_normal = vec4(n, 1.0);
     out_id = fs_in.object;
 }

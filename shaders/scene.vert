@@ -1,5 +1,5 @@
 #version 430
-// defines: CAPTURE_VS CAPTURE_GS
+// defines: CAPTURE_VS CAPTURE_GS PROJECTOR
 // One vertex shader for STD/RTT (no define), the RTTA vertex-shader path (CAPTURE_VS,
 // needs GL_ARB_shader_viewport_layer_array) and the RTTA geometry-shader path (CAPTURE_GS).
 #ifdef CAPTURE_VS
@@ -17,6 +17,9 @@ uniform mat4 u_proj;
 out VertexData {
     vec3 normal;
     flat int object;
+#ifdef PROJECTOR
+    vec3 world;       // relative to the scene origin, for projective texturing (STD only)
+#endif
 } vs_out;
 
 #ifdef CAPTURE_VS
@@ -27,6 +30,9 @@ void main() {
     vec4 clip_pos = u_proj * (u_view * vec4(in_position, 1.0));
     vs_out.normal = mat3(u_view) * in_normal;
     vs_out.object = int(in_object);
+#ifdef PROJECTOR
+    vs_out.world = in_position;
+#endif
 #ifdef CAPTURE_VS
     Record r = records[in_object];
     float d[4];

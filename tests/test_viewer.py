@@ -213,6 +213,15 @@ def test_keys_wheel_files_and_resizes(driven):
     assert result["after_resize"] == [1280, 720] and result["gl_errors"] == []
 
 
+def test_projector_toggle_and_move(driven):
+    result, shots = driven
+    assert result["projector"]["on"] and not result["projector"]["attached"]
+    rect = result["layout"]["composite"]
+    unpainted, painted, moved = (_region(shots[k], rect) for k in ("unpainted", "painted", "projector_moved"))
+    assert (np.abs(painted - unpainted).max(-1) > 10).mean() > 0.05        # the grid lands on the scene
+    assert (np.abs(moved - painted).max(-1) > 10).mean() > 0.02            # and moves with the projector
+
+
 def test_bad_input_corpus_in_the_viewer(driven):
     """Each corpus file opened in the running viewer: errors shown, the scene kept."""
     result, _ = driven

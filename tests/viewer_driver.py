@@ -126,6 +126,16 @@ send("on_key_press", key.F12, 0)                  # a second screenshot: new nam
 frames()
 result["screenshots"] = sorted(p.name for p in OUT.glob("rtta-*.png"))
 
+frames(2, shot="unpainted")                      # the projector: P on, then Ctrl+Right moves it
+send("on_key_press", key.P, 0)
+frames(2, shot="painted")
+send("on_key_press", key.RIGHT, key.MOD_CTRL)
+frames(2, shot="projector_moved")
+result["projector"] = {"on": app.state.projector.on, "attached": app.state.projector.attached,
+                       "az": app.state.projector.az}
+send("on_key_press", key.P, 0)
+frames(1)
+
 bad = OUT / "broken.glb"
 bad.write_bytes(b"glTF\x02\x00\x00\x00garbage")
 before = app.renderer.scene

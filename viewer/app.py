@@ -19,6 +19,7 @@ from moderngl_window.integrations.imgui_bundle import ModernglWindowRenderer
 from rtta.errors import RttaError
 from rtta.imageio import save_png
 from rtta.loader import load_scene
+from rtta.projector import Projector, default_image
 from rtta.renderer import Renderer
 from rtta.scene import Scene
 from rtta.snapshot import over_background
@@ -48,6 +49,7 @@ class Viewer:
         self.stats = Stats()
         self.screenshot_dir = Path(screenshot_dir or Path.cwd())
         self.message, self.message_is_error = "", False
+        self._projector_image = None
         self.item_rects: dict[int, tuple] = {}       # object list checkboxes on screen (tests click them)
         self.renderer: Renderer | None = None
         self.layout = Layout.of(wnd.buffer_size, True)
@@ -145,11 +147,13 @@ class Viewer:
         if vp[0] < 1 or vp[1] < 1:
             return                    # minimized or no room: nothing to draw, nothing to capture
         camera = self.orbit.camera()
+        r.projector = self._projector(camera)
+        painted = (s.projector.key(), tuple(camera.eye) if s.projector.on and s.projector.attached else None)
         atlas_visible = s.show_atlas and self.layout.atlas[2] > 0
         if s.mode != "std" or atlas_visible:
             self._capture(camera)
         if s.mode == "std":
-            key = (tuple(camera.eye), tuple(camera.target), vp)
+            key = (tuple(camera.eye), tuple(camera.target), vp, painted)
             if key != self._std_key:          # a static view is not drawn again
                 r.std(camera, vp)
                 self._std_key = key
@@ -158,12 +162,24 @@ class Viewer:
             self.view_pass.render(texture=target.color, layer=0, extent=extent, rect=self._rect(vp),
                                   window_height=self.wnd.buffer_size[1], target=self.wnd.fbo)
             return
-        key = (self._capture_key, s.style_key())
+        key = (self._capture_key, s.style_key(), painted)
         if key != self._composite_key:
             r.composite(s.mode, s.style)
             self._composite_key = key
         self.view_pass.render(texture=r.target.color, extent=r.target.extent, rect=self._rect(vp),
                               window_height=self.wnd.buffer_size[1], target=self.wnd.fbo)
+
+    def _projector(self, camera):
+        """The Projector the panel describes (None when off); the image is made once."""
+        p, scene = self.state.projector, self.renderer.scene
+        if not p.on:
+            return None
+        if self._projector_image is None:
+            self._projector_image = default_image()
+        kw = {"image": self._projector_image, "fov_y": p.fov, "strength": p.strength, "shadows": p.shadows}
+        if p.attached:
+            return Projector.at_camera(camera, scene.center, scene.radius, **kw)
+        return Projector.orbit(scene.center, scene.radius, p.az, p.el, p.dist, **kw)
 
     def _rect(self, vp: tuple[int, int]) -> tuple[int, int, int, int]:
         x, y, _, _ = self.layout.composite

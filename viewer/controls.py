@@ -132,7 +132,10 @@ class Controls:
         arrows = {keys.LEFT: (-1, 0), keys.RIGHT: (1, 0), keys.UP: (0, -1), keys.DOWN: (0, 1)}
         if key in arrows:
             dx, dy = arrows[key]
-            if modifiers.shift:
+            if modifiers.ctrl:          # the placed projector orbits (attached: it detaches there)
+                app.state.projector.attached = False
+                app.state.projector.nudge(dx * KEY_ROTATE_DEG, -dy * KEY_ROTATE_DEG)
+            elif modifiers.shift:
                 orbit.pan(dx * KEY_PAN_PX, dy * KEY_PAN_PX, app.layout.composite[3])
             else:
                 orbit.rotate(dx * KEY_ROTATE_DEG / DEGREES_PER_PIXEL, dy * KEY_ROTATE_DEG / DEGREES_PER_PIXEL)
@@ -148,6 +151,8 @@ class Controls:
             app.state.mode = VIEW_MODES[(VIEW_MODES.index(app.state.mode) + 1) % len(VIEW_MODES)]
         elif key == keys.L and app.records is not None:
             app.state.atlas_layer = (app.state.atlas_layer + 2) % (app.records.atlas_size[2] + 1) - 1  # -1: all
+        elif key == keys.P:
+            app.state.projector.on = not app.state.projector.on
         elif key == keys.F12:
             app.screenshot()
         elif key == keys.O:

@@ -35,6 +35,7 @@ def draw(app: Viewer) -> None:
     _objects(app)
     _stats(app)
     _style(app)
+    _projector(app)
     _atlas(app)
     imgui.pop_item_width()
     imgui.end()
@@ -108,6 +109,21 @@ def _style(app: Viewer) -> None:
     _, st.outline_color = _color("outline colour", st.outline_color)
     _, st.ao_radius = imgui.slider_float("AO radius (px)", st.ao_radius, 1.0, 16.0)
     _, st.ao_strength = imgui.slider_float("AO strength", st.ao_strength, 0.0, 2.0)
+
+
+def _projector(app: Viewer) -> None:
+    p = app.state.projector
+    if not imgui.collapsing_header("projector (P)"):
+        return
+    _, p.on = imgui.checkbox("project the grid", p.on)
+    _, p.attached = imgui.checkbox("attached to the camera", p.attached)
+    if not p.attached:
+        _, p.az = imgui.slider_float("azimuth (Ctrl+Left/Right)", p.az, 0.0, 360.0)
+        _, p.el = imgui.slider_float("elevation (Ctrl+Up/Down)", p.el, -89.0, 89.0)
+        _, p.dist = imgui.slider_float("distance (radii)", p.dist, 0.5, 6.0)
+    _, p.fov = imgui.slider_float("fov (deg)", p.fov, 5.0, 120.0)
+    _, p.strength = imgui.slider_float("strength", p.strength, 0.0, 1.0)
+    _, p.shadows = imgui.checkbox("shadows", p.shadows)
 
 
 def _color(label: str, rgba) -> tuple[bool, tuple]:

@@ -16,6 +16,28 @@ ATLAS_MAX_CHOICES = ("viewport", "512", "1024", "2048", "4096")
 
 
 @dataclass
+class ProjectorState:
+    """The projector as the panel and keys set it: attached to the camera, or placed on an
+    orbit (azimuth, elevation in degrees, distance in scene radii) around the scene."""
+
+    on: bool = False
+    attached: bool = True
+    az: float = 60.0
+    el: float = 35.0
+    dist: float = 2.5
+    fov: float = 30.0
+    strength: float = 1.0
+    shadows: bool = True
+
+    def nudge(self, d_az: float, d_el: float) -> None:
+        self.az = (self.az + d_az) % 360.0
+        self.el = max(-89.0, min(89.0, self.el + d_el))
+
+    def key(self) -> tuple:
+        return (self.on, self.attached, self.az, self.el, self.dist, self.fov, self.strength, self.shadows)
+
+
+@dataclass
 class ViewerState:
     names: list[str]
     mode: str = "ghosted-ao"
@@ -26,6 +48,7 @@ class ViewerState:
     atlas_layer: int = -1          # -1: all layers side by side
     filter: str = ""
     measure: bool = True           # time each stage (waits for the GPU after each: costs a little)
+    projector: ProjectorState = field(default_factory=lambda: ProjectorState())
 
     def __post_init__(self) -> None:
         if self.mode not in VIEW_MODES:

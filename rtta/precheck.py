@@ -76,8 +76,10 @@ def _gltf_json(path: Path) -> dict:
 def _glb_json(path: Path) -> dict:
     with open(path, "rb") as f:
         head = f.read(20)
-        if len(head) < 20 or head[:4] != b"glTF":
+        if head[:4] != b"glTF":
             raise RttaError("not a GLB file (no 'glTF' header)", path)
+        if len(head) < 20:
+            raise RttaError(f"GLB file is truncated ({len(head)} bytes; the header alone is 20)", path)
         _, version, total, length, kind = struct.unpack("<4sIIII", head)
         size = path.stat().st_size
         if version != 2:

@@ -69,9 +69,9 @@ def _write(path, data: bytes):
 
 @pytest.mark.parametrize("name,data,message", [
     ("empty.glb", b"", "empty"),
-    ("text.glb", b"this is not a glb file at all", "cannot read"),
+    ("text.glb", b"this is not a glb file at all", "not a GLB file"),
     ("trunc.stl", b"solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0", "no objects"),
-    ("trunc.glb", b"glTF\x02\x00\x00\x00\xff\xff\x00\x00JSON", "cannot read"),
+    ("trunc.glb", b"glTF\x02\x00\x00\x00\xff\xff\x00\x00JSON", "truncated"),
     ("mesh.xyz", b"1 2 3", "unsupported file type"),
     ("nan.obj", b"v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "NaN or infinite"),
     ("inf.obj", b"v inf 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "NaN or infinite"),

@@ -80,8 +80,8 @@ def run_reliability(sweep_frames: int, soak_frames: int, quick: bool = False, js
     print("worst colour: smallest fraction of pixels within 3/255 of STD in any frame (ties between coincident "
           "surfaces of two objects count as equal); worst depth: largest |sprites - STD| window depth off "
           "silhouettes")
-    print("RSS: first sample after warm-up (20% of the soak) -> last; drift: mean RSS without the render "
-          "targets over the last quarter of the samples against the first quarter after warm-up; GL objects "
+    print("RSS: first sample after warm-up (20% of the soak) -> last; drift: change of RSS without the render "
+          "targets after warm-up (least-squares line through the samples, relative to their mean); GL objects "
           "counted with glIs* over every name handed out")
     if json_path:
         Path(json_path).write_text(json.dumps(report, indent=1))

@@ -236,13 +236,14 @@ def _reference_frame(renderer: Renderer) -> None:
 
 
 def drift(samples: list[SoakSample], warmup: float = 0.2) -> tuple[float, dict]:
-    """(memory drift, GL object change) after warm-up. Memory drift: the mean RSS without the
-    render targets over the last quarter of the samples against the mean over the first
-    quarter after warm-up (means, because single readings swing with the driver's caches).
+    """(memory drift, GL object change) after warm-up. Memory drift: the change of RSS without
+    the render targets over the kept samples, from a least-squares line through them (single
+    readings swing by several percent with the driver's caches), relative to their mean.
     GL objects: last sample against the first after warm-up."""
     kept = samples[min(len(samples) - 1, int(len(samples) * warmup)):]
-    q = max(1, len(kept) // 4)
-    first = float(np.mean([s.other for s in kept[:q]]))
-    last = float(np.mean([s.other for s in kept[-q:]]))
+    frames = np.array([s.frame for s in kept], np.float64)
+    other = np.array([s.other for s in kept], np.float64)
+    slope = np.polyfit(frames, other, 1)[0] if len(kept) >= 2 and np.ptp(frames) > 0 else 0.0
+    change = slope * (frames[-1] - frames[0]) / other.mean()
     start, end = kept[0], kept[-1]
-    return (last - first) / first, {k: end.objects[k] - start.objects[k] for k in end.objects}
+    return float(change), {k: end.objects[k] - start.objects[k] for k in end.objects}

@@ -109,7 +109,7 @@ def _run(args, cwd):
 
 @pytest.mark.parametrize("args,needle", [
     (["export", "missing.glb", "--out", "o"], "missing.glb: no such file"),
-    (["export", "bad.glb", "--out", "o"], "bad.glb: not a GLB file"),
+    (["export", "bad.glb", "--out", "o"], "bad.glb: GLB file is truncated"),
     (["export", "--out", "o", "--size", "12by4"], "--size expects WxH"),
     (["export", "--out", "o", "--camera", "1,2"], "--camera expects AZ,EL,DIST"),
     (["export", "--out", "o", "--border", "-1"], "--border must be"),

@@ -9,6 +9,7 @@ import pytest
 import trimesh
 
 from rtta.camera import Camera
+from rtta.compare import near_edges
 from rtta.errors import RttaError
 from rtta.projector import Projector, default_image, load_image
 from rtta.scene import from_meshes
@@ -64,13 +65,8 @@ def _predicted_texel(projector, origin, world) -> tuple[np.ndarray, np.ndarray, 
 
 
 def _same_in_3x3(a: np.ndarray) -> np.ndarray:
-    pad = np.pad(a, 1, mode="edge")
-    h, w = a.shape
-    out = np.ones(a.shape, bool)
-    for dy in (-1, 0, 1):
-        for dx in (-1, 0, 1):
-            out &= pad[1 + dy:1 + dy + h, 1 + dx:1 + dx + w] == a
-    return out
+    """Pixels whose 8 neighbours hold the same value (not within a pixel of a change)."""
+    return ~near_edges(a)
 
 
 def test_image_pixels_land_where_the_projection_predicts(make_renderer):

@@ -18,6 +18,7 @@ import numpy as np
 from . import glraw, glsl
 from .gpu import GpuScene
 from .parameterize import Records
+from .passes import mat_bytes
 from .targets import SHRINK_AFTER_FRAMES, LayeredTarget, release_framebuffer, round_up
 
 MODES = ("sprites", "transparent", "ghosted", "ghosted-ao")
@@ -142,7 +143,11 @@ class CompositePass:
     def render(self, *, atlas: LayeredTarget, records: Records, gpu: GpuScene, style: Style, mode: str,
                view_depth: np.ndarray, target: CompositeTarget, post=None, projection=None) -> None:
         """Composite the captured atlas into `target` (sized to the records' viewport).
-        `projection`: (ProjectorPass, Projector, view-projection matrix) to paint with, or None."""
+        `projection`: (ProjectorPass, Projector, view-projection matrix, scene origin) to paint
+        with, or None."""
+        if projection is not None:      # (P V)^-1 once per render, for every draw that paints
+            pass_, projector, view_proj, origin = projection
+            projection = (pass_, projector, mat_bytes(np.linalg.inv(view_proj)), origin)
         self._projection = projection
         if mode not in MODES:
             raise ValueError(f"unknown mode {mode!r}; modes: {', '.join(MODES)}")
@@ -200,8 +205,8 @@ class CompositePass:
         prog, vao = self._program(**{k: True for k in on})
         prog["u_viewport"].value = tuple(float(v) for v in records.viewport)
         if projection is not None:
-            pass_, projector, view_proj, origin = projection
-            prog["u_inv_view_proj"].write(np.ascontiguousarray(np.linalg.inv(view_proj).T, np.float32).tobytes())
+            pass_, projector, inv_view_proj, origin = projection
+            prog["u_inv_view_proj"].write(inv_view_proj)
             pass_.bind(prog, projector, origin)
         edge_color = style.outline_color if outline else style.edge_color
         for name, value in (("u_desaturate", desaturate), ("u_edge_color", edge_color),

@@ -19,24 +19,26 @@ from .parameterize import Records
 from .targets import LayeredTarget
 
 
-def _mat(m: np.ndarray) -> bytes:
+def mat_bytes(m: np.ndarray) -> bytes:
     """Row-major float64 4x4 -> column-major float32 bytes for a GLSL mat4."""
     return np.ascontiguousarray(np.asarray(m, np.float64).T, np.float32).tobytes()
 
 
-class _ScenePass:
-    """Shared setup: a program from scene.vert (+ optional geometry shader) and scene.frag."""
+class ScenePass:
+    """Shared setup: a program from scene.vert (+ optional geometry shader) and scene.frag
+    (or another fragment shader, e.g. depth.frag for the projector's shadow map)."""
 
-    def __init__(self, ctx: moderngl.Context, geometry: str | None = None, **defines: object) -> None:
+    def __init__(self, ctx: moderngl.Context, geometry: str | None = None, fragment: str = "scene.frag",
+                 **defines: object) -> None:
         self.ctx = ctx
         self.program = ctx.program(
             vertex_shader=glsl.load("scene.vert", **defines),
             geometry_shader=glsl.load(geometry) if geometry else None,
-            fragment_shader=glsl.load("scene.frag", PROJECTOR=defines.get("PROJECTOR", False)))
+            fragment_shader=glsl.load(fragment, PROJECTOR=defines.get("PROJECTOR", False)))
 
-    def _setup(self, gpu: GpuScene, view: np.ndarray, proj: np.ndarray) -> moderngl.VertexArray:
-        self.program["u_view"].write(_mat(view))
-        self.program["u_proj"].write(_mat(proj))
+    def setup(self, gpu: GpuScene, view: np.ndarray, proj: np.ndarray) -> moderngl.VertexArray:
+        self.program["u_view"].write(mat_bytes(view))
+        self.program["u_proj"].write(mat_bytes(proj))
         gpu.bind_storage()
         self.ctx.enable_only(moderngl.DEPTH_TEST)
         self.ctx.depth_func = "<"
@@ -46,7 +48,7 @@ class _ScenePass:
         self.program.release()
 
 
-class CapturePass(_ScenePass):
+class CapturePass(ScenePass):
     """RTTA capture. path: 'vs' (GL_ARB_shader_viewport_layer_array) or 'gs' (the paper's)."""
 
     def __init__(self, ctx: moderngl.Context, path: str) -> None:
@@ -69,7 +71,7 @@ class CapturePass(_ScenePass):
         if td == 0:
             return
         gpu.upload_records(records)
-        vao = self._setup(gpu, view, proj)
+        vao = self.setup(gpu, view, proj)
         atlas.bind((0, 0, tw, th))
         glraw.set_clip_distances(4, True)
         try:
@@ -78,24 +80,24 @@ class CapturePass(_ScenePass):
             glraw.set_clip_distances(4, False)
 
 
-class StdPass(_ScenePass):
+class StdPass(ScenePass):
     """STD: the scene drawn normally into a one-layer target of the viewport's size;
     with `projection` (ProjectorPass, Projector) painted by the projector per fragment."""
 
     def __init__(self, ctx: moderngl.Context) -> None:
         super().__init__(ctx)
-        self._painted: _ScenePass | None = None
+        self._painted: ScenePass | None = None
 
     def render(self, *, gpu: GpuScene, view: np.ndarray, proj: np.ndarray,
                target: LayeredTarget, viewport: tuple[int, int], projection=None) -> None:
         target.ensure(viewport, 1)
         target.clear()
-        scene_pass: _ScenePass = self
+        scene_pass: ScenePass = self
         if projection is not None:
             if self._painted is None:
-                self._painted = _ScenePass(self.ctx, PROJECTOR=True)
+                self._painted = ScenePass(self.ctx, PROJECTOR=True)
             scene_pass = self._painted
-        vao = scene_pass._setup(gpu, view, proj)
+        vao = scene_pass.setup(gpu, view, proj)
         if projection is not None:
             pass_, projector = projection
             pass_.bind(scene_pass.program, projector, gpu.scene.origin)
@@ -108,7 +110,7 @@ class StdPass(_ScenePass):
             self._painted.release()
 
 
-class RttPass(_ScenePass):
+class RttPass(ScenePass):
     """RTT: every listed object drawn alone into its own full-viewport target.
 
     One target is reused: after each object is drawn, `consume(object_id, target)` is
@@ -122,7 +124,7 @@ class RttPass(_ScenePass):
                target: LayeredTarget, viewport: tuple[int, int], objects,
                consume: Callable[[int, LayeredTarget], None] | None = None) -> None:
         target.ensure(viewport, 1)
-        vao = self._setup(gpu, view, proj)
+        vao = self.setup(gpu, view, proj)
         ranges = gpu.scene.index_ranges
         for oid in objects:
             target.clear()

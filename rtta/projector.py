@@ -16,10 +16,10 @@ from pathlib import Path
 import moderngl
 import numpy as np
 
-from . import glsl
 from .camera import Camera
 from .errors import RttaError
 from .gpu import GpuScene
+from .passes import ScenePass, mat_bytes
 
 BIAS = np.array([[0.5, 0, 0, 0.5], [0, 0.5, 0, 0.5], [0, 0, 0.5, 0.5], [0, 0, 0, 1.0]])
 SHADOW_SIZE = 1024
@@ -111,17 +111,13 @@ class Projector:
                 self.near, self.far, id(self.image), self.strength, self.shadows)
 
 
-def _mat(m: np.ndarray) -> bytes:
-    return np.ascontiguousarray(np.asarray(m, np.float64).T, np.float32).tobytes()
-
-
 class ProjectorPass:
     """render(*, gpu, projector): the shadow map (depth from the projector) and the image
     texture; bind(program, origin) sets what shaders/projector.glsl reads."""
 
     def __init__(self, ctx: moderngl.Context) -> None:
         self.ctx = ctx
-        self.program = ctx.program(vertex_shader=glsl.load("scene.vert"), fragment_shader=glsl.load("depth.frag"))
+        self.shadow = ScenePass(ctx, fragment="depth.frag")
         self.depth = ctx.depth_texture((SHADOW_SIZE, SHADOW_SIZE))
         self.depth.compare_func = ""          # sampled as a plain depth value, compared in the shader
         self.depth.filter = (moderngl.NEAREST, moderngl.NEAREST)
@@ -139,15 +135,10 @@ class ProjectorPass:
         key = projector.key()
         if key == self._key:
             return
-        vp = projector.view_projection(gpu.scene.origin)
-        self.program["u_view"].write(_mat(np.identity(4)))
-        self.program["u_proj"].write(_mat(vp))
-        gpu.bind_storage()
-        self.ctx.enable_only(moderngl.DEPTH_TEST)
-        self.ctx.depth_func = "<"
+        vao = self.shadow.setup(gpu, np.identity(4), projector.view_projection(gpu.scene.origin))
         self.fbo.clear(depth=1.0)
         self.fbo.use()
-        gpu.vao(self.program).render(moderngl.TRIANGLES)
+        vao.render(moderngl.TRIANGLES)
         self._key = key
 
     def _upload(self, rgba: np.ndarray) -> None:
@@ -159,7 +150,7 @@ class ProjectorPass:
         self.image.repeat_x = self.image.repeat_y = False
 
     def bind(self, program: moderngl.Program, projector: Projector, origin) -> None:
-        program["u_projector"].write(_mat(projector.matrix(origin)))
+        program["u_projector"].write(mat_bytes(projector.matrix(origin)))
         for name, value in (("u_projector_strength", float(projector.strength)),
                             ("u_projector_shadows", int(projector.shadows)),
                             ("u_projector_bias", SHADOW_BIAS), ("u_projector_range", (projector.near, projector.far))):
@@ -172,6 +163,7 @@ class ProjectorPass:
         from .targets import release_framebuffer
 
         release_framebuffer(self.ctx, self.fbo)
-        for obj in (self.depth, self.image, self.program):
+        self.shadow.release()
+        for obj in (self.depth, self.image):
             if obj is not None:
                 obj.release()

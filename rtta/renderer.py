@@ -103,14 +103,13 @@ class Renderer:
         """Composite the last capture; re-run it alone when only the style or mode changes."""
         if self.last is None:
             raise RuntimeError("composite() needs a capture() first")
-        records, view, _ = self.last
+        records, view, proj = self.last
         style = style or Style()
         if self._composite is None:
             self._composite = CompositePass(self.ctx)
         centers = (self.scene.aabb_min + self.scene.aabb_max) / 2 - self.scene.origin
         view_depth = -(centers @ view[2, :3] + view[2, 3])
         post = self.post_process(style) if mode == "ghosted-ao" else None
-        _, view, proj = self.last
         projection = self._projection()
         if projection is not None:
             projection = (*projection, proj @ view, self.scene.origin)

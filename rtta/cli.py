@@ -6,6 +6,8 @@ import argparse
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from .errors import RttaError
 
 
@@ -56,6 +58,10 @@ def build_parser() -> argparse.ArgumentParser:
                         "(as --camera); without one the projector sits at the camera")
     p.add_argument("--projector-fov", type=float, default=30.0, help="projector field of view in degrees")
     p.add_argument("--no-projector-shadows", action="store_true", help="let the image pass through objects")
+    p.add_argument("--lens", default=None, metavar="SHAPE[,RADIUS]",
+                   help="cut the context away inside a lens (ghosted modes): sphere or box with a radius in "
+                        "world units (default: 0.6 x the focus bounds' diagonal), or the name of a closed object")
+    p.add_argument("--lens-at", default=None, metavar="X,Y,Z", help="lens centre in world units (default: the focus)")
     out = p.add_mutually_exclusive_group(required=True)
     out.add_argument("--out", help="PNG file to write")
     out.add_argument("--all-modes", metavar="DIR", help="write <mode>.png for every mode into DIR")
@@ -79,6 +85,14 @@ def build_parser() -> argparse.ArgumentParser:
     b = bsub.add_parser("packing", help="our packer against rectpack and rectangle-packer")
     b.add_argument("--quick", action="store_true")
     b.add_argument("--json", default=None)
+    b = bsub.add_parser("ldi", help="the seed's LDI table, parity-test throughput against trimesh, "
+                                    "error by resolution")
+    b.add_argument("--quick", action="store_true", help="20,000 points, the generated shapes, two resolutions")
+    b.add_argument("--points", type=int, default=1_000_000)
+    b.add_argument("--json", default=None)
+    from .cli_ldi import add_parser as add_ldi
+
+    add_ldi(sub)
     return parser
 
 
@@ -173,6 +187,8 @@ def cmd_snapshot(args) -> int:
     camera = Camera.orbit(scene.center, scene.radius, *orbit, fov_y=args.fov)
     if args.projector:
         renderer.projector = _projector(args, scene, camera)
+    if args.lens:
+        renderer.lens = _lens(args, scene, style.focus)
     try:
         images = render_modes(renderer, camera, viewport, list(targets), style)
     except ValueError as exc:
@@ -184,6 +200,35 @@ def cmd_snapshot(args) -> int:
     for path in write_pngs(images, targets):
         print(f"wrote {path}")
     return 0
+
+
+def _lens(args, scene, focus):
+    """--lens SHAPE[,RADIUS] or --lens NAME, placed by --lens-at X,Y,Z (default: on the focus)."""
+    from .lens import SHAPES, Lens, default_placement
+    from .snapshot import resolve_names
+
+    center, radius = default_placement(scene, focus)
+    if args.lens_at:
+        try:
+            center = np.array([float(v) for v in args.lens_at.split(",")], float)
+        except ValueError:
+            center = np.zeros(0)
+        if center.shape != (3,) or not np.isfinite(center).all():
+            raise RttaError(f"--lens-at must be X,Y,Z, got '{args.lens_at}'")
+    kind, _, size = args.lens.partition(",")
+    if kind in SHAPES:
+        try:
+            radius = float(size) if size else radius
+        except ValueError:
+            raise RttaError(f"--lens radius must be a number, got '{size}'") from None
+        return Lens.shape(kind, center, radius)
+    if size:
+        raise RttaError(f"--lens {kind}: an object lens takes no radius")
+    (oid,) = resolve_names(scene, [kind], "--lens")
+    lens = Lens.of_object(scene, oid)
+    if args.lens_at:
+        lens.center = center
+    return lens
 
 
 def _projector(args, scene, camera):
@@ -234,6 +279,12 @@ def cmd_bench(args) -> int:
         if sweep < 1 or soak < 2:
             raise RttaError("--sweep must be at least 1 and --soak at least 2")
         return run_reliability(sweep, soak, quick=args.quick, json_path=args.json)
+    if args.bench == "ldi":
+        from .bench_ldi import run_ldi
+
+        if args.points < 1:
+            raise RttaError("--points must be at least 1")
+        return run_ldi(quick=args.quick, points=args.points, json_path=args.json)
     return bench.run_packing(quick=args.quick, json_path=args.json)
 
 
@@ -242,7 +293,10 @@ def main(argv: list[str] | None = None) -> int:
 
     args = build_parser().parse_args(argv)
     steady_heap()
-    handler = {"export": cmd_export, "snapshot": cmd_snapshot, "info": cmd_info, "bench": cmd_bench}[args.command]
+    from .cli_ldi import cmd_ldi
+
+    handler = {"export": cmd_export, "snapshot": cmd_snapshot, "info": cmd_info, "bench": cmd_bench,
+               "ldi": cmd_ldi}[args.command]
     try:
         return handler(args)
     except RttaError as exc:

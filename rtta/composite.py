@@ -123,7 +123,7 @@ class CompositePass:
         self.styles = ctx.buffer(reserve=16)
         self.order = ctx.buffer(reserve=16)
         self.passes: list[str] = []        # the draws of the last render, for inspection
-        self._projection = None
+        self._projection = self._lens = self._inv_view_proj = None
 
     def _program(self, **defines) -> tuple[moderngl.Program, moderngl.VertexArray]:
         key = tuple(sorted(defines.items()))
@@ -141,14 +141,16 @@ class CompositePass:
         buf.write(data)
 
     def render(self, *, atlas: LayeredTarget, records: Records, gpu: GpuScene, style: Style, mode: str,
-               view_depth: np.ndarray, target: CompositeTarget, post=None, projection=None) -> None:
+               view_depth: np.ndarray, target: CompositeTarget, post=None, view_proj=None,
+               projection=None, lens=None) -> None:
         """Composite the captured atlas into `target` (sized to the records' viewport).
-        `projection`: (ProjectorPass, Projector, view-projection matrix, scene origin) to paint
-        with, or None."""
-        if projection is not None:      # (P V)^-1 once per render, for every draw that paints
-            pass_, projector, view_proj, origin = projection
-            projection = (pass_, projector, mat_bytes(np.linalg.inv(view_proj)), origin)
-        self._projection = projection
+        `projection`: (ProjectorPass, Projector, scene origin) to paint with; `lens`: (LensPass,
+        Lens, scene origin) cutting the context away in the ghosted modes. Both need `view_proj`."""
+        if lens is not None and mode not in ("ghosted", "ghosted-ao"):
+            lens = None
+        self._projection, self._lens = projection, lens
+        # (P V)^-1 once per render, for every draw that rebuilds world positions
+        self._inv_view_proj = None if projection is None and lens is None else mat_bytes(np.linalg.inv(view_proj))
         if mode not in MODES:
             raise ValueError(f"unknown mode {mode!r}; modes: {', '.join(MODES)}")
         n = len(records.visible)
@@ -186,11 +188,11 @@ class CompositePass:
             params[context, 0] = style.context_opacity * params[context, 0]
             self._upload(self.styles, params.tobytes())
             self._draw(back_to_front(records, view_depth, context), style, records, blend=True,
-                       desaturate=style.desaturate, depth_test=True, ao=with_ao)
+                       desaturate=style.desaturate, depth_test=True, ao=with_ao, cut=True)
             self._draw(focus, style, records, outline=True)
 
     def _draw(self, ids, style: Style, records: Records, *, sprite=False, blend=False, outline=False,
-              desaturate=0.0, depth_test=False, ao=False) -> None:
+              desaturate=0.0, depth_test=False, ao=False, cut=False) -> None:
         ids = np.asarray(ids, np.int32)
         ids = ids[records.visible[ids]] if len(ids) else ids
         if len(ids) == 0:
@@ -198,16 +200,21 @@ class CompositePass:
         self._upload(self.order, ids.astype(np.int32).tobytes())
         self.order.bind_to_storage_buffer(3)
         projection = None if outline else self._projection
+        lens = self._lens if cut else None
         mode = {"MODE_SPRITE": sprite, "MODE_BLEND": blend, "MODE_OUTLINE": outline, "WITH_AO": ao and not outline,
-                "PROJECTOR": projection is not None}
+                "PROJECTOR": projection is not None, "LENS": lens is not None}
         on = [k for k, v in mode.items() if v]
         self.passes.append("+".join(k.removeprefix("MODE_").lower() for k in on))
         prog, vao = self._program(**{k: True for k in on})
         prog["u_viewport"].value = tuple(float(v) for v in records.viewport)
+        if projection is not None or lens is not None:
+            prog["u_inv_view_proj"].write(self._inv_view_proj)
         if projection is not None:
-            pass_, projector, inv_view_proj, origin = projection
-            prog["u_inv_view_proj"].write(inv_view_proj)
+            pass_, projector, origin = projection
             pass_.bind(prog, projector, origin)
+        if lens is not None:
+            lens_pass, lens_, origin = lens
+            lens_pass.bind(prog, lens_, origin)
         edge_color = style.outline_color if outline else style.edge_color
         for name, value in (("u_desaturate", desaturate), ("u_edge_color", edge_color),
                             ("u_outline_width", style.outline_width)):

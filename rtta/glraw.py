@@ -127,3 +127,34 @@ def read_window(width: int, height: int) -> np.ndarray:
     gl.glPixelStorei(GL_PACK_ALIGNMENT, 1)
     gl.glReadPixels(0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE, out.ctypes.data_as(ctypes.c_void_p))
     return out
+
+
+GL_ANY_SAMPLES_PASSED = 0x8C2F
+GL_QUERY_RESULT = 0x8866
+
+
+class SamplesQuery:
+    """An occlusion query (GL_ANY_SAMPLES_PASSED) that can be released (moderngl's cannot)."""
+
+    def __init__(self) -> None:
+        q = ctypes.c_uint(0)
+        _lib().glGenQueries(1, ctypes.byref(q))
+        self.glo = q.value
+
+    def __enter__(self) -> SamplesQuery:
+        _lib().glBeginQuery(GL_ANY_SAMPLES_PASSED, self.glo)
+        return self
+
+    def __exit__(self, *exc) -> None:
+        _lib().glEndQuery(GL_ANY_SAMPLES_PASSED)
+
+    @property
+    def any_samples(self) -> bool:
+        result = ctypes.c_uint(0)
+        _lib().glGetQueryObjectuiv(self.glo, GL_QUERY_RESULT, ctypes.byref(result))
+        return result.value != 0
+
+    def release(self) -> None:
+        if self.glo:
+            _lib().glDeleteQueries(1, ctypes.byref(ctypes.c_uint(self.glo)))
+            self.glo = 0

@@ -54,6 +54,8 @@ class Renderer:
         self.last: tuple | None = None     # (records, view, proj) of the last capture
         self.projector = None              # a Projector painting the scene, or None
         self._projector_pass = None
+        self.lens = None                   # a Lens cutting the context away in the ghosted modes, or None
+        self._lens_pass = None
         self.measure = False               # time each stage (waits for the GPU after each)
         self.timings: dict[str, float] = {}  # stage -> ms of its last run, when measuring
 
@@ -110,13 +112,23 @@ class Renderer:
         centers = (self.scene.aabb_min + self.scene.aabb_max) / 2 - self.scene.origin
         view_depth = -(centers @ view[2, :3] + view[2, 3])
         post = self.post_process(style) if mode == "ghosted-ao" else None
+        origin = self.scene.origin
         projection = self._projection()
         if projection is not None:
-            projection = (*projection, proj @ view, self.scene.origin)
+            projection = (*projection, origin)
+        lens = None
+        if self.lens is not None and mode in ("ghosted", "ghosted-ao"):
+            if self._lens_pass is None:
+                from .lens import LensPass
+
+                self._lens_pass = LensPass(self.ctx)
+            with self._timed("lens"):
+                self._lens_pass.textures(self.lens)     # built once per lens geometry, before compositing
+            lens = (self._lens_pass, self.lens, origin)
         with self._timed("composite"):
             self._composite.render(atlas=self.atlas, records=records, gpu=self.gpu, style=style,
                                    mode=mode, view_depth=view_depth, target=self.target, post=post,
-                                   projection=projection)
+                                   view_proj=proj @ view, projection=projection, lens=lens)
         return self.target
 
     def _projection(self):
@@ -175,7 +187,8 @@ class Renderer:
         return sum(p.nbytes for p in parts if p is not None)
 
     def release(self) -> None:
-        for p in [*self._capture.values(), self._std, self._rtt, self._composite, self._post, self._projector_pass]:
+        for p in [*self._capture.values(), self._std, self._rtt, self._composite, self._post, self._projector_pass,
+                  self._lens_pass]:
             if p is not None:
                 p.release()
         self._capture.clear()

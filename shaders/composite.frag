@@ -1,20 +1,28 @@
 #version 430
-// defines: MODE_SPRITE MODE_BLEND MODE_OUTLINE WITH_AO PROJECTOR
+// defines: MODE_SPRITE MODE_BLEND MODE_OUTLINE WITH_AO PROJECTOR LENS
 // Per-object compositing from the atlas:
 //   MODE_SPRITE  depth sprite: atlas colour, gl_FragDepth = atlas depth (focus objects, `sprites`)
 //   MODE_BLEND   premultiplied blend with the object's opacity (`transparent`, ghosted context)
 //   MODE_OUTLINE the object's silhouette from its own unoccluded id image (ghosted focus)
 //   WITH_AO      shade with the atlas post-process (ambient occlusion, edges) of `ghosted-ao`
 //   PROJECTOR    paint with the projector at the world position reconstructed from the atlas depth
+//   LENS         cut away (discard) texels whose world position is inside the lens (parity test)
 #include "composite.glsl"
 #include "projector.glsl"
+#include "ldi.glsl"
 
 layout(binding = 0) uniform sampler2DArray u_color;
 layout(binding = 1) uniform sampler2DArray u_depth;
 layout(binding = 2) uniform isampler2DArray u_ids;
 layout(binding = 3) uniform sampler2DArray u_post;   // (ao, edge) per atlas texel, WITH_AO only
 layout(binding = 4) uniform sampler2DArray u_normal;  // view-space normal per atlas texel, PROJECTOR only
-uniform mat4 u_inv_view_proj;   // (P V)^-1: viewport NDC + depth -> world relative to the origin (PROJECTOR)
+uniform mat4 u_inv_view_proj;   // (P V)^-1: viewport NDC + depth -> world relative to the origin
+layout(binding = 5) uniform sampler2DArray u_lens_layers;   // the lens's LDI (LENS)
+uniform mat4 u_lens_to_texture;     // world relative to the origin -> lens LDI texture space
+uniform ivec2 u_lens_size;
+uniform ivec4 u_lens_crop;
+uniform int u_lens_depth;
+uniform int u_lens_object;      // a scene object used as the lens is not cut (-1: none)
 
 uniform float u_desaturate;     // context desaturation in [0, 1] (MODE_BLEND)
 uniform vec4 u_edge_color;
@@ -52,10 +60,19 @@ void main() {
     vec4 c = texelFetch(u_color, t, 0);
     float depth = texelFetch(u_depth, t, 0).r;
     vec3 rgb = c.rgb;
-#ifdef PROJECTOR
+#if defined(PROJECTOR) || defined(LENS)
     vec4 ndc = vec4(gl_FragCoord.xy / u_viewport * 2.0 - 1.0, depth * 2.0 - 1.0, 1.0);
     vec4 world = u_inv_view_proj * ndc;
-    rgb = painted(rgb, surface_light(texelFetch(u_normal, t, 0).xyz), world.xyz / world.w);
+    world.xyz /= world.w;
+#endif
+#ifdef LENS
+    if (g_object != u_lens_object
+            && ldi_inside(u_lens_layers, u_lens_depth, (u_lens_to_texture * vec4(world.xyz, 1.0)).xyz,
+                          u_lens_size, u_lens_crop))
+        discard;
+#endif
+#ifdef PROJECTOR
+    rgb = painted(rgb, surface_light(texelFetch(u_normal, t, 0).xyz), world.xyz);
 #endif
     rgb = shade(rgb, t);
 #ifdef MODE_SPRITE

@@ -9,6 +9,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 from bad_inputs import make_corpus
 
@@ -41,6 +42,7 @@ def _commands(path: Path, out: Path) -> dict[str, list[str]]:
         "info": ["info", str(path)],
         "snapshot": ["snapshot", str(path), "--size", "64x48", "--out", str(out / "shot.png")],
         "export": ["export", str(path), "--size", "64x48", "--out", str(out / "export")],
+        "ldi": ["ldi", str(path), "--points", str(out / "points.npy"), "--out", str(out / "inside.npy")],
     }
 
 
@@ -50,7 +52,7 @@ def test_corpus_is_large_enough(corpus):
     assert sum(c.error for c in cases) >= 30
 
 
-@pytest.mark.parametrize("command", ["info", "snapshot", "export"])
+@pytest.mark.parametrize("command", ["info", "snapshot", "export", "ldi"])
 def test_every_case_through_the_cli(corpus, command, tmp_path, capsys, monkeypatch, gl):
     monkeypatch.setenv("RTTA_MEMORY_LIMIT_MB", "1")      # the too-large cases exceed it
     folder, cases = corpus
@@ -61,6 +63,8 @@ def test_every_case_through_the_cli(corpus, command, tmp_path, capsys, monkeypat
         (out / "shot.png").write_bytes(SENTINEL)          # outputs the user already had
         (out / "export").mkdir()
         (out / "export" / "keep.txt").write_bytes(SENTINEL)
+        (out / "inside.npy").write_bytes(SENTINEL)
+        np.save(out / "points.npy", np.zeros((4, 3)))
         before, corpus_before = _tree(out), _tree(folder)
         code = main(_commands(case.path, out)[command])
         err = capsys.readouterr().err
@@ -77,6 +81,10 @@ def test_every_case_through_the_cli(corpus, command, tmp_path, capsys, monkeypat
                 problems.append(f"{where}: exit {code}, stderr {err!r}")
             if _tree(out) != before:
                 problems.append(f"{where}: an output was written or changed on error")
+        elif command == "ldi" and code == 2:      # loads, but is no closed mesh: refused the same way
+            if not (len(lines) == 1 and lines[0].startswith(f"rtta: error: {case.path}: ")
+                    and "not a closed mesh" in lines[0]) or _tree(out) != before:
+                problems.append(f"{where}: exit {code}, stderr {err!r}")
         else:
             if code != 0 or (case.says and not any(case.says in line and "warning" in line for line in lines)):
                 problems.append(f"{where}: exit {code}, stderr {err!r}")

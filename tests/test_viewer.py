@@ -222,6 +222,15 @@ def test_projector_toggle_and_move(driven):
     assert (np.abs(moved - painted).max(-1) > 10).mean() > 0.02            # and moves with the projector
 
 
+def test_lens_cuts_and_follows_the_mouse(driven):
+    result, shots = driven
+    rect = result["layout"]["composite"]
+    plain, cut, moved = (_region(shots[k], rect) for k in ("no_lens", "lens", "lens_moved"))
+    assert (np.abs(cut - plain).max(-1) > 10).mean() > 0.02              # the context is cut away
+    assert (np.abs(moved - cut).max(-1) > 10).mean() > 0.02              # where the mouse went
+    assert result["lens_center_1"] != result["lens_center_2"]
+
+
 def test_bad_input_corpus_in_the_viewer(driven):
     """Each corpus file opened in the running viewer: errors shown, the scene kept."""
     result, _ = driven

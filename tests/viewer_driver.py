@@ -136,6 +136,20 @@ result["projector"] = {"on": app.state.projector.on, "attached": app.state.proje
 send("on_key_press", key.P, 0)
 frames(1)
 
+app.state.style.context_opacity = 0.7           # the lens: C on (ghosted-ao), then it follows the mouse
+frames(2, shot="no_lens")
+send("on_key_press", key.C, 0)
+cx, cy, cw, ch = app.layout.composite
+send("on_mouse_motion", cx + cw // 2, wnd.size[1] - (cy + ch // 2), 0, 0)
+frames(2, shot="lens")
+result["lens_center_1"] = app.state.lens.center
+send("on_mouse_motion", cx + cw // 4, wnd.size[1] - (cy + ch // 3), 0, 0)
+frames(2, shot="lens_moved")
+result["lens_center_2"] = app.state.lens.center
+send("on_key_press", key.C, 0)
+app.state.style.context_opacity = 0.3
+frames(1)
+
 bad = OUT / "broken.glb"
 bad.write_bytes(b"glTF\x02\x00\x00\x00garbage")
 before = app.renderer.scene

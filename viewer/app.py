@@ -18,6 +18,7 @@ from moderngl_window.integrations.imgui_bundle import ModernglWindowRenderer
 
 from rtta.errors import RttaError
 from rtta.imageio import save_png
+from rtta.lens import Lens, default_placement
 from rtta.loader import load_scene
 from rtta.projector import Projector, default_image
 from rtta.renderer import Renderer
@@ -50,6 +51,7 @@ class Viewer:
         self.screenshot_dir = Path(screenshot_dir or Path.cwd())
         self.message, self.message_is_error = "", False
         self._projector_image = None
+        self._lens_cache = None
         self.item_rects: dict[int, tuple] = {}       # object list checkboxes on screen (tests click them)
         self.renderer: Renderer | None = None
         self.layout = Layout.of(wnd.buffer_size, True)
@@ -148,7 +150,9 @@ class Viewer:
             return                    # minimized or no room: nothing to draw, nothing to capture
         camera = self.orbit.camera()
         r.projector = self._projector(camera)
-        painted = (s.projector.key(), tuple(camera.eye) if s.projector.on and s.projector.attached else None)
+        r.lens = self._lens()
+        painted = (s.projector.key(), tuple(camera.eye) if s.projector.on and s.projector.attached else None,
+                   s.lens.key())
         atlas_visible = s.show_atlas and self.layout.atlas[2] > 0
         if s.mode != "std" or atlas_visible:
             self._capture(camera)
@@ -180,6 +184,43 @@ class Viewer:
         if p.attached:
             return Projector.at_camera(camera, scene.center, scene.radius, **kw)
         return Projector.orbit(scene.center, scene.radius, p.az, p.el, p.dist, **kw)
+
+    def _lens(self):
+        """The Lens the panel describes (None when off); its geometry is made once per shape."""
+        p, scene = self.state.lens, self.renderer.scene
+        if not p.on:
+            return None
+        if self._lens_cache is None or self._lens_cache.key != p.shape:
+            self._lens_cache = Lens.shape(p.shape, scene.center, 1.0)
+        center, _ = default_placement(scene, self.state.highlighted)
+        self._lens_cache.center = np.asarray(p.center if p.center is not None else center, float)
+        self._lens_cache.radius = max(p.radius, 1e-3) * scene.radius
+        return self._lens_cache
+
+    def move_lens(self, x: float, y: float) -> None:
+        """Put the lens under window point (x, y), at its present depth (on the plane through
+        its centre facing the camera)."""
+        p, scene = self.state.lens, self.renderer.scene
+        cx, cy, cw, ch = self.layout.composite
+        if cw < 1 or ch < 1:
+            return
+        camera = self.orbit.camera()
+        view, proj = self.renderer.matrices(camera, (cw, ch))
+        inv = np.linalg.inv(proj @ view)
+        ndc = (2.0 * (x - cx) / cw - 1.0, 1.0 - 2.0 * (y - cy) / ch)
+        near, far = (inv @ np.array([*ndc, z, 1.0]) for z in (-1.0, 1.0))
+        near, far = near[:3] / near[3], far[:3] / far[3]
+        current = np.asarray(p.center if p.center is not None
+                             else default_placement(scene, self.state.highlighted)[0], float) - scene.origin
+        forward = np.asarray(camera.target, float) - np.asarray(camera.eye, float)
+        ray = far - near
+        denom = float(ray @ forward)
+        if abs(denom) < 1e-12:
+            return
+        k = float((current - near) @ forward) / denom
+        hit = near + k * ray + scene.origin
+        if np.isfinite(hit).all():
+            p.center = tuple(float(v) for v in hit)
 
     def _rect(self, vp: tuple[int, int]) -> tuple[int, int, int, int]:
         x, y, _, _ = self.layout.composite

@@ -3,7 +3,8 @@
 Left-drag rotates, right- or middle-drag pans, the wheel zooms towards the cursor; a click
 toggles the highlight of the object under the cursor (in ghosted modes a highlighted
 object seen through the context wins; Shift+click takes the front-most); a double-click
-orbits around the object. Events imgui wants (over the panel) go to imgui only.
+orbits around the object. With the lens on (C) it follows the mouse over the composite;
+Space pins it where it is or lets it follow again. Events imgui wants (over the panel) go to imgui only.
 """
 
 from __future__ import annotations
@@ -51,6 +52,10 @@ class Controls:
     def on_move(self, x, y, dx, dy) -> None:
         self.mouse = (x, y)
         self.app.imgui.mouse_position_event(x, y, dx, dy)
+        lens = self.app.state.lens
+        if (lens.on and lens.follow and not imgui.get_io().want_capture_mouse
+                and contains(self.app.layout.composite, x, y)):
+            self.app.move_lens(x, y)
 
     def on_press(self, x, y, button) -> None:
         self.mouse = (x, y)
@@ -153,6 +158,10 @@ class Controls:
             app.state.atlas_layer = (app.state.atlas_layer + 2) % (app.records.atlas_size[2] + 1) - 1  # -1: all
         elif key == keys.P:
             app.state.projector.on = not app.state.projector.on
+        elif key == keys.C:
+            app.state.lens.on = not app.state.lens.on
+        elif key == keys.SPACE and app.state.lens.on:
+            app.state.lens.follow = not app.state.lens.follow
         elif key == keys.F12:
             app.screenshot()
         elif key == keys.O:

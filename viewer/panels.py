@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from imgui_bundle import imgui, implot
 
-from .state import ATLAS_MAX_CHOICES, VIEW_MODES
+from .state import ATLAS_MAX_CHOICES, LENS_SHAPES, VIEW_MODES
 
 if TYPE_CHECKING:
     from .app import Viewer
@@ -36,6 +36,7 @@ def draw(app: Viewer) -> None:
     _stats(app)
     _style(app)
     _projector(app)
+    _lens(app)
     _atlas(app)
     imgui.pop_item_width()
     imgui.end()
@@ -124,6 +125,22 @@ def _projector(app: Viewer) -> None:
     _, p.fov = imgui.slider_float("fov (deg)", p.fov, 5.0, 120.0)
     _, p.strength = imgui.slider_float("strength", p.strength, 0.0, 1.0)
     _, p.shadows = imgui.checkbox("shadows", p.shadows)
+
+
+def _lens(app: Viewer) -> None:
+    p = app.state.lens
+    if not imgui.collapsing_header("lens (C)"):
+        return
+    _, p.on = imgui.checkbox("cut the context away (ghosted modes)", p.on)
+    changed, i = imgui.combo("shape", LENS_SHAPES.index(p.shape), LENS_SHAPES)
+    if changed:
+        p.shape = LENS_SHAPES[i]
+    _, p.radius = imgui.slider_float("radius (scene radii)", p.radius, 0.02, 1.5)
+    _, p.follow = imgui.checkbox("follows the mouse (Space)", p.follow)
+    if imgui.button("on the focus"):
+        p.center = None
+    if p.on and not app.state.mode.startswith("ghosted"):
+        imgui.text_disabled("the lens cuts in ghosted modes")
 
 
 def _color(label: str, rgba) -> tuple[bool, tuple]:

@@ -37,6 +37,24 @@ class ProjectorState:
         return (self.on, self.attached, self.az, self.el, self.dist, self.fov, self.strength, self.shadows)
 
 
+LENS_SHAPES = ("sphere", "box")
+
+
+@dataclass
+class LensState:
+    """The cutaway lens of the ghosted modes: shape, radius (scene radii), and where it is
+    (world; None: on the focus). It follows the mouse over the composite unless pinned."""
+
+    on: bool = False
+    shape: str = "sphere"
+    radius: float = 0.35
+    follow: bool = True
+    center: tuple | None = None
+
+    def key(self) -> tuple:
+        return (self.on, self.shape, self.radius, self.center)
+
+
 @dataclass
 class ViewerState:
     names: list[str]
@@ -49,6 +67,7 @@ class ViewerState:
     filter: str = ""
     measure: bool = True           # time each stage (waits for the GPU after each: costs a little)
     projector: ProjectorState = field(default_factory=lambda: ProjectorState())
+    lens: LensState = field(default_factory=lambda: LensState())
 
     def __post_init__(self) -> None:
         if self.mode not in VIEW_MODES:

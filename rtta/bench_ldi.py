@@ -1,0 +1,103 @@
+"""`rtta bench ldi`: the seed's table (slide 18) for our shapes, GPU parity-test throughput
+against trimesh's `contains` (embreex backend), and classification error against LDI resolution."""
+
+from __future__ import annotations
+
+import json
+import platform
+import time
+from pathlib import Path
+
+import numpy as np
+
+COW = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "cow.glb"
+
+
+def print_table(columns, rows) -> None:
+    """Columns right-aligned to their widest cell."""
+    cells = [[str(c) for c in columns]] + [[str(v) for v in row] for row in rows]
+    widths = [max(len(r[i]) for r in cells) for i in range(len(columns))]
+    for r in cells:
+        print("  ".join(v.rjust(w) for v, w in zip(r, widths, strict=True)))
+
+
+def bench_meshes(quick: bool):
+    """(name, trimesh) of the benchmark shapes; the cow when ../shared/data has it."""
+    import trimesh
+
+    from . import shapes
+
+    out = [(k, shapes.SHAPES[k]()) for k in ("sphere", "torus", "torus-knot", "vase")]
+    if COW.is_file() and not quick:
+        out.append(("cow", trimesh.load(COW, force="mesh")))
+    return out
+
+
+def _best_ms(fn, repeats: int) -> tuple[float, object]:
+    best, result = float("inf"), None
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        result = fn()
+        best = min(best, (time.perf_counter() - t0) * 1e3)
+    return best, result
+
+
+def run_ldi(quick: bool = False, points: int = 1_000_000, resolution: int = 512, json_path: str | None = None) -> int:
+    from .cli_ldi import STATS_COLUMNS, stats_row
+    from .context import shared_context
+    from .ldi import Peeler, build, closed_mesh
+    from .ldi_gpu import ParityTest
+    from .ldi_pack import compress
+
+    ctx = shared_context()
+    peeler = Peeler(ctx)
+    points = 20_000 if quick else points
+    resolutions = (64, 256) if quick else (64, 128, 256, 512, 1024)
+    renderer = ctx.info["GL_RENDERER"]
+    print(f"renderer: {renderer}; cpu: {platform.processor() or platform.machine()}; "
+          f"date: {time.strftime('%Y-%m-%d')}; command: rtta bench ldi{' --quick' if quick else ''}")
+    table, speed, error = [], [], []
+    for name, mesh in bench_meshes(quick):
+        v, f = closed_mesh(mesh.vertices, mesh.faces, name)
+        build(ctx, v, f, resolution, peeler=peeler)       # warm-up: shader compilation
+        ldi = build(ctx, v, f, resolution, peeler=peeler)
+        packed = compress(ldi)
+        table.append(stats_row(name, v, ldi, packed))
+        lo, hi = mesh.bounds
+        pts = np.random.default_rng(1).uniform(lo, hi, (points, 3))
+        test = ParityTest(ctx, ldi, packed)
+        gpu_ms, inside = _best_ms(lambda t=test, p=pts: t.classify(p), 5)
+        kernel_ms = min(test.classify(pts) is not None and test.last_ms["test"] for _ in range(3))
+        comp_ms, inside_c = _best_ms(lambda t=test, p=pts: t.classify(p, compressed=True), 5)
+        test.release()
+        ref_ms, ref = _best_ms(lambda m=mesh, p=pts: m.contains(p), 1 if not quick else 2)
+        speed.append({"mesh": name, "points": points, "gpu_ms": gpu_ms, "kernel_ms": kernel_ms,
+                      "compressed_ms": comp_ms, "trimesh_ms": ref_ms, "agree": float((inside == ref).mean()),
+                      "compressed_equal": bool((inside == inside_c).all())})
+        for n in resolutions:
+            ldi_n = build(ctx, v, f, n, peeler=peeler, direction=ldi.direction)
+            test = ParityTest(ctx, ldi_n)
+            ms, got = _best_ms(lambda t=test, p=pts: t.classify(p), 3)
+            test.release()
+            error.append({"mesh": name, "resolution": n, "error": float((got != ref).mean()),
+                          "peel_ms": ldi_n.timings["peel"], "test_ms": ms, "layers": ldi_n.depth})
+    peeler.release()
+    print(f"\nLDI figures at {resolution}x{resolution} (the seed's table; times in ms, memory in bytes)")
+    print_table(STATS_COLUMNS, table)
+    runs = 1 if not quick else 2
+    print(f"\nparity test of {points} random points in the bounding box (best of 5; trimesh: best of {runs})")
+    print_table(("mesh", "GPU ms", "kernel ms", "compressed ms", "trimesh+embree ms", "speed-up", "agree",
+                 "plain == compressed"),
+                [(s["mesh"], f"{s['gpu_ms']:.1f}", f"{s['kernel_ms']:.1f}", f"{s['compressed_ms']:.1f}",
+                  f"{s['trimesh_ms']:.0f}", f"{s['trimesh_ms'] / s['gpu_ms']:.0f}x", f"{s['agree']:.5f}",
+                  s["compressed_equal"]) for s in speed])
+    print("GPU ms: points in (float64 -> float32 upload), test, result back; kernel ms: the test pass alone")
+    print("\nclassification error against trimesh.contains by LDI resolution")
+    print_table(("mesh", "N", "layers", "error", "peel ms", "test ms"),
+                [(e["mesh"], e["resolution"], e["layers"], f"{e['error']:.5f}", f"{e['peel_ms']:.1f}",
+                  f"{e['test_ms']:.1f}") for e in error])
+    if json_path:
+        Path(json_path).write_text(json.dumps({"renderer": renderer, "table": [dict(zip(STATS_COLUMNS, map(str, r),
+                                                                                       strict=True)) for r in table],
+                                               "throughput": speed, "resolution": error}, indent=1))
+    return 0

@@ -1,0 +1,119 @@
+"""`rtta ldi MESH`: volumetric parity tests of points against a closed mesh, and the seed's
+table of LDI figures (`--stats`). MESH is a scene file (all its objects together) or
+`shape:NAME` for a generated shape (sphere, box, torus, torus-knot, vase)."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from .errors import RttaError
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("ldi", help="classify points inside/outside a closed mesh with a layered depth image")
+    p.add_argument("mesh", help="closed mesh: a scene file, or shape:NAME (sphere, box, torus, torus-knot, vase)")
+    p.add_argument("--points", help="float array [N, 3] (.npy) of world points")
+    p.add_argument("--out", help="bool array [N] (.npy) written atomically: True = inside")
+    p.add_argument("--resolution", type=int, default=512, help="LDI resolution N (N x N texels)")
+    p.add_argument("--compressed", action="store_true", help="test against the compressed depth ranges")
+    p.add_argument("--stats", action="store_true", help="print the seed's table row for this mesh")
+
+
+def load_mesh(spec: str) -> tuple[str, np.ndarray, np.ndarray]:
+    """(name, vertices, faces) of a closed mesh; RttaError naming the file otherwise."""
+    from .ldi import closed_mesh
+
+    if spec.startswith("shape:"):
+        from .shapes import SHAPES
+
+        kind = spec.removeprefix("shape:")
+        if kind not in SHAPES:
+            raise RttaError(f"unknown shape; shapes: {', '.join(SHAPES)}", spec)
+        mesh = SHAPES[kind]()
+        return spec, *closed_mesh(mesh.vertices, mesh.faces, spec)
+    from .loader import load_scene
+
+    scene = load_scene(spec)
+    vertices = scene.positions.astype(np.float64) + scene.origin
+    v, f = closed_mesh(vertices, scene.indices.reshape(-1, 3), spec)
+    return spec, v, f
+
+
+def read_points(path: str) -> np.ndarray:
+    if not Path(path).is_file():
+        raise RttaError("no such file", path)
+    with open(path, "rb") as fh:
+        if fh.read(6) != b"\x93NUMPY":
+            raise RttaError("not a .npy file (numpy's format: np.save)", path)
+    try:
+        points = np.load(path, allow_pickle=False)
+    except (ValueError, OSError, EOFError) as exc:
+        raise RttaError(f"not a .npy array ({str(exc).splitlines()[0][:80]})", path) from None
+    if points.ndim != 2 or points.shape[1] != 3 or points.dtype.kind not in "fiu":
+        raise RttaError(f"expected a numeric array of shape [N, 3], got {points.dtype} {list(points.shape)}", path)
+    if not np.isfinite(points).all():
+        raise RttaError(f"{int((~np.isfinite(points)).any(axis=1).sum())} points are NaN or infinite", path)
+    return points.astype(np.float64)
+
+
+def write_npy(path: str, array: np.ndarray) -> None:
+    """Write atomically: the old file stays until the new one is complete."""
+    target = Path(path)
+    if not target.parent.is_dir():
+        raise RttaError("the output folder does not exist", path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".npy", dir=target.parent)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            np.save(fh, array)
+        os.replace(tmp, target)
+    finally:
+        Path(tmp).unlink(missing_ok=True)
+
+
+STATS_COLUMNS = ("mesh", "vertices", "d_min", "d_max", "d", "t_crop ms", "t_comp ms", "t_peel ms", "t_view ms",
+                 "M_crop B", "M_comp B", "ratio")
+
+
+def stats_row(name: str, vertices: np.ndarray, ldi, packed) -> tuple:
+    """One row of the seed's table; ratio = M_comp / M_crop (below 1: compression pays)."""
+    t = ldi.timings
+    return (name, len(vertices), ldi.complexity[0], ldi.complexity[1], ldi.depth, f"{t['crop']:.3f}",
+            f"{packed.milliseconds:.3f}", f"{t['peel']:.3f}", f"{t['view']:.3f}", ldi.nbytes, packed.nbytes,
+            f"{packed.nbytes / max(ldi.nbytes, 1):.2f}")
+
+
+def cmd_ldi(args: argparse.Namespace) -> int:
+    from .context import shared_context
+    from .ldi import build
+    from .ldi_gpu import ParityTest
+    from .ldi_pack import compress
+
+    if not args.stats and not (args.points and args.out):
+        raise RttaError("rtta ldi needs --points and --out, or --stats")
+    points = read_points(args.points) if args.points else None
+    if args.out and Path(args.out).is_dir():
+        raise RttaError("is a folder; --out takes a .npy file", args.out)
+    name, vertices, faces = load_mesh(args.mesh)
+    ctx = shared_context()
+    ldi = build(ctx, vertices, faces, args.resolution)
+    packed = compress(ldi)
+    if args.stats:
+        from .bench_ldi import print_table
+
+        print_table(STATS_COLUMNS, [stats_row(name, vertices, ldi, packed)])
+    if points is not None:
+        test = ParityTest(ctx, ldi, packed)
+        try:
+            inside = test.classify(points, compressed=args.compressed)
+        finally:
+            test.release()
+        write_npy(args.out, inside)
+        print(f"{args.out}: {int(inside.sum())} of {len(inside)} points inside {name} "
+              f"(LDI {ldi.size[0]}x{ldi.size[1]}, {ldi.depth} layers)", file=sys.stderr)
+    return 0

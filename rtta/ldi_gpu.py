@@ -1,0 +1,137 @@
+"""GPU volumetric parity tests: an LDI (plain texture array or compressed 2D texture) on the
+GPU, bound for any shader that includes `ldi.glsl`, and `ParityTest` classifying points."""
+
+from __future__ import annotations
+
+import time
+
+import moderngl
+import numpy as np
+
+from . import glsl
+from .ldi import LayeredDepthImage
+from .ldi_pack import CompressedLDI, compress
+from .passes import mat_bytes
+from .targets import release_framebuffer
+
+POINTS_WIDTH = 2048
+
+
+class LdiTextures:
+    """The plain layers (R32F array) and the compressed ranges (RG32UI) of one LDI."""
+
+    def __init__(self, ctx: moderngl.Context, ldi: LayeredDepthImage, packed: CompressedLDI | None = None) -> None:
+        self.ldi = ldi
+        self.packed = packed or compress(ldi)
+        d, h, w = ldi.layers.shape
+        self.layers = ctx.texture_array((max(w, 1), max(h, 1), max(d, 1)), 1, dtype="f4")
+        if d and w and h:
+            self.layers.write(np.ascontiguousarray(ldi.layers).tobytes())
+        rows, width, _ = self.packed.data.shape
+        self.ranges = ctx.texture((width, rows), 2, self.packed.data.tobytes(), dtype="u4")
+        for t in (self.layers, self.ranges):
+            t.filter = moderngl.NEAREST, moderngl.NEAREST
+
+    def bind(self, prog: moderngl.Program, to_texture: np.ndarray, *, layers_unit: int, packed_unit: int,
+             prefix: str = "u_") -> None:
+        """Bind both textures and set <prefix>to_texture (point space -> texture space), size,
+        crop and depth, where the program uses them."""
+        self.layers.use(layers_unit)
+        self.ranges.use(packed_unit)
+        values = {f"{prefix}to_texture": None, f"{prefix}size": tuple(self.ldi.size),
+                  f"{prefix}crop": tuple(self.ldi.crop), f"{prefix}depth": self.ldi.depth}
+        for name, value in values.items():
+            if name not in prog:
+                continue
+            if value is None:
+                prog[name].write(mat_bytes(to_texture))
+            else:
+                prog[name].value = value
+
+    def release(self) -> None:
+        self.layers.release()
+        self.ranges.release()
+
+
+class ParityTest:
+    """`classify(points, compressed=False)` -> bool [N], one fragment per point."""
+
+    def __init__(self, ctx: moderngl.Context, ldi: LayeredDepthImage, packed: CompressedLDI | None = None) -> None:
+        self.ctx = ctx
+        self.textures = LdiTextures(ctx, ldi, packed)
+        self._programs: dict[bool, moderngl.Program] = {}
+        self._vaos: dict[bool, moderngl.VertexArray] = {}
+        self._rows = 0
+        self._parts: list = []
+        self.last_ms: dict[str, float] = {}
+
+    def _program(self, compressed: bool):
+        if compressed not in self._programs:
+            prog = self.ctx.program(vertex_shader=glsl.load("view.vert"),
+                                    fragment_shader=glsl.load("ldi_classify.frag", COMPRESSED=compressed))
+            self._programs[compressed] = prog
+            self._vaos[compressed] = self.ctx.vertex_array(prog, [])
+        return self._programs[compressed], self._vaos[compressed]
+
+    def _targets(self, rows: int) -> None:
+        if rows <= self._rows:
+            return
+        self._release_targets()
+        self.points = self.ctx.texture((POINTS_WIDTH, rows), 3, dtype="f4")
+        self.inside = self.ctx.texture((POINTS_WIDTH, rows), 1, dtype="u1")
+        for t in (self.points, self.inside):
+            t.filter = moderngl.NEAREST, moderngl.NEAREST
+        self.fbo = self.ctx.framebuffer([self.inside])
+        self._parts = [self.fbo, self.points, self.inside]
+        self._rows = rows
+
+    def classify(self, points: np.ndarray, compressed: bool = False) -> np.ndarray:
+        """Inside (bool [N]) for world points [N, 3]; they are centred in float64 first, so
+        points far from the world origin keep their precision in float32."""
+        points = np.asarray(points, np.float64).reshape(-1, 3)
+        n = len(points)
+        if n == 0:
+            return np.zeros(0, bool)
+        t0 = time.perf_counter()
+        ldi = self.textures.ldi
+        center = -ldi.matrix[:3, :3].T @ np.linalg.solve(ldi.matrix[:3, :3] @ ldi.matrix[:3, :3].T,
+                                                          ldi.matrix[:3, 3] - 0.5)   # world point at T = 0.5
+        shift = np.eye(4)
+        shift[:3, 3] = center
+        rows = -(-n // POINTS_WIDTH)
+        self._targets(rows)
+        data = np.empty((rows * POINTS_WIDTH, 3), np.float32)
+        data[:n] = points - center
+        data[n:] = 0.0
+        self.points.write(data, viewport=(0, 0, POINTS_WIDTH, rows))
+        t1 = time.perf_counter()
+        prog, vao = self._program(compressed)
+        self.textures.bind(prog, ldi.matrix @ shift, layers_unit=1, packed_unit=2)
+        self.points.use(0)
+        self.ctx.enable_only(moderngl.NOTHING)
+        self.fbo.viewport = (0, 0, POINTS_WIDTH, rows)
+        self.fbo.use()
+        vao.render(moderngl.TRIANGLES, vertices=3)
+        self.ctx.finish()
+        t2 = time.perf_counter()
+        raw = self.fbo.read(viewport=(0, 0, POINTS_WIDTH, rows), components=1, dtype="u1")
+        out = np.frombuffer(raw, np.uint8)[:n] != 0
+        self.last_ms = {"upload": (t1 - t0) * 1e3, "test": (t2 - t1) * 1e3,
+                        "read": (time.perf_counter() - t2) * 1e3}
+        return out
+
+    def _release_targets(self) -> None:
+        for p in self._parts:
+            if isinstance(p, moderngl.Framebuffer):
+                release_framebuffer(self.ctx, p)
+            else:
+                p.release()
+        self._parts, self._rows = [], 0
+
+    def release(self) -> None:
+        self._release_targets()
+        for obj in [*self._vaos.values(), *self._programs.values()]:
+            obj.release()
+        self._vaos.clear()
+        self._programs.clear()
+        self.textures.release()

@@ -47,3 +47,17 @@ def test_composite_bench_quick(gl, tmp_path, capsys):
         assert set(s["modes"]) == {"sprites", "transparent", "ghosted", "ghosted-ao"}
         assert all(v > 0 for v in s["modes"].values()) and s["std_ms"] > 0 and s["recomposite_ms"] > 0
     assert "recomposite" in capsys.readouterr().out
+
+
+def test_ldi_bench_quick(gl, tmp_path, capsys):
+    from rtta.bench_ldi import run_ldi
+
+    out = tmp_path / "ldi.json"
+    assert run_ldi(quick=True, json_path=str(out)) == 0
+    data = json.loads(out.read_text())
+    assert [r["mesh"] for r in data["table"]] == ["sphere", "torus", "torus-knot", "vase"]
+    assert all(s["agree"] > 0.99 and s["compressed_equal"] for s in data["throughput"])
+    errors = {(e["mesh"], e["resolution"]): e["error"] for e in data["resolution"]}
+    assert all(errors[(m, 256)] < errors[(m, 64)] for m in ("sphere", "torus"))   # finer is better
+    printed = capsys.readouterr().out
+    assert "t_peel ms" in printed and "speed-up" in printed and gl.info["GL_RENDERER"] in printed

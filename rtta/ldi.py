@@ -23,7 +23,7 @@ import numpy as np
 from . import glraw, glsl
 from .errors import RttaError
 from .passes import mat_bytes
-from .targets import release_framebuffer
+from .targets import release_all
 
 NIL = 4.0            # depth of "no surface" (> every linear depth in [0, 1])
 MAX_LAYERS = 256     # a closed mesh needing more is refused, not peeled forever
@@ -182,11 +182,7 @@ class Peeler:
         return np.stack(layers) if layers else np.full((0, n, n), NIL, np.float32)
 
     def _release_targets(self) -> None:
-        for p in self._parts:
-            if isinstance(p, moderngl.Framebuffer):
-                release_framebuffer(self.ctx, p)
-            else:
-                p.release()
+        release_all(self.ctx, self._parts)
         self._parts, self._size = [], None
 
     def release(self) -> None:

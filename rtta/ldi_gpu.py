@@ -12,7 +12,7 @@ from . import glsl
 from .ldi import LayeredDepthImage
 from .ldi_pack import CompressedLDI, compress
 from .passes import mat_bytes
-from .targets import release_framebuffer
+from .targets import release_all
 
 POINTS_WIDTH = 2048
 
@@ -124,11 +124,7 @@ class ParityTest:
         return out
 
     def _release_targets(self) -> None:
-        for p in self._parts:
-            if isinstance(p, moderngl.Framebuffer):
-                release_framebuffer(self.ctx, p)
-            else:
-                p.release()
+        release_all(self.ctx, self._parts)
         self._parts, self._rows = [], 0
 
     def release(self) -> None:

@@ -22,6 +22,15 @@ def release_framebuffer(ctx: moderngl.Context, fbo) -> None:
     fbo.release()
 
 
+def release_all(ctx: moderngl.Context, parts) -> None:
+    """Release GL objects, framebuffers the safe way (see release_framebuffer)."""
+    for p in parts:
+        if isinstance(p, moderngl.Framebuffer):
+            release_framebuffer(ctx, p)
+        else:
+            p.release()
+
+
 def round_up(v: int, step: int) -> int:
     return max(step, -(-v // step) * step)
 

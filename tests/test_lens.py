@@ -131,3 +131,33 @@ def test_ldi_command_classifies_points_and_prints_the_table(tmp_path, capsys, gl
     np.save(bad, np.zeros((3, 2)))
     assert main(["ldi", "shape:sphere", "--points", str(bad), "--out", str(out)]) == 2
     assert "shape [N, 3]" in capsys.readouterr().err and out.read_bytes() == b"keep"
+
+
+def test_ldi_and_lens_release_every_gl_object(gl):
+    """Peelers, parity tests and renderers with a lens leave the GL census as it was."""
+    from rtta.ldi import build, closed_mesh
+    from rtta.ldi_gpu import ParityTest
+    from rtta.reliability import gl_census
+    from rtta.renderer import Renderer
+
+    mesh = trimesh.creation.icosphere(subdivisions=2)
+    v, f = closed_mesh(mesh.vertices, mesh.faces)
+    scene = _scene()
+    cam = Camera.orbit(scene.center, scene.radius, 20.0, 15.0, 2.6)
+
+    def work():
+        test = ParityTest(gl, build(gl, v, f, 64))
+        test.classify(np.zeros((10, 3)))
+        test.classify(np.zeros((5000, 3)), compressed=True)       # grows its targets
+        test.release()
+        r = Renderer(gl, scene)
+        r.lens = Lens.shape("box", scene.center, 0.5)
+        r.capture(cam, VP)
+        r.composite("ghosted", Style(focus={1}))
+        r.release()
+
+    work()                              # first use: shader caches filled
+    before = gl_census(gl)
+    for _ in range(3):
+        work()
+    assert gl_census(gl) == before

@@ -5,9 +5,7 @@ table of LDI figures (`--stats`). MESH is a scene file (all its objects together
 from __future__ import annotations
 
 import argparse
-import os
 import sys
-import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -64,16 +62,15 @@ def read_points(path: str) -> np.ndarray:
 
 def write_npy(path: str, array: np.ndarray) -> None:
     """Write atomically: the old file stays until the new one is complete."""
-    target = Path(path)
-    if not target.parent.is_dir():
+    from .imageio import atomic_write
+
+    if not Path(path).parent.is_dir():
         raise RttaError("the output folder does not exist", path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".npy", dir=target.parent)
-    try:
-        with os.fdopen(fd, "wb") as fh:
+    def save(tmp: str) -> None:
+        with open(tmp, "wb") as fh:          # a file object: np.save would add ".npy" to a bare name
             np.save(fh, array)
-        os.replace(tmp, target)
-    finally:
-        Path(tmp).unlink(missing_ok=True)
+
+    atomic_write(path, save)
 
 
 STATS_COLUMNS = ("mesh", "vertices", "d_min", "d_max", "d", "t_crop ms", "t_comp ms", "t_peel ms", "t_view ms",

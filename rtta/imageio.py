@@ -1,9 +1,10 @@
-"""PNG writing: GL arrays (row 0 = bottom) to images (top row first), atomically."""
+"""Atomic file writing, and PNGs of GL arrays (row 0 = bottom) as images (top row first)."""
 
 from __future__ import annotations
 
 import os
 import tempfile
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -14,20 +15,21 @@ def to_image(rgba_gl: np.ndarray) -> Image.Image:
     return Image.fromarray(np.ascontiguousarray(rgba_gl[::-1]))
 
 
-def save_png(path: str | Path, rgba_gl: np.ndarray, *, overwrite: bool = True) -> Path:
-    """Write a GL-convention array as PNG, atomically. With overwrite=False an existing file
-    is a FileExistsError, checked atomically (hard link), so a file that appears meanwhile
-    is never replaced either."""
+def atomic_write(path: str | Path, write: Callable[[str], None], *, overwrite: bool = True) -> Path:
+    """Let `write(tmp)` fill a temporary file beside `path`, then move it into place: an old
+    file stays whole until the new one is complete. With overwrite=False an existing file is
+    a FileExistsError, checked atomically (hard link), so a file that appears meanwhile is
+    never replaced either."""
     path = Path(path)
     if not overwrite and path.exists():
         raise FileExistsError(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".png", dir=path.parent)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)
     os.close(fd)
     umask = os.umask(0)
     os.umask(umask)
-    os.chmod(tmp, 0o666 & ~umask)          # mkstemp makes 0600; a saved image is the user's usual mode
+    os.chmod(tmp, 0o666 & ~umask)          # mkstemp makes 0600; a saved file gets the user's usual mode
     try:
-        to_image(rgba_gl).save(tmp, format="PNG")
+        write(tmp)
         if overwrite:
             os.replace(tmp, path)
         else:
@@ -35,3 +37,8 @@ def save_png(path: str | Path, rgba_gl: np.ndarray, *, overwrite: bool = True) -
     finally:
         Path(tmp).unlink(missing_ok=True)
     return path
+
+
+def save_png(path: str | Path, rgba_gl: np.ndarray, *, overwrite: bool = True) -> Path:
+    """Write a GL-convention array as PNG, atomically (see atomic_write)."""
+    return atomic_write(path, lambda tmp: to_image(rgba_gl).save(tmp, format="PNG"), overwrite=overwrite)

@@ -22,6 +22,7 @@ from .passes import mat_bytes
 from .targets import SHRINK_AFTER_FRAMES, LayeredTarget, release_framebuffer, round_up
 
 MODES = ("sprites", "transparent", "ghosted", "ghosted-ao")
+LENS_MODES = ("ghosted", "ghosted-ao")    # where a lens cuts the context away
 BACKGROUND = (0.93, 0.93, 0.95, 1.0)
 
 
@@ -146,7 +147,7 @@ class CompositePass:
         """Composite the captured atlas into `target` (sized to the records' viewport).
         `projection`: (ProjectorPass, Projector, scene origin) to paint with; `lens`: (LensPass,
         Lens, scene origin) cutting the context away in the ghosted modes. Both need `view_proj`."""
-        if lens is not None and mode not in ("ghosted", "ghosted-ao"):
+        if lens is not None and mode not in LENS_MODES:
             lens = None
         self._projection, self._lens = projection, lens
         # (P V)^-1 once per render, for every draw that rebuilds world positions

@@ -14,7 +14,7 @@ import moderngl
 import numpy as np
 
 from .camera import Camera
-from .composite import CompositePass, CompositeTarget, Style
+from .composite import LENS_MODES, CompositePass, CompositeTarget, Style
 from .context import Capabilities
 from .gpu import GpuScene
 from .parameterize import Records, parameterize
@@ -117,7 +117,7 @@ class Renderer:
         if projection is not None:
             projection = (*projection, origin)
         lens = None
-        if self.lens is not None and mode in ("ghosted", "ghosted-ao"):
+        if self.lens is not None and mode in LENS_MODES:
             if self._lens_pass is None:
                 from .lens import LensPass
 

@@ -192,17 +192,17 @@ class Viewer:
             return None
         if self._lens_cache is None or self._lens_cache.key != p.shape:
             self._lens_cache = Lens.shape(p.shape, scene.center, 1.0)
-        center, _ = default_placement(scene, self.state.highlighted)
-        self._lens_cache.center = np.asarray(p.center if p.center is not None else center, float)
+        center = p.center if p.center is not None else default_placement(scene, self.state.highlighted)[0]
+        self._lens_cache.center = np.asarray(center, float)
         self._lens_cache.radius = max(p.radius, 1e-3) * scene.radius
         return self._lens_cache
 
     def move_lens(self, x: float, y: float) -> None:
         """Put the lens under window point (x, y), at its present depth (on the plane through
         its centre facing the camera)."""
-        p, scene = self.state.lens, self.renderer.scene
+        p, scene, lens = self.state.lens, self.renderer.scene, self._lens()
         cx, cy, cw, ch = self.layout.composite
-        if cw < 1 or ch < 1:
+        if lens is None or cw < 1 or ch < 1:
             return
         camera = self.orbit.camera()
         view, proj = self.renderer.matrices(camera, (cw, ch))
@@ -210,8 +210,7 @@ class Viewer:
         ndc = (2.0 * (x - cx) / cw - 1.0, 1.0 - 2.0 * (y - cy) / ch)
         near, far = (inv @ np.array([*ndc, z, 1.0]) for z in (-1.0, 1.0))
         near, far = near[:3] / near[3], far[:3] / far[3]
-        current = np.asarray(p.center if p.center is not None
-                             else default_placement(scene, self.state.highlighted)[0], float) - scene.origin
+        current = lens.center - scene.origin
         forward = np.asarray(camera.target, float) - np.asarray(camera.eye, float)
         ray = far - near
         denom = float(ray @ forward)

@@ -11,7 +11,10 @@ from typing import TYPE_CHECKING
 import numpy as np
 from imgui_bundle import imgui, implot
 
-from .state import ATLAS_MAX_CHOICES, LENS_SHAPES, VIEW_MODES
+from rtta.composite import LENS_MODES
+from rtta.lens import SHAPES as LENS_SHAPES
+
+from .state import ATLAS_MAX_CHOICES, VIEW_MODES
 
 if TYPE_CHECKING:
     from .app import Viewer
@@ -139,7 +142,7 @@ def _lens(app: Viewer) -> None:
     _, p.follow = imgui.checkbox("follows the mouse (Space)", p.follow)
     if imgui.button("on the focus"):
         p.center = None
-    if p.on and not app.state.mode.startswith("ghosted"):
+    if p.on and app.state.mode not in LENS_MODES:
         imgui.text_disabled("the lens cuts in ghosted modes")
 
 

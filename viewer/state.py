@@ -37,9 +37,6 @@ class ProjectorState:
         return (self.on, self.attached, self.az, self.el, self.dist, self.fov, self.strength, self.shadows)
 
 
-LENS_SHAPES = ("sphere", "box")
-
-
 @dataclass
 class LensState:
     """The cutaway lens of the ghosted modes: shape, radius (scene radii), and where it is

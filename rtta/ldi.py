@@ -99,8 +99,9 @@ class LayeredDepthImage:
 
 
 class Peeler:
-    """Orthographic depth peeling and depth-complexity counting of one mesh at a time; owns its
-    programs and (reused) render targets."""
+    """Orthographic depth peeling and depth-complexity counting of the mesh last `load`ed (it
+    is uploaded once, however many directions are tried); owns its programs and (reused)
+    render targets."""
 
     def __init__(self, ctx: moderngl.Context) -> None:
         self.ctx = ctx
@@ -108,8 +109,21 @@ class Peeler:
         self.peel_prog = ctx.program(vertex_shader=vert, fragment_shader=glsl.load("ldi_peel.frag"))
         self.count_prog = ctx.program(vertex_shader=vert, fragment_shader=glsl.load("ldi_peel.frag", COUNT=True))
         self.query = glraw.SamplesQuery()
+        self.vertices = np.zeros((0, 3))
         self._size = None
         self._parts: list = []
+        self._mesh: list = []
+
+    def load(self, vertices, faces) -> None:
+        """Upload the mesh every later count() and peel() draws (vertices as float32)."""
+        release_all(self.ctx, self._mesh)
+        self.vertices = np.asarray(vertices, np.float64)
+        vbo = self.ctx.buffer(np.asarray(vertices, np.float32).tobytes())
+        ibo = self.ctx.buffer(np.asarray(faces, np.uint32).tobytes())
+        self._vaos = {prog.glo: self.ctx.vertex_array(prog, [(vbo, "3f", "in_position")], index_buffer=ibo,
+                                                      index_element_size=4)
+                      for prog in (self.peel_prog, self.count_prog)}
+        self._mesh = [*self._vaos.values(), vbo, ibo]
 
     def _targets(self, n: int) -> None:
         if self._size == n:
@@ -122,13 +136,9 @@ class Peeler:
         self._parts = [*self.fbos, *self.tex]
         self._size = n
 
-    def _vao(self, prog, vertices, faces):
-        vbo = self.ctx.buffer(np.asarray(vertices, np.float32).tobytes())
-        ibo = self.ctx.buffer(np.asarray(faces, np.uint32).tobytes())
-        vao = self.ctx.vertex_array(prog, [(vbo, "3f", "in_position")], index_buffer=ibo, index_element_size=4)
-        return vao, (vao, vbo, ibo)
-
     def _setup(self, matrix: np.ndarray, n: int, equation: int) -> None:
+        if not self._mesh:
+            raise RuntimeError("Peeler: load() a mesh first")
         self.ctx.enable_only(moderngl.BLEND)
         self.ctx.blend_func = moderngl.ONE, moderngl.ONE
         self.ctx.blend_equation = equation
@@ -140,28 +150,25 @@ class Peeler:
         self.ctx.blend_equation = moderngl.FUNC_ADD
         self.ctx.enable_only(moderngl.NOTHING)
 
-    def count(self, vertices, faces, matrix: np.ndarray, n: int) -> np.ndarray:
+    def count(self, matrix: np.ndarray, n: int) -> np.ndarray:
         """Surfaces crossed by each texel's ray (float32 [n, n]) in one additive pass."""
-        vao, parts = self._vao(self.count_prog, vertices, faces)
         try:
             self._setup(matrix, n, moderngl.FUNC_ADD)
             self.fbos[0].use()
             self.fbos[0].clear(0.0)
-            vao.render(moderngl.TRIANGLES)
+            self._vaos[self.count_prog.glo].render(moderngl.TRIANGLES)
             return np.frombuffer(self.tex[0].read(), np.float32).reshape(n, n).copy()
         finally:
             self._done()
-            for p in parts:
-                p.release()
 
-    def peel(self, vertices, faces, matrix: np.ndarray, n: int) -> np.ndarray:
+    def peel(self, matrix: np.ndarray, n: int) -> np.ndarray:
         """All depth layers (float32 [d, n, n], NIL-filled): pass k keeps, per texel, the
         nearest fragment behind layer k-1 (MIN blending on float, so exact); stops at the first
         pass whose occlusion query counts no fragment."""
-        vao, parts = self._vao(self.peel_prog, vertices, faces)
         layers = []
         try:
             self._setup(matrix, n, moderngl.MIN)
+            vao = self._vaos[self.peel_prog.glo]
             for k in range(MAX_LAYERS + 1):
                 out, prev = self.fbos[k % 2], self.tex[(k + 1) % 2]
                 out.use()
@@ -177,8 +184,6 @@ class Peeler:
                 raise RttaError(f"depth complexity above {MAX_LAYERS}", "mesh")
         finally:
             self._done()
-            for p in parts:
-                p.release()
         return np.stack(layers) if layers else np.full((0, n, n), NIL, np.float32)
 
     def _release_targets(self) -> None:
@@ -187,6 +192,8 @@ class Peeler:
 
     def release(self) -> None:
         self._release_targets()
+        release_all(self.ctx, self._mesh)
+        self._mesh = []
         for p in (self.peel_prog, self.count_prog, self.query):
             p.release()
 
@@ -203,15 +210,16 @@ def sphere_directions(horizontal: int = 8, vertical: int = 4) -> np.ndarray:
     return np.array(out)
 
 
-def select_viewpoint(peeler: Peeler, vertices, faces, resolution: int = 128,
+def select_viewpoint(peeler: Peeler, resolution: int = 128,
                      directions: np.ndarray | None = None) -> tuple[np.ndarray, list[tuple[int, float]]]:
-    """The direction of minimal depth complexity, ties broken by maximal coverage of the
-    texture (covered texels / all texels); also every direction's (d, coverage)."""
+    """For the mesh loaded in `peeler`: the direction of minimal depth complexity, ties broken
+    by maximal coverage of the texture (covered texels / all texels); also every direction's
+    (d, coverage)."""
     directions = sphere_directions() if directions is None else directions
     scores = []
     for d in directions:
         rot = look_rotation(d)
-        counts = peeler.count(vertices, faces, to_texture(rot, vertices, resolution), resolution)
+        counts = peeler.count(to_texture(rot, peeler.vertices, resolution), resolution)
         scores.append((int(round(float(counts.max()))), float((counts > 0).mean())))
     best = min(range(len(directions)), key=lambda i: (scores[i][0], -scores[i][1], i))
     return directions[best], scores
@@ -238,16 +246,17 @@ def build(ctx: moderngl.Context, vertices, faces, resolution: int = 512, *, dire
     peeler = peeler or Peeler(ctx)
     try:
         timings = {}
+        peeler.load(vertices, faces)
         t0 = time.perf_counter()
         complexity = (0, 0)
         if direction is None:
-            direction, scores = select_viewpoint(peeler, vertices, faces, select_resolution)
+            direction, scores = select_viewpoint(peeler, select_resolution)
             complexity = (min(s[0] for s in scores), max(s[0] for s in scores))
         timings["view"] = (time.perf_counter() - t0) * 1e3
         rotation = look_rotation(direction)
         matrix = to_texture(rotation, vertices, resolution)
         t0 = time.perf_counter()
-        layers = peeler.peel(vertices, faces, matrix, resolution)
+        layers = peeler.peel(matrix, resolution)
         timings["peel"] = (time.perf_counter() - t0) * 1e3
         t0 = time.perf_counter()
         s0, t0_, w, h = crop = crop_bounds(layers[0]) if len(layers) else (0, 0, 0, 0)

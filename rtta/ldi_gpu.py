@@ -38,15 +38,12 @@ class LdiTextures:
         crop and depth, where the program uses them."""
         self.layers.use(layers_unit)
         self.ranges.use(packed_unit)
-        values = {f"{prefix}to_texture": None, f"{prefix}size": tuple(self.ldi.size),
-                  f"{prefix}crop": tuple(self.ldi.crop), f"{prefix}depth": self.ldi.depth}
-        for name, value in values.items():
-            if name not in prog:
-                continue
-            if value is None:
-                prog[name].write(mat_bytes(to_texture))
-            else:
-                prog[name].value = value
+        if f"{prefix}to_texture" in prog:
+            prog[f"{prefix}to_texture"].write(mat_bytes(to_texture))
+        for name, value in (("size", tuple(self.ldi.size)), ("crop", tuple(self.ldi.crop)),
+                            ("depth", self.ldi.depth)):
+            if prefix + name in prog:
+                prog[prefix + name].value = value
 
     def release(self) -> None:
         self.layers.release()

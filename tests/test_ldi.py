@@ -60,8 +60,9 @@ def test_peeled_layers_are_the_ray_intersections(gl):
     peeler = Peeler(gl)
     try:
         matrix = to_texture(look_rotation((0.3, 0.5, 0.8)), v, n)
-        layers = peeler.peel(v, f, matrix, n)
-        counts = peeler.count(v, f, matrix, n)
+        peeler.load(v, f)
+        layers = peeler.peel(matrix, n)
+        counts = peeler.count(matrix, n)
     finally:
         peeler.release()
     assert layers.shape[0] == int(counts.max()) >= 4
@@ -149,7 +150,8 @@ def test_crop_is_the_bounding_box_of_layer_zero(gl):
     matrix = to_texture(look_rotation((1.0, 0.2, 0.0)), v, n)
     peeler = Peeler(gl)
     try:
-        layers = peeler.peel(v, f, matrix, n)
+        peeler.load(v, f)
+        layers = peeler.peel(matrix, n)
     finally:
         peeler.release()
     s0, t0, w, h = crop_bounds(layers[0])

@@ -6,6 +6,7 @@ Only figures from the run are printed; BENCHMARKS.md records them with the comma
 from __future__ import annotations
 
 import json
+import os
 import platform
 import time
 from pathlib import Path
@@ -18,6 +19,11 @@ from .generate import TABLE1, random_scene, table1_scene
 from .packing import pack_shelves
 from .parameterize import parameterize
 from .renderer import Renderer
+
+
+def shared_data() -> Path:
+    """../shared/data beside the project (third-party scenes; RTTA_SHARED_DATA overrides)."""
+    return Path(os.environ.get("RTTA_SHARED_DATA", Path.cwd().parent / "shared" / "data"))
 
 
 def _median_ms(fn, frames: int, warmup: int = 2) -> float:

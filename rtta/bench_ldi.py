@@ -4,7 +4,6 @@ against trimesh's `contains` (embreex backend), and classification error against
 from __future__ import annotations
 
 import json
-import os
 import platform
 import time
 from pathlib import Path
@@ -13,8 +12,9 @@ import numpy as np
 
 
 def _cow() -> Path:
-    """The cow of ../shared/data (third-party data beside the project; RTTA_SHARED_DATA overrides)."""
-    return Path(os.environ.get("RTTA_SHARED_DATA", Path.cwd().parent / "shared" / "data")) / "cow.glb"
+    from .bench import shared_data
+
+    return shared_data() / "cow.glb"
 
 
 def print_table(columns, rows) -> None:
@@ -44,6 +44,36 @@ def _best_ms(fn, repeats: int) -> tuple[float, object]:
         result = fn()
         best = min(best, (time.perf_counter() - t0) * 1e3)
     return best, result
+
+
+def error_by_resolution(ctx, name: str, mesh, points: int, resolutions, *, peeler=None, pts=None, ref=None,
+                        direction=None) -> list[dict]:
+    """Parity-test error against trimesh.contains (fraction of points classified differently)
+    for LDIs of one mesh at each resolution, with peel and test times. Points are uniform in
+    the bounding box; the viewpoint is chosen once (at the first resolution) unless given."""
+    from .ldi import Peeler, build, closed_mesh
+    from .ldi_gpu import ParityTest
+
+    v, f = closed_mesh(mesh.vertices, mesh.faces, name)
+    own = peeler is None
+    peeler = peeler or Peeler(ctx)
+    if pts is None:
+        lo, hi = mesh.bounds
+        pts = np.random.default_rng(1).uniform(lo, hi, (points, 3))
+        ref = mesh.contains(pts)
+    if direction is None:      # choose the viewpoint once; this also compiles the shaders
+        direction = build(ctx, v, f, resolutions[0], peeler=peeler).direction
+    rows = []
+    for n in resolutions:
+        ldi_n = build(ctx, v, f, n, peeler=peeler, direction=direction)
+        test = ParityTest(ctx, ldi_n)
+        ms, got = _best_ms(lambda t=test, p=pts: t.classify(p), 3)
+        test.release()
+        rows.append({"mesh": name, "resolution": n, "points": len(pts), "error": float((got != ref).mean()),
+                     "peel_ms": ldi_n.timings["peel"], "test_ms": ms, "layers": ldi_n.depth})
+    if own:
+        peeler.release()
+    return rows
 
 
 def run_ldi(quick: bool = False, points: int = 1_000_000, resolution: int = 512, json_path: str | None = None) -> int:
@@ -85,13 +115,8 @@ def run_ldi(quick: bool = False, points: int = 1_000_000, resolution: int = 512,
         speed.append({"mesh": name, "points": points, "gpu_ms": gpu_ms, "kernel_ms": kernel_ms,
                       "compressed_ms": comp_ms, "trimesh_ms": ref_ms, "agree": float((inside == ref).mean()),
                       "compressed_equal": bool((inside == inside_c).all())})
-        for n in resolutions:
-            ldi_n = build(ctx, v, f, n, peeler=peeler, direction=ldi.direction)
-            test = ParityTest(ctx, ldi_n)
-            ms, got = _best_ms(lambda t=test, p=pts: t.classify(p), 3)
-            test.release()
-            error.append({"mesh": name, "resolution": n, "error": float((got != ref).mean()),
-                          "peel_ms": ldi_n.timings["peel"], "test_ms": ms, "layers": ldi_n.depth})
+        error += error_by_resolution(ctx, name, mesh, points, resolutions, peeler=peeler, pts=pts, ref=ref,
+                                     direction=ldi.direction)
     peeler.release()
     print(f"\nLDI figures at {resolution}x{resolution} (the seed's table; times in ms, memory in bytes)")
     print_table(STATS_COLUMNS, table)

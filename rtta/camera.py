@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -10,6 +10,7 @@ from .errors import RttaError
 
 DEFAULT_ORBIT = (35.0, 25.0, 2.2)
 NEAR_RATIO = 1e-3   # near >= far * NEAR_RATIO: float32 depth keeps ~1e-4 relative precision at far
+MAX_FAR_NEAR = 1e4  # beyond this, window depth loses the surfaces' order (`rtta bench report`, section 4)
 
 
 def parse_orbit(text: str) -> tuple[float, float, float]:
@@ -54,6 +55,17 @@ class Camera:
         near = max(d - radius * 1.01, far * NEAR_RATIO)
         self.near, self.far = near, far
         return self
+
+    def depth_limited(self) -> tuple[Camera, str | None]:
+        """This camera, or a copy whose near plane is raised to far / MAX_FAR_NEAR, with a
+        message saying so: a wider depth range would draw z-fighting garbage."""
+        if self.near > 0 and self.far > self.near and self.far / self.near <= MAX_FAR_NEAR:
+            return self, None
+        far = self.far if self.far > 0 else 1.0
+        near = far / MAX_FAR_NEAR
+        msg = (f"far/near {self.far:g}/{self.near:g} exceeds {MAX_FAR_NEAR:g}: near plane raised to {near:g} "
+               "(closer geometry is clipped)")
+        return replace(self, near=near, far=far), msg
 
     def view(self, origin) -> np.ndarray:
         """World-to-eye matrix for positions given relative to `origin`."""

@@ -33,6 +33,10 @@ def _view_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--atlas-max", default=None, help="maximum atlas layer size WxH (default: viewport + border)")
     p.add_argument("--max-layers", type=int, default=None, help="cap on atlas layers")
     p.add_argument("--capture-path", choices=("auto", "vs", "gs"), default="auto")
+    p.add_argument("--region-scale", type=float, default=1.0,
+                   help="atlas texels per viewport pixel (0.25 to 4; default 1)")
+    p.add_argument("--bounds", choices=("aabb", "obb"), default="aabb",
+                   help="object bounds projected per frame: the paper's AABB or the tighter oriented box")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -90,6 +94,13 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--quick", action="store_true", help="20,000 points, the generated shapes, two resolutions")
     b.add_argument("--points", type=int, default=1_000_000)
     b.add_argument("--json", default=None)
+    b = bsub.add_parser("report", help="error against run time: regenerate the report block of BENCHMARKS.md "
+                                       "and the plots in docs/bench/")
+    b.add_argument("--quick", action="store_true",
+                   help="small scenes and grids, under two minutes (default output: out/report-quick/)")
+    b.add_argument("--markdown", default=None, help="markdown file whose report block is replaced "
+                                                    "(default: BENCHMARKS.md)")
+    b.add_argument("--plots", default=None, help="folder for the PNG plots (default: docs/bench)")
     from .cli_ldi import add_parser as add_ldi
 
     add_ldi(sub)
@@ -112,9 +123,11 @@ def _settings(args):
         raise RttaError(f"--border must be between 0 and 64, got {args.border}")
     if args.max_layers is not None and args.max_layers < 1:
         raise RttaError(f"--max-layers must be at least 1, got {args.max_layers}")
+    if not (0.25 <= args.region_scale <= 4):
+        raise RttaError(f"--region-scale must be between 0.25 and 4, got {args.region_scale}")
     atlas_max = parse_size(args.atlas_max, "--atlas-max") if args.atlas_max else None
     return Settings(border=args.border, atlas_max=atlas_max, max_layers=args.max_layers,
-                    capture_path=args.capture_path)
+                    capture_path=args.capture_path, region_scale=args.region_scale, bounds=args.bounds)
 
 
 def _renderer(ctx, scene, settings):
@@ -285,6 +298,10 @@ def cmd_bench(args) -> int:
         if args.points < 1:
             raise RttaError("--points must be at least 1")
         return run_ldi(quick=args.quick, points=args.points, json_path=args.json)
+    if args.bench == "report":
+        from .report import run_report
+
+        return run_report(quick=args.quick, markdown=args.markdown, plots=args.plots)
     return bench.run_packing(quick=args.quick, json_path=args.json)
 
 

@@ -45,7 +45,7 @@ def load_scene(path: str | Path) -> Scene:
         notes.append(f"{len(dropped)} object(s) with only degenerate (zero-area) triangles left out: "
                      + ", ".join(dropped[:5]) + (" ..." if len(dropped) > 5 else ""))
     scene = from_meshes(parts, colors, source=str(path))
-    scene.warnings = notes
+    scene.warnings = notes + scene.warnings
     return scene
 
 

@@ -80,6 +80,15 @@ def project_bounds(corners: np.ndarray, vpm: np.ndarray):
     return in_frustum, lo[:, :2], hi[:, :2]
 
 
+def _intersected(boxes: np.ndarray, vpm: np.ndarray):
+    """Several enclosing boxes per object [k, n, 8, 3]: the intersection of their projections."""
+    vis, lo, hi = project_bounds(boxes[0], vpm)
+    for corners in boxes[1:]:
+        v, a, b = project_bounds(corners, vpm)
+        vis, lo, hi = vis & v, np.maximum(lo, a), np.minimum(hi, b)
+    return vis & (lo <= hi).all(axis=1), lo, hi
+
+
 def _min_max_over_corners(xyz: np.ndarray):
     """min/max over axis 1 of [n, 8, 3]; pairwise ufuncs beat a reduction over a short axis."""
     lo, hi = xyz[:, 0].copy(), xyz[:, 0].copy()
@@ -122,21 +131,27 @@ def viewport_rects(vis: np.ndarray, lo: np.ndarray, hi: np.ndarray, size: tuple[
 
 def parameterize(corners: np.ndarray, vpm: np.ndarray, viewport: tuple[int, int], *,
                  border: int = 1, atlas_max: tuple[int, int] | None = None,
-                 max_layers: int = 2048) -> Records:
-    """Algorithm 1: records for all objects, given B_world corners and VPM (float64)."""
-    n = corners.shape[0]
+                 max_layers: int = 2048, region_scale: float = 1.0) -> Records:
+    """Algorithm 1: records for all objects, given B_world corners [n, 8, 3] (or several
+    enclosing boxes per object [k, n, 8, 3], whose projections are intersected) and VPM.
+
+    region_scale: atlas texels per viewport pixel wanted for every region (below 1 saves
+    atlas memory and fill, above 1 supersamples); lowered per object only where it must be."""
+    n = corners.shape[-3]
     W, H = int(viewport[0]), int(viewport[1])
     if W < 1 or H < 1:
         raise ValueError(f"viewport must be at least 1x1, got {W}x{H}")
-    max_w, max_h = atlas_max or (W + 2 * border, H + 2 * border)
+    if not (np.isfinite(region_scale) and 0 < region_scale <= 16):
+        raise ValueError(f"region scale must be in (0, 16], got {region_scale}")
+    max_w, max_h = atlas_max or default_atlas_max((W, H), border, region_scale)
     if max_w < 1 + 2 * border or max_h < 1 + 2 * border:
         raise ValueError(f"atlas maximum {max_w}x{max_h} cannot hold a 1-pixel region with border {border}")
-    vis, lo, hi = project_bounds(corners, vpm)
+    vis, lo, hi = project_bounds(corners, vpm) if corners.ndim == 3 else _intersected(corners, vpm)
     vis, rect = viewport_rects(vis, lo, hi, (W, H))
     inner = (rect[:, 2:] - rect[:, :2]).astype(np.float64)
     fit = np.minimum((max_w - 2 * border) / np.maximum(inner[:, 0], 1),
                      (max_h - 2 * border) / np.maximum(inner[:, 1], 1))
-    scale = np.where(vis, np.minimum(1.0, fit), 0.0)
+    scale = np.where(vis, np.minimum(region_scale, fit), 0.0)
     packing, scale = _pack_with_scaling(inner, scale, vis, border, max_w, max_h, max_layers)
     size_atlas = _region_sizes(inner, scale, border)
     atlas_rect = np.zeros((n, 4), np.int64)
@@ -153,6 +168,12 @@ def parameterize(corners: np.ndarray, vpm: np.ndarray, viewport: tuple[int, int]
     return Records(visible=vis, viewport_rect=rect, atlas_rect=atlas_rect, layer=layer,
                    scale=scale, transform=transform, clip_ndc=clip_ndc, viewport=(W, H),
                    atlas_size=(packing.width, packing.height, packing.layers), border=border)
+
+
+def default_atlas_max(viewport: tuple[int, int], border: int, region_scale: float = 1.0) -> tuple[int, int]:
+    """A layer that holds the whole viewport at the region scale, borders included."""
+    return (int(np.ceil(viewport[0] * region_scale)) + 2 * border,
+            int(np.ceil(viewport[1] * region_scale)) + 2 * border)
 
 
 def _region_sizes(inner: np.ndarray, scale: np.ndarray, border: int) -> np.ndarray:

@@ -7,6 +7,7 @@ frees them. It never creates a context: it takes a moderngl.Context.
 from __future__ import annotations
 
 import time
+import warnings
 from contextlib import contextmanager
 from dataclasses import dataclass
 
@@ -17,7 +18,7 @@ from .camera import Camera
 from .composite import LENS_MODES, CompositePass, CompositeTarget, Style
 from .context import Capabilities
 from .gpu import GpuScene
-from .parameterize import Records, parameterize
+from .parameterize import Records, default_atlas_max, parameterize
 from .passes import CapturePass, RttPass, StdPass
 from .post import AtlasPostPass
 from .scene import Scene
@@ -32,6 +33,8 @@ class Settings:
     atlas_max: tuple[int, int] | None = None   # None: viewport + 2 * border
     max_layers: int | None = None              # None: GL_MAX_ARRAY_TEXTURE_LAYERS
     capture_path: str = "auto"                 # 'auto', 'vs' or 'gs'
+    region_scale: float = 1.0                  # atlas texels per viewport pixel
+    bounds: str = "aabb"                       # B_world: 'aabb' (the paper's) or 'obb' (tighter)
 
 
 class Renderer:
@@ -58,6 +61,7 @@ class Renderer:
         self._lens_pass = None
         self.measure = False               # time each stage (waits for the GPU after each)
         self.timings: dict[str, float] = {}  # stage -> ms of its last run, when measuring
+        self.warnings: list[str] = []      # what was degraded (each said once)
 
     @contextmanager
     def _timed(self, stage: str):
@@ -71,17 +75,20 @@ class Renderer:
         self.timings[stage] = (time.perf_counter() - t0) * 1e3
 
     def matrices(self, camera: Camera, viewport: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+        camera, message = camera.depth_limited()
+        if message and message not in self.warnings:
+            self.warnings.append(message)
+            warnings.warn(message, stacklevel=2)
         return camera.view(self.scene.origin), camera.projection(viewport[0] / viewport[1])
 
     def parameterize(self, camera: Camera, viewport: tuple[int, int], matrices=None) -> Records:
         view, proj = matrices or self.matrices(camera, viewport)
         s = self.settings
-        atlas_max = s.atlas_max
-        if atlas_max is not None:
-            atlas_max = (min(atlas_max[0], self.caps.max_texture), min(atlas_max[1], self.caps.max_texture))
+        atlas_max = s.atlas_max or default_atlas_max(viewport, s.border, s.region_scale)
+        atlas_max = (min(atlas_max[0], self.caps.max_texture), min(atlas_max[1], self.caps.max_texture))
         max_layers = min(s.max_layers or self.caps.max_layers, self.caps.max_layers)
-        return parameterize(self.scene.box_corners(), proj @ view, viewport, border=s.border,
-                            atlas_max=atlas_max, max_layers=max_layers)
+        return parameterize(self.scene.box_corners(s.bounds), proj @ view, viewport, border=s.border,
+                            atlas_max=atlas_max, max_layers=max_layers, region_scale=s.region_scale)
 
     def capture_pass(self, path: str | None = None) -> CapturePass:
         path = self.caps.capture_path(path or self.settings.capture_path)

@@ -19,6 +19,7 @@ SUPPORTED = (".glb", ".gltf", ".obj", ".stl", ".ply", ".3mf", ".off")
 BOX_EDGES = np.array([(0, 1), (2, 3), (4, 5), (6, 7), (0, 2), (1, 3), (4, 6), (5, 7),
                       (0, 4), (1, 5), (2, 6), (3, 7)], dtype=np.intp)
 _BITS = np.array([[(i >> k) & 1 for k in range(3)] for i in range(8)], dtype=bool)
+BOUNDS = ("aabb", "obb")
 
 
 @dataclass
@@ -63,13 +64,21 @@ class Scene:
         r = float(np.linalg.norm(hi - lo) / 2.0)
         return r if r > 0 else max(1e-6, float(np.abs(lo).max()) * 1e-7)
 
-    def box_corners(self) -> np.ndarray:
-        """B_world as 8 corners per object, relative to origin: float64 [N, 8, 3]."""
+    def box_corners(self, kind: str = "aabb") -> np.ndarray:
+        """B_world as 8 corners per object, relative to origin: float64 [N, 8, 3] for 'aabb'
+        (the paper's axis-aligned boxes); [2, N, 8, 3] for 'obb': the AABBs and the
+        principal-axes boxes, whose projections parameterization intersects (both enclose
+        the object, so the intersection does too, and it is never larger than the AABB's)."""
+        if kind not in BOUNDS:
+            raise ValueError(f"unknown bounds '{kind}' (choose from {', '.join(BOUNDS)})")
         if "aabb" not in self._corners:
             lo = (self.aabb_min - self.origin)[:, None, :]
             hi = (self.aabb_max - self.origin)[:, None, :]
             self._corners["aabb"] = np.where(_BITS[None], hi, lo)
-        return self._corners["aabb"]
+        if kind == "obb" and "obb" not in self._corners:
+            obb = oriented_corners(self.positions, self.object_ids, self.count)
+            self._corners["obb"] = np.stack([self._corners["aabb"], obb])
+        return self._corners[kind]
 
     def index(self, name: str) -> int:
         return self.names.index(name)
@@ -131,7 +140,20 @@ def from_meshes(parts: list[tuple[str, np.ndarray, np.ndarray, np.ndarray | None
     return Scene(names=names, positions=np.concatenate(pos), normals=np.concatenate(nrm),
                  object_ids=np.concatenate(ids), indices=np.concatenate(idx).astype(np.uint32),
                  index_ranges=np.array(ranges, np.int64), colors=cols, aabb_min=lo,
-                 aabb_max=hi, origin=origin, source=source)
+                 aabb_max=hi, origin=origin, source=source, warnings=_collapsed(names, lo, hi, origin))
+
+
+def _collapsed(names: list[str], lo: np.ndarray, hi: np.ndarray, origin: np.ndarray) -> list[str]:
+    """A warning for objects smaller than a few float32 steps at their distance from the
+    scene origin: their GPU positions collapse, so they draw as specks or not at all."""
+    far = np.maximum(np.abs(lo - origin), np.abs(hi - origin)).max(axis=1)
+    step = np.spacing(far.astype(np.float32)).astype(np.float64)
+    small = np.flatnonzero((hi - lo).max(axis=1) < 16 * step)
+    if not small.size:
+        return []
+    listed = ", ".join(names[i] for i in small[:5]) + (" ..." if small.size > 5 else "")
+    return [f"{small.size} object(s) smaller than 16 float32 steps at their distance from the scene centre "
+            f"draw collapsed: {listed}"]
 
 
 def _vertex_normals(v: np.ndarray, f: np.ndarray) -> np.ndarray:
@@ -145,3 +167,23 @@ def _vertex_normals(v: np.ndarray, f: np.ndarray) -> np.ndarray:
     length = np.linalg.norm(out, axis=1, keepdims=True)
     return (out / np.where(length > 0, length, 1.0)).astype(np.float32)
 
+
+
+def oriented_corners(positions: np.ndarray, object_ids: np.ndarray, n: int) -> np.ndarray:
+    """Principal-axes bounding box of each object's vertices (which lie contiguously, in
+    object order), as 8 corners in the BOX_EDGES order: float64 [n, 8, 3]."""
+    p = positions.astype(np.float64)
+    counts = np.bincount(object_ids, minlength=n)
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    mean = np.add.reduceat(p, starts, axis=0) / counts[:, None]
+    q = p - mean[object_ids]
+    i, j = [0, 0, 0, 1, 1, 2], [0, 1, 2, 1, 2, 2]
+    m = np.add.reduceat(q[:, i] * q[:, j], starts, axis=0)
+    cov = m[:, [0, 1, 2, 1, 3, 4, 2, 4, 5]].reshape(n, 3, 3)
+    axes = np.linalg.eigh(cov)[1]                          # columns: principal axes
+    local = np.einsum("vi,vij->vj", q, axes[object_ids])
+    lo = np.minimum.reduceat(local, starts, axis=0)
+    hi = np.maximum.reduceat(local, starts, axis=0)
+    pad = 1e-9 * np.maximum(np.abs(hi - lo).max(axis=1, keepdims=True), 1e-30)
+    box = np.where(_BITS[None], (hi + pad)[:, None], (lo - pad)[:, None])    # [n, 8, 3] local
+    return mean[:, None, :] + np.einsum("nkj,nij->nki", box, axes)

@@ -13,6 +13,7 @@ from imgui_bundle import imgui, implot
 
 from rtta.composite import LENS_MODES
 from rtta.lens import SHAPES as LENS_SHAPES
+from rtta.scene import BOUNDS
 
 from .state import ATLAS_MAX_CHOICES, VIEW_MODES
 
@@ -159,6 +160,10 @@ def _atlas(app: Viewer) -> None:
     changed, i = imgui.combo("max size", ATLAS_MAX_CHOICES.index(s.atlas_max), ATLAS_MAX_CHOICES)
     if changed:
         s.set_atlas_max(ATLAS_MAX_CHOICES[i])
+    _, s.settings.region_scale = imgui.slider_float("region scale", s.settings.region_scale, 0.25, 2.0, "%.2f")
+    changed, i = imgui.combo("bounds", BOUNDS.index(s.settings.bounds), list(BOUNDS))
+    if changed:
+        s.settings.bounds = BOUNDS[i]
     paths = app.capture_paths
     current = app.renderer.caps.capture_path(s.settings.capture_path)
     changed, i = imgui.combo("capture path", paths.index(current), paths)

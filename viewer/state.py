@@ -111,4 +111,4 @@ class ViewerState:
     def capture_key(self) -> tuple:
         """Changes whenever the atlas must be captured again (besides camera and viewport)."""
         s = self.settings
-        return (s.border, s.atlas_max, s.max_layers, s.capture_path)
+        return (s.border, s.atlas_max, s.max_layers, s.capture_path, s.region_scale, s.bounds)

@@ -115,14 +115,22 @@ class FrameCheck:
                 and self.depth_off + self.depth_crease <= self.crease_limit)
 
 
-def check_sprites_frame(renderer: Renderer, camera: Camera, viewport: tuple[int, int]) -> FrameCheck:
-    """Capture, composite `sprites` and compare with STD, the core's reconstruction check."""
+def sprites_and_std(renderer: Renderer, camera: Camera, viewport: tuple[int, int]):
+    """One view captured and composited as `sprites`, and drawn by STD: (records, whether
+    the records are finite, sprites rgba and depth, STD's readback, per-pixel colour
+    difference (max over RGB, of 255) between sprites and STD over the background)."""
     records = renderer.capture(camera, viewport)
     finite = all(np.isfinite(getattr(records, k)).all() for k in ("transform", "clip_ndc", "scale"))
     rgba, depth = renderer.composite("sprites").read()
     std = renderer.std(camera, viewport).read(viewport, 1)
     std_rgb = over_background(std["color"][0])[..., :3].astype(int)
-    close = np.abs(rgba[..., :3].astype(int) - std_rgb).max(-1) <= COLOR_TOL
+    return records, finite, rgba, depth, std, np.abs(rgba[..., :3].astype(int) - std_rgb).max(-1)
+
+
+def check_sprites_frame(renderer: Renderer, camera: Camera, viewport: tuple[int, int]) -> FrameCheck:
+    """Capture, composite `sprites` and compare with STD, the core's reconstruction check."""
+    records, finite, rgba, depth, std, color_diff = sprites_and_std(renderer, camera, viewport)
+    close = color_diff <= COLOR_TOL
     std_id, std_depth = std["id"][0], std["depth"][0]
     if close.mean() < COLOR_FRACTION:
         close |= _depth_ties(renderer, records, ~close, std_id, depth)

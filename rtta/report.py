@@ -12,12 +12,11 @@ import math
 import os
 import platform
 import re
-import sys
 import time
 from pathlib import Path
 
 from . import report_runs as runs
-from .bench import shared_data
+from .bench_reliability import _progress
 from .errors import RttaError
 from .imageio import atomic_write
 
@@ -51,27 +50,23 @@ def _g(x: float, digits: int = 3) -> str:
     return f"{x:.{digits}g}"
 
 
-def _progress(total: int):
-    """A one-line progress bar on stderr; counts steps across all sections."""
+def _ticker(total: int):
+    """A tick() per finished step, drawn by the reliability bench's progress bar (stderr,
+    terminals only)."""
+    show = _progress("report", total)
     done = [0]
-    t0 = time.perf_counter()
 
-    def tick(label: str = "") -> None:
+    def tick() -> None:
         done[0] += 1
-        n = done[0]
-        filled = min(30, int(30 * n / total))
-        end = "\n" if n == total else ""
-        print(f"\rreport [{'#' * filled}{'.' * (30 - filled)}] {n}/{total} {time.perf_counter() - t0:5.0f} s",
-              end=end, file=sys.stderr, flush=True)
+        if show:
+            show(done[0])
     return tick
 
 
-def _steps(quick: bool) -> int:
+def _steps(quick: bool, scenes: int, meshes: int) -> int:
     """Ticks of the whole run, as report_runs' loops make them."""
-    scenes = 2 if quick else 5 + (shared_data() / "engine_2cyl.glb").is_file()
-    meshes = 2 if quick else 4 + (shared_data() / "cow.glb").is_file()
-    return (scenes * (4 if quick else 16) + 2 * (2 if quick else 4) + 4 + (4 if quick else 12)
-            + (9 if quick else 17) + meshes)
+    return (scenes * (4 if quick else 16) + 2 * (2 if quick else 4) + 2 * min(scenes, 2)
+            + (4 if quick else 12) + (9 if quick else 17) + meshes)
 
 
 def run_report(quick: bool = False, markdown: str | None = None, plots: str | None = None, ctx=None) -> int:
@@ -90,14 +85,15 @@ def run_report(quick: bool = False, markdown: str | None = None, plots: str | No
     viewport = (256, 256) if quick else (1024, 1024)
     header = {"renderer": str(ctx.info["GL_RENDERER"]), "cpu": cpu_name(), "date": time.strftime("%Y-%m-%d"),
               "command": "rtta bench report" + (" --quick" if quick else ""), "viewport": viewport}
-    tick = _progress(_steps(quick))
+    scenes, meshes = runs.report_scenes(quick), runs.ldi_meshes(quick)
+    tick = _ticker(_steps(quick, len(scenes), len(meshes)))
     results = {
-        "error": runs.error_vs_time(ctx, viewport, quick, tick),
+        "error": runs.error_vs_time(ctx, scenes, viewport, quick, tick),
         "packing": runs.packing(ctx, viewport, quick, tick),
-        "bounds": runs.bounds_cost(ctx, viewport, quick, tick),
+        "bounds": runs.bounds_cost(ctx, scenes, viewport, quick, tick),
         "capture": runs.capture_cost(ctx, viewport, quick, tick),
         "stability": runs.stability(ctx, (256, 256) if quick else (512, 512), quick, tick),
-        "ldi": runs.ldi_error(ctx, quick, tick),
+        "ldi": runs.ldi_error(ctx, meshes, quick, tick),
     }
     plot_dir.mkdir(parents=True, exist_ok=True)
     images = draw_all(results, header, plot_dir)

@@ -11,30 +11,24 @@ import numpy as np
 from .bench import _gl_timed, _median_ms, _rectpack, _rpack, shared_data
 from .camera import Camera
 from .generate import TABLE1, random_scene, table1_scene
+from .reliability import COLOR_TOL, sprites_and_std
 from .renderer import Renderer, Settings
 from .scene import Scene, from_meshes, oriented_corners
-from .snapshot import over_background
-
-COLOR_TOL = 3  # of 255
 
 
 def sprites_error(r: Renderer, camera: Camera, viewport: tuple[int, int]) -> dict:
     """`sprites` against STD for one view: fraction of pixels off by more than 3/255, RMS and
     max window-depth error where both cover the pixel, holes (STD covers, sprites do not),
     whether records and depth are finite, and the GL error state."""
-    records = r.capture(camera, viewport)
-    rgba, depth = r.composite("sprites").read()
-    std = r.std(camera, viewport).read(viewport, 1)
-    std_rgb = over_background(std["color"][0])[..., :3].astype(int)
-    off = np.abs(rgba[..., :3].astype(int) - std_rgb).max(-1) > COLOR_TOL
+    records, finite, _, depth, std, color_diff = sprites_and_std(r, camera, viewport)
+    off = color_diff > COLOR_TOL
     covered = std["id"][0] >= 0
     both = covered & (depth < 1.0)
     d = np.abs(depth[both].astype(np.float64) - std["depth"][0][both])
-    finite = bool(np.isfinite(depth).all()) and all(
-        np.isfinite(getattr(records, k)).all() for k in ("transform", "clip_ndc", "scale"))
     return {"color_off": float(off.mean()), "depth_rms": float(np.sqrt((d ** 2).mean())) if d.size else 0.0,
             "depth_max": float(d.max()) if d.size else 0.0, "holes": int((covered & (depth >= 1.0) & off).sum()),
-            "finite": finite, "gl_error": r.ctx.error, "atlas": records.atlas_size}
+            "finite": finite and bool(np.isfinite(depth).all()), "gl_error": r.ctx.error,
+            "atlas": records.atlas_size}
 
 
 def report_scenes(quick: bool) -> list[tuple[str, Scene]]:
@@ -54,14 +48,14 @@ def _orbit(scene: Scene) -> Camera:
     return Camera.orbit(scene.center, scene.radius, 30.0, 20.0, 2.2)
 
 
-def error_vs_time(ctx, viewport, quick: bool, tick) -> list[dict]:
+def error_vs_time(ctx, scenes, viewport, quick: bool, tick) -> list[dict]:
     """Section 1: every region scale x border on every scene: sprites error and frame time
     (capture + sprites composite, median of frames after glFinish)."""
     scales = (0.5, 1.0) if quick else (0.25, 0.5, 1.0, 2.0)
     borders = (0, 1) if quick else (0, 1, 2, 4)
     frames = 3 if quick else 7
     rows = []
-    for name, scene in report_scenes(quick):
+    for name, scene in scenes:
         cam = _orbit(scene)
         for scale in scales:
             for border in borders:
@@ -108,12 +102,12 @@ def packing(ctx, viewport, quick: bool, tick) -> list[dict]:
     return rows
 
 
-def bounds_cost(ctx, viewport, quick: bool, tick) -> list[dict]:
+def bounds_cost(ctx, scenes, viewport, quick: bool, tick) -> list[dict]:
     """Section 2b: the paper's AABB against oriented bounds on real assemblies: region area,
     atlas use and the time each costs (setup once per scene, parameterize and capture per frame)."""
     frames = 3 if quick else 7
     rows = []
-    for name, scene in report_scenes(quick)[:2]:
+    for name, scene in scenes[:2]:
         cam = _orbit(scene)
         for bounds in ("aabb", "obb"):
             t0 = time.perf_counter()
@@ -261,15 +255,22 @@ def _stability_row(ctx, scene: Scene, sweep: str, value: float, cams, viewport) 
             "warnings": list(scene.warnings) + r.warnings}
 
 
-def ldi_error(ctx, quick: bool, tick) -> list[dict]:
+def ldi_meshes(quick: bool):
+    """(name, trimesh) of section 5: the LDI benchmark's shapes (two with --quick)."""
+    from .bench_ldi import bench_meshes
+
+    return bench_meshes(quick)[: 2 if quick else None]
+
+
+def ldi_error(ctx, meshes, quick: bool, tick) -> list[dict]:
     """Section 5: LDI parity-test error against trimesh.contains, by resolution, with peel
     and test times."""
-    from .bench_ldi import bench_meshes, error_by_resolution
+    from .bench_ldi import error_by_resolution
 
     points = 20_000 if quick else 100_000
     resolutions = (64, 256) if quick else (64, 128, 256, 512, 1024)
     rows = []
-    for name, mesh in bench_meshes(quick)[: 2 if quick else None]:
+    for name, mesh in meshes:
         rows += error_by_resolution(ctx, name, mesh, points, resolutions)
         tick()
     return rows

@@ -94,6 +94,13 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--quick", action="store_true", help="20,000 points, the generated shapes, two resolutions")
     b.add_argument("--points", type=int, default=1_000_000)
     b.add_argument("--json", default=None)
+    b = bsub.add_parser("material", help="textured objects without and with batching (material atlas, "
+                                         "BVH chunks): draw calls, frame time, atlas memory")
+    b.add_argument("--objects", type=int, default=240, help="textured boxes in the generated scene")
+    b.add_argument("--max-vertices", type=int, default=480,
+                   help="BVH leaf size in vertices (the seed used 5000 for a city; the generated scene is smaller)")
+    b.add_argument("--quick", action="store_true", help="5 frames per figure, 16 textures")
+    b.add_argument("--json", default=None)
     b = bsub.add_parser("report", help="error against run time: regenerate the report block of BENCHMARKS.md "
                                        "and the plots in docs/bench/")
     b.add_argument("--quick", action="store_true",
@@ -298,6 +305,12 @@ def cmd_bench(args) -> int:
         if args.points < 1:
             raise RttaError("--points must be at least 1")
         return run_ldi(quick=args.quick, points=args.points, json_path=args.json)
+    if args.bench == "material":
+        from .bench_material import run_material
+
+        if args.objects < 1 or args.max_vertices < 3:
+            raise RttaError("--objects must be at least 1 and --max-vertices at least 3")
+        return run_material(args.objects, quick=args.quick, json_path=args.json, max_vertices=args.max_vertices)
     if args.bench == "report":
         from .report import run_report
 

@@ -1,5 +1,6 @@
 """GPU-side scene data shared by every pass: one vertex buffer, one index buffer, the
-object buffer (colours) and the record buffer R (one std430 entry per object ID)."""
+object buffer (colours), the record buffer R (one std430 entry per object ID) and, for a
+textured scene, the material atlas and its per-object buffer."""
 
 from __future__ import annotations
 
@@ -10,6 +11,9 @@ from .parameterize import RECORD_DTYPE, Records
 from .scene import Scene
 
 VERTEX_LAYOUT = (("in_position", "3f", "12x"), ("in_normal", "3f", "12x"), ("in_object", "u4", "4x"))
+UV_LAYOUT = (("in_uv", "2f", "8x"),)
+MATERIAL_UNIT = 15          # texture unit of the material atlas
+MATERIAL_DTYPE = np.dtype([("rect", "<f4", 4), ("info", "<i4", 4)])
 
 
 class GpuScene:
@@ -18,10 +22,17 @@ class GpuScene:
     def __init__(self, ctx: moderngl.Context, scene: Scene) -> None:
         self.ctx = ctx
         self.scene = scene
-        interleaved = np.zeros(scene.vertex_count, dtype=[("p", "<f4", 3), ("n", "<f4", 3), ("id", "<u4")])
+        self.textured = scene.textured
+        fields = [("p", "<f4", 3), ("n", "<f4", 3), ("id", "<u4")] + ([("uv", "<f4", 2)] if self.textured else [])
+        interleaved = np.zeros(scene.vertex_count, dtype=fields)
         interleaved["p"] = scene.positions
         interleaved["n"] = scene.normals
         interleaved["id"] = scene.object_ids
+        self.layout = VERTEX_LAYOUT + (UV_LAYOUT if self.textured else ())
+        self.material_atlas = self.materials = None
+        if self.textured:
+            interleaved["uv"] = scene.uvs
+            self._upload_materials()
         self.vbo = ctx.buffer(interleaved.tobytes())
         self.ibo = ctx.buffer(scene.indices.astype(np.uint32).tobytes())
         self.objects = ctx.buffer(np.ascontiguousarray(scene.colors, np.float32).tobytes())
@@ -29,15 +40,48 @@ class GpuScene:
         self._vaos: dict[int, moderngl.VertexArray] = {}
 
     def vao(self, program: moderngl.Program) -> moderngl.VertexArray:
+        """The shared buffers bound to `program` (one vertex array per program, cached)."""
         key = program.glo
         if key not in self._vaos:
-            # attributes a program does not use (optimized out) are skipped in the layout
-            used = [(name, fmt if name in program else skip) for name, fmt, skip in VERTEX_LAYOUT]
-            layout = " ".join(fmt for _, fmt in used)
-            names = [name for name, fmt in used if not fmt.endswith("x")]
-            self._vaos[key] = self.ctx.vertex_array(
-                program, [(self.vbo, layout, *names)], index_buffer=self.ibo, index_element_size=4)
+            self._vaos[key] = self.vertex_array(program, self.ibo)
         return self._vaos[key]
+
+    def vertex_array(self, program: moderngl.Program, index_buffer: moderngl.Buffer) -> moderngl.VertexArray:
+        """A new vertex array over the scene's vertices with another index buffer (the caller releases it)."""
+        # attributes a program does not use (optimized out) are skipped in the layout
+        used = [(name, fmt if name in program else skip) for name, fmt, skip in self.layout]
+        layout = " ".join(fmt for _, fmt in used)
+        names = [name for name, fmt in used if not fmt.endswith("x")]
+        return self.ctx.vertex_array(program, [(self.vbo, layout, *names)], index_buffer=index_buffer,
+                                     index_element_size=4)
+
+    def _upload_materials(self) -> None:
+        """Pack the textures into the material atlas (mip levels 0..levels built by GL from
+        the wrapped slots) and write, per object, where its texture lies."""
+        from .material_atlas import build_atlas
+
+        max_size = min(4096, self.ctx.info["GL_MAX_TEXTURE_SIZE"])
+        atlas = build_atlas(self.scene.textures, max_size=max_size)
+        self.atlas_info = atlas
+        tex = self.ctx.texture_array((atlas.size, atlas.size, atlas.layers), 4, atlas.image.tobytes())
+        tex.build_mipmaps(0, atlas.levels)
+        tex.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
+        tex.repeat_x = tex.repeat_y = False
+        self.material_atlas = tex
+        rows = np.zeros(self.scene.count, MATERIAL_DTYPE)
+        ids = self.scene.texture_ids
+        has = ids >= 0
+        rect = atlas.rects[np.where(has, ids, 0)]
+        rows["rect"] = rect[:, [1, 2, 3, 4]]
+        rows["info"][:, 0] = rect[:, 0]
+        rows["info"][:, 3] = has
+        self.materials = self.ctx.buffer(rows.tobytes())
+
+    def bind_material(self, program: moderngl.Program) -> None:
+        """The material atlas on MATERIAL_UNIT for a program that samples it."""
+        if self.material_atlas is not None and "u_material_atlas" in program:
+            program["u_material_atlas"].value = MATERIAL_UNIT
+            self.material_atlas.use(MATERIAL_UNIT)
 
     def upload_records(self, records: Records) -> None:
         """Write R for this frame (same size every frame: no reallocation)."""
@@ -46,10 +90,13 @@ class GpuScene:
     def bind_storage(self) -> None:
         self.records.bind_to_storage_buffer(0)
         self.objects.bind_to_storage_buffer(1)
+        if self.materials is not None:
+            self.materials.bind_to_storage_buffer(2)
 
     def release(self) -> None:
         for vao in self._vaos.values():
             vao.release()
         self._vaos.clear()
-        for buf in (self.vbo, self.ibo, self.objects, self.records):
-            buf.release()
+        for buf in (self.vbo, self.ibo, self.objects, self.records, self.materials, self.material_atlas):
+            if buf is not None:
+                buf.release()

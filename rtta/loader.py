@@ -14,14 +14,18 @@ import numpy as np
 
 from .errors import RttaError
 from .precheck import check_size, precheck
+from .preprocess import DEFAULT_SMOOTH_ANGLE, index_vertices, smooth_normals
 from .scene import SUPPORTED, Scene, from_meshes
+from .textures import TextureTable
 
 MAX_FILE_BYTES = 2 * 1024**3
 MAX_COORDINATE = 1e15    # float64 keeps ~0.1 units of precision there; float32 offsets stay finite
 
 
-def load_scene(path: str | Path) -> Scene:
-    """Read a scene file; see the module docstring for the rules."""
+def load_scene(path: str | Path, smooth_angle: float = DEFAULT_SMOOTH_ANGLE, smooth: bool = False) -> Scene:
+    """Read a scene file; see the module docstring for the rules. Vertices are indexed;
+    normals are smoothed by `smooth_angle` degrees where the file has none, or everywhere
+    with `smooth`."""
     path = Path(path)
     if not path.exists():
         raise RttaError("no such file", path)
@@ -40,11 +44,11 @@ def load_scene(path: str | Path) -> Scene:
         warnings.simplefilter("ignore")
         notes = precheck(path)
         loaded = _trimesh_load(path, suffix)
-        parts, colors, dropped = _parts(loaded, path)
+        parts, colors, dropped, materials = _parts(loaded, path, smooth_angle, smooth)
     if dropped:
         notes.append(f"{len(dropped)} object(s) with only degenerate (zero-area) triangles left out: "
                      + ", ".join(dropped[:5]) + (" ..." if len(dropped) > 5 else ""))
-    scene = from_meshes(parts, colors, source=str(path))
+    scene = from_meshes(parts, colors, source=str(path), **materials)
     scene.warnings = notes + scene.warnings
     return scene
 
@@ -61,12 +65,15 @@ def _trimesh_load(path: Path, suffix: str):
         raise RttaError(f"cannot read {suffix[1:].upper()} file ({reason[:160]})", path) from None
 
 
-def _parts(loaded, path: Path) -> tuple[list, list, list]:
-    """(name, world vertices, faces, normals) per object, their colours, and the names of
-    objects left out because every triangle is degenerate."""
+def _parts(loaded, path: Path, smooth_angle: float, smooth: bool) -> tuple[list, list, list, dict]:
+    """(name, world vertices, faces, normals) per object, their colours, the names of
+    objects left out because every triangle is degenerate, and the from_meshes texture
+    arguments (uvs, texture_ids, textures)."""
     import trimesh
 
     parts, colors, dropped = [], [], []
+    textures = TextureTable()
+    uvs, texture_ids = [], []
     vertices = triangles = 0
     graph = loaded.graph
     for node in graph.nodes_geometry:
@@ -82,7 +89,7 @@ def _parts(loaded, path: Path) -> tuple[list, list, list]:
             raise RttaError(f"object '{node}' has face indices out of range", path)
         m = np.asarray(transform, np.float64)
         world = v @ m[:3, :3].T + m[:3, 3]
-        normals = _world_normals(mesh, m)
+        normals = None if smooth or not _file_has_normals(mesh) else _world_normals(mesh, m)
         if not np.isfinite(world).all():
             raise RttaError(f"object '{node}' has a transform that makes coordinates non-finite", path)
         if np.abs(world).max() > MAX_COORDINATE:
@@ -93,13 +100,26 @@ def _parts(loaded, path: Path) -> tuple[list, list, list]:
         if not _has_area(world, f):
             dropped.append(str(node))
             continue
+        uv, texture = textures.of(mesh)
+        if normals is None:
+            world, f, normals, uv = smooth_normals(world, f, uv, smooth_angle)
+        else:
+            world, f, normals, uv = index_vertices(world, f, normals, uv)
         parts.append((str(node), world, f, normals))
         colors.append(_color(mesh))
+        uvs.append(uv)
+        texture_ids.append(texture)
     if not parts and dropped:
         raise RttaError("every triangle of the scene is degenerate (zero area)", path)
     if not parts:
         raise RttaError("scene has no objects with triangle geometry", path)
-    return parts, colors, dropped
+    return parts, colors, dropped, {"uvs": uvs, "texture_ids": texture_ids, "textures": textures.images}
+
+
+def _file_has_normals(mesh) -> bool:
+    """Whether the file gave vertex normals (trimesh computes them lazily otherwise)."""
+    cache = getattr(getattr(mesh, "_cache", None), "cache", None)
+    return cache is None or "vertex_normals" in cache
 
 
 def _has_area(v: np.ndarray, f: np.ndarray) -> bool:
@@ -143,8 +163,8 @@ def _color(mesh) -> list[float] | None:
     return None
 
 
-def load_scene_or_demo(path: str | None) -> Scene:
+def load_scene_or_demo(path: str | None, **options) -> Scene:
     """The scene at `path`, or the built-in demo assembly when no path is given."""
     from .demo import demo_path
 
-    return load_scene(path or str(demo_path()))
+    return load_scene(path or str(demo_path()), **options)

@@ -31,21 +31,38 @@ class ScenePass:
     def __init__(self, ctx: moderngl.Context, geometry: str | None = None, fragment: str = "scene.frag",
                  **defines: object) -> None:
         self.ctx = ctx
-        self.program = ctx.program(
-            vertex_shader=glsl.load("scene.vert", **defines),
-            geometry_shader=glsl.load(geometry) if geometry else None,
-            fragment_shader=glsl.load(fragment, PROJECTOR=defines.get("PROJECTOR", False)))
+        self._source = (geometry, fragment, defines)
+        self._programs: dict[bool, moderngl.Program] = {}
+        self.program = self.program_for(False)
+
+    def program_for(self, textured: bool) -> moderngl.Program:
+        """The pass's program for untextured or textured scenes (compiled on first use)."""
+        if textured not in self._programs:
+            geometry, fragment, defines = self._source
+            frag_defines = {k: v for k, v in defines.items() if k in ("PROJECTOR", "SEPARATE")}
+            textured_define = {"TEXTURED": True} if textured else {}
+            self._programs[textured] = self.ctx.program(
+                vertex_shader=glsl.load("scene.vert", **{k: v for k, v in defines.items() if k != "SEPARATE"},
+                                        **textured_define),
+                geometry_shader=glsl.load(geometry, **textured_define) if geometry else None,
+                fragment_shader=glsl.load(fragment, **frag_defines,
+                                          **(textured_define if fragment == "scene.frag" else {})))
+        return self._programs[textured]
 
     def setup(self, gpu: GpuScene, view: np.ndarray, proj: np.ndarray) -> moderngl.VertexArray:
+        self.program = self.program_for(gpu.textured)
         self.program["u_view"].write(mat_bytes(view))
         self.program["u_proj"].write(mat_bytes(proj))
         gpu.bind_storage()
+        gpu.bind_material(self.program)
         self.ctx.enable_only(moderngl.DEPTH_TEST)
         self.ctx.depth_func = "<"
         return gpu.vao(self.program)
 
     def release(self) -> None:
-        self.program.release()
+        for program in self._programs.values():
+            program.release()
+        self._programs.clear()
 
 
 class CapturePass(ScenePass):

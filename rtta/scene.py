@@ -38,11 +38,19 @@ class Scene:
     origin: np.ndarray         # float64 [3]
     source: str = "<memory>"
     warnings: list[str] = field(default_factory=list)   # problems loading worked around
+    uvs: np.ndarray | None = None          # float32 [V, 2] when the scene has textures
+    textures: list[np.ndarray] = field(default_factory=list)   # uint8 [h, w, 4], row 0 = v 0, each once
+    texture_ids: np.ndarray | None = None  # int32 [N]: index into textures, -1 = material colour only
     _corners: dict = field(default_factory=dict, repr=False)
 
     @property
     def count(self) -> int:
         return len(self.names)
+
+    @property
+    def textured(self) -> bool:
+        """Whether any object has a base-colour texture (else the material atlas is skipped)."""
+        return bool(self.textures) and self.uvs is not None
 
     @property
     def vertex_count(self) -> int:
@@ -114,8 +122,11 @@ PALETTE = np.array([
 
 
 def from_meshes(parts: list[tuple[str, np.ndarray, np.ndarray, np.ndarray | None]],
-                colors: list | None = None, source: str = "<memory>") -> Scene:
-    """Batch (name, vertices float64 [V,3] world, faces int [F,3], normals or None) parts."""
+                colors: list | None = None, source: str = "<memory>", *,
+                uvs: list[np.ndarray | None] | None = None, texture_ids: list[int] | None = None,
+                textures: list[np.ndarray] | None = None) -> Scene:
+    """Batch (name, vertices float64 [V,3] world, faces int [F,3], normals or None) parts;
+    optionally with texture coordinates per part and an index into `textures` per part."""
     if not parts:
         raise RttaError("scene has no objects with geometry", source)
     names = unique_names([p[0] for p in parts])
@@ -137,10 +148,16 @@ def from_meshes(parts: list[tuple[str, np.ndarray, np.ndarray, np.ndarray | None
     for i in range(len(parts)):
         c = None if colors is None else colors[i]
         cols[i] = (*PALETTE[i % len(PALETTE)], 1.0) if c is None else c
-    return Scene(names=names, positions=np.concatenate(pos), normals=np.concatenate(nrm),
-                 object_ids=np.concatenate(ids), indices=np.concatenate(idx).astype(np.uint32),
-                 index_ranges=np.array(ranges, np.int64), colors=cols, aabb_min=lo,
-                 aabb_max=hi, origin=origin, source=source, warnings=_collapsed(names, lo, hi, origin))
+    scene = Scene(names=names, positions=np.concatenate(pos), normals=np.concatenate(nrm),
+                  object_ids=np.concatenate(ids), indices=np.concatenate(idx).astype(np.uint32),
+                  index_ranges=np.array(ranges, np.int64), colors=cols, aabb_min=lo,
+                  aabb_max=hi, origin=origin, source=source, warnings=_collapsed(names, lo, hi, origin))
+    if textures and uvs is not None and texture_ids is not None:
+        scene.textures = list(textures)
+        scene.texture_ids = np.asarray(texture_ids, np.int32)
+        scene.uvs = np.concatenate([np.zeros((len(p[1]), 2), np.float32) if uv is None
+                                    else np.asarray(uv, np.float32) for p, uv in zip(parts, uvs, strict=True)])
+    return scene
 
 
 def _collapsed(names: list[str], lo: np.ndarray, hi: np.ndarray, origin: np.ndarray) -> list[str]:

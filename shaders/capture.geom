@@ -1,5 +1,5 @@
 #version 430
-// defines:
+// defines: TEXTURED
 // The paper's path (Figure 4): displace each triangle into its atlas region and route it to its layer.
 #include "records.glsl"
 
@@ -9,6 +9,10 @@ layout(triangle_strip, max_vertices = 3) out;
 in VertexData { vec3 normal; flat int object; } gs_in[];
 out VertexData { vec3 normal; flat int object; } gs_out;
 out float gl_ClipDistance[4];
+#ifdef TEXTURED
+layout(location = 5) in vec2 v_uv[];
+layout(location = 5) out vec2 g_uv;
+#endif
 
 void main() {
     Record r = records[gs_in[0].object];
@@ -22,6 +26,9 @@ void main() {
         gl_Position = displace(clip_pos, r.transform);
         gs_out.normal = gs_in[i].normal;
         gs_out.object = gs_in[i].object;
+#ifdef TEXTURED
+        g_uv = v_uv[i];
+#endif
         EmitVertex();
     }
     EndPrimitive();

@@ -1,5 +1,5 @@
 #version 430
-// defines: CAPTURE_VS CAPTURE_GS PROJECTOR
+// defines: CAPTURE_VS CAPTURE_GS PROJECTOR TEXTURED
 // One vertex shader for STD/RTT (no define), the RTTA vertex-shader path (CAPTURE_VS,
 // needs GL_ARB_shader_viewport_layer_array) and the RTTA geometry-shader path (CAPTURE_GS).
 #ifdef CAPTURE_VS
@@ -10,6 +10,10 @@
 layout(location = 0) in vec3 in_position;
 layout(location = 1) in vec3 in_normal;
 layout(location = 2) in uint in_object;
+#ifdef TEXTURED
+layout(location = 3) in vec2 in_uv;
+layout(location = 5) out vec2 v_uv;    // by location, so depth-only shaders need not declare it
+#endif
 
 uniform mat4 u_view;
 uniform mat4 u_proj;
@@ -30,6 +34,9 @@ void main() {
     vec4 clip_pos = u_proj * (u_view * vec4(in_position, 1.0));
     vs_out.normal = mat3(u_view) * in_normal;
     vs_out.object = int(in_object);
+#ifdef TEXTURED
+    v_uv = in_uv;
+#endif
 #ifdef PROJECTOR
     vs_out.world = in_position;
 #endif

@@ -61,3 +61,19 @@ def test_ldi_bench_quick(gl, tmp_path, capsys):
     assert all(errors[(m, 256)] < errors[(m, 64)] for m in ("sphere", "torus"))   # finer is better
     printed = capsys.readouterr().out
     assert "t_peel ms" in printed and "speed-up" in printed and gl.info["GL_RENDERER"] in printed
+
+
+def test_material_bench_quick(gl, tmp_path, capsys):
+    from rtta.bench_material import run_material
+
+    out = tmp_path / "material.json"
+    assert run_material(40, quick=True, json_path=str(out), viewport=(256, 192), max_vertices=96) == 0
+    data = json.loads(out.read_text())
+    assert data["renderer"] == gl.info["GL_RENDERER"] and data["objects"] == 40
+    calls = {(r["view"], r["method"].split(",")[0]): r["draw calls"] for r in data["rows"]}
+    assert calls[("overview", "separate textures")] == 40
+    assert calls[("overview", "material atlas")] == 1
+    assert all(float(r["frame ms"]) > 0 for r in data["rows"])
+    mem = data["memory"]
+    assert mem["atlas_bytes"] > 0 and mem["original_bytes"] > 0 and mem["bvh_leaves"] >= 10
+    assert "memory:" in capsys.readouterr().out

@@ -24,22 +24,21 @@ class SeparatePass(ScenePass):
 
     def __init__(self, ctx: moderngl.Context) -> None:
         super().__init__(ctx, SEPARATE=True)
-        self._textures: dict[int, list[moderngl.Texture]] = {}
+        self._for: GpuScene | None = None          # the scene whose textures are uploaded
+        self._textures: list[moderngl.Texture] = []
         self.draw_calls = 0
 
     def _uploaded(self, gpu: GpuScene) -> list[moderngl.Texture]:
-        key = id(gpu)
-        if key not in self._textures:
+        if self._for is not gpu:
             self._release_textures()
-            out = []
             for image in gpu.scene.textures:
                 h, w = image.shape[:2]
                 tex = self.ctx.texture((w, h), 4, np.ascontiguousarray(image).tobytes())
                 tex.build_mipmaps()
                 tex.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
-                out.append(tex)
-            self._textures = {key: out}
-        return self._textures[key]
+                self._textures.append(tex)
+            self._for = gpu
+        return self._textures
 
     def render(self, *, gpu: GpuScene, view: np.ndarray, proj: np.ndarray,
                target: LayeredTarget, viewport: tuple[int, int]) -> None:
@@ -62,10 +61,9 @@ class SeparatePass(ScenePass):
             self.draw_calls += 1
 
     def _release_textures(self) -> None:
-        for textures in self._textures.values():
-            for tex in textures:
-                tex.release()
-        self._textures = {}
+        for tex in self._textures:
+            tex.release()
+        self._textures, self._for = [], None
 
     def release(self) -> None:
         self._release_textures()
@@ -78,7 +76,7 @@ class ChunkedStdPass(ScenePass):
     def __init__(self, ctx: moderngl.Context, max_vertices: int = 5000) -> None:
         super().__init__(ctx)
         self.max_vertices = max_vertices
-        self._built: tuple[int, Bvh, moderngl.Buffer, dict] | None = None
+        self._built: tuple[GpuScene, Bvh, moderngl.Buffer, dict] | None = None
         self.draw_calls = 0
         self.visible = 0
 
@@ -86,11 +84,11 @@ class ChunkedStdPass(ScenePass):
         return self._chunks(gpu)[1]
 
     def _chunks(self, gpu: GpuScene):
-        if self._built is None or self._built[0] != id(gpu):
+        if self._built is None or self._built[0] is not gpu:
             self._release_chunks()
             bvh = build_bvh(gpu.scene.positions, gpu.scene.indices.reshape(-1, 3), self.max_vertices)
             ibo = self.ctx.buffer(bvh.indices.astype(np.uint32).tobytes())
-            self._built = (id(gpu), bvh, ibo, {})
+            self._built = (gpu, bvh, ibo, {})
         return self._built
 
     def render(self, *, gpu: GpuScene, view: np.ndarray, proj: np.ndarray,

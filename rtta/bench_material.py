@@ -74,7 +74,7 @@ def frame_rows(ctx, scene, viewport, frames: int, max_vertices: int) -> list[lis
 
 
 def run_material(objects: int, quick: bool = False, json_path: str | None = None,
-                 viewport: tuple[int, int] = (1024, 768), max_vertices: int = 5000) -> int:
+                 viewport: tuple[int, int] = (1024, 768), max_vertices: int = 480) -> int:
     ctx = create_headless_context()
     renderer = ctx.info["GL_RENDERER"]
     frames = 5 if quick else 30

@@ -29,7 +29,7 @@ class GpuScene:
         interleaved["n"] = scene.normals
         interleaved["id"] = scene.object_ids
         self.layout = VERTEX_LAYOUT + (UV_LAYOUT if self.textured else ())
-        self.material_atlas = self.materials = None
+        self.material_atlas = self.materials = self.atlas_info = None
         if self.textured:
             interleaved["uv"] = scene.uvs
             self._upload_materials()
@@ -58,9 +58,9 @@ class GpuScene:
     def _upload_materials(self) -> None:
         """Pack the textures into the material atlas (mip levels 0..levels built by GL from
         the wrapped slots) and write, per object, where its texture lies."""
-        from .material_atlas import build_atlas
+        from .material_atlas import DEFAULT_MAX_SIZE, build_atlas
 
-        max_size = min(4096, self.ctx.info["GL_MAX_TEXTURE_SIZE"])
+        max_size = min(DEFAULT_MAX_SIZE, self.ctx.info["GL_MAX_TEXTURE_SIZE"])
         atlas = build_atlas(self.scene.textures, max_size=max_size)
         self.atlas_info = atlas
         tex = self.ctx.texture_array((atlas.size, atlas.size, atlas.layers), 4, atlas.image.tobytes())

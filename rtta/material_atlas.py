@@ -37,7 +37,6 @@ class MaterialAtlas:
     image: np.ndarray
     rects: np.ndarray          # int64 [T, 5]
     levels: int
-    scales: list[int]          # per texture: how many times it was halved to fit
 
     @property
     def size(self) -> int:
@@ -73,19 +72,19 @@ def build_atlas(textures: list[np.ndarray], levels: int = DEFAULT_LEVELS,
         raise ValueError(f"material atlas mip levels must be 0..8, got {levels}")
     unit = border = 1 << levels
     fitted = [_fit(t, max_size - 2 * border) for t in textures]
-    slots = [(_round(t.shape[1] + 2 * border, unit), _round(t.shape[0] + 2 * border, unit)) for t, _ in fitted]
+    slots = [(_round(t.shape[1] + 2 * border, unit), _round(t.shape[0] + 2 * border, unit)) for t in fitted]
     size = _layer_size(slots, max_size, unit)
     places = pack_slots(slots, size)
     layers = 1 + max((p[0] for p in places), default=0)
     image = np.zeros((layers, size, size, 4), np.uint8)
     rects = np.zeros((len(fitted), 5), np.int64)
-    for i, ((tex, _), (sw, sh), (layer, x, y)) in enumerate(zip(fitted, slots, places, strict=True)):
+    for i, (tex, (sw, sh), (layer, x, y)) in enumerate(zip(fitted, slots, places, strict=True)):
         h, w = tex.shape[:2]
         rows = (np.arange(sh) - border) % h
         cols = (np.arange(sw) - border) % w
         image[layer, y:y + sh, x:x + sw] = tex[rows[:, None], cols[None, :]]
         rects[i] = (layer, x + border, y + border, w, h)
-    return MaterialAtlas(image=image, rects=rects, levels=levels, scales=[s for _, s in fitted])
+    return MaterialAtlas(image=image, rects=rects, levels=levels)
 
 
 def pack_slots(slots: list[tuple[int, int]], size: int) -> list[tuple[int, int, int]]:
@@ -132,9 +131,8 @@ def _layer_size(slots: list[tuple[int, int]], max_size: int, unit: int) -> int:
     return min(size, max_size)
 
 
-def _fit(tex: np.ndarray, limit: int) -> tuple[np.ndarray, int]:
-    """Halve (2x2 box) a texture until it fits `limit` texels; returns it and the halvings."""
-    halvings = 0
+def _fit(tex: np.ndarray, limit: int) -> np.ndarray:
+    """Halve (2x2 box) a texture until it fits `limit` texels."""
     while max(tex.shape[:2]) > limit:
         h, w = (tex.shape[0] // 2) * 2 or 1, (tex.shape[1] // 2) * 2 or 1
         t = tex[:h, :w].astype(np.float32)
@@ -143,5 +141,4 @@ def _fit(tex: np.ndarray, limit: int) -> tuple[np.ndarray, int]:
         if w > 1:
             t = (t[:, 0::2] + t[:, 1::2]) / 2
         tex = np.round(t).astype(np.uint8)
-        halvings += 1
-    return tex, halvings
+    return tex

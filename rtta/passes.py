@@ -39,14 +39,16 @@ class ScenePass:
         """The pass's program for untextured or textured scenes (compiled on first use)."""
         if textured not in self._programs:
             geometry, fragment, defines = self._source
-            frag_defines = {k: v for k, v in defines.items() if k in ("PROJECTOR", "SEPARATE")}
-            textured_define = {"TEXTURED": True} if textured else {}
-            self._programs[textured] = self.ctx.program(
-                vertex_shader=glsl.load("scene.vert", **{k: v for k, v in defines.items() if k != "SEPARATE"},
-                                        **textured_define),
-                geometry_shader=glsl.load(geometry, **textured_define) if geometry else None,
-                fragment_shader=glsl.load(fragment, **frag_defines,
-                                          **(textured_define if fragment == "scene.frag" else {})))
+            defines = {**defines, "TEXTURED": textured}
+            stages = {"vertex_shader": "scene.vert", "geometry_shader": geometry, "fragment_shader": fragment}
+            known = set().union(*(glsl.declared_defines(name) for name in stages.values() if name))
+            unknown = sorted(set(defines) - known)
+            if unknown:
+                raise ValueError(f"no shader of this pass declares {', '.join(unknown)}")
+            # each stage gets the defines its file declares
+            self._programs[textured] = self.ctx.program(**{
+                stage: glsl.load(name, **{k: v for k, v in defines.items() if k in glsl.declared_defines(name)})
+                if name else None for stage, name in stages.items()})
         return self._programs[textured]
 
     def setup(self, gpu: GpuScene, view: np.ndarray, proj: np.ndarray) -> moderngl.VertexArray:

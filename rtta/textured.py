@@ -15,6 +15,9 @@ TEXTURE_KINDS = (("checker", 64, 64, "rgb"), ("stripes_npot", 48, 80, "rgb"), ("
                  ("rings", 256, 256, "rgb"), ("wide", 96, 16, "rgb"))
 
 
+REPEATS = (1.0, 2.5, 3.0)     # tilings per face, object i takes REPEATS[i % 3] by default
+
+
 def make_texture(width: int, height: int, kind: str, seed: int) -> np.ndarray:
     """uint8 [h, w, 4] (row 0 = v 0): smooth colour waves with a few sharp lines, so both
     bilinear filtering and mip levels are exercised."""
@@ -54,7 +57,7 @@ def textured_box(repeat: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return np.concatenate(verts), np.concatenate(faces), np.concatenate(uvs)
 
 
-def textured_scene(n: int = 24, seed: int = 0, untextured_every: int = 7, repeat_choices=(1.0, 2.5, 3.0),
+def textured_scene(n: int = 24, seed: int = 0, untextured_every: int = 7, repeat_choices=REPEATS,
                    textures: int | None = None, spacing: float = 1.6) -> Scene:
     """n textured boxes on a square grid in the x-y plane (facing +z), turned a little so
     three faces show; every `untextured_every`-th object keeps only its material colour."""
@@ -74,7 +77,6 @@ def textured_scene(n: int = 24, seed: int = 0, untextured_every: int = 7, repeat
         textured = untextured_every <= 0 or (i + 1) % untextured_every != 0
         uvs.append(uv if textured else None)
         ids.append(i % count if textured else -1)
-        colors.append(None if textured else [0.8, 0.4, 0.3, 1.0])
-    colors = [[1.0, 1.0, 1.0, 1.0] if c is None else c for c in colors]
+        colors.append([1.0, 1.0, 1.0, 1.0] if textured else [0.8, 0.4, 0.3, 1.0])
     return from_meshes(parts, colors, source=f"<textured {n} seed {seed}>", uvs=uvs, texture_ids=ids,
                        textures=images)

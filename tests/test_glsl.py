@@ -40,3 +40,16 @@ def test_capture_path_falls_back_without_the_layer_extension(gl):
     with pytest.raises(RttaError, match=LAYER_EXTENSION):
         caps.capture_path("vs")
     assert Capabilities.of(gl).capture_path("auto") == ("vs" if LAYER_EXTENSION in gl.extensions else "gs")
+
+
+def test_scene_pass_routes_defines_by_declaration_and_rejects_unknown(gl):
+    from rtta.passes import ScenePass
+
+    with pytest.raises(ValueError, match="BOGUS"):
+        ScenePass(gl, BOGUS=True)
+    p = ScenePass(gl, SEPARATE=True)          # declared by scene.frag only: scene.vert must not get it
+    try:
+        assert "u_textured" not in p.program   # untextured variant: SEPARATE's uniforms are #ifdef TEXTURED
+        assert "u_textured" in p.program_for(True)
+    finally:
+        p.release()

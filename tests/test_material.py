@@ -15,7 +15,7 @@ from rtta.camera import Camera
 from rtta.material_atlas import DEFAULT_LEVELS, build_atlas, pack_slots
 from rtta.preprocess import index_vertices, smooth_normals
 from rtta.targets import LayeredTarget
-from rtta.textured import TEXTURE_KINDS, textured_box, textured_scene
+from rtta.textured import REPEATS, TEXTURE_KINDS, textured_box, textured_scene
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 VP = (384, 384)
@@ -102,7 +102,7 @@ def _lod_estimates(scene, records) -> np.ndarray:
     for o in np.flatnonzero(records.visible & (scene.texture_ids >= 0)):
         x0, y0, x1, y1 = records.viewport_rect[o]
         _, w, h, _ = TEXTURE_KINDS[scene.texture_ids[o]]
-        repeat = (1.0, 2.5, 3.0)[o % 3]
+        repeat = REPEATS[o % len(REPEATS)]
         out[o] = np.log2(max(w, h) * repeat / max(1.0, min(x1 - x0, y1 - y0)))
     return out
 

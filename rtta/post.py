@@ -1,8 +1,11 @@
 """`AtlasPostPass`: ambient occlusion and edge strength per atlas texel, computed on each
 object's own unoccluded images (the `ghosted-ao` mode only).
 
-Two draws: AO at half the atlas resolution (it is low-frequency, and it is most of the
-cost), then edges at full resolution, which also picks up each texel's AO."""
+Two draws of one quad per visible object over its atlas rectangle: AO at half the atlas
+resolution (it is low-frequency), then edges at full resolution, which also picks up each
+texel's AO. Texels outside every rectangle are never shaded (compositing reads only the
+objects' own texels), and no fragment reads an id or the record buffer. The edge pass with
+width 1 (EDGE_QUAD) takes the neighbour in its 2x2 quad from derivatives."""
 
 from __future__ import annotations
 
@@ -13,6 +16,8 @@ from . import glraw, glsl
 from .gpu import GpuScene
 from .parameterize import Records
 from .targets import LayeredTarget, release_framebuffer
+
+STAGES = {"vertex_shader": "post.vert", "geometry_shader": "post.geom", "fragment_shader": "post.frag"}
 
 
 class _LayerTarget:
@@ -43,14 +48,11 @@ class _LayerTarget:
 
 class AtlasPostPass:
     """render(*, atlas, records, gpu, proj, style) -> `texture`, an RGBA8 texture array
-    (ao, edge) shaped like the atlas."""
+    (ao, edge) shaped like the atlas, valid on the texels of visible objects."""
 
     def __init__(self, ctx: moderngl.Context) -> None:
         self.ctx = ctx
-        self.programs = {ao: ctx.program(vertex_shader=glsl.load("post.vert"), geometry_shader=glsl.load("post.geom"),
-                                         fragment_shader=glsl.load("post.frag", AO_PASS=ao))
-                         for ao in (True, False)}
-        self.vaos = {ao: ctx.vertex_array(p, []) for ao, p in self.programs.items()}
+        self._variants: dict[tuple[str, ...], tuple] = {}     # defines -> (program, vao)
         self._ao = _LayerTarget(ctx)
         self._out = _LayerTarget(ctx)
 
@@ -62,35 +64,48 @@ class AtlasPostPass:
     def nbytes(self) -> int:
         return self._ao.nbytes + self._out.nbytes
 
+    def _variant(self, *defines: str) -> tuple:
+        """(program, vao) compiled on first use; each stage gets the defines it declares."""
+        if defines not in self._variants:
+            prog = self.ctx.program(**{
+                stage: glsl.load(name, **{d: True for d in defines if d in glsl.declared_defines(name)})
+                for stage, name in STAGES.items()})
+            self._variants[defines] = (prog, self.ctx.vertex_array(prog, []))
+        return self._variants[defines]
+
     def render(self, *, atlas: LayeredTarget, records: Records, gpu: GpuScene, proj: np.ndarray, style) -> None:
         w, h = atlas.size
         self._out.ensure((w, h, atlas.layers))
         self._ao.ensure(((w + 1) // 2, (h + 1) // 2, atlas.layers))
         tw, th, td = records.atlas_size
-        if td == 0:
+        n = len(records.visible)
+        if td == 0 or n == 0:
             return
         gpu.bind_storage()
         glraw.bind_texture_array(0, atlas.depth.glo)
         atlas.normal.use(1)
-        atlas.ids.use(2)
         uniforms = {"u_proj": (float(proj[0, 0]), float(proj[1, 1]), float(proj[2, 2]), float(proj[2, 3])),
                     "u_viewport": tuple(float(v) for v in records.viewport),
                     "u_ao_radius": float(style.ao_radius), "u_ao_strength": float(style.ao_strength),
                     "u_edge_width": int(style.edge_width)}
         self.ctx.enable_only(moderngl.NOTHING)
-        for ao, target, size in ((True, self._ao, ((tw + 1) // 2, (th + 1) // 2)), (False, self._out, (tw, th))):
-            prog = self.programs[ao]
-            for name, value in uniforms.items():
+        edge = ("EDGE_QUAD",) if int(style.edge_width) == 1 else ()
+        for defines, target, size in ((("AO_PASS",), self._ao, ((tw + 1) // 2, (th + 1) // 2)),
+                                      (edge, self._out, (tw, th))):
+            prog, vao = self._variant(*defines)
+            for name, value in {**uniforms, "u_target": tuple(float(v) for v in size)}.items():
                 if name in prog:      # the compiler drops what a variant does not use
                     prog[name].value = value
-            if not ao:
+            if target is self._out:
                 self._ao.texture.use(3)
             target.fbo.viewport = (0, 0, *size)
             target.fbo.use()
-            self.vaos[ao].render(moderngl.TRIANGLES, vertices=3, instances=td)
+            vao.render(moderngl.POINTS, vertices=n)
 
     def release(self) -> None:
         self._ao.release()
         self._out.release()
-        for obj in (*self.vaos.values(), *self.programs.values()):
-            obj.release()
+        for prog, vao in self._variants.values():
+            vao.release()
+            prog.release()
+        self._variants.clear()

@@ -6,12 +6,16 @@
 layout(triangles) in;
 layout(triangle_strip, max_vertices = 3) out;
 
-in VertexData { vec3 normal; flat int object; } gs_in[];
-out VertexData { vec3 normal; flat int object; } gs_out;
+in VertexData { vec3 normal; flat int object; flat vec3 color; } gs_in[];
+out VertexData { vec3 normal; flat int object; flat vec3 color; } gs_out;
 out float gl_ClipDistance[4];
 #ifdef TEXTURED
 layout(location = 5) in vec2 v_uv[];
 layout(location = 5) out vec2 g_uv;
+layout(location = 6) flat in vec4 v_material_rect[];
+layout(location = 6) flat out vec4 g_material_rect;
+layout(location = 7) flat in int v_material_layer[];
+layout(location = 7) flat out int g_material_layer;
 #endif
 
 void main() {
@@ -26,8 +30,11 @@ void main() {
         gl_Position = displace(clip_pos, r.transform);
         gs_out.normal = gs_in[i].normal;
         gs_out.object = gs_in[i].object;
+        gs_out.color = gs_in[i].color;
 #ifdef TEXTURED
         g_uv = v_uv[i];
+        g_material_rect = v_material_rect[i];
+        g_material_layer = v_material_layer[i];
 #endif
         EmitVertex();
     }

@@ -29,6 +29,10 @@ uniform vec4 u_edge_color;
 uniform int u_outline_width;    // pixels (MODE_OUTLINE)
 
 flat in int g_object;
+flat in vec4 g_map;
+flat in float g_scale;
+flat in int g_layer;
+flat in float g_opacity;
 layout(location = 0) out vec4 out_color;
 
 vec3 shade(vec3 rgb, ivec3 t) {
@@ -41,8 +45,7 @@ vec3 shade(vec3 rgb, ivec3 t) {
 }
 
 void main() {
-    Record r = records[g_object];
-    ivec3 t = atlas_texel(r, gl_FragCoord.xy);
+    ivec3 t = atlas_texel(g_map, g_scale, g_layer, gl_FragCoord.xy);
     int id = texelFetch(u_ids, t, 0).r;
 #ifdef MODE_OUTLINE
     // a silhouette texel: the object's own, with a neighbour within the width that is not
@@ -79,7 +82,7 @@ void main() {
     gl_FragDepth = depth;
     out_color = vec4(rgb, 1.0);
 #else
-    float a = styles[g_object].params.x;
+    float a = g_opacity;
     float grey = dot(rgb, vec3(0.299, 0.587, 0.114));
     rgb = mix(rgb, vec3(grey), u_desaturate);
     gl_FragDepth = depth;

@@ -1,7 +1,8 @@
 #version 430
 // defines:
 // Point-sprite expansion: a screen-aligned quad over the object's B_viewport (its atlas
-// bounds mapped back through T^-1).
+// bounds mapped back through T^-1). What the fragments need of the record and the style
+// goes as flat values: no fragment reads the buffers (per-fragment loads cost on llvmpipe).
 #include "composite.glsl"
 
 layout(points) in;
@@ -9,6 +10,10 @@ layout(triangle_strip, max_vertices = 4) out;
 
 flat in int v_object[];
 flat out int g_object;
+flat out vec4 g_map;       // (B_atlas origin + border, B_viewport origin): see atlas_texel
+flat out float g_scale;    // atlas texels per viewport pixel
+flat out int g_layer;
+flat out float g_opacity;  // the style's opacity
 
 void main() {
     Record r = records[v_object[0]];
@@ -17,6 +22,10 @@ void main() {
     vec2 corners[4] = vec2[](ndc.xy, ndc.zy, ndc.xw, ndc.zw);
     for (int i = 0; i < 4; ++i) {
         g_object = v_object[0];
+        g_map = vec4(r.atlas.xy + float(r.info.z), r.viewport.xy);
+        g_scale = intBitsToFloat(r.info.w);
+        g_layer = r.info.x;
+        g_opacity = styles[v_object[0]].params.x;
         gl_Position = vec4(corners[i], 0.0, 1.0);
         EmitVertex();
     }

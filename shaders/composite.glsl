@@ -9,9 +9,8 @@ layout(std430, binding = 3) readonly buffer OrderBuffer { int order[]; };
 
 uniform vec2 u_viewport;   // composite target size in pixels
 
-// Atlas texel (x, y, layer) of the viewport pixel centre `px`: B_viewport -> B_atlas through T.
-ivec3 atlas_texel(Record r, vec2 px) {
-    float scale = intBitsToFloat(r.info.w);
-    vec2 t = r.atlas.xy + float(r.info.z) + scale * (px - r.viewport.xy);
-    return ivec3(floor(t), r.info.x);
+// Atlas texel (x, y, layer) of the viewport pixel centre `px`: B_viewport -> B_atlas through T,
+// from the flat values of composite.geom (`map` = (B_atlas origin + border, B_viewport origin)).
+ivec3 atlas_texel(vec4 map, float scale, int layer, vec2 px) {
+    return ivec3(floor(map.xy + scale * (px - map.zw)), layer);
 }

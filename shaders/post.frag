@@ -1,75 +1,60 @@
-#version 430
-// defines: AO_PASS
+#version 450
+// defines: AO_PASS EDGE_QUAD
 // Atlas post-processing for `ghosted-ao`: per texel, ambient occlusion and edge strength
-// from the object's OWN unoccluded depth/normal/id images, so hidden objects get complete
-// shading and silhouettes. Border texels (id -1) separate regions: no bleeding.
+// from the object's OWN unoccluded depth/normal images, so hidden objects get complete
+// shading and silhouettes. Drawn as one quad per object over its atlas rectangle
+// (post.geom), where a texel is either the object's or empty (depth 1, normal.w 0); a
+// neighbour outside the rectangle counts as empty. So no id is fetched at all.
 // AO_PASS: ambient occlusion at half resolution (at the even texels), low-frequency enough;
-// the full-resolution pass adds edges and takes AO from the half-resolution texel of the
-// same object (1 where none is: a one-texel band at region borders).
-#include "records.glsl"
+//   writes (ao, 1) for a covered texel, (1, 0) for an empty one.
+// Otherwise edges at full resolution, plus the AO of the half-resolution texel of the same
+// object (1 where none is). EDGE_QUAD (edge width 1): the neighbour in the same 2x2 quad
+// comes from the fine derivatives of the texel's own fetch, so only two are fetched.
 
-layout(binding = 0) uniform sampler2DArray u_depth;
-layout(binding = 1) uniform sampler2DArray u_normal;
-layout(binding = 2) uniform isampler2DArray u_ids;
+layout(binding = 0) uniform sampler2DArray u_depth;    // window depth, 1 where empty
+layout(binding = 1) uniform sampler2DArray u_normal;   // (view normal, distance / far), w 0 where empty
+layout(binding = 3) uniform sampler2DArray u_ao;       // half-resolution (ao, covered) (full pass only)
 
 uniform vec4 u_proj;           // (P00, P11, P22, P23) of the perspective projection
-uniform vec2 u_viewport;
 uniform float u_ao_radius;     // pixels
 uniform float u_ao_strength;
 uniform int u_edge_width;      // pixels
 
-layout(binding = 3) uniform sampler2DArray u_ao;   // half-resolution AO (full pass only)
+flat in ivec4 g_rect;
+flat in vec4 g_map;
+flat in float g_scale;
 
-layout(location = 0) out vec4 out_post;   // AO_PASS: (ao, 0, 0, 1); else (ao, edge, 0, 1)
+layout(location = 0) out vec4 out_post;   // AO_PASS: (ao, covered, 0, 1); else (ao, edge, 0, 1)
 
-// texel -> view-space position: `origin` and `step` map atlas texels to viewport NDC
-vec3 view_position(ivec3 t, vec2 origin, vec2 step) {
-    vec2 ndc = origin + (vec2(t.xy) + 0.5) * step;
-    float z = -u_proj.w / (texelFetch(u_depth, t, 0).r * 2.0 - 1.0 + u_proj.z);
+// Globals of the texel being shaded (set once in main, read by the unrolled helpers).
+ivec3 g_t;
+vec3 g_p, g_n;
+float g_dist;
+
+bool outside(ivec2 t) { return any(lessThan(t, g_rect.xy)) || any(greaterThan(t, g_rect.zw)); }
+
+#ifdef AO_PASS
+// texel with window depth `d` -> view-space position
+vec3 view_position(ivec2 t, float d) {
+    vec2 ndc = g_map.xy + (vec2(t) + 0.5) * g_map.zw;
+    float z = -u_proj.w / (d * 2.0 - 1.0 + u_proj.z);
     return vec3(-z * ndc.x / u_proj.x, -z * ndc.y / u_proj.y, z);
 }
 
-// Globals of the texel being shaded (set once in main, read by the unrolled helpers).
-int g_id;
-ivec3 g_t;
-ivec2 g_size;
-vec2 g_origin, g_step;
-vec3 g_p, g_n;
-
-ivec3 neighbour(ivec2 o) { return ivec3(clamp(g_t.xy + o, ivec2(0), g_size - 1), g_t.z); }
-
 // one AO sample at offset `o` (texels); returns (occlusion, used)
 vec2 ao_sample(vec2 o) {
-    ivec3 s = neighbour(ivec2(round(o)));
-    if (texelFetch(u_ids, s, 0).r != g_id) return vec2(0.0);
-    vec3 v = view_position(s, g_origin, g_step) - g_p;
+    ivec2 s = g_t.xy + ivec2(round(o));
+    if (outside(s)) return vec2(0.0);
+    float d = texelFetch(u_depth, ivec3(s, g_t.z), 0).r;
+    if (d >= 1.0) return vec2(0.0);
+    vec3 v = view_position(s, d) - g_p;
     float dist = length(v) + 1e-12;
     return vec2(max(0.0, dot(v, g_n) - 0.002 * abs(g_p.z)) / dist, 1.0);
 }
 
-// edge strength towards offset `o`: silhouette, depth discontinuity or crease
-float edge_towards(ivec2 o) {
-    ivec3 s = neighbour(o);
-    if (texelFetch(u_ids, s, 0).r != g_id) return 1.0;
-    vec3 q = view_position(s, g_origin, g_step);
-    float jump = abs(q.z - g_p.z) / max(abs(g_p.z), 1e-12);
-    float bend = 1.0 - dot(g_n, normalize(texelFetch(u_normal, s, 0).xyz));
-    return max(smoothstep(0.01, 0.03, jump), smoothstep(0.2, 0.5, bend));
-}
-
-void setup(ivec3 t) {
-    g_t = t;
-    Record r = records[g_id];
-    float scale = intBitsToFloat(r.info.w);
-    g_step = 2.0 / (scale * u_viewport);
-    g_origin = (r.viewport.xy - (r.atlas.xy + float(r.info.z)) / scale) / u_viewport * 2.0 - 1.0;
-    g_p = view_position(g_t, g_origin, g_step);
-    g_n = normalize(texelFetch(u_normal, g_t, 0).xyz);
-}
-
 float ambient_occlusion() {
     // 8 samples on a golden-angle spiral (unrolled: no dynamic indexing)
-    float R = u_ao_radius * intBitsToFloat(records[g_id].info.w);
+    float R = u_ao_radius * g_scale;
     vec2 acc = ao_sample(R * vec2(0.0548, 0.0300)) + ao_sample(R * vec2(-0.1821, 0.0449))
              + ao_sample(R * vec2(0.1732, -0.2601)) + ao_sample(R * vec2(0.0672, 0.4323))
              + ao_sample(R * vec2(-0.4391, -0.3515)) + ao_sample(R * vec2(0.6860, -0.0457))
@@ -77,30 +62,63 @@ float ambient_occlusion() {
     return acc.y > 0.0 ? clamp(1.0 - u_ao_strength * acc.x / acc.y, 0.0, 1.0) : 1.0;
 }
 
-// AO of the half-resolution texel `h` when it was computed for this object, else -1
+void main() {
+    g_t = ivec3(min(ivec2(gl_FragCoord.xy) * 2, g_rect.zw), gl_Layer);
+    vec4 nd = texelFetch(u_normal, g_t, 0);
+    if (nd.w <= 0.0) { out_post = vec4(1.0, 0.0, 0.0, 1.0); return; }
+    g_p = view_position(g_t.xy, texelFetch(u_depth, g_t, 0).r);
+    g_n = normalize(nd.xyz);
+    out_post = vec4(ambient_occlusion(), 1.0, 0.0, 1.0);
+}
+
+#else
+// edge strength against a neighbour's (normal, distance) `q`: silhouette, depth
+// discontinuity or crease
+float edge_with(vec4 q) {
+    if (q.w <= 0.0) return 1.0;
+    float jump = abs(q.w - g_dist) / g_dist;
+    float bend = 1.0 - dot(g_n, normalize(q.xyz));
+    return max(smoothstep(0.01, 0.03, jump), smoothstep(0.2, 0.5, bend));
+}
+
+float edge_towards(ivec2 o) {
+    ivec2 s = g_t.xy + o;
+    return outside(s) ? 1.0 : edge_with(texelFetch(u_normal, ivec3(s, g_t.z), 0));
+}
+
+// AO of the half-resolution texel `h` when it was computed for a covered texel of the
+// rectangle (which is then this object's), else -1
 float ao_from(ivec2 h) {
-    ivec3 rep = ivec3(min(h * 2, g_size - 1), g_t.z);
-    return texelFetch(u_ids, rep, 0).r == g_id ? texelFetch(u_ao, ivec3(h, g_t.z), 0).r : -1.0;
+    if (outside(h * 2)) return -1.0;
+    vec2 a = texelFetch(u_ao, ivec3(h, g_t.z), 0).rg;
+    return a.g > 0.5 ? a.r : -1.0;
 }
 
 void main() {
-    g_size = textureSize(u_ids, 0).xy;
-#ifdef AO_PASS
-    ivec3 t = ivec3(min(ivec2(gl_FragCoord.xy) * 2, g_size - 1), gl_Layer);
-    g_id = texelFetch(u_ids, t, 0).r;
-    if (g_id < 0) { out_post = vec4(1.0, 0.0, 0.0, 1.0); return; }
-    setup(t);
-    out_post = vec4(ambient_occlusion(), 0.0, 0.0, 1.0);
+    g_t = ivec3(gl_FragCoord.xy, gl_Layer);
+    // every fragment of a 2x2 quad (helpers too) fetches its own (normal, distance) before
+    // any branch, so that the fine derivatives are defined (EDGE_QUAD)
+    vec4 nd = texelFetch(u_normal, ivec3(min(g_t.xy, textureSize(u_normal, 0).xy - 1), g_t.z), 0);
+#ifdef EDGE_QUAD
+    vec4 ddx = dFdxFine(nd), ddy = dFdyFine(nd);
+#endif
+    if (nd.w <= 0.0) { out_post = vec4(1.0, 0.0, 0.0, 1.0); return; }
+    g_n = normalize(nd.xyz);
+    g_dist = nd.w;
+    float ao = ao_from(g_t.xy / 2);
+    if (ao < 0.0) ao = ao_from((g_t.xy + 1) / 2);     // the next even texel, for odd coordinates
+#ifdef EDGE_QUAD
+    // the quad partner (x ^ 1, y ^ 1) from the derivatives, the other side fetched
+    ivec2 odd = g_t.xy & 1;
+    ivec2 partner = g_t.xy + 1 - 2 * odd;
+    float ex = partner.x < g_rect.x || partner.x > g_rect.z ? 1.0 : edge_with(odd.x == 0 ? nd + ddx : nd - ddx);
+    float ey = partner.y < g_rect.y || partner.y > g_rect.w ? 1.0 : edge_with(odd.y == 0 ? nd + ddy : nd - ddy);
+    float edge = max(max(ex, ey), max(edge_towards(ivec2(2 * odd.x - 1, 0)), edge_towards(ivec2(0, 2 * odd.y - 1))));
 #else
-    ivec3 t = ivec3(gl_FragCoord.xy, gl_Layer);
-    g_id = texelFetch(u_ids, t, 0).r;
-    if (g_id < 0) { out_post = vec4(1.0, 0.0, 0.0, 1.0); return; }
-    setup(t);
-    float ao = ao_from(t.xy / 2);
-    if (ao < 0.0) ao = ao_from((t.xy + 1) / 2);     // the next even texel, for odd coordinates
     int w = u_edge_width;
     float edge = max(max(edge_towards(ivec2(w, 0)), edge_towards(ivec2(-w, 0))),
                      max(edge_towards(ivec2(0, w)), edge_towards(ivec2(0, -w))));
-    out_post = vec4(ao < 0.0 ? 1.0 : ao, edge, 0.0, 1.0);
 #endif
+    out_post = vec4(ao < 0.0 ? 1.0 : ao, edge, 0.0, 1.0);
 }
+#endif

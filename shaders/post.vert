@@ -1,10 +1,9 @@
 #version 430
 // defines:
-// Full-screen triangle, one instance per atlas layer (no vertex buffer).
-flat out int v_layer;
+// One point per object (gl_VertexID is its id); no vertex buffer. post.geom expands it.
+flat out int v_object;
 
 void main() {
-    vec2 p = vec2((gl_VertexID << 1) & 2, gl_VertexID & 2);
-    v_layer = gl_InstanceID;
-    gl_Position = vec4(p * 2.0 - 1.0, 0.0, 1.0);
+    v_object = gl_VertexID;
+    gl_Position = vec4(0.0, 0.0, 0.0, 1.0);
 }

@@ -1,6 +1,8 @@
 #version 430
 // defines: PROJECTOR TEXTURED SEPARATE
-// Multiple render targets: shaded colour, view-space normal, object id (depth is the depth attachment).
+// Multiple render targets: shaded colour, view-space normal with the view distance over the far
+// plane distance in w (0 where empty; post-processing reads both in one fetch), object id
+// (depth is the depth attachment).
 #include "records.glsl"
 #include "projector.glsl"
 #ifdef TEXTURED
@@ -11,12 +13,15 @@ uniform sampler2D u_texture;
 uniform bool u_textured;
 #else
 #include "material.glsl"
+layout(location = 6) flat in vec4 f_material_rect;
+layout(location = 7) flat in int f_material_layer;
 #endif
 #endif
 
 in VertexData {
     vec3 normal;
     flat int object;
+    flat vec3 color;
 #ifdef PROJECTOR
     vec3 world;
 #endif
@@ -26,18 +31,20 @@ layout(location = 0) out vec4 out_color;
 layout(location = 1) out vec4 out_normal;
 layout(location = 2) out int out_id;
 
+uniform mat4 u_proj;   // shared with the vertex stage: (P22 + 1) / P23 == 1 / far
+
 void main() {
     float len_n = length(fs_in.normal);
     vec3 n = len_n > 1e-20 ? fs_in.normal / len_n : vec3(0.0, 0.0, 1.0);
     if (!gl_FrontFacing) n = -n;
     // headlight: light from the camera, two-sided
     float light = surface_light(n);
-    vec3 base = object_colors[fs_in.object].rgb;
+    vec3 base = fs_in.color;
 #ifdef TEXTURED
 #ifdef SEPARATE
     if (u_textured) base *= texture(u_texture, f_uv).rgb;   // the sampler's REPEAT and mip selection
 #else
-    base *= material_texel(fs_in.object, f_uv, dFdx(f_uv), dFdy(f_uv));
+    base *= material_texel(f_material_rect, f_material_layer, f_uv, dFdx(f_uv), dFdy(f_uv));
 #endif
 #endif
     vec3 rgb = base * light;
@@ -45,6 +52,8 @@ void main() {
     rgb = painted(rgb, light, fs_in.world);
 #endif
     out_color = vec4(rgb, 1.0);
-    out_normal = vec4(n, 1.0);
+    // 1 / gl_FragCoord.w is the clip w, the view distance (the RTTA displacement keeps w);
+    // over `far` it lies in [near/far, 1], well inside half-float range for any scene scale
+    out_normal = vec4(n, (u_proj[2][2] + 1.0) / (u_proj[3][2] * gl_FragCoord.w));
     out_id = fs_in.object;
 }

@@ -13,6 +13,9 @@ layout(location = 2) in uint in_object;
 #ifdef TEXTURED
 layout(location = 3) in vec2 in_uv;
 layout(location = 5) out vec2 v_uv;    // by location, so depth-only shaders need not declare it
+layout(location = 6) flat out vec4 v_material_rect;   // the object's material slot (material.glsl)
+layout(location = 7) flat out int v_material_layer;
+#include "material.glsl"
 #endif
 
 uniform mat4 u_view;
@@ -21,6 +24,7 @@ uniform mat4 u_proj;
 out VertexData {
     vec3 normal;
     flat int object;
+    flat vec3 color;  // the object's colour, read here per vertex, not per fragment
 #ifdef PROJECTOR
     vec3 world;       // relative to the scene origin, for projective texturing (STD only)
 #endif
@@ -34,8 +38,12 @@ void main() {
     vec4 clip_pos = u_proj * (u_view * vec4(in_position, 1.0));
     vs_out.normal = mat3(u_view) * in_normal;
     vs_out.object = int(in_object);
+    vs_out.color = object_colors[in_object].rgb;
 #ifdef TEXTURED
     v_uv = in_uv;
+    MaterialSlot m = material_slot(int(in_object));
+    v_material_rect = m.rect;
+    v_material_layer = m.layer;
 #endif
 #ifdef PROJECTOR
     vs_out.world = in_position;

@@ -1,0 +1,135 @@
+"""The `ghosted-ao` atlas post-process (ambient occlusion, edges) against the same quantities
+computed in numpy from the atlas read back: every shader variant (edge width 1 through the
+quad derivatives, wider edges) and border (down to none, narrower than the edge width) must
+give the same answer."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rtta.camera import DEFAULT_ORBIT, Camera
+from rtta.composite import Style
+from rtta.renderer import Settings
+
+VP = (240, 180)
+SPIRAL = np.array([(0.0548, 0.0300), (-0.1821, 0.0449), (0.1732, -0.2601), (0.0672, 0.4323),
+                   (-0.4391, -0.3515), (0.6860, -0.0457), (-0.5613, 0.5875), (0.0196, -0.9373)], np.float32)
+
+
+def _smoothstep(e0: float, e1: float, x: np.ndarray) -> np.ndarray:
+    t = np.clip((x - e0) / (e1 - e0), 0.0, 1.0)
+    return t * t * (3.0 - 2.0 * t)
+
+
+def _normalize(v: np.ndarray) -> np.ndarray:
+    return v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), 1e-30)
+
+
+class AtlasFrame:
+    """The atlas of one capture in numpy, with each texel's object rectangle."""
+
+    def __init__(self, r, records, proj):
+        tw, th, td = records.atlas_size
+        a = r.atlas.read((tw, th), td, ("normal", "id", "depth"))
+        self.normal = a["normal"].astype(np.float32)
+        self.ids, self.depth = a["id"], a["depth"].astype(np.float32)
+        self.rec, self.proj = records, proj
+        self.shape = self.ids.shape                              # (layers, th, tw)
+        self.covered = np.argwhere(self.ids >= 0)                # (layer, y, x)
+        rect = records.atlas_rect[self.ids[tuple(self.covered.T)]]
+        self.lo = rect[:, [1, 0]]                                # (y, x) per covered texel
+        self.hi = self.lo + rect[:, [3, 2]] - 1
+
+    def inside(self, yx: np.ndarray) -> np.ndarray:
+        return ((yx >= self.lo) & (yx <= self.hi)).all(-1)
+
+    def fetch(self, image: np.ndarray, yx: np.ndarray) -> np.ndarray:
+        y = np.clip(yx[:, 0], 0, self.shape[1] - 1)
+        x = np.clip(yx[:, 1], 0, self.shape[2] - 1)
+        return image[self.covered[:, 0], y, x]
+
+    def edges(self, width: int) -> np.ndarray:
+        """Per covered texel: max over the 4 neighbours at `width` of silhouette (outside the
+        rectangle or empty), relative depth jump and crease."""
+        p = self.fetch(self.normal, self.covered[:, 1:])
+        n_p, d_p = _normalize(p[:, :3]), p[:, 3]
+        out = np.zeros(len(p), np.float32)
+        for o in ((0, width), (0, -width), (width, 0), (-width, 0)):
+            yx = self.covered[:, 1:] + o
+            q = self.fetch(self.normal, yx)
+            jump = np.abs(q[:, 3] - d_p) / d_p
+            bend = 1.0 - (n_p * _normalize(q[:, :3])).sum(-1)
+            e = np.maximum(_smoothstep(0.01, 0.03, jump), _smoothstep(0.2, 0.5, bend))
+            out = np.maximum(out, np.where(self.inside(yx) & (q[:, 3] > 0), e, 1.0))
+        return out
+
+    def view_position(self, ids: np.ndarray, yx: np.ndarray, d: np.ndarray) -> np.ndarray:
+        rec, P = self.rec, self.proj
+        scale = rec.scale[ids].astype(np.float32)[:, None]
+        vp = np.asarray(rec.viewport, np.float32)
+        step = 2.0 / (scale * vp)
+        origin = (rec.viewport_rect[ids, :2] - (rec.atlas_rect[ids, :2] + rec.border) / scale) / vp * 2 - 1
+        ndc = origin + (yx[:, ::-1] + 0.5) * step
+        z = -P[2, 3] / (d * 2.0 - 1.0 + P[2, 2])
+        return np.stack([-z * ndc[:, 0] / P[0, 0], -z * ndc[:, 1] / P[1, 1], z], -1)
+
+    def ambient_occlusion(self, radius: float, strength: float) -> np.ndarray:
+        """Per covered texel: the AO of the nearest even texel (down, then up) of the same
+        object, from 8 spiral samples within its rectangle; 1 where there is none."""
+        ids = self.ids[tuple(self.covered.T)]
+        result = np.ones(len(ids), np.float32)
+        found = np.zeros(len(ids), bool)
+        size = np.array(self.shape[1:])
+        for shift in (0, 1):
+            rep = np.minimum((self.covered[:, 1:] + shift) // 2 * 2, size - 1)
+            own = ~found & (self.fetch(self.ids, rep) == ids)
+            p = self.view_position(ids, rep, self.fetch(self.depth, rep))
+            n = _normalize(self.fetch(self.normal, rep)[:, :3])
+            occ = np.zeros(len(ids), np.float32)
+            used = np.zeros(len(ids), np.float32)
+            R = radius * self.rec.scale[ids].astype(np.float32)
+            for o in SPIRAL:
+                s = rep + np.rint(R[:, None] * o[::-1]).astype(int)
+                d = self.fetch(self.depth, s)
+                ok = self.inside(s) & (d < 1.0)
+                v = self.view_position(ids, s, d) - p
+                dist = np.linalg.norm(v, axis=-1) + 1e-12
+                occ += np.where(ok, np.maximum(0, (v * n).sum(-1) - 0.002 * np.abs(p[:, 2])) / dist, 0)
+                used += ok
+            ao = np.where(used > 0, np.clip(1 - strength * occ / np.maximum(used, 1), 0, 1), 1.0)
+            result = np.where(own, ao, result)
+            found |= own
+        return result
+
+
+@pytest.mark.parametrize("edge_width, border", [(1, 1), (1, 0), (2, 1), (2, 2), (3, 1)])
+def test_post_process_matches_numpy(make_renderer, demo_scene, edge_width, border):
+    r = make_renderer(demo_scene, Settings(border=border))
+    cam = Camera.orbit(demo_scene.center, demo_scene.radius, *DEFAULT_ORBIT)
+    records = r.capture(cam, VP)
+    style = Style(edge_width=edge_width, ao_radius=12.0, ao_strength=1.5)
+    post = r.post_process(style)
+    frame = AtlasFrame(r, records, r.last[2])
+    tw, th, td = records.atlas_size
+    w, h = r.atlas.size
+    got = np.frombuffer(post.texture.read(), np.uint8).reshape(-1, h, w, 4)[:td, :th, :tw] / 255.0
+    at = tuple(frame.covered.T)
+    edge_err = np.abs(got[..., 1][at] - frame.edges(edge_width))
+    ao_err = np.abs(got[..., 0][at] - frame.ambient_occlusion(style.ao_radius, style.ao_strength))
+    assert len(frame.covered) > 5000
+    # the same float arithmetic: beyond the RGBA8 rounding only a handful of texels may differ
+    # (float contraction on another CPU); a wrong neighbour or sample shows in tens of texels
+    assert (edge_err > 2 / 255).sum() <= 3, f"edges: {(edge_err > 2 / 255).sum()} texels differ"
+    assert (ao_err > 3 / 255).sum() <= 10, f"AO: {(ao_err > 3 / 255).sum()} texels differ"
+    # empty texels of a visible object's rectangle: no AO, no edge (texels outside every
+    # rectangle are not shaded: nothing reads them)
+    in_rect = np.zeros(frame.shape, bool)
+    for oid in np.flatnonzero(records.visible):
+        x, y, rw, rh = records.atlas_rect[oid]
+        in_rect[records.layer[oid], y:y + rh, x:x + rw] = True
+    empty = in_rect & (frame.ids < 0)
+    assert empty.sum() > 1000
+    assert (got[..., 0][empty] == 1).all() and (got[..., 1][empty] == 0).all()
+    assert 0.02 < (frame.edges(edge_width) > 0.5).mean() < 0.6       # edges exist, not everywhere
+    assert (frame.ambient_occlusion(style.ao_radius, style.ao_strength) < 0.9).mean() > 0.01

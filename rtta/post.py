@@ -21,23 +21,26 @@ STAGES = {"vertex_shader": "post.vert", "geometry_shader": "post.geom", "fragmen
 
 
 class _LayerTarget:
-    """One RGBA8 texture array with its framebuffer, reallocated only when the shape changes."""
+    """One texture array with its framebuffer, reallocated only when the shape changes."""
 
-    def __init__(self, ctx: moderngl.Context) -> None:
+    def __init__(self, ctx: moderngl.Context, components: int, dtype: str) -> None:
         self.ctx = ctx
+        self.components, self.dtype = components, dtype
         self.texture = self.fbo = self.shape = None
 
     def ensure(self, shape: tuple[int, int, int]) -> None:
         if shape != self.shape:
             self.release()
-            self.texture = self.ctx.texture_array(shape, 4, dtype="f1")
+            self.texture = self.ctx.texture_array(shape, self.components, dtype=self.dtype)
             self.texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
+            self.texture.repeat_x = self.texture.repeat_y = False    # gathers clamp at the edge
             self.fbo = self.ctx.framebuffer([self.texture])
             self.shape = shape
 
     @property
     def nbytes(self) -> int:
-        return 0 if self.shape is None else self.shape[0] * self.shape[1] * self.shape[2] * 4
+        size = self.components * int(self.dtype[1])
+        return 0 if self.shape is None else self.shape[0] * self.shape[1] * self.shape[2] * size
 
     def release(self) -> None:
         if self.fbo is not None:
@@ -53,8 +56,8 @@ class AtlasPostPass:
     def __init__(self, ctx: moderngl.Context) -> None:
         self.ctx = ctx
         self._variants: dict[tuple[str, ...], tuple] = {}     # defines -> (program, vao)
-        self._ao = _LayerTarget(ctx)
-        self._out = _LayerTarget(ctx)
+        self._ao = _LayerTarget(ctx, 1, "f2")     # AO at half resolution, -1 where empty
+        self._out = _LayerTarget(ctx, 4, "f1")    # (ao, edge)
 
     @property
     def texture(self):

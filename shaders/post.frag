@@ -6,14 +6,14 @@
 // (post.geom), where a texel is either the object's or empty (depth 1, normal.w 0); a
 // neighbour outside the rectangle counts as empty. So no id is fetched at all.
 // AO_PASS: ambient occlusion at half resolution (at the even texels), low-frequency enough;
-//   writes (ao, 1) for a covered texel, (1, 0) for an empty one.
+//   writes ao for a covered texel, -1 for an empty one (one half float).
 // Otherwise edges at full resolution, plus the AO of the half-resolution texel of the same
 // object (1 where none is). EDGE_QUAD (edge width 1): the neighbour in the same 2x2 quad
 // comes from the fine derivatives of the texel's own fetch, so only two are fetched.
 
 layout(binding = 0) uniform sampler2DArray u_depth;    // window depth, 1 where empty
 layout(binding = 1) uniform sampler2DArray u_normal;   // (view normal, distance / far), w 0 where empty
-layout(binding = 3) uniform sampler2DArray u_ao;       // half-resolution (ao, covered) (full pass only)
+layout(binding = 3) uniform sampler2DArray u_ao;       // half-resolution ao, -1 where empty (full pass only)
 
 uniform vec4 u_proj;           // (P00, P11, P22, P23) of the perspective projection
 uniform float u_ao_radius;     // pixels
@@ -24,7 +24,7 @@ flat in ivec4 g_rect;
 flat in vec4 g_map;
 flat in float g_scale;
 
-layout(location = 0) out vec4 out_post;   // AO_PASS: (ao, covered, 0, 1); else (ao, edge, 0, 1)
+layout(location = 0) out vec4 out_post;   // AO_PASS: ao or -1; else (ao, edge, 0, 1)
 
 // Globals of the texel being shaded (set once in main, read by the unrolled helpers).
 ivec3 g_t;
@@ -65,10 +65,10 @@ float ambient_occlusion() {
 void main() {
     g_t = ivec3(min(ivec2(gl_FragCoord.xy) * 2, g_rect.zw), gl_Layer);
     vec4 nd = texelFetch(u_normal, g_t, 0);
-    if (nd.w <= 0.0) { out_post = vec4(1.0, 0.0, 0.0, 1.0); return; }
+    if (nd.w <= 0.0) { out_post = vec4(-1.0); return; }
     g_p = view_position(g_t.xy, texelFetch(u_depth, g_t, 0).r);
     g_n = normalize(nd.xyz);
-    out_post = vec4(ambient_occlusion(), 1.0, 0.0, 1.0);
+    out_post = vec4(ambient_occlusion());
 }
 
 #else
@@ -86,12 +86,17 @@ float edge_towards(ivec2 o) {
     return outside(s) ? 1.0 : edge_with(texelFetch(u_normal, ivec3(s, g_t.z), 0));
 }
 
-// AO of the half-resolution texel `h` when it was computed for a covered texel of the
-// rectangle (which is then this object's), else -1
-float ao_from(ivec2 h) {
-    if (outside(h * 2)) return -1.0;
-    vec2 a = texelFetch(u_ao, ivec3(h, g_t.z), 0).rg;
-    return a.g > 0.5 ? a.r : -1.0;
+// The AO of the half-resolution texel t / 2 when it was computed for a covered texel of
+// the rectangle (which is then this object's), else of (t + 1) / 2 (odd coordinates), else 1.
+// Both candidates lie in the 2x2 footprint at t / 2: one gather reads them.
+float ambient_occlusion_of_texel() {
+    ivec2 h = g_t.xy / 2, odd = g_t.xy & 1;
+    vec2 size = vec2(textureSize(u_ao, 0).xy);
+    // components: x (h.x, h.y+1), y (h.x+1, h.y+1), z (h.x+1, h.y), w (h.x, h.y)
+    vec4 a = textureGather(u_ao, vec3((vec2(h) + 1.0) / size, float(g_t.z)), 0);
+    if (a.w >= 0.0 && !outside(h * 2)) return a.w;
+    float second = odd.x == 1 ? (odd.y == 1 ? a.y : a.z) : (odd.y == 1 ? a.x : -1.0);
+    return second >= 0.0 && !outside((h + odd) * 2) ? second : 1.0;
 }
 
 void main() {
@@ -105,8 +110,7 @@ void main() {
     if (nd.w <= 0.0) { out_post = vec4(1.0, 0.0, 0.0, 1.0); return; }
     g_n = normalize(nd.xyz);
     g_dist = nd.w;
-    float ao = ao_from(g_t.xy / 2);
-    if (ao < 0.0) ao = ao_from((g_t.xy + 1) / 2);     // the next even texel, for odd coordinates
+    float ao = ambient_occlusion_of_texel();
 #ifdef EDGE_QUAD
     // the quad partner (x ^ 1, y ^ 1) from the derivatives, the other side fetched
     ivec2 odd = g_t.xy & 1;
@@ -119,6 +123,6 @@ void main() {
     float edge = max(max(edge_towards(ivec2(w, 0)), edge_towards(ivec2(-w, 0))),
                      max(edge_towards(ivec2(0, w)), edge_towards(ivec2(0, -w))));
 #endif
-    out_post = vec4(ao < 0.0 ? 1.0 : ao, edge, 0.0, 1.0);
+    out_post = vec4(ao, edge, 0.0, 1.0);
 }
 #endif

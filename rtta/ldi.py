@@ -88,6 +88,14 @@ class LayeredDepthImage:
         return int(self.layers.shape[0])
 
     @property
+    def crop_matrix(self) -> np.ndarray:
+        """World -> crop space: texels of the crop in x and y (the texel is the floor), linear
+        depth in z. A point is in the LDI's box when 0 <= x < w, 0 <= y < h, 0 <= z < 1."""
+        s = np.diag([float(self.size[0]), float(self.size[1]), 1.0, 1.0])
+        s[0, 3], s[1, 3] = -self.crop[0], -self.crop[1]
+        return s @ self.matrix
+
+    @property
     def texel_size(self) -> np.ndarray:
         """World size of one texel along s and t (a volumetric test is exact up to this)."""
         return 1.0 / (np.linalg.norm(self.matrix[:2, :3], axis=1) * np.array(self.size))
@@ -273,24 +281,25 @@ def build(ctx: moderngl.Context, vertices, faces, resolution: int = 512, *, dire
             peeler.release()
 
 
-def texture_coords(ldi: LayeredDepthImage, points: np.ndarray) -> np.ndarray:
-    """Points (world, [N, 3]) in the LDI's texture space, float32 as the GPU computes them."""
+def crop_coords(ldi: LayeredDepthImage, points: np.ndarray) -> np.ndarray:
+    """Points (world, [N, 3]) in the LDI's crop space (`crop_matrix`), float32 as the GPU
+    computes them."""
     p = np.asarray(points, np.float64)
-    return (p @ ldi.matrix[:3, :3].T + ldi.matrix[:3, 3]).astype(np.float32)
+    m = ldi.crop_matrix
+    return (p @ m[:3, :3].T + m[:3, 3]).astype(np.float32)
 
 
 def classify(ldi: LayeredDepthImage, points: np.ndarray) -> np.ndarray:
     """CPU volumetric parity test (bool [N]): the reference the GPU paths are compared with."""
-    tc = texture_coords(ldi, points)
-    n = np.array(ldi.size)
-    texel = np.floor(tc[:, :2] * n).astype(np.int64) - np.array(ldi.crop[:2])
+    q = crop_coords(ldi, points)
     w, h = ldi.crop[2:]
-    ok = (tc >= 0).all(axis=1) & (tc < 1).all(axis=1) & (texel >= 0).all(axis=1) & (texel < (w, h)).all(axis=1)
-    out = np.zeros(len(tc), bool)
+    ok = (q >= 0).all(axis=1) & (q[:, 0] < w) & (q[:, 1] < h) & (q[:, 2] < 1)
+    texel = np.floor(np.where(ok[:, None], q[:, :2], 0)).astype(np.int64)
+    out = np.zeros(len(q), bool)
     idx = np.flatnonzero(ok)
     if len(idx) == 0 or ldi.depth == 0:
         return out
     depths = ldi.layers[:, texel[idx, 1], texel[idx, 0]]          # [d, M]
-    in_front = (depths < tc[idx, 2][None, :]).sum(axis=0)
+    in_front = (depths < q[idx, 2][None, :]).sum(axis=0)
     out[idx] = in_front % 2 == 1
     return out

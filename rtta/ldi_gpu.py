@@ -18,7 +18,8 @@ POINTS_WIDTH = 2048
 
 
 class LdiTextures:
-    """The plain layers (R32F array) and the compressed ranges (RG32UI) of one LDI."""
+    """The plain layers (R32F array, read as an image) and the compressed ranges (RG32UI)
+    of one LDI."""
 
     def __init__(self, ctx: moderngl.Context, ldi: LayeredDepthImage, packed: CompressedLDI | None = None) -> None:
         self.ldi = ldi
@@ -32,16 +33,15 @@ class LdiTextures:
         for t in (self.layers, self.ranges):
             t.filter = moderngl.NEAREST, moderngl.NEAREST
 
-    def bind(self, prog: moderngl.Program, to_texture: np.ndarray, *, layers_unit: int, packed_unit: int,
-             prefix: str = "u_") -> None:
-        """Bind both textures and set <prefix>to_texture (point space -> texture space), size,
-        crop and depth, where the program uses them."""
-        self.layers.use(layers_unit)
+    def bind(self, prog: moderngl.Program, to_world: np.ndarray, *, packed_unit: int, prefix: str = "u_") -> None:
+        """Bind the layers (image unit 0, ldi.glsl) and the ranges (texture unit `packed_unit`),
+        and set <prefix>to_crop (point space -> crop space, for `to_world`: point -> world),
+        crop_size and depth, where the program uses them."""
+        self.layers.bind_to_image(0, read=True, write=False)
         self.ranges.use(packed_unit)
-        if f"{prefix}to_texture" in prog:
-            prog[f"{prefix}to_texture"].write(mat_bytes(to_texture))
-        for name, value in (("size", tuple(self.ldi.size)), ("crop", tuple(self.ldi.crop)),
-                            ("depth", self.ldi.depth)):
+        if f"{prefix}to_crop" in prog:
+            prog[f"{prefix}to_crop"].write(mat_bytes(self.ldi.crop_matrix @ to_world))
+        for name, value in (("crop_size", tuple(self.ldi.crop[2:])), ("depth", self.ldi.depth)):
             if prefix + name in prog:
                 prog[prefix + name].value = value
 
@@ -106,7 +106,7 @@ class ParityTest:
         self.points.write(data, viewport=(0, 0, POINTS_WIDTH, rows))
         t1 = time.perf_counter()
         prog, vao = self._program(compressed)
-        self.textures.bind(prog, ldi.matrix @ shift, layers_unit=1, packed_unit=2)
+        self.textures.bind(prog, shift, packed_unit=2)
         self.points.use(0)
         self.ctx.enable_only(moderngl.NOTHING)
         self.fbo.viewport = (0, 0, POINTS_WIDTH, rows)

@@ -12,7 +12,7 @@ import moderngl
 import numpy as np
 
 from .errors import RttaError
-from .ldi import LayeredDepthImage, Peeler, build, closed_mesh
+from .ldi import Peeler, build, closed_mesh
 from .ldi_gpu import LdiTextures
 from .scene import Scene
 
@@ -55,12 +55,12 @@ class Lens:
         v, f = closed_mesh(local - center, faces.reshape(-1, 3), f"lens object {scene.names[oid]!r}")
         return cls(f"object:{oid}", v, f, center + scene.origin, 1.0, oid)
 
-    def matrix(self, ldi: LayeredDepthImage, origin) -> np.ndarray:
-        """World relative to `origin` -> the LDI's texture space."""
-        to_local = np.eye(4)
-        to_local[:3, :3] /= self.radius
-        to_local[:3, 3] = (np.asarray(origin, float) - self.center) / self.radius
-        return ldi.matrix @ to_local
+    def to_local(self, origin) -> np.ndarray:
+        """World relative to `origin` -> the lens shape's own frame (where its LDI was built)."""
+        m = np.eye(4)
+        m[:3, :3] /= self.radius
+        m[:3, 3] = (np.asarray(origin, float) - self.center) / self.radius
+        return m
 
 
 def default_placement(scene: Scene, focus) -> tuple[np.ndarray, float]:
@@ -88,7 +88,7 @@ class LensPass:
 
     def bind(self, prog: moderngl.Program, lens: Lens, origin) -> None:
         tex = self.textures(lens)
-        tex.bind(prog, lens.matrix(tex.ldi, origin), layers_unit=5, packed_unit=6, prefix="u_lens_")
+        tex.bind(prog, lens.to_local(origin), packed_unit=6, prefix="u_lens_")
         if "u_lens_object" in prog:
             prog["u_lens_object"].value = lens.object_id
 

@@ -17,10 +17,8 @@ layout(binding = 2) uniform isampler2DArray u_ids;
 layout(binding = 3) uniform sampler2DArray u_post;   // (ao, edge) per atlas texel, WITH_AO only
 layout(binding = 4) uniform sampler2DArray u_normal;  // view-space normal per atlas texel, PROJECTOR only
 uniform mat4 u_inv_view_proj;   // (P V)^-1: viewport NDC + depth -> world relative to the origin
-layout(binding = 5) uniform sampler2DArray u_lens_layers;   // the lens's LDI (LENS)
-uniform mat4 u_lens_to_texture;     // world relative to the origin -> lens LDI texture space
-uniform ivec2 u_lens_size;
-uniform ivec4 u_lens_crop;
+uniform mat4 u_lens_to_crop;        // world relative to the origin -> the lens LDI's crop space
+uniform ivec2 u_lens_crop_size;     // (its layers are image unit 0: ldi.glsl)
 uniform int u_lens_depth;
 uniform int u_lens_object;      // a scene object used as the lens is not cut (-1: none)
 
@@ -70,8 +68,7 @@ void main() {
 #endif
 #ifdef LENS
     if (g_object != u_lens_object
-            && ldi_inside(u_lens_layers, u_lens_depth, (u_lens_to_texture * vec4(world.xyz, 1.0)).xyz,
-                          u_lens_size, u_lens_crop))
+            && ldi_inside(u_lens_depth, (u_lens_to_crop * vec4(world.xyz, 1.0)).xyz, u_lens_crop_size))
         discard;
 #endif
 #ifdef PROJECTOR

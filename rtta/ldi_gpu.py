@@ -15,6 +15,7 @@ from .passes import mat_bytes
 from .targets import release_all
 
 POINTS_WIDTH = 2048
+LOCAL_SIZE = 256      # ldi_classify.comp's local_size_x; divides POINTS_WIDTH
 
 
 class LdiTextures:
@@ -51,24 +52,21 @@ class LdiTextures:
 
 
 class ParityTest:
-    """`classify(points, compressed=False)` -> bool [N], one fragment per point."""
+    """`classify(points, compressed=False)` -> bool [N], one compute invocation per point."""
 
     def __init__(self, ctx: moderngl.Context, ldi: LayeredDepthImage, packed: CompressedLDI | None = None) -> None:
         self.ctx = ctx
         self.textures = LdiTextures(ctx, ldi, packed)
-        self._programs: dict[bool, moderngl.Program] = {}
-        self._vaos: dict[bool, moderngl.VertexArray] = {}
+        self._programs: dict[bool, moderngl.ComputeShader] = {}
         self._rows = 0
         self._parts: list = []
+        self._staging = None
         self.last_ms: dict[str, float] = {}
 
-    def _program(self, compressed: bool):
+    def _program(self, compressed: bool) -> moderngl.ComputeShader:
         if compressed not in self._programs:
-            prog = self.ctx.program(vertex_shader=glsl.load("view.vert"),
-                                    fragment_shader=glsl.load("ldi_classify.frag", COMPRESSED=compressed))
-            self._programs[compressed] = prog
-            self._vaos[compressed] = self.ctx.vertex_array(prog, [])
-        return self._programs[compressed], self._vaos[compressed]
+            self._programs[compressed] = self.ctx.compute_shader(glsl.load("ldi_classify.comp", COMPRESSED=compressed))
+        return self._programs[compressed]
 
     def _targets(self, rows: int) -> None:
         if rows <= self._rows:
@@ -78,8 +76,8 @@ class ParityTest:
         self.inside = self.ctx.texture((POINTS_WIDTH, rows), 1, dtype="u1")
         for t in (self.points, self.inside):
             t.filter = moderngl.NEAREST, moderngl.NEAREST
-        self.fbo = self.ctx.framebuffer([self.inside])
-        self._parts = [self.fbo, self.points, self.inside]
+        self._staging = np.empty((rows * POINTS_WIDTH, 3), np.float32)   # reused: no page faults per call
+        self._parts = [self.points, self.inside]
         self._rows = rows
 
     def classify(self, points: np.ndarray, compressed: bool = False) -> np.ndarray:
@@ -100,21 +98,19 @@ class ParityTest:
         shift[:3, 3] = center
         rows = -(-n // POINTS_WIDTH)
         self._targets(rows)
-        data = np.empty((rows * POINTS_WIDTH, 3), np.float32)
+        data = self._staging[:rows * POINTS_WIDTH]
         data[:n] = points - center if center.any() else points
         data[n:] = 0.0
         self.points.write(data, viewport=(0, 0, POINTS_WIDTH, rows))
         t1 = time.perf_counter()
-        prog, vao = self._program(compressed)
+        prog = self._program(compressed)
         self.textures.bind(prog, shift, packed_unit=2)
         self.points.use(0)
-        self.ctx.enable_only(moderngl.NOTHING)
-        self.fbo.viewport = (0, 0, POINTS_WIDTH, rows)
-        self.fbo.use()
-        vao.render(moderngl.TRIANGLES, vertices=3)
+        self.inside.bind_to_image(1, read=False, write=True)
+        prog.run(POINTS_WIDTH // LOCAL_SIZE, rows)
         self.ctx.finish()
         t2 = time.perf_counter()
-        raw = self.fbo.read(viewport=(0, 0, POINTS_WIDTH, rows), components=1, dtype="u1")
+        raw = self.inside.read()
         out = np.frombuffer(raw, np.uint8)[:n] != 0
         self.last_ms = {"upload": (t1 - t0) * 1e3, "test": (t2 - t1) * 1e3,
                         "read": (time.perf_counter() - t2) * 1e3}
@@ -122,12 +118,11 @@ class ParityTest:
 
     def _release_targets(self) -> None:
         release_all(self.ctx, self._parts)
-        self._parts, self._rows = [], 0
+        self._parts, self._rows, self._staging = [], 0, None
 
     def release(self) -> None:
         self._release_targets()
-        for obj in [*self._vaos.values(), *self._programs.values()]:
+        for obj in self._programs.values():
             obj.release()
-        self._vaos.clear()
         self._programs.clear()
         self.textures.release()

@@ -70,6 +70,12 @@ class CompositeTarget:
             self._small_frames = 0
         self.fbo.viewport = (0, 0, vw, vh)
 
+    def trim(self) -> None:
+        """Reallocate to just hold the current viewport (64-pixel steps) now (contents lost)."""
+        fit = (round_up(self.viewport[0], 64), round_up(self.viewport[1], 64))
+        if self.fbo is not None and fit != self.size:
+            self._allocate(fit)
+
     def _allocate(self, size: tuple[int, int]) -> None:
         viewport = self.viewport
         self.release()

@@ -117,6 +117,13 @@ GL_UNSIGNED_BYTE = 0x1401
 GL_READ_FRAMEBUFFER = 0x8CA8
 
 
+def flush() -> None:
+    """glFlush: hand the queued commands to the driver now. llvmpipe holds a frame's
+    commands, and the memory of textures deleted meanwhile, until something flushes; a loop
+    that never reads back or swaps (a headless pipeline, the soak) grew without bound."""
+    _lib().glFlush()
+
+
 def read_window(width: int, height: int) -> np.ndarray:
     """The default framebuffer's back buffer as RGBA8 [H, W, 4], row 0 at the bottom.
     moderngl reads the default framebuffer through GL_COLOR_ATTACHMENT0, an error there."""

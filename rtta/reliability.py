@@ -234,13 +234,21 @@ def soak(renderer: Renderer, frames: int, samples: int = 10, seed: int = 0,
     return out, errors
 
 
+REFERENCE_REPEATS = 6   # llvmpipe keeps textures of recent frames alive a while after release
+
+
 def _reference_frame(renderer: Renderer) -> None:
-    """The same frame before every sample, so the driver's per-frame working memory (bins,
-    sized by the viewport) is the same when RSS is read."""
+    """The same frame before every sample, with the render targets trimmed to it, so the
+    targets and the driver's per-frame working memory (bins, sized by the viewport) are the
+    same whenever RSS is read."""
     scene = renderer.scene
-    renderer.capture(Camera.orbit(scene.center, scene.radius, 30.0, 20.0, 2.2), (320, 240))
-    renderer.composite("ghosted-ao")
-    renderer.ctx.finish()
+    camera = Camera.orbit(scene.center, scene.radius, 30.0, 20.0, 2.2)
+    renderer.capture(camera, (320, 240))
+    renderer.trim()
+    for _ in range(REFERENCE_REPEATS):
+        renderer.capture(camera, (320, 240))
+        renderer.composite("ghosted-ao")
+        renderer.ctx.finish()
 
 
 def drift(samples: list[SoakSample], warmup: float = 0.2) -> tuple[float, dict]:

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import moderngl
 import numpy as np
 
+from . import glraw
 from .camera import Camera
 from .composite import LENS_MODES, CompositePass, CompositeTarget, Style
 from .context import Capabilities
@@ -104,6 +105,7 @@ class Renderer:
         with self._timed("capture"):
             self.capture_pass(path).render(gpu=self.gpu, records=records, view=view, proj=proj,
                                            atlas=self.atlas)
+            glraw.flush()       # rasterize while Python goes on; bounds the driver's queued memory
         self.last = (records, view, proj)
         self._captures += 1
         return records
@@ -136,6 +138,7 @@ class Renderer:
             self._composite.render(atlas=self.atlas, records=records, gpu=self.gpu, style=style,
                                    mode=mode, view_depth=view_depth, target=self.target, post=post,
                                    view_proj=proj @ view, projection=projection, lens=lens)
+            glraw.flush()
         return self.target
 
     def _projection(self):
@@ -177,6 +180,7 @@ class Renderer:
         with self._timed("std"):
             self._std.render(gpu=self.gpu, view=view, proj=proj, target=self.single_target, viewport=viewport,
                              projection=projection)
+            glraw.flush()
         return self.single_target
 
     def rtt(self, camera: Camera, viewport: tuple[int, int], objects, consume=None) -> None:
@@ -185,6 +189,18 @@ class Renderer:
         view, proj = self.matrices(camera, viewport)
         self._rtt.render(gpu=self.gpu, view=view, proj=proj, target=self.single_target,
                          viewport=viewport, objects=objects, consume=consume)
+
+    def trim(self) -> None:
+        """Shrink the lazily sized targets (atlas, composite) to the last capture's needs now;
+        their contents are lost, so capture again before compositing. For memory
+        measurements that must see the same allocations every time, and for a viewer that
+        wants memory back after a huge window."""
+        if self.last is None:
+            return
+        records = self.last[0]
+        tw, th, td = records.atlas_size
+        self.atlas.trim((tw, th), td)
+        self.target.trim()
 
     @property
     def target_bytes(self) -> int:

@@ -86,6 +86,16 @@ class LayeredTarget:
             self._small_frames = 0
         return False
 
+    def trim(self, size: tuple[int, int], layers: int) -> bool:
+        """Reallocate to just hold `size` x `layers` (64-texel steps) now, instead of after
+        SHRINK_AFTER_FRAMES frames; returns True when textures were reallocated (contents lost)."""
+        fit = (round_up(max(1, size[0]), 64), round_up(max(1, size[1]), 64)), max(1, layers)
+        if fit == (self.size, self.layers):
+            return False
+        self._small_frames = 0
+        self._allocate(*fit)
+        return True
+
     @property
     def nbytes(self) -> int:
         """Texture memory: RGBA8 + RGBA16F + R32I + D32F per texel."""

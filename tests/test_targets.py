@@ -43,3 +43,23 @@ def test_clear_values(gl):
         assert d["id"].shape == (2, 8, 16)
     finally:
         t.release()
+
+
+def test_trim_shrinks_to_the_last_capture_at_once(make_renderer, demo_scene, gl):
+    """After a large view, trim() gives the memory back now (not after SHRINK_AFTER_FRAMES),
+    and the next capture and composite work in the trimmed targets and equal an untrimmed run."""
+    from rtta.snapshot import over_background
+
+    r = make_renderer(demo_scene)
+    cam = Camera.orbit(demo_scene.center, demo_scene.radius, 30, 20, 2.2)
+    r.capture(cam, (900, 700))
+    r.composite("sprites")
+    big = r.target_bytes
+    r.capture(cam, (120, 90))
+    before = over_background(r.composite("sprites").read()[0])
+    assert r.target_bytes == big                     # lazily kept
+    r.trim()
+    assert r.target_bytes < big / 10 and r.atlas.size[0] <= 192 and r.target.size == (128, 128)
+    r.capture(cam, (120, 90))
+    after = over_background(r.composite("sprites").read()[0])
+    assert np.abs(after.astype(int) - before.astype(int)).max() <= 1

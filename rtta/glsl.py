@@ -46,3 +46,14 @@ def load(name: str, **defines: object) -> str:
     """Shader source with `defines` (name=value; True means 1) injected after #version."""
     items = tuple(sorted((k, "1" if v is True else str(v)) for k, v in defines.items() if v is not False))
     return _load(name, items)
+
+
+def stage_sources(stages: dict[str, str | None], **defines: object) -> dict[str, str | None]:
+    """Sources for `ctx.program(**...)`: each stage (keyword -> file, or None) gets the defines
+    its own file declares; a define that no stage declares is rejected."""
+    known = set().union(*(declared_defines(name) for name in stages.values() if name))
+    unknown = sorted(set(defines) - known)
+    if unknown:
+        raise ValueError(f"no shader of this pass declares {', '.join(unknown)}")
+    return {stage: load(name, **{k: v for k, v in defines.items() if k in declared_defines(name)}) if name else None
+            for stage, name in stages.items()}

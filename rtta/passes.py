@@ -41,14 +41,7 @@ class ScenePass:
             geometry, fragment, defines = self._source
             defines = {**defines, "TEXTURED": textured}
             stages = {"vertex_shader": "scene.vert", "geometry_shader": geometry, "fragment_shader": fragment}
-            known = set().union(*(glsl.declared_defines(name) for name in stages.values() if name))
-            unknown = sorted(set(defines) - known)
-            if unknown:
-                raise ValueError(f"no shader of this pass declares {', '.join(unknown)}")
-            # each stage gets the defines its file declares
-            self._programs[textured] = self.ctx.program(**{
-                stage: glsl.load(name, **{k: v for k, v in defines.items() if k in glsl.declared_defines(name)})
-                if name else None for stage, name in stages.items()})
+            self._programs[textured] = self.ctx.program(**glsl.stage_sources(stages, **defines))
         return self._programs[textured]
 
     def setup(self, gpu: GpuScene, view: np.ndarray, proj: np.ndarray) -> moderngl.VertexArray:

@@ -70,9 +70,7 @@ class AtlasPostPass:
     def _variant(self, *defines: str) -> tuple:
         """(program, vao) compiled on first use; each stage gets the defines it declares."""
         if defines not in self._variants:
-            prog = self.ctx.program(**{
-                stage: glsl.load(name, **{d: True for d in defines if d in glsl.declared_defines(name)})
-                for stage, name in STAGES.items()})
+            prog = self.ctx.program(**glsl.stage_sources(STAGES, **{d: True for d in defines}))
             self._variants[defines] = (prog, self.ctx.vertex_array(prog, []))
         return self._variants[defines]
 

@@ -65,7 +65,7 @@ class CompositeTarget:
         elif 2 * vw * vh < w * h:
             self._small_frames += 1
             if self._small_frames >= SHRINK_AFTER_FRAMES:
-                self._allocate((round_up(vw, 64), round_up(vh, 64)))
+                self.trim()
         else:
             self._small_frames = 0
         self.fbo.viewport = (0, 0, vw, vh)

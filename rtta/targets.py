@@ -79,9 +79,7 @@ class LayeredTarget:
         if need_w * need_h * need_l * 2 < w * h * self.layers:
             self._small_frames += 1
             if self._small_frames >= SHRINK_AFTER_FRAMES:
-                self._small_frames = 0
-                self._allocate((round_up(need_w, 64), round_up(need_h, 64)), need_l)
-                return True
+                return self.trim((need_w, need_h), need_l)
         else:
             self._small_frames = 0
         return False

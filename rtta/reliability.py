@@ -234,7 +234,10 @@ def soak(renderer: Renderer, frames: int, samples: int = 10, seed: int = 0,
     return out, errors
 
 
-REFERENCE_REPEATS = 6   # llvmpipe keeps textures of recent frames alive a while after release
+# The reference frame is drawn this many times before a sample, so that the frames just before
+# every reading are the same. It was meant to let llvmpipe drop textures released earlier;
+# it did not remove the scatter between samples (RELIABILITY.md, Soak).
+REFERENCE_REPEATS = 6
 
 
 def _reference_frame(renderer: Renderer) -> None:

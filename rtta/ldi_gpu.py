@@ -15,7 +15,7 @@ from .passes import mat_bytes
 from .targets import release_all
 
 POINTS_WIDTH = 2048
-LOCAL_SIZE = 256      # ldi_classify.comp's local_size_x; divides POINTS_WIDTH
+LOCAL_SIZE = 256      # ldi_classify.comp's local_size_x (injected); divides POINTS_WIDTH
 
 
 class LdiTextures:
@@ -65,7 +65,8 @@ class ParityTest:
 
     def _program(self, compressed: bool) -> moderngl.ComputeShader:
         if compressed not in self._programs:
-            self._programs[compressed] = self.ctx.compute_shader(glsl.load("ldi_classify.comp", COMPRESSED=compressed))
+            source = glsl.load("ldi_classify.comp", COMPRESSED=compressed, LOCAL_SIZE=LOCAL_SIZE)
+            self._programs[compressed] = self.ctx.compute_shader(source)
         return self._programs[compressed]
 
     def _targets(self, rows: int) -> None:

@@ -1,12 +1,12 @@
 #version 430
-// defines: COMPRESSED
+// defines: COMPRESSED LOCAL_SIZE
 // Volumetric parity test of many points: one invocation per point (points in an RGB32F
 // texture, row-major), 1 = inside, written to an R8UI image of the same shape. A compute
 // shader skips rasterization: on llvmpipe ~20% faster than one fragment per point.
 // COMPRESSED: test against the packed depth ranges.
 #include "ldi.glsl"
 
-layout(local_size_x = 256) in;
+layout(local_size_x = LOCAL_SIZE) in;     // given by ldi_gpu.py, which dispatches by it
 layout(binding = 0) uniform sampler2D u_points;
 layout(binding = 2) uniform usampler2D u_packed;
 layout(binding = 1, r8ui) writeonly uniform uimage2D u_inside;

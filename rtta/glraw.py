@@ -117,11 +117,48 @@ GL_UNSIGNED_BYTE = 0x1401
 GL_READ_FRAMEBUFFER = 0x8CA8
 
 
-def flush() -> None:
-    """glFlush: hand the queued commands to the driver now. llvmpipe holds a frame's
-    commands, and the memory of textures deleted meanwhile, until something flushes; a loop
-    that never reads back or swaps (a headless pipeline, the soak) grew without bound."""
-    _lib().glFlush()
+GL_SYNC_GPU_COMMANDS_COMPLETE = 0x9117
+GL_SYNC_FLUSH_COMMANDS_BIT = 0x1
+GL_WAIT_FAILED = 0x911D
+GL_TIMEOUT_EXPIRED = 0x911B
+WAIT_STEP_NS = 100_000_000
+
+
+class Throttle:
+    """Flush, keeping at most one flushed batch of commands in flight: before a batch is
+    handed over, the one before it must be done. llvmpipe gives every batch in flight a
+    "scene" of its own, allocates scenes on demand and keeps them; a scene keeps the
+    framebuffer it drew last (and so its textures, after they were deleted) until it is
+    used again. A loop that never waits (headless, no swap) piled up many scenes, and the
+    memory of as many old atlases (RELIABILITY.md, Soak). Waiting for the batch before
+    costs nothing on a GPU that keeps up, and on llvmpipe keeps Python one batch ahead."""
+
+    def __init__(self) -> None:
+        self._fence = None
+
+    def flush(self) -> None:
+        gl = _lib()
+        self.wait()
+        gl.glFenceSync.restype = ctypes.c_void_p
+        self._fence = gl.glFenceSync(ctypes.c_uint(GL_SYNC_GPU_COMMANDS_COMPLETE), ctypes.c_uint(0))
+        gl.glFlush()
+
+    def wait(self) -> None:
+        """Until the last flushed batch is done (a wait that fails gives up, not hangs)."""
+        if not self._fence:
+            return
+        gl = _lib()
+        gl.glClientWaitSync.restype = ctypes.c_uint
+        fence = ctypes.c_void_p(self._fence)
+        while gl.glClientWaitSync(fence, ctypes.c_uint(GL_SYNC_FLUSH_COMMANDS_BIT),
+                                  ctypes.c_uint64(WAIT_STEP_NS)) == GL_TIMEOUT_EXPIRED:
+            pass
+        self.release()
+
+    def release(self) -> None:
+        if self._fence:
+            _lib().glDeleteSync(ctypes.c_void_p(self._fence))
+            self._fence = None
 
 
 def read_window(width: int, height: int) -> np.ndarray:

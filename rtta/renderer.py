@@ -63,6 +63,7 @@ class Renderer:
         self.measure = False               # time each stage (waits for the GPU after each)
         self.timings: dict[str, float] = {}  # stage -> ms of its last run, when measuring
         self.warnings: list[str] = []      # what was degraded (each said once)
+        self._throttle = glraw.Throttle()  # one flushed batch in flight (glraw.Throttle)
 
     @contextmanager
     def _timed(self, stage: str):
@@ -105,7 +106,7 @@ class Renderer:
         with self._timed("capture"):
             self.capture_pass(path).render(gpu=self.gpu, records=records, view=view, proj=proj,
                                            atlas=self.atlas)
-            glraw.flush()       # rasterize while Python goes on; bounds the driver's queued memory
+            self._throttle.flush()   # rasterize while Python goes on; bounds the driver's memory
         self.last = (records, view, proj)
         self._captures += 1
         return records
@@ -138,7 +139,7 @@ class Renderer:
             self._composite.render(atlas=self.atlas, records=records, gpu=self.gpu, style=style,
                                    mode=mode, view_depth=view_depth, target=self.target, post=post,
                                    view_proj=proj @ view, projection=projection, lens=lens)
-            glraw.flush()
+            self._throttle.flush()
         return self.target
 
     def _projection(self):
@@ -180,7 +181,7 @@ class Renderer:
         with self._timed("std"):
             self._std.render(gpu=self.gpu, view=view, proj=proj, target=self.single_target, viewport=viewport,
                              projection=projection)
-            glraw.flush()
+            self._throttle.flush()
         return self.single_target
 
     def rtt(self, camera: Camera, viewport: tuple[int, int], objects, consume=None) -> None:
@@ -210,6 +211,7 @@ class Renderer:
         return sum(p.nbytes for p in parts if p is not None)
 
     def release(self) -> None:
+        self._throttle.release()
         for p in [*self._capture.values(), self._std, self._rtt, self._composite, self._post, self._projector_pass,
                   self._lens_pass]:
             if p is not None:

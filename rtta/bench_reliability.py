@@ -12,6 +12,7 @@ import time
 from pathlib import Path
 
 from .context import create_headless_context
+from .errors import RttaError
 from .generate import random_scene
 from .reliability import drift, soak, sweep
 from .renderer import Renderer
@@ -34,26 +35,38 @@ def _progress(label: str, total: int):
 
 
 def _scenes(quick: bool):
+    """The demo, a large generated scene, and a textured one (material atlas, REPEAT
+    emulation and mip levels under the same extreme cameras)."""
     from .loader import load_scene_or_demo
+    from .textured import textured_scene
 
     return [("demo", load_scene_or_demo(None)),
-            ("random-2000", random_scene(200 if quick else 2000, seed=3, spread=40.0))]
+            ("random-2000", random_scene(200 if quick else 2000, seed=3, spread=40.0)),
+            ("textured-64", textured_scene(64, seed=4))]
 
 
 def run_reliability(sweep_frames: int, soak_frames: int, quick: bool = False, json_path: str | None = None,
-                    ctx=None) -> int:
-    """Sweep and soak on the demo and a generated 2,000-object scene; exit 1 on any failure."""
+                    ctx=None, only: list[str] | None = None) -> int:
+    """Sweep and soak on the demo, a generated 2,000-object scene and a textured scene (or
+    the `only` ones); exit 1 on any failure."""
+    scenes = _scenes(quick)
+    names = [name for name, _ in scenes]
+    unknown = sorted(set(only or []) - set(names))
+    if unknown:
+        raise RttaError(f"--scenes: unknown {', '.join(unknown)}; choose from {', '.join(names)}")
+    scenes = [(n, s) for n, s in scenes if only is None or n in only]
     ctx = ctx or create_headless_context()
     renderer_name = str(ctx.info["GL_RENDERER"])
     print(f"renderer: {renderer_name}; cpu: {platform.processor() or platform.machine()}; "
           f"date: {time.strftime('%Y-%m-%d')}")
     flags = " --quick" if quick else f" --sweep {sweep_frames} --soak {soak_frames}"
+    flags += f" --scenes {','.join(only)}" if only else ""
     print(f"command: rtta bench reliability{flags}")
     report, failed = {"renderer": renderer_name, "scenes": []}, False
     print(f"{'scene':>12} {'objects':>7} {'sweep frames':>12} {'failed':>6} {'worst colour':>12} "
           f"{'worst depth':>11} {'s':>7} | {'soak frames':>11} {'RSS MiB':>15} {'drift':>7} "
           f"{'GL objects':>10} {'GL errors':>9} {'s':>7}")
-    for name, scene in _scenes(quick):
+    for name, scene in scenes:
         r = Renderer(ctx, scene)
         t0 = time.perf_counter()
         sw = sweep(r, sweep_frames, seed=1, progress=_progress(f"{name} sweep", sweep_frames))

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import RttaError
+from .preprocess import DEFAULT_SMOOTH_ANGLE
 
 
 def parse_size(text: str, what: str = "--size") -> tuple[int, int]:
@@ -23,6 +24,16 @@ def parse_size(text: str, what: str = "--size") -> tuple[int, int]:
 
 def _scene_arg(p: argparse.ArgumentParser) -> None:
     p.add_argument("scene", nargs="?", help="glTF/GLB/OBJ/STL/PLY/3MF/OFF file (default: the built-in demo)")
+    add_load_options(p)
+
+
+def add_load_options(p: argparse.ArgumentParser) -> None:
+    """Mesh preprocessing options of every command that loads a scene (the viewer's too)."""
+    p.add_argument("--smooth-angle", type=float, default=DEFAULT_SMOOTH_ANGLE, metavar="DEG",
+                   help="normals are smoothed across edges below this angle where the file has none "
+                        f"(default {DEFAULT_SMOOTH_ANGLE:g}; 0 = faceted, 180 = smooth everywhere)")
+    p.add_argument("--smooth", action="store_true",
+                   help="recompute normals by --smooth-angle even where the file has its own")
 
 
 def _view_args(p: argparse.ArgumentParser) -> None:
@@ -85,6 +96,8 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--sweep", type=int, default=10000, help="random cameras per scene")
     b.add_argument("--soak", type=int, default=20000, help="soak frames per scene")
     b.add_argument("--quick", action="store_true", help="200 cameras, 500 soak frames, a 200-object scene")
+    b.add_argument("--scenes", default=None, metavar="NAME,...",
+                   help="only these of demo, random-2000, textured-64 (default: all)")
     b.add_argument("--json", default=None)
     b = bsub.add_parser("packing", help="our packer against rectpack and rectangle-packer")
     b.add_argument("--quick", action="store_true")
@@ -114,10 +127,17 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _load(arg: str | None):
+def load_options(args: argparse.Namespace) -> dict:
+    """The loader's keyword arguments from add_load_options' flags (checked)."""
+    if not 0.0 <= args.smooth_angle <= 180.0:
+        raise RttaError(f"--smooth-angle must be between 0 and 180 degrees, got {args.smooth_angle:g}")
+    return {"smooth_angle": args.smooth_angle, "smooth": args.smooth}
+
+
+def _load(args):
     from .loader import load_scene_or_demo
 
-    scene = load_scene_or_demo(arg)
+    scene = load_scene_or_demo(args.scene, **load_options(args))
     for note in scene.warnings:
         print(f"rtta: warning: {scene.source}: {note}", file=sys.stderr)
     return scene
@@ -154,7 +174,7 @@ def cmd_export(args) -> int:
     from .context import shared_context
     from .export import export
 
-    scene = _load(args.scene)
+    scene = _load(args)
     viewport = parse_size(args.size)
     orbit = parse_orbit(args.camera) if args.camera else DEFAULT_ORBIT
     settings = _settings(args)
@@ -179,7 +199,7 @@ def cmd_snapshot(args) -> int:
 
     if args.mode not in SNAPSHOT_MODES:
         raise RttaError(f"--mode must be one of {', '.join(SNAPSHOT_MODES)}, got '{args.mode}'")
-    scene = _load(args.scene)
+    scene = _load(args)
     viewport = parse_size(args.size)
     orbit = parse_orbit(args.camera) if args.camera else DEFAULT_ORBIT
     style = Style(focus=set(resolve_names(scene, args.focus, "--focus")), opacity=parse_opacities(scene, args.opacity))
@@ -275,7 +295,7 @@ def _projector(args, scene, camera):
 
 
 def cmd_info(args) -> int:
-    scene = _load(args.scene)
+    scene = _load(args)
     lo, hi = scene.bounds
     print(f"{scene.source}: {scene.count} objects, {scene.vertex_count} vertices, "
           f"{len(scene.indices) // 3} triangles, bounds {lo.round(4).tolist()} .. {hi.round(4).tolist()}")
@@ -298,7 +318,8 @@ def cmd_bench(args) -> int:
         sweep, soak = (200, 500) if args.quick else (args.sweep, args.soak)
         if sweep < 1 or soak < 2:
             raise RttaError("--sweep must be at least 1 and --soak at least 2")
-        return run_reliability(sweep, soak, quick=args.quick, json_path=args.json)
+        only = args.scenes.split(",") if args.scenes else None
+        return run_reliability(sweep, soak, quick=args.quick, json_path=args.json, only=only)
     if args.bench == "ldi":
         from .bench_ldi import run_ldi
 

@@ -49,8 +49,22 @@ def load_scene(path: str | Path, smooth_angle: float = DEFAULT_SMOOTH_ANGLE, smo
         notes.append(f"{len(dropped)} object(s) with only degenerate (zero-area) triangles left out: "
                      + ", ".join(dropped[:5]) + (" ..." if len(dropped) > 5 else ""))
     scene = from_meshes(parts, colors, source=str(path), **materials)
-    scene.warnings = notes + scene.warnings
+    scene.warnings = notes + scene.warnings + _texture_notes(scene)
     return scene
+
+
+def _texture_notes(scene: Scene) -> list[str]:
+    """A warning when textures are too large for the material atlas and get halved."""
+    if not scene.textured:
+        return []
+    from .material_atlas import oversized_note
+
+    users: list[list[str]] = [[] for _ in scene.textures]
+    for name, tid in zip(scene.names, scene.texture_ids, strict=True):
+        if tid >= 0:
+            users[tid].append(name)
+    note = oversized_note(scene.textures, users)
+    return [note] if note else []
 
 
 def _trimesh_load(path: Path, suffix: str):

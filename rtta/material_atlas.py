@@ -132,7 +132,7 @@ def _layer_size(slots: list[tuple[int, int]], max_size: int, unit: int) -> int:
 
 
 def _fit(tex: np.ndarray, limit: int) -> np.ndarray:
-    """Halve (2x2 box) a texture until it fits `limit` texels."""
+    """Halve (2x2 box) a texture until it fits `limit` texels (fitted_shape's rule)."""
     while max(tex.shape[:2]) > limit:
         h, w = (tex.shape[0] // 2) * 2 or 1, (tex.shape[1] // 2) * 2 or 1
         t = tex[:h, :w].astype(np.float32)
@@ -142,3 +142,31 @@ def _fit(tex: np.ndarray, limit: int) -> np.ndarray:
             t = (t[:, 0::2] + t[:, 1::2]) / 2
         tex = np.round(t).astype(np.uint8)
     return tex
+
+
+def fitted_shape(shape: tuple[int, int], limit: int) -> tuple[int, int]:
+    """(h, w) of a texture of `shape` once _fit has halved it to `limit` texels a side."""
+    h, w = shape
+    while max(h, w) > limit:
+        h, w = max(1, h // 2), max(1, w // 2)
+    return h, w
+
+
+def oversized_note(textures: list[np.ndarray], users: list[list[str]], levels: int = DEFAULT_LEVELS,
+                   max_size: int = DEFAULT_MAX_SIZE) -> str | None:
+    """One warning line for the textures the atlas will store halved (too large for a layer
+    with their borders), naming each texture's size, stored size and first user; None when
+    all fit."""
+    limit = max_size - 2 * (1 << levels)
+    big = []
+    for i, tex in enumerate(textures):
+        shape = tuple(tex.shape[:2])
+        fit = fitted_shape(shape, limit)
+        if fit != shape:
+            more = f" and {len(users[i]) - 1} more" if len(users[i]) > 1 else ""
+            who = users[i][0] + more if users[i] else "unused"
+            big.append(f"{shape[1]}x{shape[0]} -> {fit[1]}x{fit[0]} ({who})")
+    if not big:
+        return None
+    return (f"{len(big)} texture(s) larger than the material atlas holds ({limit} texels a side) stored "
+            "at reduced resolution: " + ", ".join(big[:5]) + (" ..." if len(big) > 5 else ""))

@@ -77,3 +77,20 @@ def test_material_bench_quick(gl, tmp_path, capsys):
     mem = data["memory"]
     assert mem["atlas_bytes"] > 0 and mem["original_bytes"] > 0 and mem["bvh_leaves"] >= 10
     assert "memory:" in capsys.readouterr().out
+
+
+def test_reliability_bench_scene_choice(gl, tmp_path, capsys):
+    """--scenes runs only the named scenes (here the textured one, a few frames); an unknown
+    name is one error line naming the choices, exit 2."""
+    from rtta.bench_reliability import run_reliability
+    from rtta.cli import main
+
+    out = tmp_path / "rel.json"
+    assert run_reliability(3, 40, json_path=str(out), ctx=gl, only=["textured-64"]) == 0
+    data = json.loads(out.read_text())
+    assert [s["name"] for s in data["scenes"]] == ["textured-64"]
+    assert data["scenes"][0]["sweep_failures"] == 0 and data["scenes"][0]["gl_errors"] == 0
+    assert "--scenes textured-64" in capsys.readouterr().out
+    assert main(["bench", "reliability", "--scenes", "demo,nope"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "nope" in err[0] and "textured-64" in err[0]

@@ -85,6 +85,54 @@ def test_smoothing_keeps_hard_edges_and_smooths_curves():
     assert np.einsum("ij,ij->i", radial, sn).min() > 0.995
 
 
+def test_smooth_angle_flags_reach_the_loader(tmp_path, capsys):
+    """`--smooth-angle 0` keeps every face flat (3 vertices each), the default 30 degrees
+    shares the sphere's vertices, `--smooth` recomputes a file's own normals, and an angle
+    out of range is one error line with exit 2."""
+    import trimesh
+
+    from rtta.cli import _load, build_parser, main
+
+    path = tmp_path / "ball.obj"
+    trimesh.creation.icosphere(2).export(path, include_normals=False)
+    scenes = {a: _load(build_parser().parse_args(["info", str(path), "--smooth-angle", a])) for a in ("0", "30")}
+    faces = len(scenes["0"].indices) // 3
+    assert scenes["0"].vertex_count == 3 * faces
+    assert scenes["30"].vertex_count < faces
+    with_normals = tmp_path / "faceted.obj"
+    trimesh.Trimesh(scenes["0"].positions, scenes["0"].indices.reshape(-1, 3),
+                    vertex_normals=scenes["0"].normals, process=False).export(with_normals)
+    kept = _load(build_parser().parse_args(["info", str(with_normals)]))
+    redone = _load(build_parser().parse_args(["info", str(with_normals), "--smooth"]))
+    assert kept.vertex_count == 3 * faces and redone.vertex_count < faces
+    assert main(["info", str(path), "--smooth-angle", "200"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--smooth-angle" in err[0] and "200" in err[0]
+
+
+def test_oversized_texture_is_named_in_one_warning(tmp_path):
+    """A texture wider than an atlas layer holds is stored halved, and loading says so once,
+    naming its size, the stored size and the object using it."""
+    import trimesh
+    from PIL import Image
+
+    from rtta.loader import load_scene
+
+    box = trimesh.creation.box()
+    uv = np.random.default_rng(0).random((len(box.vertices), 2))
+    image = Image.fromarray(np.full((8, 4100, 3), 200, np.uint8))
+    box.visual = trimesh.visual.TextureVisuals(uv=uv, image=image)
+    path = tmp_path / "wide.glb"
+    trimesh.Scene({"banner": box}).export(path)
+    scene = load_scene(path)
+    notes = [w for w in scene.warnings if "material atlas" in w]
+    assert len(notes) == 1 and "4100x8 -> 2050x4" in notes[0] and "banner" in notes[0], scene.warnings
+    small = tmp_path / "small.glb"
+    box.visual = trimesh.visual.TextureVisuals(uv=uv, image=Image.fromarray(np.full((8, 64, 3), 9, np.uint8)))
+    trimesh.Scene({"label": box}).export(small)
+    assert not [w for w in load_scene(small).warnings if "material atlas" in w]
+
+
 # --- the atlas against the separate textures ---------------------------------------------
 
 def _both(r, sep, target, cam):

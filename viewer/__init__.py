@@ -12,6 +12,7 @@ NO_DISPLAY = ("rtta-view: no display found (DISPLAY and WAYLAND_DISPLAY are not 
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from rtta.cli import add_load_options
     from rtta.snapshot import SNAPSHOT_MODES
 
     p = argparse.ArgumentParser(prog="rtta-view", description="Interactive ghosted views of multi-part models.")
@@ -22,11 +23,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--screenshot-dir", default=".", help="folder for screenshots (F12)")
     p.add_argument("--bench", type=int, default=0, metavar="FRAMES",
                    help="orbit for FRAMES frames per mode and print frame times, then exit")
+    add_load_options(p)
     return p
 
 
 def main(argv: list[str] | None = None) -> int:
-    from rtta.cli import parse_size
+    from rtta.cli import load_options, parse_size
     from rtta.errors import RttaError
     from rtta.memory import steady_heap
 
@@ -46,7 +48,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         size = parse_size(args.size)
         return run(args.scene_opt or args.scene, size=size, mode=args.mode,
-                   screenshot_dir=Path(args.screenshot_dir), bench=args.bench)
+                   screenshot_dir=Path(args.screenshot_dir), bench=args.bench, load=load_options(args))
     except RttaError as exc:
         print(f"rtta-view: {exc}", file=sys.stderr)
         return 2

@@ -37,8 +37,10 @@ LABEL_HEIGHT = 22
 
 
 class Viewer:
-    def __init__(self, wnd, scene: Scene, *, screenshot_dir: Path | None = None, mode: str = "ghosted-ao") -> None:
+    def __init__(self, wnd, scene: Scene, *, screenshot_dir: Path | None = None, mode: str = "ghosted-ao",
+                 load: dict | None = None) -> None:
         self.wnd = wnd
+        self.load_options = dict(load or {})          # smoothing for scenes opened from the panel
         self.ctx: moderngl.Context = wnd.ctx
         imgui.create_context()
         implot.create_context()
@@ -81,7 +83,7 @@ class Viewer:
     def open_scene(self, path) -> bool:
         """Load `path`; on failure show the error in the panel and keep the current scene."""
         try:
-            scene = load_scene(str(path))
+            scene = load_scene(str(path), **self.load_options)
         except RttaError as exc:
             return self.say(str(exc), error=True)
         except Exception as exc:      # a broken file must never take the session down

@@ -30,12 +30,14 @@ def create_window(size: tuple[int, int], visible: bool = True):
     return wnd
 
 
-def run(scene_path: str | None, *, size: tuple[int, int], mode: str, screenshot_dir: Path, bench: int = 0) -> int:
+def run(scene_path: str | None, *, size: tuple[int, int], mode: str, screenshot_dir: Path, bench: int = 0,
+        load: dict | None = None) -> int:
+    """`load`: the loader's options (smoothing), for this scene and those opened later."""
     from .app import Viewer
 
-    scene = load_scene_or_demo(scene_path)   # a bad file on the command line: one line, exit 2
+    scene = load_scene_or_demo(scene_path, **(load or {}))   # a bad file on the command line: one line, exit 2
     wnd = create_window(size)
-    app = Viewer(wnd, scene, screenshot_dir=screenshot_dir, mode=mode)
+    app = Viewer(wnd, scene, screenshot_dir=screenshot_dir, mode=mode, load=load)
     try:
         if bench:
             print_bench(app, bench)

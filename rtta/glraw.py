@@ -202,3 +202,53 @@ class SamplesQuery:
         if self.glo:
             _lib().glDeleteQueries(1, ctypes.byref(ctypes.c_uint(self.glo)))
             self.glo = 0
+
+
+GL_TEXTURE_BUFFER = 0x8C2A
+GL_RGB32F = 0x8815
+GL_MAP_WRITE_BIT = 0x0002
+GL_MAP_INVALIDATE_BUFFER_BIT = 0x0008
+
+
+class BufferTexture:
+    """An RGB32F buffer texture (samplerBuffer) over a buffer, and writing that buffer in
+    place through a mapping: numpy casts straight into the driver's memory, one copy fewer
+    than a texture upload (moderngl has neither)."""
+
+    def __init__(self, buffer_glo: int) -> None:
+        gl = _lib()
+        tex = ctypes.c_uint(0)
+        gl.glGenTextures(1, ctypes.byref(tex))
+        self.glo = tex.value
+        self.buffer_glo = buffer_glo
+        gl.glBindTexture(GL_TEXTURE_BUFFER, self.glo)
+        gl.glTexBuffer(GL_TEXTURE_BUFFER, GL_RGB32F, buffer_glo)
+        gl.glBindTexture(GL_TEXTURE_BUFFER, 0)
+
+    def write_points(self, points: np.ndarray, count: int) -> None:
+        """Points [n, 3] (any float type) as float32 into the first `count` texels, zeros after."""
+        gl = _lib()
+        gl.glMapNamedBufferRange.restype = ctypes.c_void_p
+        nbytes = count * 12
+        ptr = gl.glMapNamedBufferRange(ctypes.c_uint(self.buffer_glo), ctypes.c_ssize_t(0), ctypes.c_ssize_t(nbytes),
+                                       ctypes.c_uint(GL_MAP_WRITE_BIT | GL_MAP_INVALIDATE_BUFFER_BIT))
+        if not ptr:
+            raise RuntimeError("glMapNamedBufferRange failed")
+        try:
+            view = np.ctypeslib.as_array((ctypes.c_float * (count * 3)).from_address(ptr)).reshape(count, 3)
+            n = len(points)
+            view[:n] = points
+            view[n:] = 0.0
+        finally:
+            gl.glUnmapNamedBuffer(ctypes.c_uint(self.buffer_glo))
+
+    def use(self, unit: int) -> None:
+        gl = _lib()
+        gl.glActiveTexture(GL_TEXTURE0 + unit)
+        gl.glBindTexture(GL_TEXTURE_BUFFER, self.glo)
+        gl.glActiveTexture(GL_TEXTURE0)
+
+    def release(self) -> None:
+        if self.glo:
+            _lib().glDeleteTextures(1, ctypes.byref(ctypes.c_uint(self.glo)))
+            self.glo = 0

@@ -8,8 +8,8 @@ import time
 import moderngl
 import numpy as np
 
-from . import glsl
-from .ldi import LayeredDepthImage
+from . import glraw, glsl
+from .ldi import NIL, LayeredDepthImage
 from .ldi_pack import CompressedLDI, compress
 from .passes import mat_bytes
 from .targets import release_all
@@ -18,17 +18,30 @@ POINTS_WIDTH = 2048
 LOCAL_SIZE = 256      # ldi_classify.comp's local_size_x (injected); divides POINTS_WIDTH
 
 
-class LdiTextures:
-    """The plain layers (R32F array, read as an image) and the compressed ranges (RG32UI)
-    of one LDI."""
+def texel_major(layers: np.ndarray, max_width: int) -> tuple[np.ndarray, int]:
+    """The layers [d, h, w] as one float32 image in which each crop texel's d layers are
+    consecutive (ldi.glsl), and per_row, the crop texels per image row: the crop width when
+    w * d fits `max_width`, else as many as fit, each crop row then taking k image rows."""
+    d, h, w = layers.shape
+    depth = max(d, 1)
+    per_row = max(1, min(max(w, 1), max_width // depth))
+    k = -(-max(w, 1) // per_row)
+    image = np.full((max(h, 1), k * per_row, depth), NIL, np.float32)
+    image[:h, :w, :d] = np.moveaxis(layers, 0, -1)
+    return image.reshape(max(h, 1) * k, per_row * depth), per_row
 
-    def __init__(self, ctx: moderngl.Context, ldi: LayeredDepthImage, packed: CompressedLDI | None = None) -> None:
+
+class LdiTextures:
+    """The plain layers (R32F, texel-major, read as an image) and the compressed ranges
+    (RG32UI) of one LDI."""
+
+    def __init__(self, ctx: moderngl.Context, ldi: LayeredDepthImage, packed: CompressedLDI | None = None,
+                 max_width: int | None = None) -> None:
+        """`max_width`: the layers image's width limit (default: the driver's)."""
         self.ldi = ldi
         self.packed = packed or compress(ldi)
-        d, h, w = ldi.layers.shape
-        self.layers = ctx.texture_array((max(w, 1), max(h, 1), max(d, 1)), 1, dtype="f4")
-        if d and w and h:
-            self.layers.write(np.ascontiguousarray(ldi.layers).tobytes())
+        image, self.per_row = texel_major(ldi.layers, max_width or ctx.info["GL_MAX_TEXTURE_SIZE"])
+        self.layers = ctx.texture(image.shape[::-1], 1, image.tobytes(), dtype="f4")
         rows, width, _ = self.packed.data.shape
         self.ranges = ctx.texture((width, rows), 2, self.packed.data.tobytes(), dtype="u4")
         for t in (self.layers, self.ranges):
@@ -37,12 +50,13 @@ class LdiTextures:
     def bind(self, prog: moderngl.Program, to_world: np.ndarray, *, packed_unit: int, prefix: str = "u_") -> None:
         """Bind the layers (image unit 0, ldi.glsl) and the ranges (texture unit `packed_unit`),
         and set <prefix>to_crop (point space -> crop space, for `to_world`: point -> world),
-        crop_size and depth, where the program uses them."""
+        crop_size, depth and per_row, where the program uses them."""
         self.layers.bind_to_image(0, read=True, write=False)
         self.ranges.use(packed_unit)
         if f"{prefix}to_crop" in prog:
             prog[f"{prefix}to_crop"].write(mat_bytes(self.ldi.crop_matrix @ to_world))
-        for name, value in (("crop_size", tuple(self.ldi.crop[2:])), ("depth", self.ldi.depth)):
+        for name, value in (("crop_size", tuple(self.ldi.crop[2:])), ("depth", self.ldi.depth),
+                            ("per_row", self.per_row)):
             if prefix + name in prog:
                 prog[prefix + name].value = value
 
@@ -54,18 +68,19 @@ class LdiTextures:
 class ParityTest:
     """`classify(points, compressed=False)` -> bool [N], one compute invocation per point."""
 
-    def __init__(self, ctx: moderngl.Context, ldi: LayeredDepthImage, packed: CompressedLDI | None = None) -> None:
+    def __init__(self, ctx: moderngl.Context, ldi: LayeredDepthImage, packed: CompressedLDI | None = None,
+                 max_width: int | None = None) -> None:
         self.ctx = ctx
-        self.textures = LdiTextures(ctx, ldi, packed)
+        self.textures = LdiTextures(ctx, ldi, packed, max_width)
         self._programs: dict[bool, moderngl.ComputeShader] = {}
         self._rows = 0
         self._parts: list = []
-        self._staging = None
         self.last_ms: dict[str, float] = {}
 
     def _program(self, compressed: bool) -> moderngl.ComputeShader:
         if compressed not in self._programs:
-            source = glsl.load("ldi_classify.comp", COMPRESSED=compressed, LOCAL_SIZE=LOCAL_SIZE)
+            source = glsl.load("ldi_classify.comp", COMPRESSED=compressed, LOCAL_SIZE=LOCAL_SIZE,
+                               LDI_DEPTH=max(1, self.textures.ldi.depth))
             self._programs[compressed] = self.ctx.compute_shader(source)
         return self._programs[compressed]
 
@@ -73,12 +88,11 @@ class ParityTest:
         if rows <= self._rows:
             return
         self._release_targets()
-        self.points = self.ctx.texture((POINTS_WIDTH, rows), 3, dtype="f4")
+        self._points_buffer = self.ctx.buffer(reserve=rows * POINTS_WIDTH * 12)
+        self.points = glraw.BufferTexture(self._points_buffer.glo)
         self.inside = self.ctx.texture((POINTS_WIDTH, rows), 1, dtype="u1")
-        for t in (self.points, self.inside):
-            t.filter = moderngl.NEAREST, moderngl.NEAREST
-        self._staging = np.empty((rows * POINTS_WIDTH, 3), np.float32)   # reused: no page faults per call
-        self._parts = [self.points, self.inside]
+        self.inside.filter = moderngl.NEAREST, moderngl.NEAREST
+        self._parts = [self.points, self._points_buffer, self.inside]
         self._rows = rows
 
     def classify(self, points: np.ndarray, compressed: bool = False) -> np.ndarray:
@@ -99,10 +113,7 @@ class ParityTest:
         shift[:3, 3] = center
         rows = -(-n // POINTS_WIDTH)
         self._targets(rows)
-        data = self._staging[:rows * POINTS_WIDTH]
-        data[:n] = points - center if center.any() else points
-        data[n:] = 0.0
-        self.points.write(data, viewport=(0, 0, POINTS_WIDTH, rows))
+        self.points.write_points(points - center if center.any() else points, rows * POINTS_WIDTH)
         t1 = time.perf_counter()
         prog = self._program(compressed)
         self.textures.bind(prog, shift, packed_unit=2)
@@ -119,7 +130,7 @@ class ParityTest:
 
     def _release_targets(self) -> None:
         release_all(self.ctx, self._parts)
-        self._parts, self._rows, self._staging = [], 0, None
+        self._parts, self._rows = [], 0
 
     def release(self) -> None:
         self._release_targets()

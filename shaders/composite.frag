@@ -20,6 +20,7 @@ uniform mat4 u_inv_view_proj;   // (P V)^-1: viewport NDC + depth -> world relat
 uniform mat4 u_lens_to_crop;        // world relative to the origin -> the lens LDI's crop space
 uniform ivec2 u_lens_crop_size;     // (its layers are image unit 0: ldi.glsl)
 uniform int u_lens_depth;
+uniform int u_lens_per_row;     // crop texels per row of its layers image (ldi.glsl)
 uniform int u_lens_object;      // a scene object used as the lens is not cut (-1: none)
 
 uniform float u_desaturate;     // context desaturation in [0, 1] (MODE_BLEND)
@@ -68,7 +69,7 @@ void main() {
 #endif
 #ifdef LENS
     if (g_object != u_lens_object
-            && ldi_inside(u_lens_depth, (u_lens_to_crop * vec4(world.xyz, 1.0)).xyz, u_lens_crop_size))
+            && ldi_inside(u_lens_depth, u_lens_per_row, (u_lens_to_crop * vec4(world.xyz, 1.0)).xyz, u_lens_crop_size))
         discard;
 #endif
 #ifdef PROJECTOR

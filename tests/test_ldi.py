@@ -184,3 +184,24 @@ def test_open_meshes_are_refused_with_a_reason():
     box = trimesh.creation.box()
     with pytest.raises(RttaError, match="not a closed mesh .*1 open edges|not a closed mesh"):
         closed_mesh(box.vertices, box.faces[:-1], "open box")
+
+
+def test_layers_wrapped_to_a_narrow_image_give_the_same_answers(gl):
+    """When crop width x layers exceeds the image width limit, crop texels wrap onto more
+    image rows (ldi.glsl's per_row); the answers must not change. Checked on the torus knot
+    (8 layers) with a limit that fits 37 texels a row, which splits every crop row unevenly."""
+    mesh = shapes.torus_knot()
+    v, f = closed_mesh(mesh.vertices, mesh.faces)
+    ldi = build(gl, v, f, 128)
+    points = np.random.default_rng(4).uniform(*mesh.bounds, (20_000, 3))
+    answers = []
+    for max_width in (None, 37 * ldi.depth + 3):
+        test = ParityTest(gl, ldi, max_width=max_width)
+        try:
+            answers.append(test.classify(points))
+            assert max_width is None or test.textures.per_row == 37
+        finally:
+            test.release()
+    assert ldi.depth >= 4 and ldi.layers.shape[2] > 37
+    assert np.array_equal(answers[0], answers[1]) and 0.05 < answers[0].mean() < 0.95
+    assert (classify(ldi, points) == answers[0]).mean() > 0.9999

@@ -235,8 +235,9 @@ def soak(renderer: Renderer, frames: int, samples: int = 10, seed: int = 0,
 
 
 # The reference frame is drawn this many times before a sample, so that the frames just before
-# every reading are the same. It was meant to let llvmpipe drop textures released earlier;
-# it did not remove the scatter between samples (RELIABILITY.md, Soak).
+# every reading are the same, and so that each of llvmpipe's few scenes (one flushed batch in
+# flight: glraw.Throttle) draws it once and lets go of the framebuffer it held, the atlas
+# that trim() just replaced among them (RELIABILITY.md, Soak).
 REFERENCE_REPEATS = 6
 
 

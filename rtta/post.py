@@ -4,8 +4,11 @@ object's own unoccluded images (the `ghosted-ao` mode only).
 Two draws of one quad per visible object over its atlas rectangle: AO at half the atlas
 resolution (it is low-frequency), then edges at full resolution, which also picks up each
 texel's AO. Texels outside every rectangle are never shaded (compositing reads only the
-objects' own texels), and no fragment reads an id or the record buffer. The edge pass with
-width 1 (EDGE_QUAD) takes the neighbour in its 2x2 quad from derivatives."""
+objects' own texels), and no fragment reads an id or the record buffer. The edge pass
+tests its quads (at depth 1) against the atlas depth, so the empty texels inside the
+rectangles are not shaded either (on the demo the rectangles hold about three times the
+objects' texels). The edge pass with width 1 (EDGE_QUAD) takes the neighbour in its 2x2
+quad from derivatives."""
 
 from __future__ import annotations
 
@@ -26,16 +29,22 @@ class _LayerTarget:
     def __init__(self, ctx: moderngl.Context, components: int, dtype: str) -> None:
         self.ctx = ctx
         self.components, self.dtype = components, dtype
-        self.texture = self.fbo = self.shape = None
+        self.texture = self.fbo = self.shape = self._key = None
 
-    def ensure(self, shape: tuple[int, int, int]) -> None:
-        if shape != self.shape:
+    def ensure(self, shape: tuple[int, int, int], depth: glraw.DepthArray | None = None) -> None:
+        """Texture of `shape`; the framebuffer also tests against `depth` (a layered depth
+        attachment of the same shape) when given. Rebuilt only when either changes."""
+        key = (shape, None if depth is None else (id(depth), depth.glo))
+        if key != self._key:
             self.release()
             self.texture = self.ctx.texture_array(shape, self.components, dtype=self.dtype)
             self.texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
             self.texture.repeat_x = self.texture.repeat_y = False    # gathers clamp at the edge
             self.fbo = self.ctx.framebuffer([self.texture])
-            self.shape = shape
+            if depth is not None:
+                self.fbo.use()
+                depth.attach_to_bound_framebuffer()
+            self.shape, self._key = shape, key
 
     @property
     def nbytes(self) -> int:
@@ -46,7 +55,7 @@ class _LayerTarget:
         if self.fbo is not None:
             release_framebuffer(self.ctx, self.fbo)
             self.texture.release()
-        self.texture = self.fbo = self.shape = None
+        self.texture = self.fbo = self.shape = self._key = None
 
 
 class AtlasPostPass:
@@ -76,7 +85,7 @@ class AtlasPostPass:
 
     def render(self, *, atlas: LayeredTarget, records: Records, gpu: GpuScene, proj: np.ndarray, style) -> None:
         w, h = atlas.size
-        self._out.ensure((w, h, atlas.layers))
+        self._out.ensure((w, h, atlas.layers), atlas.depth)
         self._ao.ensure(((w + 1) // 2, (h + 1) // 2, atlas.layers))
         tw, th, td = records.atlas_size
         n = len(records.visible)
@@ -99,9 +108,16 @@ class AtlasPostPass:
                     prog[name].value = value
             if target is self._out:
                 self._ao.texture.use(3)
+                # quads at depth 1 pass only where the capture wrote the object (depth < 1):
+                # empty texels of the rectangles are never shaded nor written
+                self.ctx.enable_only(moderngl.DEPTH_TEST)
+                self.ctx.depth_func = ">"
+                target.fbo.depth_mask = False
             target.fbo.viewport = (0, 0, *size)
             target.fbo.use()
             vao.render(moderngl.POINTS, vertices=n)
+        self.ctx.depth_func = "<"
+        self.ctx.enable_only(moderngl.NOTHING)
 
     def release(self) -> None:
         self._ao.release()

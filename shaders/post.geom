@@ -37,7 +37,7 @@ void main() {
         g_map = vec4(origin, step);
         g_scale = scale;
         gl_Layer = r.info.x;
-        gl_Position = vec4(corners[i], 0.0, 1.0);
+        gl_Position = vec4(corners[i], 1.0, 1.0);   // depth 1: the edge pass tests it against the atlas's
         EmitVertex();
     }
     EndPrimitive();

@@ -103,12 +103,18 @@ class AtlasFrame:
         return result
 
 
+SENTINEL = 77
+
+
 @pytest.mark.parametrize("edge_width, border", [(1, 1), (1, 0), (2, 1), (2, 2), (3, 1)])
 def test_post_process_matches_numpy(make_renderer, demo_scene, edge_width, border):
     r = make_renderer(demo_scene, Settings(border=border))
     cam = Camera.orbit(demo_scene.center, demo_scene.radius, *DEFAULT_ORBIT)
     records = r.capture(cam, VP)
     style = Style(edge_width=edge_width, ao_radius=12.0, ao_strength=1.5)
+    post = r.post_process(style)
+    post.texture.write(np.full(post.texture.size[:2] + (post.texture.layers, 4), SENTINEL, np.uint8))
+    r._post_key = None                      # run again over the sentinel
     post = r.post_process(style)
     frame = AtlasFrame(r, records, r.last[2])
     tw, th, td = records.atlas_size
@@ -122,14 +128,15 @@ def test_post_process_matches_numpy(make_renderer, demo_scene, edge_width, borde
     # (float contraction on another CPU); a wrong neighbour or sample shows in tens of texels
     assert (edge_err > 2 / 255).sum() <= 3, f"edges: {(edge_err > 2 / 255).sum()} texels differ"
     assert (ao_err > 3 / 255).sum() <= 10, f"AO: {(ao_err > 3 / 255).sum()} texels differ"
-    # empty texels of a visible object's rectangle: no AO, no edge (texels outside every
-    # rectangle are not shaded: nothing reads them)
+    # empty texels of a visible object's rectangle are neither shaded nor written (the depth
+    # test against the atlas culls them; compositing reads only the objects' own texels)
     in_rect = np.zeros(frame.shape, bool)
     for oid in np.flatnonzero(records.visible):
         x, y, rw, rh = records.atlas_rect[oid]
         in_rect[records.layer[oid], y:y + rh, x:x + rw] = True
     empty = in_rect & (frame.ids < 0)
     assert empty.sum() > 1000
-    assert (got[..., 0][empty] == 1).all() and (got[..., 1][empty] == 0).all()
+    assert (got[empty] == SENTINEL / 255.0).all()
+    assert not (got[at] == SENTINEL / 255.0).all(-1).any()       # every covered texel was written
     assert 0.02 < (frame.edges(edge_width) > 0.5).mean() < 0.6       # edges exist, not everywhere
     assert (frame.ambient_occlusion(style.ao_radius, style.ao_strength) < 0.9).mean() > 0.01

@@ -120,3 +120,12 @@ def test_loaded_scenes_are_what_the_file_says(corpus):
     tex = load_scene(by_name["missing_texture.gltf"].path)
     assert len(tex.warnings) == 1 and "no_such_texture.png" in tex.warnings[0]
     assert tex.colors[0][:3] == pytest.approx([0.2, 0.6, 0.9], abs=1 / 255)   # its material colour (8-bit)
+
+
+def test_closed_pipe_is_not_a_traceback():
+    """`rtta info | head`: a reader that leaves early ends the command quietly (exit 1, the
+    usual status for a broken pipe), not with a BrokenPipeError traceback."""
+    proc = subprocess.Popen([RTTA, "info"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc.stdout.close()                 # gone before the first line is written
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 1 and b"Traceback" not in err and err == b"", err.decode()

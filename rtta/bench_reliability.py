@@ -34,27 +34,27 @@ def _progress(label: str, total: int):
     return show
 
 
-def _scenes(quick: bool):
-    """The demo, a large generated scene, and a textured one (material atlas, REPEAT
-    emulation and mip levels under the same extreme cameras)."""
+def _scenes(quick: bool) -> dict:
+    """Name -> a function making the scene: the demo, a large generated scene, and a
+    textured one (material atlas, REPEAT emulation and mip levels under the same extreme
+    cameras). Only the scenes asked for are made."""
     from .loader import load_scene_or_demo
     from .textured import textured_scene
 
-    return [("demo", load_scene_or_demo(None)),
-            ("random-2000", random_scene(200 if quick else 2000, seed=3, spread=40.0)),
-            ("textured-64", textured_scene(64, seed=4))]
+    return {"demo": lambda: load_scene_or_demo(None),
+            "random-2000": lambda: random_scene(200 if quick else 2000, seed=3, spread=40.0),
+            "textured-64": lambda: textured_scene(64, seed=4)}
 
 
 def run_reliability(sweep_frames: int, soak_frames: int, quick: bool = False, json_path: str | None = None,
                     ctx=None, only: list[str] | None = None) -> int:
     """Sweep and soak on the demo, a generated 2,000-object scene and a textured scene (or
     the `only` ones); exit 1 on any failure."""
-    scenes = _scenes(quick)
-    names = [name for name, _ in scenes]
-    unknown = sorted(set(only or []) - set(names))
+    makers = _scenes(quick)
+    unknown = sorted(set(only or []) - set(makers))
     if unknown:
-        raise RttaError(f"--scenes: unknown {', '.join(unknown)}; choose from {', '.join(names)}")
-    scenes = [(n, s) for n, s in scenes if only is None or n in only]
+        raise RttaError(f"--scenes: unknown {', '.join(unknown)}; choose from {', '.join(makers)}")
+    names = [name for name in makers if only is None or name in only]
     ctx = ctx or create_headless_context()
     renderer_name = str(ctx.info["GL_RENDERER"])
     print(f"renderer: {renderer_name}; cpu: {platform.processor() or platform.machine()}; "
@@ -66,7 +66,8 @@ def run_reliability(sweep_frames: int, soak_frames: int, quick: bool = False, js
     print(f"{'scene':>12} {'objects':>7} {'sweep frames':>12} {'failed':>6} {'worst colour':>12} "
           f"{'worst depth':>11} {'s':>7} | {'soak frames':>11} {'RSS MiB':>15} {'drift':>7} "
           f"{'GL objects':>10} {'GL errors':>9} {'s':>7}")
-    for name, scene in scenes:
+    for name in names:
+        scene = makers[name]()
         r = Renderer(ctx, scene)
         t0 = time.perf_counter()
         sw = sweep(r, sweep_frames, seed=1, progress=_progress(f"{name} sweep", sweep_frames))

@@ -31,19 +31,20 @@ class _LayerTarget:
         self.components, self.dtype = components, dtype
         self.texture = self.fbo = self.shape = self._key = None
 
-    def ensure(self, shape: tuple[int, int, int], depth: glraw.DepthArray | None = None) -> None:
-        """Texture of `shape`; the framebuffer also tests against `depth` (a layered depth
-        attachment of the same shape) when given. Rebuilt only when either changes."""
-        key = (shape, None if depth is None else (id(depth), depth.glo))
+    def ensure(self, shape: tuple[int, int, int], depth_of: LayeredTarget | None = None) -> None:
+        """Texture of `shape`; the framebuffer also tests against the depth of `depth_of` (a
+        target of the same shape) when given. Rebuilt when the shape changes or that target
+        reallocated its textures."""
+        key = (shape, None if depth_of is None else (id(depth_of), depth_of.allocations))
         if key != self._key:
             self.release()
             self.texture = self.ctx.texture_array(shape, self.components, dtype=self.dtype)
             self.texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
             self.texture.repeat_x = self.texture.repeat_y = False    # gathers clamp at the edge
             self.fbo = self.ctx.framebuffer([self.texture])
-            if depth is not None:
+            if depth_of is not None:
                 self.fbo.use()
-                depth.attach_to_bound_framebuffer()
+                depth_of.depth.attach_to_bound_framebuffer()
             self.shape, self._key = shape, key
 
     @property
@@ -85,7 +86,7 @@ class AtlasPostPass:
 
     def render(self, *, atlas: LayeredTarget, records: Records, gpu: GpuScene, proj: np.ndarray, style) -> None:
         w, h = atlas.size
-        self._out.ensure((w, h, atlas.layers), atlas.depth)
+        self._out.ensure((w, h, atlas.layers), atlas)
         self._ao.ensure(((w + 1) // 2, (h + 1) // 2, atlas.layers))
         tw, th, td = records.atlas_size
         n = len(records.visible)

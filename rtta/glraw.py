@@ -119,7 +119,6 @@ GL_READ_FRAMEBUFFER = 0x8CA8
 
 GL_SYNC_GPU_COMMANDS_COMPLETE = 0x9117
 GL_SYNC_FLUSH_COMMANDS_BIT = 0x1
-GL_WAIT_FAILED = 0x911D
 GL_TIMEOUT_EXPIRED = 0x911B
 WAIT_STEP_NS = 100_000_000
 
@@ -144,7 +143,8 @@ class Throttle:
         gl.glFlush()
 
     def wait(self) -> None:
-        """Until the last flushed batch is done (a wait that fails gives up, not hangs)."""
+        """Until the last flushed batch is done (anything but a timeout, a failed wait too,
+        ends it: it gives up rather than hangs)."""
         if not self._fence:
             return
         gl = _lib()

@@ -13,6 +13,7 @@ from __future__ import annotations
 import ctypes
 import ctypes.util
 import os
+from functools import cache
 
 M_MMAP_THRESHOLD = -3
 M_ARENA_MAX = -8
@@ -20,14 +21,19 @@ MMAP_THRESHOLD_BYTES = 256 * 1024
 ARENAS = 2              # the driver's worker threads would each grow an arena of their own
 
 
+@cache
+def _libc() -> ctypes.CDLL | None:
+    try:
+        return ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
+    except OSError:
+        return None
+
+
 def steady_heap() -> bool:
     """Fix glibc's mmap threshold (process-wide; the CLI and viewer call it at start).
     Returns False where the C library is not glibc (nothing is changed there)."""
-    try:
-        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
-        return bool(libc.mallopt(M_MMAP_THRESHOLD, MMAP_THRESHOLD_BYTES) and libc.mallopt(M_ARENA_MAX, ARENAS))
-    except (OSError, AttributeError):
-        return False
+    mallopt = getattr(_libc(), "mallopt", None)
+    return bool(mallopt and mallopt(M_MMAP_THRESHOLD, MMAP_THRESHOLD_BYTES) and mallopt(M_ARENA_MAX, ARENAS))
 
 
 def rss_bytes() -> int:
@@ -47,10 +53,8 @@ def mapped_block_bytes() -> int | None:
     """Bytes in live blocks that glibc's malloc gave their own mmap (at least
     MMAP_THRESHOLD_BYTES once steady_heap() ran): on llvmpipe, texture storage. None where
     the C library is not glibc >= 2.33."""
-    try:
-        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
-        fn = libc.mallinfo2
-    except (OSError, AttributeError):
+    fn = getattr(_libc(), "mallinfo2", None)
+    if fn is None:
         return None
     fn.restype = _MallInfo2
     return int(fn().hblkhd)

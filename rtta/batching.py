@@ -44,7 +44,7 @@ class SeparatePass(ScenePass):
                target: LayeredTarget, viewport: tuple[int, int]) -> None:
         target.ensure(viewport, 1)
         target.clear()
-        vao = self.setup(gpu, view, proj)
+        vao = self.setup(gpu, view, proj, target)
         target.bind((0, 0, *viewport))
         textures = self._uploaded(gpu) if gpu.textured else []
         if "u_texture" in self.program:
@@ -95,7 +95,7 @@ class ChunkedStdPass(ScenePass):
                target: LayeredTarget, viewport: tuple[int, int]) -> None:
         target.ensure(viewport, 1)
         target.clear()
-        self.setup(gpu, view, proj)
+        self.setup(gpu, view, proj, target)
         _, bvh, ibo, vaos = self._chunks(gpu)
         key = self.program.glo
         if key not in vaos:

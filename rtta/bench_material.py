@@ -40,7 +40,7 @@ def _frame(r, pass_, cam, view, proj, target, viewport):
 def frame_rows(ctx, scene, viewport, frames: int, max_vertices: int) -> list[list]:
     r = Renderer(ctx, scene)
     sep, chunked = SeparatePass(ctx), ChunkedStdPass(ctx, max_vertices)
-    target = LayeredTarget(ctx, viewport, 1)
+    target = LayeredTarget(ctx, viewport, 1, normals=False)   # as the renderer's STD target
     rows = []
     try:
         for name, cam in _views(scene):

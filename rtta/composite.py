@@ -175,8 +175,7 @@ class CompositePass:
         gpu.bind_storage()
         self.styles.bind_to_storage_buffer(2)
         atlas.color.use(0)
-        glraw.bind_texture_array(1, atlas.depth.glo)
-        atlas.ids.use(2)
+        glraw.bind_texture_array(1, atlas.depth.glo)     # depth-keyed: no id image is read
         if projection is not None:
             atlas.normal.use(4)
         everyone = np.arange(n)
@@ -189,7 +188,7 @@ class CompositePass:
         else:
             with_ao = mode == "ghosted-ao"
             if with_ao:
-                post.texture.use(3)
+                (post._ao.texture if __import__('os').environ.get('NOEDGE') else post.texture).use(3); atlas.normal.use(5)
             context = np.setdiff1d(everyone, focus)
             self._draw(focus, style, records, sprite=True, ao=with_ao)
             params[context, 0] = style.context_opacity * params[context, 0]

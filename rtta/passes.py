@@ -32,20 +32,27 @@ class ScenePass:
                  **defines: object) -> None:
         self.ctx = ctx
         self._source = (geometry, fragment, defines)
-        self._programs: dict[bool, moderngl.Program] = {}
+        self._programs: dict[tuple[bool, bool], moderngl.Program] = {}
         self.program = self.program_for(False)
 
-    def program_for(self, textured: bool) -> moderngl.Program:
-        """The pass's program for untextured or textured scenes (compiled on first use)."""
-        if textured not in self._programs:
+    def program_for(self, textured: bool, normals: bool = True) -> moderngl.Program:
+        """The pass's program for untextured or textured scenes, writing a normal image or
+        not (to match the target: LayeredTarget.normals); compiled on first use."""
+        key = (textured, normals)
+        if key not in self._programs:
             geometry, fragment, defines = self._source
             defines = {**defines, "TEXTURED": textured}
+            if not normals:
+                defines["NO_NORMAL"] = True
             stages = {"vertex_shader": "scene.vert", "geometry_shader": geometry, "fragment_shader": fragment}
-            self._programs[textured] = self.ctx.program(**glsl.stage_sources(stages, **defines))
-        return self._programs[textured]
+            self._programs[key] = self.ctx.program(**glsl.stage_sources(stages, **defines))
+        return self._programs[key]
 
-    def setup(self, gpu: GpuScene, view: np.ndarray, proj: np.ndarray) -> moderngl.VertexArray:
-        self.program = self.program_for(gpu.textured)
+    def setup(self, gpu: GpuScene, view: np.ndarray, proj: np.ndarray,
+              target: LayeredTarget | None = None) -> moderngl.VertexArray:
+        """Program, matrices, buffers and state for drawing the batch into `target` (its
+        attachments pick the program's outputs; None: a target of its own, e.g. a shadow map)."""
+        self.program = self.program_for(gpu.textured, target is None or target.normals)
         self.program["u_view"].write(mat_bytes(view))
         self.program["u_proj"].write(mat_bytes(proj))
         gpu.bind_storage()
@@ -83,7 +90,7 @@ class CapturePass(ScenePass):
         if td == 0:
             return
         gpu.upload_records(records)
-        vao = self.setup(gpu, view, proj)
+        vao = self.setup(gpu, view, proj, atlas)
         atlas.bind((0, 0, tw, th))
         glraw.set_clip_distances(4, True)
         try:
@@ -109,7 +116,7 @@ class StdPass(ScenePass):
             if self._painted is None:
                 self._painted = ScenePass(self.ctx, PROJECTOR=True)
             scene_pass = self._painted
-        vao = scene_pass.setup(gpu, view, proj)
+        vao = scene_pass.setup(gpu, view, proj, target)
         if projection is not None:
             pass_, projector = projection
             pass_.bind(scene_pass.program, projector, gpu.scene.origin)
@@ -136,7 +143,7 @@ class RttPass(ScenePass):
                target: LayeredTarget, viewport: tuple[int, int], objects,
                consume: Callable[[int, LayeredTarget], None] | None = None) -> None:
         target.ensure(viewport, 1)
-        vao = self.setup(gpu, view, proj)
+        vao = self.setup(gpu, view, proj, target)
         ranges = gpu.scene.index_ranges
         for oid in objects:
             target.clear()

@@ -48,7 +48,7 @@ class Renderer:
         self._capture: dict[str, CapturePass] = {}
         self._std: StdPass | None = None
         self._rtt: RttPass | None = None
-        self.atlas = LayeredTarget(ctx, (64, 64), 1)
+        self.atlas = LayeredTarget(ctx, (64, 64), 1, depth_keyed=True)
         self._single: LayeredTarget | None = None
         self._composite: CompositePass | None = None
         self._post: AtlasPostPass | None = None
@@ -170,7 +170,7 @@ class Renderer:
     @property
     def single_target(self) -> LayeredTarget:
         if self._single is None:
-            self._single = LayeredTarget(self.ctx, (64, 64), 1)
+            self._single = LayeredTarget(self.ctx, (64, 64), 1, normals=False)
         return self._single
 
     def std(self, camera: Camera, viewport: tuple[int, int]) -> LayeredTarget:

@@ -36,10 +36,23 @@ def round_up(v: int, step: int) -> int:
 
 
 class LayeredTarget:
-    """Colour RGBA8, normal RGBA16F, id R32I (-1 = empty) and depth 32F, `layers` deep."""
+    """Colour RGBA8, normal RGBA16F, id R32I (-1 = empty) and depth 32F, `layers` deep.
 
-    def __init__(self, ctx: moderngl.Context, size: tuple[int, int], layers: int = 1) -> None:
+    `normals=False` (STD and RTT targets): no normal image; nothing reads one there, and on
+    llvmpipe writing it costs about a fifth of an STD frame (BENCHMARKS.md).
+
+    `depth_keyed` (the atlas): a texel is empty exactly where its depth is 1 (the far plane,
+    which no drawn fragment passes), so `clear()` clears the depth alone and the other
+    attachments of empty texels keep whatever an earlier frame left there; every reader
+    tests the depth (the shaders) or gets masked arrays (`read`). Clearing colour, normal
+    and id too cost 11 of the 14 ms that clearing a 3-layer 1024² atlas takes on llvmpipe.
+    """
+
+    def __init__(self, ctx: moderngl.Context, size: tuple[int, int], layers: int = 1,
+                 depth_keyed: bool = False, normals: bool = True) -> None:
         self.ctx = ctx
+        self.depth_keyed = depth_keyed
+        self.normals = normals
         self.size = (0, 0)
         self.layers = 0
         self.allocations = 0
@@ -54,17 +67,17 @@ class LayeredTarget:
         n = max(1, int(layers))
         ctx = self.ctx
         self.color = ctx.texture_array((w, h, n), 4, dtype="f1")
-        self.normal = ctx.texture_array((w, h, n), 4, dtype="f2")
+        self.normal = ctx.texture_array((w, h, n), 4, dtype="f2") if self.normals else None
         self.ids = ctx.texture_array((w, h, n), 1, dtype="i4")
-        for tex in (self.color, self.normal, self.ids):
+        self._textures = [t for t in (self.color, self.normal, self.ids) if t is not None]
+        for tex in self._textures:
             tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
         self.depth = glraw.DepthArray(w, h, n)
-        self._fbo = ctx.framebuffer(color_attachments=[self.color, self.normal, self.ids])
+        self._fbo = ctx.framebuffer(color_attachments=self._textures)
         self._fbo.depth_mask = True
         self._fbo.use()
         self.depth.attach_to_bound_framebuffer()
         self.size, self.layers = (w, h), n
-        self._textures = [self.color, self.normal, self.ids]
         self.allocations += 1
 
     def ensure(self, size: tuple[int, int], layers: int) -> bool:
@@ -96,8 +109,8 @@ class LayeredTarget:
 
     @property
     def nbytes(self) -> int:
-        """Texture memory: RGBA8 + RGBA16F + R32I + D32F per texel."""
-        return self.size[0] * self.size[1] * self.layers * (4 + 8 + 4 + 4)
+        """Texture memory: RGBA8 + RGBA16F (with normals) + R32I + D32F per texel."""
+        return self.size[0] * self.size[1] * self.layers * (4 + 8 * self.normals + 4 + 4)
 
     def bind(self, viewport: tuple[int, int, int, int] | None = None) -> None:
         """Bind for drawing, with the GL viewport set (default: the whole allocation)."""
@@ -105,31 +118,44 @@ class LayeredTarget:
         self._fbo.use()
 
     def clear(self) -> None:
-        """Clear every layer whole: colour/normal 0, id -1, depth 1 (far). Unscissored on
-        purpose: on llvmpipe any scissor makes layered clears ~2x slower (BENCHMARKS.md)."""
+        """Clear every layer whole: depth 1 (far), and unless depth-keyed colour/normal 0,
+        id -1. Unscissored on purpose: on llvmpipe any scissor makes layered clears ~2x
+        slower (BENCHMARKS.md)."""
         self._fbo.viewport = (0, 0, *self.size)
         self._fbo.scissor = None
         self._fbo.use()
-        glraw.clear_color_float(0, (0.0, 0.0, 0.0, 0.0))
-        glraw.clear_color_float(1, (0.0, 0.0, 0.0, 0.0))
-        glraw.clear_color_int(2, -1)
+        if not self.depth_keyed:
+            glraw.clear_color_float(0, (0.0, 0.0, 0.0, 0.0))
+            if self.normals:
+                glraw.clear_color_float(1, (0.0, 0.0, 0.0, 0.0))
+            glraw.clear_color_int(len(self._textures) - 1, -1)
         glraw.clear_depth(1.0)
 
     def read(self, size: tuple[int, int] | None = None, layers: int | None = None,
-             parts: tuple[str, ...] = ("color", "normal", "id", "depth")) -> dict[str, np.ndarray]:
+             parts: tuple[str, ...] | None = None) -> dict[str, np.ndarray]:
         """Layers as numpy [layers, H, W(, C)], cropped to `size`; row 0 is the bottom row.
-        `parts` picks which attachments are read (picking needs only id and depth)."""
+        `parts` picks which attachments are read (picking needs only id and depth; None:
+        all there are: no "normal" without normals). Empty
+        texels read as cleared (colour/normal 0, id -1, depth 1), depth-keyed or not."""
         w, h = self.size
         n = self.layers
         cw, ch = size or (w, h)
         cl = n if layers is None else max(1, layers)
+        parts = parts or (("color", "normal", "id", "depth") if self.normals else ("color", "id", "depth"))
+        if "normal" in parts and not self.normals:
+            raise ValueError("this target has no normal image (normals=False)")
         readers = {
             "color": lambda: np.frombuffer(self.color.read(), np.uint8).reshape(n, h, w, 4),
             "normal": lambda: np.frombuffer(self.normal.read(), np.float16).reshape(n, h, w, 4),
             "id": lambda: np.frombuffer(self.ids.read(), np.int32).reshape(n, h, w),
             "depth": self.depth.read,
         }
-        return {k: np.ascontiguousarray(readers[k]()[:cl, :ch, :cw]) for k in parts}
+        out = {k: np.array(readers[k]()[:cl, :ch, :cw]) for k in parts}
+        if self.depth_keyed and set(parts) - {"depth"}:
+            empty = out["depth"] >= 1.0 if "depth" in out else readers["depth"]()[:cl, :ch, :cw] >= 1.0
+            for k in set(parts) - {"depth"}:
+                out[k][empty] = -1 if k == "id" else 0
+        return out
 
     def _free(self) -> None:
         if self._fbo is not None:

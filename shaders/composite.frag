@@ -13,7 +13,6 @@
 
 layout(binding = 0) uniform sampler2DArray u_color;
 layout(binding = 1) uniform sampler2DArray u_depth;
-layout(binding = 2) uniform isampler2DArray u_ids;
 layout(binding = 3) uniform sampler2DArray u_post;   // (ao, edge) per atlas texel, WITH_AO only
 layout(binding = 4) uniform sampler2DArray u_normal;  // view-space normal per atlas texel, PROJECTOR only
 uniform mat4 u_inv_view_proj;   // (P V)^-1: viewport NDC + depth -> world relative to the origin
@@ -31,6 +30,7 @@ flat in int g_object;
 flat in vec4 g_map;
 flat in float g_scale;
 flat in int g_layer;
+flat in ivec4 g_rect;
 flat in float g_opacity;
 layout(location = 0) out vec4 out_color;
 
@@ -43,25 +43,29 @@ vec3 shade(vec3 rgb, ivec3 t) {
     return rgb;
 }
 
+// Whether atlas texel `s` holds this object: inside its B_atlas and written by the capture.
+// The atlas is depth-keyed (targets.py): empty texels have depth 1 and stale colour.
+bool covered(ivec3 s) {
+    return all(greaterThanEqual(s.xy, g_rect.xy)) && all(lessThanEqual(s.xy, g_rect.zw))
+        && texelFetch(u_depth, s, 0).r < 1.0;
+}
+
 void main() {
     ivec3 t = atlas_texel(g_map, g_scale, g_layer, gl_FragCoord.xy);
-    int id = texelFetch(u_ids, t, 0).r;
 #ifdef MODE_OUTLINE
     // a silhouette texel: the object's own, with a neighbour within the width that is not
-    bool inside = id == g_object;
+    if (!covered(t)) discard;
     bool near_other = false;
-    ivec2 size = textureSize(u_ids, 0).xy;
     for (int dy = -u_outline_width; dy <= u_outline_width && !near_other; ++dy)
         for (int dx = -u_outline_width; dx <= u_outline_width; ++dx)
-            if (texelFetch(u_ids, ivec3(clamp(t.xy + ivec2(dx, dy), ivec2(0), size - 1), t.z), 0).r
-                    != g_object) { near_other = true; break; }
-    if (!inside || !near_other) discard;
+            if (!covered(t + ivec3(dx, dy, 0))) { near_other = true; break; }
+    if (!near_other) discard;
     out_color = vec4(u_edge_color.rgb, 1.0);
 #else
-    if (id != g_object) discard;
-    vec4 c = texelFetch(u_color, t, 0);
+    if (any(lessThan(t.xy, g_rect.xy)) || any(greaterThan(t.xy, g_rect.zw))) discard;
     float depth = texelFetch(u_depth, t, 0).r;
-    vec3 rgb = c.rgb;
+    if (depth >= 1.0) discard;
+    vec3 rgb = texelFetch(u_color, t, 0).rgb;
 #if defined(PROJECTOR) || defined(LENS)
     vec4 ndc = vec4(gl_FragCoord.xy / u_viewport * 2.0 - 1.0, depth * 2.0 - 1.0, 1.0);
     vec4 world = u_inv_view_proj * ndc;

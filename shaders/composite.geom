@@ -13,6 +13,7 @@ flat out int g_object;
 flat out vec4 g_map;       // (B_atlas origin + border, B_viewport origin): see atlas_texel
 flat out float g_scale;    // atlas texels per viewport pixel
 flat out int g_layer;
+flat out ivec4 g_rect;     // B_atlas's first and last texel (x0, y0, x1, y1), border included
 flat out float g_opacity;  // the style's opacity
 
 void main() {
@@ -25,6 +26,7 @@ void main() {
         g_map = vec4(r.atlas.xy + float(r.info.z), r.viewport.xy);
         g_scale = intBitsToFloat(r.info.w);
         g_layer = r.info.x;
+        g_rect = ivec4(r.atlas.xy, r.atlas.xy + r.atlas.zw - 1.0);
         g_opacity = styles[v_object[0]].params.x;
         gl_Position = vec4(corners[i], 0.0, 1.0);
         EmitVertex();

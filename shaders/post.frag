@@ -3,16 +3,17 @@
 // Atlas post-processing for `ghosted-ao`: per texel, ambient occlusion and edge strength
 // from the object's OWN unoccluded depth/normal images, so hidden objects get complete
 // shading and silhouettes. Drawn as one quad per object over its atlas rectangle
-// (post.geom), where a texel is either the object's or empty (depth 1, normal.w 0); a
-// neighbour outside the rectangle counts as empty. So no id is fetched at all.
+// (post.geom), where a texel is either the object's or empty; the atlas is depth-keyed
+// (targets.py): a texel is empty exactly where its depth is 1, whatever its normal holds.
+// A neighbour outside the rectangle counts as empty. So no id is fetched at all.
 // AO_PASS: ambient occlusion at half resolution (at the even texels), low-frequency enough;
 //   writes ao for a covered texel, -1 for an empty one (one half float).
 // Otherwise edges at full resolution, plus the AO of the half-resolution texel of the same
 // object (1 where none is). EDGE_QUAD (edge width 1): the neighbour in the same 2x2 quad
-// comes from the fine derivatives of the texel's own fetch, so only two are fetched.
+// comes from the fine derivatives of the texel's own fetches, so only two are fetched.
 
 layout(binding = 0) uniform sampler2DArray u_depth;    // window depth, 1 where empty
-layout(binding = 1) uniform sampler2DArray u_normal;   // (view normal, distance / far), w 0 where empty
+layout(binding = 1) uniform sampler2DArray u_normal;   // (view normal, distance / far); stale where empty
 layout(binding = 3) uniform sampler2DArray u_ao;       // half-resolution ao, -1 where empty (full pass only)
 
 uniform vec4 u_proj;           // (P00, P11, P22, P23) of the perspective projection
@@ -64,26 +65,25 @@ float ambient_occlusion() {
 
 void main() {
     g_t = ivec3(min(ivec2(gl_FragCoord.xy) * 2, g_rect.zw), gl_Layer);
-    vec4 nd = texelFetch(u_normal, g_t, 0);
-    if (nd.w <= 0.0) { out_post = vec4(-1.0); return; }
-    g_p = view_position(g_t.xy, texelFetch(u_depth, g_t, 0).r);
-    g_n = normalize(nd.xyz);
+    float d = texelFetch(u_depth, g_t, 0).r;
+    if (d >= 1.0) { out_post = vec4(-1.0); return; }
+    g_p = view_position(g_t.xy, d);
+    g_n = normalize(texelFetch(u_normal, g_t, 0).xyz);
     out_post = vec4(ambient_occlusion());
 }
 
 #else
-// edge strength against a neighbour's (normal, distance) `q`: silhouette, depth
-// discontinuity or crease
+// edge strength against a covered neighbour's (normal, distance) `q`: depth
+// discontinuity or crease (an empty neighbour makes a silhouette: 1)
 float edge_with(vec4 q) {
-    if (q.w <= 0.0) return 1.0;
     float jump = abs(q.w - g_dist) / g_dist;
     float bend = 1.0 - dot(g_n, normalize(q.xyz));
     return max(smoothstep(0.01, 0.03, jump), smoothstep(0.2, 0.5, bend));
 }
 
 float edge_towards(ivec2 o) {
-    ivec2 s = g_t.xy + o;
-    return outside(s) ? 1.0 : edge_with(texelFetch(u_normal, ivec3(s, g_t.z), 0));
+    ivec3 s = ivec3(g_t.xy + o, g_t.z);
+    return outside(s.xy) || texelFetch(u_depth, s, 0).r >= 1.0 ? 1.0 : edge_with(texelFetch(u_normal, s, 0));
 }
 
 // The AO of the half-resolution texel t / 2 when it was computed for a covered texel of
@@ -100,14 +100,20 @@ float ambient_occlusion_of_texel() {
 }
 
 void main() {
+    // the depth test passed: this texel is covered (the quads lie at depth 1)
     g_t = ivec3(gl_FragCoord.xy, gl_Layer);
-    // every fragment of a 2x2 quad (helpers too) fetches its own (normal, distance) before
-    // any branch, so that the fine derivatives are defined (EDGE_QUAD)
-    vec4 nd = texelFetch(u_normal, ivec3(min(g_t.xy, textureSize(u_normal, 0).xy - 1), g_t.z), 0);
 #ifdef EDGE_QUAD
+    // every fragment of a 2x2 quad (helpers too) fetches its own (normal, distance) and
+    // emptiness before any branch, so that the fine derivatives are defined; an empty
+    // partner's normal is stale, so its emptiness (0 or 1, exact in a difference) decides
+    ivec3 own = ivec3(min(g_t.xy, textureSize(u_normal, 0).xy - 1), g_t.z);
+    vec4 nd = texelFetch(u_normal, own, 0);
+    float empty = texelFetch(u_depth, own, 0).r >= 1.0 ? 1.0 : 0.0;
     vec4 ddx = dFdxFine(nd), ddy = dFdyFine(nd);
+    vec2 partner_empty = vec2(dFdxFine(empty), dFdyFine(empty));
+#else
+    vec4 nd = texelFetch(u_normal, g_t, 0);
 #endif
-    if (nd.w <= 0.0) { out_post = vec4(1.0, 0.0, 0.0, 1.0); return; }
     g_n = normalize(nd.xyz);
     g_dist = nd.w;
     float ao = ambient_occlusion_of_texel();
@@ -115,8 +121,10 @@ void main() {
     // the quad partner (x ^ 1, y ^ 1) from the derivatives, the other side fetched
     ivec2 odd = g_t.xy & 1;
     ivec2 partner = g_t.xy + 1 - 2 * odd;
-    float ex = partner.x < g_rect.x || partner.x > g_rect.z ? 1.0 : edge_with(odd.x == 0 ? nd + ddx : nd - ddx);
-    float ey = partner.y < g_rect.y || partner.y > g_rect.w ? 1.0 : edge_with(odd.y == 0 ? nd + ddy : nd - ddy);
+    float ex = partner.x < g_rect.x || partner.x > g_rect.z || partner_empty.x != 0.0 ? 1.0
+             : edge_with(odd.x == 0 ? nd + ddx : nd - ddx);
+    float ey = partner.y < g_rect.y || partner.y > g_rect.w || partner_empty.y != 0.0 ? 1.0
+             : edge_with(odd.y == 0 ? nd + ddy : nd - ddy);
     float edge = max(max(ex, ey), max(edge_towards(ivec2(2 * odd.x - 1, 0)), edge_towards(ivec2(0, 2 * odd.y - 1))));
 #else
     int w = u_edge_width;

@@ -1,8 +1,8 @@
 #version 430
-// defines: PROJECTOR TEXTURED SEPARATE
+// defines: PROJECTOR TEXTURED SEPARATE NO_NORMAL
 // Multiple render targets: shaded colour, view-space normal with the view distance over the far
-// plane distance in w (0 where empty; post-processing reads both in one fetch), object id
-// (depth is the depth attachment).
+// plane distance in w (post-processing reads both in one fetch), object id (depth is the depth
+// attachment). NO_NORMAL: colour and id only (STD, RTT: nothing reads their normals).
 #include "records.glsl"
 #include "projector.glsl"
 #ifdef TEXTURED
@@ -28,8 +28,12 @@ in VertexData {
 } fs_in;
 
 layout(location = 0) out vec4 out_color;
+#ifdef NO_NORMAL
+layout(location = 1) out int out_id;
+#else
 layout(location = 1) out vec4 out_normal;
 layout(location = 2) out int out_id;
+#endif
 
 uniform mat4 u_proj;   // shared with the vertex stage: (P22 + 1) / P23 == 1 / far
 
@@ -54,6 +58,8 @@ void main() {
     out_color = vec4(rgb, 1.0);
     // 1 / gl_FragCoord.w is the clip w, the view distance (the RTTA displacement keeps w);
     // over `far` it lies in [near/far, 1], well inside half-float range for any scene scale
+#ifndef NO_NORMAL
     out_normal = vec4(n, (u_proj[2][2] + 1.0) / (u_proj[3][2] * gl_FragCoord.w));
+#endif
     out_id = fs_in.object;
 }

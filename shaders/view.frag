@@ -1,9 +1,11 @@
 #version 430
 // defines: ARRAY
 // Shows a texture (a composite, or one layer of the atlas with ARRAY) in the GL viewport,
-// over u_background where its alpha is below 1 (empty atlas texels, STD background).
+// over u_background where its alpha is below 1 (STD background) or, for the depth-keyed
+// atlas, where its depth is 1 (empty texels, whose colour is stale: targets.py).
 #ifdef ARRAY
-uniform sampler2DArray u_texture;
+layout(binding = 0) uniform sampler2DArray u_texture;
+layout(binding = 1) uniform sampler2DArray u_depth;
 uniform int u_layer;
 #else
 uniform sampler2D u_texture;
@@ -16,7 +18,9 @@ out vec4 out_color;
 
 void main() {
 #ifdef ARRAY
-    vec4 c = texture(u_texture, vec3(v_uv * u_extent, float(u_layer)));
+    vec3 uvl = vec3(v_uv * u_extent, float(u_layer));
+    vec4 c = texture(u_texture, uvl);
+    if (texture(u_depth, uvl).r >= 1.0) c.a = 0.0;
 #else
     vec4 c = texture(u_texture, v_uv * u_extent);
 #endif

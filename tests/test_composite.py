@@ -7,7 +7,7 @@ import pytest
 import trimesh
 
 from rtta.camera import DEFAULT_ORBIT, Camera
-from rtta.composite import BACKGROUND, Style
+from rtta.composite import BACKGROUND, MODES, Style
 from rtta.generate import random_scene
 from rtta.scene import from_meshes
 from rtta.snapshot import over_background
@@ -162,3 +162,31 @@ def test_borders_are_marked_empty(make_renderer, demo_scene):
         ring = np.ones(ids.shape, bool)
         ring[2:-2, 2:-2] = False
         assert (ids[ring] == -1).all() and (alpha[ring] == 0).all()
+
+
+def test_stale_atlas_texels_never_show(make_renderer, demo_scene):
+    """The atlas is depth-keyed: a frame clears only its depth, so the colour, normal and id
+    of texels that are empty now still hold an earlier view. No output may show them: every
+    mode, the post-process and the atlas read equal those of a renderer without that history."""
+    c, radius = demo_scene.center, demo_scene.radius
+    now, before = Camera.orbit(c, radius, 30, 20, 2.2), Camera.orbit(c, radius, 200, -30, 1.3)
+    style = Style(focus={0, demo_scene.count // 2})
+    r, fresh = make_renderer(demo_scene), make_renderer(demo_scene)
+    r.capture(before, VP)
+    for mode in MODES:
+        r.composite(mode, style)
+    allocations = r.atlas.allocations
+    r.capture(now, VP)
+    fresh.capture(now, VP)
+    assert r.atlas.allocations == allocations       # the same textures, history and all
+    w, h = r.atlas.size
+    raw = np.frombuffer(r.atlas.color.read(), np.uint8).reshape(-1, h, w, 4)
+    assert raw[r.atlas.depth.read() >= 1.0].any(), "no stale texel: the test would prove nothing"
+    for mode in MODES:
+        got, want = r.composite(mode, style).read(), fresh.composite(mode, style).read()
+        assert np.array_equal(got[0], want[0]) and np.array_equal(got[1], want[1]), mode
+    tw, th, td = r.last[0].atlas_size
+    got, want = r.atlas.read((tw, th), td), fresh.atlas.read((tw, th), td)
+    for part in got:
+        assert np.array_equal(got[part], want[part]), part
+    assert (got["id"][got["depth"] >= 1.0] == -1).all() and (got["color"][got["depth"] >= 1.0] == 0).all()

@@ -1,6 +1,7 @@
 """Atlas textures are reused across frames, grow at once, shrink lazily, and are released."""
 
 import numpy as np
+import pytest
 
 from rtta.camera import Camera
 from rtta.generate import random_scene
@@ -43,6 +44,31 @@ def test_clear_values(gl):
         assert d["id"].shape == (2, 8, 16)
     finally:
         t.release()
+
+
+def test_std_target_has_no_normal_image(make_renderer, demo_scene, gl):
+    """STD and RTT draw colour, id and depth only (nothing reads their normals); the program
+    follows the target, so the same pass fills a target with a normal image correctly too."""
+    r = make_renderer(demo_scene)
+    cam = Camera.orbit(demo_scene.center, demo_scene.radius, 30, 20, 2.2)
+    std = r.std(cam, (96, 64))
+    assert not std.normals and std.normal is None
+    assert std.nbytes == std.size[0] * std.size[1] * 12
+    d = std.read((96, 64), 1)
+    assert set(d) == {"color", "id", "depth"}
+    assert (d["id"] >= 0).mean() > 0.2 and ((d["id"] >= 0) == (d["depth"] < 1)).all()
+    with pytest.raises(ValueError, match="no normal image"):
+        std.read(parts=("normal",))
+    full = LayeredTarget(gl, (96, 64), 1)
+    try:
+        view, proj = r.matrices(cam, (96, 64))
+        r._std.render(gpu=r.gpu, view=view, proj=proj, target=full, viewport=(96, 64))
+        f = full.read((96, 64), 1)
+        assert (f["id"] == d["id"]).all() and (f["color"] == d["color"]).all()
+        lengths = np.linalg.norm(f["normal"][..., :3].astype(np.float32), axis=-1)[f["id"] >= 0]
+        assert np.abs(lengths - 1).max() < 0.01
+    finally:
+        full.release()
 
 
 def test_trim_shrinks_to_the_last_capture_at_once(make_renderer, demo_scene, gl):

@@ -165,7 +165,7 @@ class Viewer:
                 self._std_key = key
             target = r.single_target
             extent = (vp[0] / target.size[0], vp[1] / target.size[1])
-            self.view_pass.render(texture=target.color, layer=0, extent=extent, rect=self._rect(vp),
+            self.view_pass.render(texture=target.color, layer=0, depth=target.depth, extent=extent, rect=self._rect(vp),
                                   window_height=self.wnd.buffer_size[1], target=self.wnd.fbo)
             return
         key = (self._capture_key, s.style_key(), painted)
@@ -239,7 +239,7 @@ class Viewer:
     def _draw_atlas(self) -> None:
         atlas, rec = self.renderer.atlas, self.records
         for layer, rect in self.atlas_tiles():
-            self.view_pass.render(texture=atlas.color, layer=layer, rect=rect,
+            self.view_pass.render(texture=atlas.color, layer=layer, depth=atlas.depth, rect=rect,
                                   extent=(rec.atlas_size[0] / atlas.size[0], rec.atlas_size[1] / atlas.size[1]),
                                   background=ATLAS_BACKGROUND, window_height=self.wnd.buffer_size[1],
                                   target=self.wnd.fbo)

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import moderngl
 import numpy as np
 
-from rtta import glsl
+from rtta import glraw, glsl
 from rtta.composite import BACKGROUND
 
 PANEL_WIDTH = 320
@@ -103,9 +103,10 @@ class ViewPass:
         return self._programs[array], self._vaos[array]
 
     def render(self, *, texture, rect: Rect, window_height: int, layer: int | None = None,
-               extent: tuple[float, float] = (1.0, 1.0), background=BACKGROUND[:3],
+               depth=None, extent: tuple[float, float] = (1.0, 1.0), background=BACKGROUND[:3],
                target: moderngl.Framebuffer) -> None:
-        """Draw `texture` into `rect` of `target`; `layer` selects an array layer, `extent`
+        """Draw `texture` into `rect` of `target`; `layer` selects an array layer (then
+        `depth`, the depth-keyed atlas's DepthArray, says which texels are empty), `extent`
         the fraction of the texture shown (fitted into `rect`, aspect kept, for arrays)."""
         rx, ry, rw, rh = rect
         if rw <= 0 or rh <= 0:
@@ -116,6 +117,8 @@ class ViewPass:
         prog["u_extent"].value = tuple(float(v) for v in extent)
         prog["u_background"].value = tuple(float(v) for v in background)
         texture.use(0)
+        if layer is not None:
+            glraw.bind_texture_array(1, depth.glo)
         self.ctx.enable_only(moderngl.NOTHING)
         target.viewport = (int(rx), int(window_height - ry - rh), int(rw), int(rh))
         target.use()

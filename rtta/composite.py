@@ -188,7 +188,7 @@ class CompositePass:
         else:
             with_ao = mode == "ghosted-ao"
             if with_ao:
-                (post._ao.texture if __import__('os').environ.get('NOEDGE') else post.texture).use(3); atlas.normal.use(5)
+                post.texture.use(3)
             context = np.setdiff1d(everyone, focus)
             self._draw(focus, style, records, sprite=True, ao=with_ao)
             params[context, 0] = style.context_opacity * params[context, 0]

@@ -31,12 +31,18 @@ def release_all(ctx: moderngl.Context, parts) -> None:
             p.release()
 
 
+def decode_normals(texels: np.ndarray) -> np.ndarray:
+    """RGBA8 normal texels -> float32 view-space normals [..., 3] (as the shaders decode them)."""
+    return texels[..., :3].astype(np.float32) / 255.0 * 2.0 - 1.0
+
+
 def round_up(v: int, step: int) -> int:
     return max(step, -(-v // step) * step)
 
 
 class LayeredTarget:
-    """Colour RGBA8, normal RGBA16F, id R32I (-1 = empty) and depth 32F, `layers` deep.
+    """Colour RGBA8, normal RGBA8 (view-space n * 0.5 + 0.5), id R32I (-1 = empty) and
+    depth 32F, `layers` deep. Post-processing takes a texel's view distance from its depth.
 
     `normals=False` (STD and RTT targets): no normal image; nothing reads one there, and on
     llvmpipe writing it costs about a fifth of an STD frame (BENCHMARKS.md).
@@ -67,7 +73,7 @@ class LayeredTarget:
         n = max(1, int(layers))
         ctx = self.ctx
         self.color = ctx.texture_array((w, h, n), 4, dtype="f1")
-        self.normal = ctx.texture_array((w, h, n), 4, dtype="f2") if self.normals else None
+        self.normal = ctx.texture_array((w, h, n), 4, dtype="f1") if self.normals else None
         self.ids = ctx.texture_array((w, h, n), 1, dtype="i4")
         self._textures = [t for t in (self.color, self.normal, self.ids) if t is not None]
         for tex in self._textures:
@@ -109,8 +115,8 @@ class LayeredTarget:
 
     @property
     def nbytes(self) -> int:
-        """Texture memory: RGBA8 + RGBA16F (with normals) + R32I + D32F per texel."""
-        return self.size[0] * self.size[1] * self.layers * (4 + 8 * self.normals + 4 + 4)
+        """Texture memory: RGBA8 + RGBA8 (with normals) + R32I + D32F per texel."""
+        return self.size[0] * self.size[1] * self.layers * (4 + 4 * self.normals + 4 + 4)
 
     def bind(self, viewport: tuple[int, int, int, int] | None = None) -> None:
         """Bind for drawing, with the GL viewport set (default: the whole allocation)."""
@@ -133,7 +139,8 @@ class LayeredTarget:
 
     def read(self, size: tuple[int, int] | None = None, layers: int | None = None,
              parts: tuple[str, ...] | None = None) -> dict[str, np.ndarray]:
-        """Layers as numpy [layers, H, W(, C)], cropped to `size`; row 0 is the bottom row.
+        """Layers as numpy [layers, H, W(, C)], cropped to `size`; row 0 is the bottom row;
+        normals decoded to float32 xyz.
         `parts` picks which attachments are read (picking needs only id and depth; None:
         all there are: no "normal" without normals). Empty
         texels read as cleared (colour/normal 0, id -1, depth 1), depth-keyed or not."""
@@ -146,7 +153,7 @@ class LayeredTarget:
             raise ValueError("this target has no normal image (normals=False)")
         readers = {
             "color": lambda: np.frombuffer(self.color.read(), np.uint8).reshape(n, h, w, 4),
-            "normal": lambda: np.frombuffer(self.normal.read(), np.float16).reshape(n, h, w, 4),
+            "normal": lambda: decode_normals(np.frombuffer(self.normal.read(), np.uint8).reshape(n, h, w, 4)),
             "id": lambda: np.frombuffer(self.ids.read(), np.int32).reshape(n, h, w),
             "depth": self.depth.read,
         }

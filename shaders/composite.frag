@@ -14,7 +14,7 @@
 layout(binding = 0) uniform sampler2DArray u_color;
 layout(binding = 1) uniform sampler2DArray u_depth;
 layout(binding = 3) uniform sampler2DArray u_post;   // (ao, edge) per atlas texel, WITH_AO only
-layout(binding = 4) uniform sampler2DArray u_normal;  // view-space normal per atlas texel, PROJECTOR only
+layout(binding = 4) uniform sampler2DArray u_normal;  // view-space normal * 0.5 + 0.5 per atlas texel, PROJECTOR only
 uniform mat4 u_inv_view_proj;   // (P V)^-1: viewport NDC + depth -> world relative to the origin
 uniform mat4 u_lens_to_crop;        // world relative to the origin -> the lens LDI's crop space
 uniform ivec2 u_lens_crop_size;     // (its layers are image unit 0: ldi.glsl)
@@ -77,7 +77,7 @@ void main() {
         discard;
 #endif
 #ifdef PROJECTOR
-    rgb = painted(rgb, surface_light(texelFetch(u_normal, t, 0).xyz), world.xyz);
+    rgb = painted(rgb, surface_light(normalize(texelFetch(u_normal, t, 0).xyz * 2.0 - 1.0)), world.xyz);
 #endif
     rgb = shade(rgb, t);
 #ifdef MODE_SPRITE

@@ -13,7 +13,7 @@
 // comes from the fine derivatives of the texel's own fetches, so only two are fetched.
 
 layout(binding = 0) uniform sampler2DArray u_depth;    // window depth, 1 where empty
-layout(binding = 1) uniform sampler2DArray u_normal;   // (view normal, distance / far); stale where empty
+layout(binding = 1) uniform sampler2DArray u_normal;   // view normal * 0.5 + 0.5 (RGBA8); stale where empty
 layout(binding = 3) uniform sampler2DArray u_ao;       // half-resolution ao, -1 where empty (full pass only)
 
 uniform vec4 u_proj;           // (P00, P11, P22, P23) of the perspective projection
@@ -32,13 +32,18 @@ ivec3 g_t;
 vec3 g_p, g_n;
 float g_dist;
 
+// view distance (along -z) of window depth `d`
+float view_distance(float d) { return u_proj.w / (d * 2.0 - 1.0 + u_proj.z); }
+
+vec3 normal_at(ivec3 t) { return texelFetch(u_normal, t, 0).xyz * 2.0 - 1.0; }
+
 bool outside(ivec2 t) { return any(lessThan(t, g_rect.xy)) || any(greaterThan(t, g_rect.zw)); }
 
 #ifdef AO_PASS
 // texel with window depth `d` -> view-space position
 vec3 view_position(ivec2 t, float d) {
     vec2 ndc = g_map.xy + (vec2(t) + 0.5) * g_map.zw;
-    float z = -u_proj.w / (d * 2.0 - 1.0 + u_proj.z);
+    float z = -view_distance(d);
     return vec3(-z * ndc.x / u_proj.x, -z * ndc.y / u_proj.y, z);
 }
 
@@ -68,12 +73,12 @@ void main() {
     float d = texelFetch(u_depth, g_t, 0).r;
     if (d >= 1.0) { out_post = vec4(-1.0); return; }
     g_p = view_position(g_t.xy, d);
-    g_n = normalize(texelFetch(u_normal, g_t, 0).xyz);
+    g_n = normalize(normal_at(g_t));
     out_post = vec4(ambient_occlusion());
 }
 
 #else
-// edge strength against a covered neighbour's (normal, distance) `q`: depth
+// edge strength against a covered neighbour's (normal, view distance) `q`: depth
 // discontinuity or crease (an empty neighbour makes a silhouette: 1)
 float edge_with(vec4 q) {
     float jump = abs(q.w - g_dist) / g_dist;
@@ -83,7 +88,9 @@ float edge_with(vec4 q) {
 
 float edge_towards(ivec2 o) {
     ivec3 s = ivec3(g_t.xy + o, g_t.z);
-    return outside(s.xy) || texelFetch(u_depth, s, 0).r >= 1.0 ? 1.0 : edge_with(texelFetch(u_normal, s, 0));
+    if (outside(s.xy)) return 1.0;
+    float d = texelFetch(u_depth, s, 0).r;
+    return d >= 1.0 ? 1.0 : edge_with(vec4(normal_at(s), view_distance(d)));
 }
 
 // The AO of the half-resolution texel t / 2 when it was computed for a covered texel of
@@ -107,12 +114,13 @@ void main() {
     // emptiness before any branch, so that the fine derivatives are defined; an empty
     // partner's normal is stale, so its emptiness (0 or 1, exact in a difference) decides
     ivec3 own = ivec3(min(g_t.xy, textureSize(u_normal, 0).xy - 1), g_t.z);
-    vec4 nd = texelFetch(u_normal, own, 0);
-    float empty = texelFetch(u_depth, own, 0).r >= 1.0 ? 1.0 : 0.0;
+    float depth = texelFetch(u_depth, own, 0).r;
+    vec4 nd = vec4(normal_at(own), view_distance(depth));
+    float empty = depth >= 1.0 ? 1.0 : 0.0;
     vec4 ddx = dFdxFine(nd), ddy = dFdyFine(nd);
     vec2 partner_empty = vec2(dFdxFine(empty), dFdyFine(empty));
 #else
-    vec4 nd = texelFetch(u_normal, g_t, 0);
+    vec4 nd = vec4(normal_at(g_t), view_distance(texelFetch(u_depth, g_t, 0).r));
 #endif
     g_n = normalize(nd.xyz);
     g_dist = nd.w;

@@ -1,7 +1,7 @@
 #version 430
 // defines: PROJECTOR TEXTURED SEPARATE NO_NORMAL
-// Multiple render targets: shaded colour, view-space normal with the view distance over the far
-// plane distance in w (post-processing reads both in one fetch), object id (depth is the depth
+// Multiple render targets: shaded colour, view-space normal (RGBA8: n * 0.5 + 0.5; the view
+// distance post-processing needs comes from the depth), object id (depth is the depth
 // attachment). NO_NORMAL: colour and id only (STD, RTT: nothing reads their normals).
 #include "records.glsl"
 #include "projector.glsl"
@@ -35,7 +35,6 @@ layout(location = 1) out vec4 out_normal;
 layout(location = 2) out int out_id;
 #endif
 
-uniform mat4 u_proj;   // shared with the vertex stage: (P22 + 1) / P23 == 1 / far
 
 void main() {
     float len_n = length(fs_in.normal);
@@ -59,7 +58,7 @@ void main() {
     // 1 / gl_FragCoord.w is the clip w, the view distance (the RTTA displacement keeps w);
     // over `far` it lies in [near/far, 1], well inside half-float range for any scene scale
 #ifndef NO_NORMAL
-    out_normal = vec4(n, (u_proj[2][2] + 1.0) / (u_proj[3][2] * gl_FragCoord.w));
+    out_normal = vec4(n * 0.5 + 0.5, 1.0);
 #endif
     out_id = fs_in.object;
 }

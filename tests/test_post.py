@@ -32,8 +32,10 @@ class AtlasFrame:
     def __init__(self, r, records, proj):
         tw, th, td = records.atlas_size
         a = r.atlas.read((tw, th), td, ("normal", "id", "depth"))
-        self.normal = a["normal"].astype(np.float32)
         self.ids, self.depth = a["id"], a["depth"].astype(np.float32)
+        p22, p23 = np.float32(proj[2, 2]), np.float32(proj[2, 3])
+        distance = p23 / (self.depth * np.float32(2) - np.float32(1) + p22)   # as post.frag's view_distance
+        self.normal = np.concatenate([a["normal"], distance[..., None]], -1)   # (normal, view distance)
         self.rec, self.proj = records, proj
         self.shape = self.ids.shape                              # (layers, th, tw)
         self.covered = np.argwhere(self.ids >= 0)                # (layer, y, x)
@@ -61,7 +63,7 @@ class AtlasFrame:
             jump = np.abs(q[:, 3] - d_p) / d_p
             bend = 1.0 - (n_p * _normalize(q[:, :3])).sum(-1)
             e = np.maximum(_smoothstep(0.01, 0.03, jump), _smoothstep(0.2, 0.5, bend))
-            out = np.maximum(out, np.where(self.inside(yx) & (q[:, 3] > 0), e, 1.0))
+            out = np.maximum(out, np.where(self.inside(yx) & (self.fetch(self.depth, yx) < 1.0), e, 1.0))
         return out
 
     def view_position(self, ids: np.ndarray, yx: np.ndarray, d: np.ndarray) -> np.ndarray:

@@ -10,7 +10,8 @@
 //   writes ao for a covered texel, -1 for an empty one (one half float).
 // Otherwise edges at full resolution, plus the AO of the half-resolution texel of the same
 // object (1 where none is). EDGE_QUAD (edge width 1): the neighbour in the same 2x2 quad
-// comes from the fine derivatives of the texel's own fetches, so only two are fetched.
+// comes from the fine derivatives of the texel's own fetches, and one depth gather covers
+// the texel and its two other neighbours, so two normals and one gather are fetched.
 
 layout(binding = 0) uniform sampler2DArray u_depth;    // window depth, 1 where empty
 layout(binding = 1) uniform sampler2DArray u_normal;   // view normal * 0.5 + 0.5 (RGBA8); stale where empty
@@ -86,11 +87,15 @@ float edge_with(vec4 q) {
     return max(smoothstep(0.01, 0.03, jump), smoothstep(0.2, 0.5, bend));
 }
 
+// edge strength towards the texel at offset `o` whose depth is `d`
+float edge_at(ivec2 o, float d) {
+    ivec3 s = ivec3(g_t.xy + o, g_t.z);
+    return outside(s.xy) || d >= 1.0 ? 1.0 : edge_with(vec4(normal_at(s), view_distance(d)));
+}
+
 float edge_towards(ivec2 o) {
     ivec3 s = ivec3(g_t.xy + o, g_t.z);
-    if (outside(s.xy)) return 1.0;
-    float d = texelFetch(u_depth, s, 0).r;
-    return d >= 1.0 ? 1.0 : edge_with(vec4(normal_at(s), view_distance(d)));
+    return outside(s.xy) ? 1.0 : edge_at(o, texelFetch(u_depth, s, 0).r);
 }
 
 // The AO of the half-resolution texel t / 2 when it was computed for a covered texel of
@@ -113,8 +118,17 @@ void main() {
     // every fragment of a 2x2 quad (helpers too) fetches its own (normal, distance) and
     // emptiness before any branch, so that the fine derivatives are defined; an empty
     // partner's normal is stale, so its emptiness (0 or 1, exact in a difference) decides
+    // one gather reads the depths of this texel and of the two neighbours on the far side
+    // from its quad partner: the 2x2 footprint with corner `lo`, components
+    // x (lo.x, lo.y+1), y (lo.x+1, lo.y+1), z (lo.x+1, lo.y), w (lo.x, lo.y)
+    ivec2 odd = g_t.xy & 1, away = 2 * odd - 1;
+    ivec2 lo = min(g_t.xy, g_t.xy + away);
+    vec4 g = textureGather(u_depth, vec3((vec2(lo) + 1.0) / vec2(textureSize(u_depth, 0).xy), float(g_t.z)), 0);
+    vec2 row0 = odd.y == 1 ? g.wz : g.xy, row1 = odd.y == 1 ? g.xy : g.wz;   // own row, the other row
+    float depth = odd.x == 1 ? row0.x : row0.y;
+    float depth_x = odd.x == 1 ? row0.y : row0.x;       // at (x + away.x, y)
+    float depth_y = odd.x == 1 ? row1.x : row1.y;       // at (x, y + away.y)
     ivec3 own = ivec3(min(g_t.xy, textureSize(u_normal, 0).xy - 1), g_t.z);
-    float depth = texelFetch(u_depth, own, 0).r;
     vec4 nd = vec4(normal_at(own), view_distance(depth));
     float empty = depth >= 1.0 ? 1.0 : 0.0;
     vec4 ddx = dFdxFine(nd), ddy = dFdyFine(nd);
@@ -127,13 +141,12 @@ void main() {
     float ao = ambient_occlusion_of_texel();
 #ifdef EDGE_QUAD
     // the quad partner (x ^ 1, y ^ 1) from the derivatives, the other side fetched
-    ivec2 odd = g_t.xy & 1;
     ivec2 partner = g_t.xy + 1 - 2 * odd;
     float ex = partner.x < g_rect.x || partner.x > g_rect.z || partner_empty.x != 0.0 ? 1.0
              : edge_with(odd.x == 0 ? nd + ddx : nd - ddx);
     float ey = partner.y < g_rect.y || partner.y > g_rect.w || partner_empty.y != 0.0 ? 1.0
              : edge_with(odd.y == 0 ? nd + ddy : nd - ddy);
-    float edge = max(max(ex, ey), max(edge_towards(ivec2(2 * odd.x - 1, 0)), edge_towards(ivec2(0, 2 * odd.y - 1))));
+    float edge = max(max(ex, ey), max(edge_at(ivec2(away.x, 0), depth_x), edge_at(ivec2(0, away.y), depth_y)));
 #else
     int w = u_edge_width;
     float edge = max(max(edge_towards(ivec2(w, 0)), edge_towards(ivec2(-w, 0))),

@@ -45,13 +45,14 @@ class LayeredTarget:
     depth 32F, `layers` deep. Post-processing takes a texel's view distance from its depth.
 
     `normals=False` (STD and RTT targets): no normal image; nothing reads one there, and on
-    llvmpipe writing it costs about a fifth of an STD frame (BENCHMARKS.md).
+    llvmpipe writing it costs about 15% of an STD frame (BENCHMARKS.md).
 
     `depth_keyed` (the atlas): a texel is empty exactly where its depth is 1 (the far plane,
     which no drawn fragment passes), so `clear()` clears the depth alone and the other
     attachments of empty texels keep whatever an earlier frame left there; every reader
-    tests the depth (the shaders) or gets masked arrays (`read`). Clearing colour, normal
-    and id too cost 11 of the 14 ms that clearing a 3-layer 1024² atlas takes on llvmpipe.
+    tests the depth (the shaders) or gets masked arrays (`read`). On llvmpipe a standalone
+    clear of a 3-layer 1024² atlas took 14.8 ms with colour, normal and id, 3.3 ms of the
+    depth alone (inside a frame the difference is smaller: BENCHMARKS.md).
     """
 
     def __init__(self, ctx: moderngl.Context, size: tuple[int, int], layers: int = 1,
@@ -140,10 +141,9 @@ class LayeredTarget:
     def read(self, size: tuple[int, int] | None = None, layers: int | None = None,
              parts: tuple[str, ...] | None = None) -> dict[str, np.ndarray]:
         """Layers as numpy [layers, H, W(, C)], cropped to `size`; row 0 is the bottom row;
-        normals decoded to float32 xyz.
-        `parts` picks which attachments are read (picking needs only id and depth; None:
-        all there are: no "normal" without normals). Empty
-        texels read as cleared (colour/normal 0, id -1, depth 1), depth-keyed or not."""
+        normals decoded to float32 xyz. `parts` picks which attachments are read (picking
+        needs only id and depth; None: all there are, so no "normal" without normals).
+        Empty texels (depth 1) read as colour 0, normal 0, id -1, depth-keyed or not."""
         w, h = self.size
         n = self.layers
         cw, ch = size or (w, h)
@@ -158,7 +158,7 @@ class LayeredTarget:
             "depth": self.depth.read,
         }
         out = {k: np.array(readers[k]()[:cl, :ch, :cw]) for k in parts}
-        if self.depth_keyed and set(parts) - {"depth"}:
+        if set(parts) - {"depth"}:
             empty = out["depth"] >= 1.0 if "depth" in out else readers["depth"]()[:cl, :ch, :cw] >= 1.0
             for k in set(parts) - {"depth"}:
                 out[k][empty] = -1 if k == "id" else 0

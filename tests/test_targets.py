@@ -41,6 +41,7 @@ def test_clear_values(gl):
         t.clear()
         d = t.read()
         assert (d["id"] == -1).all() and (d["depth"] == 1.0).all() and (d["color"] == 0).all()
+        assert (d["normal"] == 0).all()          # decoded, and masked like the atlas's
         assert d["id"].shape == (2, 8, 16)
     finally:
         t.release()

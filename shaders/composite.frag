@@ -3,7 +3,7 @@
 // Per-object compositing from the atlas:
 //   MODE_SPRITE  depth sprite: atlas colour, gl_FragDepth = atlas depth (focus objects, `sprites`)
 //   MODE_BLEND   premultiplied blend with the object's opacity (`transparent`, ghosted context)
-//   MODE_OUTLINE the object's silhouette from its own unoccluded id image (ghosted focus)
+//   MODE_OUTLINE the object's silhouette from its own unoccluded coverage (ghosted focus)
 //   WITH_AO      shade with the atlas post-process (ambient occlusion, edges) of `ghosted-ao`
 //   PROJECTOR    paint with the projector at the world position reconstructed from the atlas depth
 //   LENS         cut away (discard) texels whose world position is inside the lens (parity test)
@@ -43,12 +43,11 @@ vec3 shade(vec3 rgb, ivec3 t) {
     return rgb;
 }
 
+bool outside(ivec2 s) { return any(lessThan(s, g_rect.xy)) || any(greaterThan(s, g_rect.zw)); }
+
 // Whether atlas texel `s` holds this object: inside its B_atlas and written by the capture.
 // The atlas is depth-keyed (targets.py): empty texels have depth 1 and stale colour.
-bool covered(ivec3 s) {
-    return all(greaterThanEqual(s.xy, g_rect.xy)) && all(lessThanEqual(s.xy, g_rect.zw))
-        && texelFetch(u_depth, s, 0).r < 1.0;
-}
+bool covered(ivec3 s) { return !outside(s.xy) && texelFetch(u_depth, s, 0).r < 1.0; }
 
 void main() {
     ivec3 t = atlas_texel(g_map, g_scale, g_layer, gl_FragCoord.xy);
@@ -62,7 +61,7 @@ void main() {
     if (!near_other) discard;
     out_color = vec4(u_edge_color.rgb, 1.0);
 #else
-    if (any(lessThan(t.xy, g_rect.xy)) || any(greaterThan(t.xy, g_rect.zw))) discard;
+    if (outside(t.xy)) discard;
     float depth = texelFetch(u_depth, t, 0).r;
     if (depth >= 1.0) discard;
     vec3 rgb = texelFetch(u_color, t, 0).rgb;

@@ -115,7 +115,7 @@ void main() {
     // the depth test passed: this texel is covered (the quads lie at depth 1)
     g_t = ivec3(gl_FragCoord.xy, gl_Layer);
 #ifdef EDGE_QUAD
-    // every fragment of a 2x2 quad (helpers too) fetches its own (normal, distance) and
+    // every fragment of a 2x2 quad (helpers too) fetches its own (normal, view distance) and
     // emptiness before any branch, so that the fine derivatives are defined; an empty
     // partner's normal is stale, so its emptiness (0 or 1, exact in a difference) decides
     // one gather reads the depths of this texel and of the two neighbours on the far side

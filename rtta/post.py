@@ -1,14 +1,15 @@
 """`AtlasPostPass`: ambient occlusion and edge strength per atlas texel, computed on each
 object's own unoccluded images (the `ghosted-ao` mode only).
 
-Two draws of one quad per visible object over its atlas rectangle: AO at half the atlas
-resolution (it is low-frequency), then edges at full resolution, which also picks up each
-texel's AO. Texels outside every rectangle are never shaded (compositing reads only the
-objects' own texels), and no fragment reads an id or the record buffer. The edge pass
-tests its quads (at depth 1) against the atlas depth, so the empty texels inside the
-rectangles are not shaded either (on the demo at 1024² the rectangles hold 1.8 times the
-objects' texels). The edge pass with width 1 (EDGE_QUAD) takes the neighbour in its 2x2
-quad from derivatives."""
+One draw of one quad per visible object over its atlas rectangle. Texels outside every
+rectangle are never shaded (compositing reads only the objects' own texels), and no
+fragment reads an id or the record buffer. The quads lie at depth 1 and are tested
+against the atlas depth, so the empty texels inside the rectangles are not shaded either
+(on the demo at 1024² the rectangles hold 1.8 times the objects' texels): llvmpipe rejects
+them before shading, where a branch in the shader would still run them (masked lanes cost
+as much as live ones). AO takes 8 samples per 2x2 quad of texels, 2 per texel, summed over
+the quad through derivatives; with edge width 1 (EDGE_QUAD) the neighbour in the quad comes
+from derivatives too."""
 
 from __future__ import annotations
 
@@ -66,7 +67,6 @@ class AtlasPostPass:
     def __init__(self, ctx: moderngl.Context) -> None:
         self.ctx = ctx
         self._variants: dict[tuple[str, ...], tuple] = {}     # defines -> (program, vao)
-        self._ao = _LayerTarget(ctx, 1, "f2")     # AO at half resolution, -1 where empty
         self._out = _LayerTarget(ctx, 4, "f1")    # (ao, edge)
 
     @property
@@ -75,7 +75,7 @@ class AtlasPostPass:
 
     @property
     def nbytes(self) -> int:
-        return self._ao.nbytes + self._out.nbytes
+        return self._out.nbytes
 
     def _variant(self, *defines: str) -> tuple:
         """(program, vao) compiled on first use; each stage gets the defines it declares."""
@@ -87,7 +87,6 @@ class AtlasPostPass:
     def render(self, *, atlas: LayeredTarget, records: Records, gpu: GpuScene, proj: np.ndarray, style) -> None:
         w, h = atlas.size
         self._out.ensure((w, h, atlas.layers), atlas)
-        self._ao.ensure(((w + 1) // 2, (h + 1) // 2, atlas.layers))
         tw, th, td = records.atlas_size
         n = len(records.visible)
         if td == 0 or n == 0:
@@ -95,33 +94,26 @@ class AtlasPostPass:
         gpu.bind_storage()
         glraw.bind_texture_array(0, atlas.depth.glo)
         atlas.normal.use(1)
+        prog, vao = self._variant(*(("EDGE_QUAD",) if int(style.edge_width) == 1 else ()))
         uniforms = {"u_proj": (float(proj[0, 0]), float(proj[1, 1]), float(proj[2, 2]), float(proj[2, 3])),
-                    "u_viewport": tuple(float(v) for v in records.viewport),
+                    "u_viewport": tuple(float(v) for v in records.viewport), "u_target": (float(tw), float(th)),
                     "u_ao_radius": float(style.ao_radius), "u_ao_strength": float(style.ao_strength),
                     "u_edge_width": int(style.edge_width)}
-        self.ctx.enable_only(moderngl.NOTHING)
-        edge = ("EDGE_QUAD",) if int(style.edge_width) == 1 else ()
-        for defines, target, size in ((("AO_PASS",), self._ao, ((tw + 1) // 2, (th + 1) // 2)),
-                                      (edge, self._out, (tw, th))):
-            prog, vao = self._variant(*defines)
-            for name, value in {**uniforms, "u_target": tuple(float(v) for v in size)}.items():
-                if name in prog:      # the compiler drops what a variant does not use
-                    prog[name].value = value
-            if target is self._out:
-                self._ao.texture.use(3)
-                # quads at depth 1 pass only where the capture wrote the object (depth < 1):
-                # empty texels of the rectangles are never shaded nor written
-                self.ctx.enable_only(moderngl.DEPTH_TEST)
-                self.ctx.depth_func = ">"
-                target.fbo.depth_mask = False
-            target.fbo.viewport = (0, 0, *size)
-            target.fbo.use()
-            vao.render(moderngl.POINTS, vertices=n)
+        for name, value in uniforms.items():
+            if name in prog:      # the compiler drops what a variant does not use
+                prog[name].value = value
+        # quads at depth 1 pass only where the capture wrote the object (depth < 1):
+        # empty texels of the rectangles are never shaded nor written
+        self.ctx.enable_only(moderngl.DEPTH_TEST)
+        self.ctx.depth_func = ">"
+        self._out.fbo.depth_mask = False
+        self._out.fbo.viewport = (0, 0, tw, th)
+        self._out.fbo.use()
+        vao.render(moderngl.POINTS, vertices=n)
         self.ctx.depth_func = "<"
         self.ctx.enable_only(moderngl.NOTHING)
 
     def release(self) -> None:
-        self._ao.release()
         self._out.release()
         for prog, vao in self._variants.values():
             vao.release()

@@ -1,21 +1,22 @@
 #version 450
-// defines: AO_PASS EDGE_QUAD
+// defines: EDGE_QUAD
 // Atlas post-processing for `ghosted-ao`: per texel, ambient occlusion and edge strength
 // from the object's OWN unoccluded depth/normal images, so hidden objects get complete
 // shading and silhouettes. Drawn as one quad per object over its atlas rectangle
 // (post.geom), where a texel is either the object's or empty; the atlas is depth-keyed
 // (targets.py): a texel is empty exactly where its depth is 1, whatever its normal holds.
-// A neighbour outside the rectangle counts as empty. So no id is fetched at all.
-// AO_PASS: ambient occlusion at half resolution (at the even texels), low-frequency enough;
-//   writes ao for a covered texel, -1 for an empty one (one half float).
-// Otherwise edges at full resolution, plus the AO of the half-resolution texel of the same
-// object (1 where none is). EDGE_QUAD (edge width 1): the neighbour in the same 2x2 quad
-// comes from the fine derivatives of the texel's own fetches, and one depth gather covers
-// the texel and its two other neighbours, so two normals and one gather are fetched.
+// A neighbour outside the rectangle counts as empty. So no id is fetched at all. The quads
+// lie at depth 1 and are tested '>' against the atlas depth, so only covered texels (and
+// the helpers of their 2x2 quads) are shaded.
+// AO: 8 samples per 2x2 quad of texels, 2 taken by each texel around itself and summed
+// over the quad through derivatives, so every texel of the quad gets the same 8-sample
+// AO for a quarter of the fetches (the AO is low-frequency enough).
+// EDGE_QUAD (edge width 1): the neighbour in the same 2x2 quad comes from the fine
+// derivatives of the texel's own fetches, and one depth gather covers the texel and its
+// two other neighbours, so two normals and one gather are fetched.
 
 layout(binding = 0) uniform sampler2DArray u_depth;    // window depth, 1 where empty
 layout(binding = 1) uniform sampler2DArray u_normal;   // view normal * 0.5 + 0.5 (RGBA8); stale where empty
-layout(binding = 3) uniform sampler2DArray u_ao;       // half-resolution ao, -1 where empty (full pass only)
 
 uniform vec4 u_proj;           // (P00, P11, P22, P23) of the perspective projection
 uniform float u_ao_radius;     // pixels
@@ -26,7 +27,7 @@ flat in ivec4 g_rect;
 flat in vec4 g_map;
 flat in float g_scale;
 
-layout(location = 0) out vec4 out_post;   // AO_PASS: ao or -1; else (ao, edge, 0, 1)
+layout(location = 0) out vec4 out_post;   // (ao, edge, 0, 1)
 
 // Globals of the texel being shaded (set once in main, read by the unrolled helpers).
 ivec3 g_t;
@@ -40,7 +41,6 @@ vec3 normal_at(ivec3 t) { return texelFetch(u_normal, t, 0).xyz * 2.0 - 1.0; }
 
 bool outside(ivec2 t) { return any(lessThan(t, g_rect.xy)) || any(greaterThan(t, g_rect.zw)); }
 
-#ifdef AO_PASS
 // texel with window depth `d` -> view-space position
 vec3 view_position(ivec2 t, float d) {
     vec2 ndc = g_map.xy + (vec2(t) + 0.5) * g_map.zw;
@@ -59,26 +59,31 @@ vec2 ao_sample(vec2 o) {
     return vec2(max(0.0, dot(v, g_n) - 0.002 * abs(g_p.z)) / dist, 1.0);
 }
 
-float ambient_occlusion() {
-    // 8 samples on a golden-angle spiral (unrolled: no dynamic indexing)
+// The 8 spiral samples of a quad: this texel's 2 around itself (occlusion, used), none
+// unless it is covered; texel (x & 1, y & 1) = (i, j) takes samples 2k and 2k + 1, k = i + 2j.
+vec2 ao_share(bool covered) {
+    ivec2 odd = g_t.xy & 1;
+    int k = odd.x + 2 * odd.y;
     float R = u_ao_radius * g_scale;
-    vec2 acc = ao_sample(R * vec2(0.0548, 0.0300)) + ao_sample(R * vec2(-0.1821, 0.0449))
-             + ao_sample(R * vec2(0.1732, -0.2601)) + ao_sample(R * vec2(0.0672, 0.4323))
-             + ao_sample(R * vec2(-0.4391, -0.3515)) + ao_sample(R * vec2(0.6860, -0.0457))
-             + ao_sample(R * vec2(-0.5613, 0.5875)) + ao_sample(R * vec2(0.0196, -0.9373));
-    return acc.y > 0.0 ? clamp(1.0 - u_ao_strength * acc.x / acc.y, 0.0, 1.0) : 1.0;
+    vec2 o0 = k == 0 ? vec2(0.0548, 0.0300) : k == 1 ? vec2(0.1732, -0.2601)
+            : k == 2 ? vec2(-0.4391, -0.3515) : vec2(-0.5613, 0.5875);
+    vec2 o1 = k == 0 ? vec2(-0.1821, 0.0449) : k == 1 ? vec2(0.0672, 0.4323)
+            : k == 2 ? vec2(0.6860, -0.0457) : vec2(0.0196, -0.9373);
+    vec2 acc = ao_sample(R * o0) + ao_sample(R * o1);
+    return covered ? acc : vec2(0.0);    // a select: an empty helper's NaN never reaches the sum
 }
 
-void main() {
-    g_t = ivec3(min(ivec2(gl_FragCoord.xy) * 2, g_rect.zw), gl_Layer);
-    float d = texelFetch(u_depth, g_t, 0).r;
-    if (d >= 1.0) { out_post = vec4(-1.0); return; }
-    g_p = view_position(g_t.xy, d);
-    g_n = normalize(normal_at(g_t));
-    out_post = vec4(ambient_occlusion());
+// AO from the shares of the whole 2x2 quad: with a = this texel's share, dx, dy its fine
+// derivatives and dxy the derivative of dy along x, the quad's sum is
+// 4a + 2 sx dx + 2 sy dy + sx sy dxy, with s = +1 on even and -1 on odd coordinates.
+float quad_ambient_occlusion(bool covered) {
+    vec2 share = ao_share(covered);
+    vec2 dx = dFdxFine(share), dy = dFdyFine(share), dxy = dFdxFine(dy);
+    vec2 s = vec2(1 - 2 * (g_t.xy & 1));
+    vec2 acc = 4.0 * share + 2.0 * s.x * dx + 2.0 * s.y * dy + s.x * s.y * dxy;
+    return acc.y > 0.5 ? clamp(1.0 - u_ao_strength * acc.x / acc.y, 0.0, 1.0) : 1.0;
 }
 
-#else
 // edge strength against a covered neighbour's (normal, view distance) `q`: depth
 // discontinuity or crease (an empty neighbour makes a silhouette: 1)
 float edge_with(vec4 q) {
@@ -98,22 +103,11 @@ float edge_towards(ivec2 o) {
     return outside(s.xy) ? 1.0 : edge_at(o, texelFetch(u_depth, s, 0).r);
 }
 
-// The AO of the half-resolution texel t / 2 when it was computed for a covered texel of
-// the rectangle (which is then this object's), else of (t + 1) / 2 (odd coordinates), else 1.
-// Both candidates lie in the 2x2 footprint at t / 2: one gather reads them.
-float ambient_occlusion_of_texel() {
-    ivec2 h = g_t.xy / 2, odd = g_t.xy & 1;
-    vec2 size = vec2(textureSize(u_ao, 0).xy);
-    // components: x (h.x, h.y+1), y (h.x+1, h.y+1), z (h.x+1, h.y), w (h.x, h.y)
-    vec4 a = textureGather(u_ao, vec3((vec2(h) + 1.0) / size, float(g_t.z)), 0);
-    if (a.w >= 0.0 && !outside(h * 2)) return a.w;
-    float second = odd.x == 1 ? (odd.y == 1 ? a.y : a.z) : (odd.y == 1 ? a.x : -1.0);
-    return second >= 0.0 && !outside((h + odd) * 2) ? second : 1.0;
-}
-
 void main() {
-    // the depth test passed: this texel is covered (the quads lie at depth 1)
+    // the depth test passed: this texel is covered (the quads lie at depth 1), unless it is
+    // a helper of a covered one in its quad (maybe outside the rectangle, or the texture)
     g_t = ivec3(gl_FragCoord.xy, gl_Layer);
+    ivec3 own = ivec3(min(g_t.xy, textureSize(u_normal, 0).xy - 1), g_t.z);
 #ifdef EDGE_QUAD
     // every fragment of a 2x2 quad (helpers too) fetches its own (normal, view distance) and
     // emptiness before any branch, so that the fine derivatives are defined; an empty
@@ -128,17 +122,18 @@ void main() {
     float depth = odd.x == 1 ? row0.x : row0.y;
     float depth_x = odd.x == 1 ? row0.y : row0.x;       // at (x + away.x, y)
     float depth_y = odd.x == 1 ? row1.x : row1.y;       // at (x, y + away.y)
-    ivec3 own = ivec3(min(g_t.xy, textureSize(u_normal, 0).xy - 1), g_t.z);
     vec4 nd = vec4(normal_at(own), view_distance(depth));
     float empty = depth >= 1.0 ? 1.0 : 0.0;
     vec4 ddx = dFdxFine(nd), ddy = dFdyFine(nd);
     vec2 partner_empty = vec2(dFdxFine(empty), dFdyFine(empty));
 #else
-    vec4 nd = vec4(normal_at(g_t), view_distance(texelFetch(u_depth, g_t, 0).r));
+    float depth = texelFetch(u_depth, own, 0).r;
+    vec4 nd = vec4(normal_at(own), view_distance(depth));
 #endif
     g_n = normalize(nd.xyz);
     g_dist = nd.w;
-    float ao = ambient_occlusion_of_texel();
+    g_p = view_position(g_t.xy, depth);
+    float ao = quad_ambient_occlusion(!outside(g_t.xy) && depth < 1.0);
 #ifdef EDGE_QUAD
     // the quad partner (x ^ 1, y ^ 1) from the derivatives, the other side fetched
     ivec2 partner = g_t.xy + 1 - 2 * odd;
@@ -154,4 +149,3 @@ void main() {
 #endif
     out_post = vec4(ao, edge, 0.0, 1.0);
 }
-#endif

@@ -1,10 +1,8 @@
 #version 430
-// defines: AO_PASS
+// defines:
 // A quad over the object's atlas rectangle (border included) on its layer; culled objects
 // emit nothing. Texels outside every rectangle are never shaded: nothing reads them. What a
 // fragment needs of the record goes as flat values, so no fragment reads the record buffer.
-// AO_PASS: the target is at half resolution, and texel h is shaded when its representative
-// 2h lies in the rectangle.
 #include "records.glsl"
 
 layout(points) in;
@@ -16,7 +14,7 @@ flat out vec4 g_map;       // (origin, step): atlas texel -> viewport NDC, ndc =
 flat out float g_scale;    // atlas texels per viewport pixel
 
 uniform vec2 u_viewport;   // viewport pixels
-uniform vec2 u_target;     // target size in pixels (the used atlas, or half of it)
+uniform vec2 u_target;     // target size in pixels (the used atlas)
 
 void main() {
     Record r = records[v_object[0]];
@@ -25,11 +23,7 @@ void main() {
     ivec4 rect = ivec4(r.atlas.xy, r.atlas.xy + r.atlas.zw - 1.0);
     vec2 step = 2.0 / (scale * u_viewport);
     vec2 origin = (r.viewport.xy - (r.atlas.xy + float(r.info.z)) / scale) / u_viewport * 2.0 - 1.0;
-#ifdef AO_PASS
-    vec4 px = vec4((rect.xy + 1) / 2, rect.zw / 2 + 1);
-#else
     vec4 px = vec4(rect.xy, rect.zw + 1);
-#endif
     vec4 ndc = px / u_target.xyxy * 2.0 - 1.0;
     vec2 corners[4] = vec2[](ndc.xy, ndc.zy, ndc.xw, ndc.zw);
     for (int i = 0; i < 4; ++i) {
@@ -37,7 +31,7 @@ void main() {
         g_map = vec4(origin, step);
         g_scale = scale;
         gl_Layer = r.info.x;
-        gl_Position = vec4(corners[i], 1.0, 1.0);   // depth 1: the edge pass tests it against the atlas's
+        gl_Position = vec4(corners[i], 1.0, 1.0);   // depth 1: tested against the atlas's
         EmitVertex();
     }
     EndPrimitive();

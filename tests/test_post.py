@@ -77,32 +77,32 @@ class AtlasFrame:
         return np.stack([-z * ndc[:, 0] / P[0, 0], -z * ndc[:, 1] / P[1, 1], z], -1)
 
     def ambient_occlusion(self, radius: float, strength: float) -> np.ndarray:
-        """Per covered texel: the AO of the nearest even texel (down, then up) of the same
-        object, from 8 spiral samples within its rectangle; 1 where there is none."""
+        """Per covered texel: AO from the 8 spiral samples of its 2x2 quad (even-aligned):
+        quad texel (i, j) takes samples 2k and 2k + 1 (k = i + 2j) around itself, if it is
+        covered and in the object's rectangle; samples count within the rectangle only."""
         ids = self.ids[tuple(self.covered.T)]
-        result = np.ones(len(ids), np.float32)
-        found = np.zeros(len(ids), bool)
-        size = np.array(self.shape[1:])
-        for shift in (0, 1):
-            rep = np.minimum((self.covered[:, 1:] + shift) // 2 * 2, size - 1)
-            own = ~found & (self.fetch(self.ids, rep) == ids)
-            p = self.view_position(ids, rep, self.fetch(self.depth, rep))
-            n = _normalize(self.fetch(self.normal, rep)[:, :3])
-            occ = np.zeros(len(ids), np.float32)
-            used = np.zeros(len(ids), np.float32)
-            R = radius * self.rec.scale[ids].astype(np.float32)
-            for o in SPIRAL:
-                s = rep + np.rint(R[:, None] * o[::-1]).astype(int)
-                d = self.fetch(self.depth, s)
-                ok = self.inside(s) & (d < 1.0)
-                v = self.view_position(ids, s, d) - p
-                dist = np.linalg.norm(v, axis=-1) + 1e-12
-                occ += np.where(ok, np.maximum(0, (v * n).sum(-1) - 0.002 * np.abs(p[:, 2])) / dist, 0)
-                used += ok
-            ao = np.where(used > 0, np.clip(1 - strength * occ / np.maximum(used, 1), 0, 1), 1.0)
-            result = np.where(own, ao, result)
-            found |= own
-        return result
+        occ = np.zeros(len(ids), np.float32)
+        used = np.zeros(len(ids), np.float32)
+        R = radius * self.rec.scale[ids].astype(np.float32)
+        for j in (0, 1):
+            for i in (0, 1):
+                lane = self.covered[:, 1:] // 2 * 2 + (j, i)                  # (y, x)
+                d_lane = self.fetch(self.depth, lane)
+                live = self.inside(lane) & (d_lane < 1.0)
+                p = self.view_position(ids, lane, d_lane)
+                n = _normalize(self.fetch(self.normal, lane)[:, :3])
+                k = i + 2 * j
+                for o in SPIRAL[2 * k:2 * k + 2]:
+                    s = lane + np.rint(R[:, None] * o[::-1]).astype(int)
+                    d = self.fetch(self.depth, s)
+                    ok = live & self.inside(s) & (d < 1.0)
+                    v = self.view_position(ids, s, d) - p
+                    dist = np.linalg.norm(v, axis=-1) + 1e-12
+                    with np.errstate(invalid="ignore"):
+                        o_occ = np.maximum(0, (v * n).sum(-1) - 0.002 * np.abs(p[:, 2])) / dist
+                    occ += np.where(ok, o_occ, 0)
+                    used += ok
+        return np.where(used > 0, np.clip(1 - strength * occ / np.maximum(used, 1), 0, 1), 1.0)
 
 
 SENTINEL = 77

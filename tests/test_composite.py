@@ -190,3 +190,42 @@ def test_stale_atlas_texels_never_show(make_renderer, demo_scene):
     for part in got:
         assert np.array_equal(got[part], want[part]), part
     assert (got["id"][got["depth"] >= 1.0] == -1).all() and (got["color"][got["depth"] >= 1.0] == 0).all()
+
+
+def _silhouettes(records, covered: np.ndarray, oid: int, width: int) -> np.ndarray:
+    """The object's texels in its B_atlas with a texel within `width` (square window) that
+    is outside B_atlas or empty: what the outline pass draws, in numpy."""
+    x, y, w, h = records.atlas_rect[oid]
+    own = np.zeros((h + 2 * width, w + 2 * width), bool)       # outside B_atlas: not the object's
+    own[width:-width, width:-width] = covered[records.layer[oid], y:y + h, x:x + w]
+    near_other = np.zeros((h, w), bool)
+    for dy in range(-width, width + 1):
+        for dx in range(-width, width + 1):
+            near_other |= ~own[width + dy:width + dy + h, width + dx:width + dx + w]
+    return own[width:-width, width:-width] & near_other
+
+
+@pytest.mark.parametrize("border, width, distance", [(0, 1, 2.2), (0, 1, 0.6), (0, 3, 0.6), (1, 3, 2.2)])
+def test_outlines_match_numpy_silhouettes(make_renderer, demo_scene, border, width, distance):
+    """Every object in focus: the outline pixels are exactly the silhouette texels of each
+    object's own atlas region mapped back through T^-1. With border 0 the regions touch, so
+    a silhouette next to B_atlas's edge is found only if texels beyond it count as empty
+    (not the neighbouring object's); close up (distance 0.6) parts cross the viewport's edge,
+    so their regions are full up to B_atlas's edge. A wide outline reaches past a 1-texel border."""
+    from rtta.renderer import Settings
+    r = make_renderer(demo_scene, Settings(border=border))
+    cam = Camera.orbit(demo_scene.center, demo_scene.radius, 30, 20, distance)
+    rec = r.capture(cam, VP)
+    covered = r.atlas.read(rec.atlas_size[:2], rec.atlas_size[2], ("depth",))["depth"] < 1.0
+    style = Style(focus=set(range(demo_scene.count)), outline_width=width)
+    rgba, _ = r.composite("sprites", style).read()
+    drawn = np.abs(rgba[..., :3].astype(int) - np.array(style.outline_color[:3]) * 255).max(-1) <= 3
+    expected = np.zeros(drawn.shape, bool)
+    for oid in np.flatnonzero(rec.visible):
+        assert rec.scale[oid] == 1.0
+        x0, y0, x1, y1 = rec.viewport_rect[oid].astype(int)
+        sil = _silhouettes(rec, covered, oid, width)
+        # pixel (x0 + i, y0 + j) shows texel (border + i, border + j) of B_atlas at scale 1
+        expected[y0:y1, x0:x1] |= sil[border:border + y1 - y0, border:border + x1 - x0]
+    assert expected.sum() > 500
+    assert np.array_equal(drawn, expected), f"{(drawn != expected).sum()} pixels differ"

@@ -25,27 +25,24 @@ STAGES = {"vertex_shader": "post.vert", "geometry_shader": "post.geom", "fragmen
 
 
 class _LayerTarget:
-    """One texture array with its framebuffer, reallocated only when the shape changes."""
+    """One texture array with its framebuffer, which tests against the depth of a target of
+    the same shape (the atlas); reallocated only when the shape changes or that target
+    reallocated its textures."""
 
     def __init__(self, ctx: moderngl.Context, components: int, dtype: str) -> None:
         self.ctx = ctx
         self.components, self.dtype = components, dtype
         self.texture = self.fbo = self.shape = self._key = None
 
-    def ensure(self, shape: tuple[int, int, int], depth_of: LayeredTarget | None = None) -> None:
-        """Texture of `shape`; the framebuffer also tests against the depth of `depth_of` (a
-        target of the same shape) when given. Rebuilt when the shape changes or that target
-        reallocated its textures."""
-        key = (shape, None if depth_of is None else (id(depth_of), depth_of.allocations))
+    def ensure(self, shape: tuple[int, int, int], depth_of: LayeredTarget) -> None:
+        key = (shape, id(depth_of), depth_of.allocations)
         if key != self._key:
             self.release()
             self.texture = self.ctx.texture_array(shape, self.components, dtype=self.dtype)
             self.texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
-            self.texture.repeat_x = self.texture.repeat_y = False    # gathers clamp at the edge
             self.fbo = self.ctx.framebuffer([self.texture])
-            if depth_of is not None:
-                self.fbo.use()
-                depth_of.depth.attach_to_bound_framebuffer()
+            self.fbo.use()
+            depth_of.depth.attach_to_bound_framebuffer()
             self.shape, self._key = shape, key
 
     @property

@@ -5,14 +5,14 @@ and the whole batched scene is drawn in one pass, displaced into the atlas regio
 every object is available unoccluded (colour, depth, normal, id).
 """
 
-from .camera import Camera
-from .context import Capabilities, create_headless_context
+from .atlas.parameterize import Records, parameterize
 from .errors import RttaError
-from .loader import load_scene
-from .parameterize import Records, parameterize
-from .passes import CapturePass, RttPass, StdPass
-from .renderer import Renderer, Settings
-from .scene import Scene, from_meshes
+from .gl.context import Capabilities, create_headless_context
+from .passes.capture import CapturePass, RttPass, StdPass
+from .renderer.renderer import Renderer, Settings
+from .scene.camera import Camera
+from .scene.loader import load_scene
+from .scene.model import Scene, from_meshes
 
 __all__ = [
     "Camera", "Capabilities", "CapturePass", "Records", "Renderer", "RttPass", "RttaError", "Scene",

@@ -5,4 +5,5 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh test,viewer
 .venv/bin/ruff check rtta viewer tests scripts
+.venv/bin/lint-imports              # the layers and no-cycle contracts in pyproject.toml
 exec .venv/bin/pytest "$@"

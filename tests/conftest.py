@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from rtta.context import shared_context
+from rtta.gl.context import shared_context
 
 
 def pytest_addoption(parser):
@@ -15,7 +15,7 @@ def pytest_addoption(parser):
 @pytest.fixture(scope="session")
 def ctx():
     """The process's one headless context (the CLI called in-process uses it too)."""
-    from rtta.memory import steady_heap
+    from rtta.tools.memory import steady_heap
 
     steady_heap()       # as the CLI and the viewer do
     return shared_context()
@@ -32,7 +32,7 @@ def gl(ctx):
 @pytest.fixture
 def make_renderer(gl):
     """Renderers created in a test are released at its end (no GPU objects leak)."""
-    from rtta.renderer import Renderer
+    from rtta.renderer.renderer import Renderer
 
     made = []
 
@@ -48,7 +48,7 @@ def make_renderer(gl):
 
 @pytest.fixture(scope="session")
 def demo_scene():
-    from rtta.demo import demo_path
-    from rtta.loader import load_scene
+    from rtta.scene.demo import demo_path
+    from rtta.scene.loader import load_scene
 
     return load_scene(demo_path())

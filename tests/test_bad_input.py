@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from bad_inputs import make_corpus
 
-from rtta.cli import main
+from rtta.cli.main import main
 
 RTTA = str(Path(sys.executable).with_name("rtta"))
 SENTINEL = b"the user's file: must survive"
@@ -109,7 +109,7 @@ def test_real_process_one_line_exit_2(corpus, name, tmp_path):
 
 
 def test_loaded_scenes_are_what_the_file_says(corpus):
-    from rtta.loader import load_scene
+    from rtta.scene.loader import load_scene
 
     _, cases = corpus
     by_name = {c.name: c for c in cases}

@@ -5,7 +5,7 @@ import math
 import os
 
 import rtta
-from rtta import bench
+from rtta.tools import bench
 
 
 def test_capture_bench_quick(gl, tmp_path, capsys):
@@ -50,7 +50,7 @@ def test_composite_bench_quick(gl, tmp_path, capsys):
 
 
 def test_ldi_bench_quick(gl, tmp_path, capsys):
-    from rtta.bench_ldi import run_ldi
+    from rtta.tools.bench_ldi import run_ldi
 
     out = tmp_path / "ldi.json"
     assert run_ldi(quick=True, json_path=str(out)) == 0
@@ -64,7 +64,7 @@ def test_ldi_bench_quick(gl, tmp_path, capsys):
 
 
 def test_material_bench_quick(gl, tmp_path, capsys):
-    from rtta.bench_material import run_material
+    from rtta.tools.bench_material import run_material
 
     out = tmp_path / "material.json"
     assert run_material(40, quick=True, json_path=str(out), viewport=(256, 192), max_vertices=96) == 0
@@ -82,8 +82,8 @@ def test_material_bench_quick(gl, tmp_path, capsys):
 def test_reliability_bench_scene_choice(gl, tmp_path, capsys):
     """--scenes runs only the named scenes (here the textured one, a few frames); an unknown
     name is one error line naming the choices, exit 2."""
-    from rtta.bench_reliability import run_reliability
-    from rtta.cli import main
+    from rtta.cli.main import main
+    from rtta.tools.bench_reliability import run_reliability
 
     out = tmp_path / "rel.json"
     assert run_reliability(3, 40, json_path=str(out), ctx=gl, only=["textured-64"]) == 0

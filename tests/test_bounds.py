@@ -10,12 +10,12 @@ import pytest
 import trimesh
 from checks import check_frame
 
-from rtta.camera import MAX_FAR_NEAR, Camera
-from rtta.cli import main
-from rtta.generate import random_scene
-from rtta.renderer import Settings
-from rtta.report_runs import _two_spheres, sprites_error
-from rtta.scene import from_meshes
+from rtta.cli.main import main
+from rtta.renderer.renderer import Settings
+from rtta.scene.camera import MAX_FAR_NEAR, Camera
+from rtta.scene.generate import random_scene
+from rtta.scene.model import from_meshes
+from rtta.tools.report_runs import _two_spheres, sprites_error
 
 
 def _rotated_box(extents, angle, axis, shift=(0.0, 0.0, 0.0)):
@@ -120,7 +120,7 @@ def test_supersampled_regions_are_the_double_resolution_capture(make_renderer, d
 
 
 def test_region_scale_is_checked():
-    from rtta.parameterize import parameterize
+    from rtta.atlas.parameterize import parameterize
 
     with pytest.raises(ValueError, match="region scale"):
         parameterize(np.zeros((1, 8, 3)), np.identity(4), (8, 8), region_scale=0.0)

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 from checks import assert_depth_close, check_frame
 
-from rtta.camera import DEFAULT_ORBIT, Camera
-from rtta.compare import near_edges, near_silhouettes
-from rtta.generate import random_scene
+from rtta.scene.camera import DEFAULT_ORBIT, Camera
+from rtta.scene.generate import random_scene
+from rtta.tools.compare import near_edges, near_silhouettes
 
 PATHS = ("vs", "gs")
 

@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 import trimesh
 
-from rtta.camera import DEFAULT_ORBIT, Camera
-from rtta.composite import BACKGROUND, MODES, Style
-from rtta.generate import random_scene
-from rtta.scene import from_meshes
-from rtta.snapshot import over_background
+from rtta.passes.composite import BACKGROUND, MODES, Style
+from rtta.renderer.snapshot import over_background
+from rtta.scene.camera import DEFAULT_ORBIT, Camera
+from rtta.scene.generate import random_scene
+from rtta.scene.model import from_meshes
 
 VP = (240, 180)
 
@@ -150,7 +150,7 @@ def test_only_needed_passes_run(make_renderer, demo_scene):
 
 
 def test_borders_are_marked_empty(make_renderer, demo_scene):
-    from rtta.renderer import Settings
+    from rtta.renderer.renderer import Settings
     r = make_renderer(demo_scene, Settings(border=2))
     cam = Camera.orbit(demo_scene.center, demo_scene.radius, *DEFAULT_ORBIT)
     rec = r.capture(cam, VP)
@@ -212,7 +212,7 @@ def test_outlines_match_numpy_silhouettes(make_renderer, demo_scene, border, wid
     a silhouette next to B_atlas's edge is found only if texels beyond it count as empty
     (not the neighbouring object's); close up (distance 0.6) parts cross the viewport's edge,
     so their regions are full up to B_atlas's edge. A wide outline reaches past a 1-texel border."""
-    from rtta.renderer import Settings
+    from rtta.renderer.renderer import Settings
     r = make_renderer(demo_scene, Settings(border=border))
     cam = Camera.orbit(demo_scene.center, demo_scene.radius, 30, 20, distance)
     rec = r.capture(cam, VP)

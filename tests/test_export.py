@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from rtta.cli import main
-from rtta.demo import demo_path
-from rtta.loader import load_scene
+from rtta.cli.main import main
+from rtta.scene.demo import demo_path
+from rtta.scene.loader import load_scene
 
 RTTA = str(Path(sys.executable).with_name("rtta"))
 

@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from rtta.context import LAYER_EXTENSION, Capabilities
 from rtta.errors import RttaError
+from rtta.gl.context import LAYER_EXTENSION, Capabilities
 
 RTTA = str(Path(sys.executable).with_name("rtta"))
 

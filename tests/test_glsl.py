@@ -2,7 +2,7 @@
 
 import pytest
 
-from rtta import glsl
+from rtta.gl import glsl
 
 
 def test_defines_are_injected_after_version():
@@ -32,8 +32,8 @@ def test_capture_path_falls_back_without_the_layer_extension(gl):
     an explicit 'vs' request is a clear error naming the extension."""
     import dataclasses
 
-    from rtta.context import LAYER_EXTENSION, Capabilities
     from rtta.errors import RttaError
+    from rtta.gl.context import LAYER_EXTENSION, Capabilities
 
     caps = dataclasses.replace(Capabilities.of(gl), vertex_layer=False)
     assert caps.capture_path("auto") == "gs"
@@ -43,7 +43,7 @@ def test_capture_path_falls_back_without_the_layer_extension(gl):
 
 
 def test_scene_pass_routes_defines_by_declaration_and_rejects_unknown(gl):
-    from rtta.passes import ScenePass
+    from rtta.passes.capture import ScenePass
 
     with pytest.raises(ValueError, match="BOGUS"):
         ScenePass(gl, BOGUS=True)

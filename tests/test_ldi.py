@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 import trimesh
 
-from rtta import shapes
 from rtta.errors import RttaError
-from rtta.ldi import NIL, Peeler, build, classify, closed_mesh, crop_bounds, look_rotation, to_texture
-from rtta.ldi_gpu import ParityTest
-from rtta.ldi_pack import compress, decompress
+from rtta.ldi.gpu import ParityTest
+from rtta.ldi.pack import compress, decompress
+from rtta.ldi.peel import NIL, Peeler, build, classify, closed_mesh, crop_bounds, look_rotation, to_texture
+from rtta.scene import shapes
 
 COW = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "cow.glb"
 MESHES = ["sphere", "torus", "torus-knot", "vase", "cow"]
@@ -122,7 +122,7 @@ def test_compression_is_lossless(gl, name):
 
 def test_odd_layer_counts_survive_compression():
     """A texel with an odd number of layers (a grazing ray) keeps its last layer."""
-    from rtta.ldi import LayeredDepthImage
+    from rtta.ldi.peel import LayeredDepthImage
 
     layers = np.full((3, 2, 2), NIL, np.float32)
     layers[:, 0, 0] = (0.1, 0.2, 0.3)

@@ -9,13 +9,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rtta.batching import ChunkedStdPass, SeparatePass
-from rtta.bvh import build_bvh, visible_leaves
-from rtta.camera import Camera
-from rtta.material_atlas import DEFAULT_LEVELS, build_atlas, pack_slots
-from rtta.preprocess import index_vertices, smooth_normals
-from rtta.targets import LayeredTarget
-from rtta.textured import REPEATS, TEXTURE_KINDS, textured_box, textured_scene
+from rtta.gl.targets import LayeredTarget
+from rtta.passes.batching import ChunkedStdPass, SeparatePass
+from rtta.passes.bvh import build_bvh, visible_leaves
+from rtta.scene.camera import Camera
+from rtta.scene.material_atlas import DEFAULT_LEVELS, build_atlas, pack_slots
+from rtta.scene.preprocess import index_vertices, smooth_normals
+from rtta.scene.textured import REPEATS, TEXTURE_KINDS, textured_box, textured_scene
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 VP = (384, 384)
@@ -91,7 +91,7 @@ def test_smooth_angle_flags_reach_the_loader(tmp_path, capsys):
     out of range is one error line with exit 2."""
     import trimesh
 
-    from rtta.cli import _load, build_parser, main
+    from rtta.cli.main import _load, build_parser, main
 
     path = tmp_path / "ball.obj"
     trimesh.creation.icosphere(2).export(path, include_normals=False)
@@ -116,7 +116,7 @@ def test_oversized_texture_is_named_in_one_warning(tmp_path):
     import trimesh
     from PIL import Image
 
-    from rtta.loader import load_scene
+    from rtta.scene.loader import load_scene
 
     box = trimesh.creation.box()
     uv = np.random.default_rng(0).random((len(box.vertices), 2))
@@ -192,7 +192,7 @@ def test_atlas_matches_separate_textures(make_renderer, gl, view):
 
 @pytest.mark.parametrize("path", ["vs", "gs"])
 def test_textured_sprites_reconstruct_textured_std(make_renderer, path):
-    from rtta.snapshot import over_background
+    from rtta.renderer.snapshot import over_background
 
     scene = textured_scene(12, seed=5)
     r = make_renderer(scene)
@@ -255,7 +255,7 @@ def test_chunked_std_equals_std_and_culls(make_renderer, gl):
 
 @pytest.mark.parametrize("name", ["textured_gallery.glb", "flight_helmet.glb"])
 def test_real_textured_files_load_and_composite(make_renderer, name):
-    from rtta.loader import load_scene
+    from rtta.scene.loader import load_scene
 
     path = DATA / name
     if not path.exists():

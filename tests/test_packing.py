@@ -7,10 +7,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rtta.camera import Camera
-from rtta.generate import random_scene
-from rtta.packing import overlaps, pack_shelves
-from rtta.parameterize import parameterize
+from rtta.atlas.packing import overlaps, pack_shelves
+from rtta.atlas.parameterize import parameterize
+from rtta.scene.camera import Camera
+from rtta.scene.generate import random_scene
 
 sizes = st.integers(1, 64)
 
@@ -74,14 +74,14 @@ def test_parameterization_regions(n, border, atlas_max, max_layers, az, el, dist
     r = rec.atlas_rect[vis]
     assert (r[:, 2] >= 1 + 2 * border).all() and (r[:, 3] >= 1 + 2 * border).all()
     assert (r[:, 0] >= 0).all() and (r[:, 0] + r[:, 2] <= tw).all() and (r[:, 1] + r[:, 3] <= th).all()
-    from rtta.packing import Packing
+    from rtta.atlas.packing import Packing
     p = Packing(r[:, 0], r[:, 1], rec.layer[vis], tw, th, td)
     assert not overlaps(p, r[:, 2], r[:, 3])
     assert ((rec.scale[vis] > 0) & (rec.scale[vis] <= 1)).all()
 
 
 def rec_min_area(scene, vpm, vp, border):
-    from rtta.parameterize import project_bounds
+    from rtta.atlas.parameterize import project_bounds
     vis, _, _ = project_bounds(scene.box_corners(), vpm)
     return vis.sum() * (1 + 2 * border) ** 2
 

@@ -8,9 +8,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rtta.camera import DEFAULT_ORBIT, Camera
-from rtta.composite import Style
-from rtta.renderer import Settings
+from rtta.passes.composite import Style
+from rtta.renderer.renderer import Settings
+from rtta.scene.camera import DEFAULT_ORBIT, Camera
 
 VP = (240, 180)
 SPIRAL = np.array([(0.0548, 0.0300), (-0.1821, 0.0449), (0.1732, -0.2601), (0.0672, 0.4323),

@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from rtta.camera import DEFAULT_ORBIT, Camera
-from rtta.composite import Style
-from rtta.snapshot import render_modes
+from rtta.passes.composite import Style
+from rtta.renderer.snapshot import render_modes
+from rtta.scene.camera import DEFAULT_ORBIT, Camera
 
 HERE = Path(__file__).parent
 REFS = HERE / "references"
@@ -26,7 +26,7 @@ FOCUS = ("pad_inner", "pad_outer", "piston_1", "piston_2")
 
 @pytest.fixture(scope="module")
 def snapshots(ctx, demo_scene):
-    from rtta.renderer import Renderer
+    from rtta.renderer.renderer import Renderer
 
     r = Renderer(ctx, demo_scene)
     try:

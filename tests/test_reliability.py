@@ -6,11 +6,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from rtta.camera import Camera
-from rtta.generate import random_scene
-from rtta.memory import mapped_block_bytes, steady_heap
-from rtta.reliability import drift, gl_census, random_camera, random_viewport, soak, sweep
-from rtta.textured import textured_scene
+from rtta.scene.camera import Camera
+from rtta.scene.generate import random_scene
+from rtta.scene.textured import textured_scene
+from rtta.tools.memory import mapped_block_bytes, steady_heap
+from rtta.tools.reliability import drift, gl_census, random_camera, random_viewport, soak, sweep
 
 
 def test_census_sees_a_leak_and_its_release(gl):

@@ -7,8 +7,8 @@ import pytest
 import trimesh
 
 from rtta.errors import RttaError
-from rtta.loader import load_scene
-from rtta.scene import unique_names
+from rtta.scene.loader import load_scene
+from rtta.scene.model import unique_names
 
 
 def test_demo_assembly(demo_scene):

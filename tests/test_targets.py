@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from rtta.camera import Camera
-from rtta.generate import random_scene
-from rtta.targets import SHRINK_AFTER_FRAMES, LayeredTarget
+from rtta.gl.targets import SHRINK_AFTER_FRAMES, LayeredTarget
+from rtta.scene.camera import Camera
+from rtta.scene.generate import random_scene
 
 
 def test_hysteresis(gl):
@@ -75,7 +75,7 @@ def test_std_target_has_no_normal_image(make_renderer, demo_scene, gl):
 def test_trim_shrinks_to_the_last_capture_at_once(make_renderer, demo_scene, gl):
     """After a large view, trim() gives the memory back now (not after SHRINK_AFTER_FRAMES),
     and the next capture and composite work in the trimmed targets and equal an untrimmed run."""
-    from rtta.snapshot import over_background
+    from rtta.renderer.snapshot import over_background
 
     r = make_renderer(demo_scene)
     cam = Camera.orbit(demo_scene.center, demo_scene.radius, 30, 20, 2.2)

@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from rtta.camera import DEFAULT_ORBIT, Camera
-from rtta.picking import objects_at, pick
-from rtta.readback import front_most
+from rtta.gl.readback import front_most
+from rtta.passes.picking import objects_at, pick
+from rtta.scene.camera import DEFAULT_ORBIT, Camera
 from viewer.orbit import MAX_ELEVATION, Orbit
 from viewer.state import ViewerState
 from viewer.views import Layout, atlas_rects_on_screen, layer_tiles

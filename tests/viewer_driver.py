@@ -15,9 +15,9 @@ from pathlib import Path
 
 from pyglet.window import key, mouse
 
-from rtta import glraw
+from rtta.gl import glraw
 from rtta.imageio import save_png
-from rtta.loader import load_scene_or_demo
+from rtta.scene.loader import load_scene_or_demo
 from viewer.app import Viewer
 from viewer.run import create_window
 

@@ -12,8 +12,8 @@ NO_DISPLAY = ("rtta-view: no display found (DISPLAY and WAYLAND_DISPLAY are not 
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from rtta.cli import add_load_options
-    from rtta.snapshot import SNAPSHOT_MODES
+    from rtta.cli.main import add_load_options
+    from rtta.renderer.snapshot import SNAPSHOT_MODES
 
     p = argparse.ArgumentParser(prog="rtta-view", description="Interactive ghosted views of multi-part models.")
     p.add_argument("scene", nargs="?", help="scene file (default: the built-in demo)")
@@ -28,9 +28,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from rtta.cli import load_options, parse_size
+    from rtta.cli.main import load_options, parse_size
     from rtta.errors import RttaError
-    from rtta.memory import steady_heap
+    from rtta.tools.memory import steady_heap
 
     args = build_parser().parse_args(argv)
     steady_heap()          # long sessions resize targets often: keep the heap from creeping

@@ -18,12 +18,12 @@ from moderngl_window.integrations.imgui_bundle import ModernglWindowRenderer
 
 from rtta.errors import RttaError
 from rtta.imageio import save_png
-from rtta.lens import Lens, default_placement
-from rtta.loader import load_scene
-from rtta.projector import Projector, default_image
-from rtta.renderer import Renderer
-from rtta.scene import Scene
-from rtta.snapshot import over_background
+from rtta.ldi.lens import Lens, default_placement
+from rtta.passes.projector import Projector, default_image
+from rtta.renderer.renderer import Renderer
+from rtta.renderer.snapshot import over_background
+from rtta.scene.loader import load_scene
+from rtta.scene.model import Scene
 
 from . import overlay, panels
 from .controls import Controls

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 
 from imgui_bundle import imgui
 
-from rtta.picking import objects_at, pick
+from rtta.passes.picking import objects_at, pick
 
 from .orbit import DEGREES_PER_PIXEL
 from .state import VIEW_MODES

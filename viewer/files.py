@@ -10,7 +10,7 @@ from pathlib import Path
 
 from imgui_bundle import imgui
 
-from rtta.scene import SUPPORTED
+from rtta.scene.model import SUPPORTED
 
 POPUP = "Open scene"
 

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rtta.camera import DEFAULT_ORBIT, Camera
+from rtta.scene.camera import DEFAULT_ORBIT, Camera
 
 DEGREES_PER_PIXEL = 0.3
 MAX_ELEVATION = 89.0

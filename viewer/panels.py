@@ -11,9 +11,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 from imgui_bundle import imgui, implot
 
-from rtta.composite import LENS_MODES
-from rtta.lens import SHAPES as LENS_SHAPES
-from rtta.scene import BOUNDS
+from rtta.ldi.lens import SHAPES as LENS_SHAPES
+from rtta.passes.composite import LENS_MODES
+from rtta.scene.model import BOUNDS
 
 from .state import ATLAS_MAX_CHOICES, VIEW_MODES
 

@@ -7,9 +7,9 @@ from pathlib import Path
 
 import numpy as np
 
-from rtta.camera import DEFAULT_ORBIT
 from rtta.errors import RttaError
-from rtta.loader import load_scene_or_demo
+from rtta.scene.camera import DEFAULT_ORBIT
+from rtta.scene.loader import load_scene_or_demo
 
 from .orbit import DEGREES_PER_PIXEL
 from .state import VIEW_MODES

@@ -8,8 +8,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from rtta.composite import MODES, Style
-from rtta.renderer import Settings
+from rtta.passes.composite import MODES, Style
+from rtta.renderer.renderer import Settings
 
 VIEW_MODES = ("std", *MODES)
 ATLAS_MAX_CHOICES = ("viewport", "512", "1024", "2048", "4096")

@@ -11,8 +11,8 @@ from dataclasses import dataclass
 import moderngl
 import numpy as np
 
-from rtta import glraw, glsl
-from rtta.composite import BACKGROUND
+from rtta.gl import glraw, glsl
+from rtta.passes.composite import BACKGROUND
 
 PANEL_WIDTH = 320
 ATLAS_FRACTION = 0.4

@@ -12,8 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..scene.model import BOX_EDGES
 from .packing import Packing, pack_shelves
-from .scene import BOX_EDGES
 
 EPS_PX = 1e-3        # slack against CPU/GPU rounding when snapping bounds to pixels
 RECORD_DTYPE = np.dtype([("transform", "<f4", 4), ("clip", "<f4", 4), ("atlas", "<f4", 4),

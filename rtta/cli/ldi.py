@@ -10,7 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import RttaError
+from ..errors import RttaError
+from ..ldi.stats import STATS_COLUMNS, stats_row
 
 
 def add_parser(sub) -> None:
@@ -25,17 +26,17 @@ def add_parser(sub) -> None:
 
 def load_mesh(spec: str) -> tuple[str, np.ndarray, np.ndarray]:
     """(name, vertices, faces) of a closed mesh; RttaError naming the file otherwise."""
-    from .ldi import closed_mesh
+    from ..ldi.peel import closed_mesh
 
     if spec.startswith("shape:"):
-        from .shapes import SHAPES
+        from ..scene.shapes import SHAPES
 
         kind = spec.removeprefix("shape:")
         if kind not in SHAPES:
             raise RttaError(f"unknown shape; shapes: {', '.join(SHAPES)}", spec)
         mesh = SHAPES[kind]()
         return spec, *closed_mesh(mesh.vertices, mesh.faces, spec)
-    from .loader import load_scene
+    from ..scene.loader import load_scene
 
     scene = load_scene(spec)
     vertices = scene.positions.astype(np.float64) + scene.origin
@@ -62,7 +63,7 @@ def read_points(path: str) -> np.ndarray:
 
 def write_npy(path: str, array: np.ndarray) -> None:
     """Write atomically: the old file stays until the new one is complete."""
-    from .imageio import atomic_write
+    from ..imageio import atomic_write
 
     if not Path(path).parent.is_dir():
         raise RttaError("the output folder does not exist", path)
@@ -73,23 +74,11 @@ def write_npy(path: str, array: np.ndarray) -> None:
     atomic_write(path, save)
 
 
-STATS_COLUMNS = ("mesh", "vertices", "d_min", "d_max", "d", "t_crop ms", "t_comp ms", "t_peel ms", "t_view ms",
-                 "M_crop B", "M_comp B", "ratio")
-
-
-def stats_row(name: str, vertices: np.ndarray, ldi, packed) -> tuple:
-    """One row of the seed's table; ratio = M_comp / M_crop (below 1: compression pays)."""
-    t = ldi.timings
-    return (name, len(vertices), ldi.complexity[0], ldi.complexity[1], ldi.depth, f"{t['crop']:.3f}",
-            f"{packed.milliseconds:.3f}", f"{t['peel']:.3f}", f"{t['view']:.3f}", ldi.nbytes, packed.nbytes,
-            f"{packed.nbytes / max(ldi.nbytes, 1):.2f}")
-
-
 def cmd_ldi(args: argparse.Namespace) -> int:
-    from .context import shared_context
-    from .ldi import build
-    from .ldi_gpu import ParityTest
-    from .ldi_pack import compress
+    from ..gl.context import shared_context
+    from ..ldi.gpu import ParityTest
+    from ..ldi.pack import compress
+    from ..ldi.peel import build
 
     if not args.stats and not (args.points and args.out):
         raise RttaError("rtta ldi needs --points and --out, or --stats")
@@ -101,7 +90,7 @@ def cmd_ldi(args: argparse.Namespace) -> int:
     ldi = build(ctx, vertices, faces, args.resolution)
     packed = compress(ldi)
     if args.stats:
-        from .bench_ldi import print_table
+        from ..tools.tables import print_table
 
         print_table(STATS_COLUMNS, [stats_row(name, vertices, ldi, packed)])
     if points is not None:

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import RttaError
-from .preprocess import DEFAULT_SMOOTH_ANGLE
+from ..errors import RttaError
+from ..scene.preprocess import DEFAULT_SMOOTH_ANGLE
 
 
 def parse_size(text: str, what: str = "--size") -> tuple[int, int]:
@@ -122,7 +122,7 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--markdown", default=None, help="markdown file whose report block is replaced "
                                                     "(default: BENCHMARKS.md)")
     b.add_argument("--plots", default=None, help="folder for the PNG plots (default: docs/bench)")
-    from .cli_ldi import add_parser as add_ldi
+    from .ldi import add_parser as add_ldi
 
     add_ldi(sub)
     return parser
@@ -136,7 +136,7 @@ def load_options(args: argparse.Namespace) -> dict:
 
 
 def _load(args):
-    from .loader import load_scene_or_demo
+    from ..scene.loader import load_scene_or_demo
 
     scene = load_scene_or_demo(args.scene, **load_options(args))
     for note in scene.warnings:
@@ -145,7 +145,7 @@ def _load(args):
 
 
 def _settings(args):
-    from .renderer import Settings
+    from ..renderer.renderer import Settings
 
     if args.border < 0 or args.border > 64:
         raise RttaError(f"--border must be between 0 and 64, got {args.border}")
@@ -160,8 +160,8 @@ def _settings(args):
 
 def _renderer(ctx, scene, settings):
     """A Renderer; what the driver lacks and the fallback used are said once on stderr."""
-    from .context import Capabilities
-    from .renderer import Renderer
+    from ..gl.context import Capabilities
+    from ..renderer.renderer import Renderer
 
     caps = Capabilities.of(ctx)
     caps.capture_path(settings.capture_path)     # a path the driver lacks is an error, before any work
@@ -171,9 +171,9 @@ def _renderer(ctx, scene, settings):
 
 
 def cmd_export(args) -> int:
-    from .camera import DEFAULT_ORBIT, Camera, parse_orbit
-    from .context import shared_context
-    from .export import export
+    from ..gl.context import shared_context
+    from ..renderer.export import export
+    from ..scene.camera import DEFAULT_ORBIT, Camera, parse_orbit
 
     scene = _load(args)
     viewport = parse_size(args.size)
@@ -193,10 +193,10 @@ def cmd_export(args) -> int:
 
 
 def cmd_snapshot(args) -> int:
-    from .camera import DEFAULT_ORBIT, Camera, parse_orbit
-    from .composite import Style
-    from .context import shared_context
-    from .snapshot import SNAPSHOT_MODES, parse_opacities, render_modes, resolve_names, write_pngs
+    from ..gl.context import shared_context
+    from ..passes.composite import Style
+    from ..renderer.snapshot import SNAPSHOT_MODES, parse_opacities, render_modes, resolve_names, write_pngs
+    from ..scene.camera import DEFAULT_ORBIT, Camera, parse_orbit
 
     if args.mode not in SNAPSHOT_MODES:
         raise RttaError(f"--mode must be one of {', '.join(SNAPSHOT_MODES)}, got '{args.mode}'")
@@ -245,8 +245,8 @@ def cmd_snapshot(args) -> int:
 
 def _lens(args, scene, focus):
     """--lens SHAPE[,RADIUS] or --lens NAME, placed by --lens-at X,Y,Z (default: on the focus)."""
-    from .lens import SHAPES, Lens, default_placement
-    from .snapshot import resolve_names
+    from ..ldi.lens import SHAPES, Lens, default_placement
+    from ..renderer.snapshot import resolve_names
 
     center, radius = default_placement(scene, focus)
     if args.lens_at:
@@ -274,8 +274,8 @@ def _lens(args, scene, focus):
 
 def _projector(args, scene, camera):
     """--projector IMAGE[,AZ,EL,DIST]: the image file (or 'default') and where it stands."""
-    from .camera import parse_orbit
-    from .projector import Projector, default_image, load_image
+    from ..passes.projector import Projector, default_image, load_image
+    from ..scene.camera import parse_orbit
 
     text = args.projector
     name, orbit = text, None
@@ -307,14 +307,14 @@ def cmd_info(args) -> int:
 
 
 def cmd_bench(args) -> int:
-    from . import bench
+    from ..tools import bench
 
     if args.bench == "capture":
         return bench.run_capture(parse_size(args.size), quick=args.quick, json_path=args.json)
     if args.bench == "composite":
         return bench.run_composite(parse_size(args.size), quick=args.quick, json_path=args.json)
     if args.bench == "reliability":
-        from .bench_reliability import run_reliability
+        from ..tools.bench_reliability import run_reliability
 
         sweep, soak = (200, 500) if args.quick else (args.sweep, args.soak)
         if sweep < 1 or soak < 2:
@@ -322,30 +322,30 @@ def cmd_bench(args) -> int:
         only = args.scenes.split(",") if args.scenes else None
         return run_reliability(sweep, soak, quick=args.quick, json_path=args.json, only=only)
     if args.bench == "ldi":
-        from .bench_ldi import run_ldi
+        from ..tools.bench_ldi import run_ldi
 
         if args.points < 1:
             raise RttaError("--points must be at least 1")
         return run_ldi(quick=args.quick, points=args.points, json_path=args.json)
     if args.bench == "material":
-        from .bench_material import run_material
+        from ..tools.bench_material import run_material
 
         if args.objects < 1 or args.max_vertices < 3:
             raise RttaError("--objects must be at least 1 and --max-vertices at least 3")
         return run_material(args.objects, quick=args.quick, json_path=args.json, max_vertices=args.max_vertices)
     if args.bench == "report":
-        from .report import run_report
+        from ..tools.report import run_report
 
         return run_report(quick=args.quick, markdown=args.markdown, plots=args.plots)
     return bench.run_packing(quick=args.quick, json_path=args.json)
 
 
 def main(argv: list[str] | None = None) -> int:
-    from .memory import steady_heap
+    from ..tools.memory import steady_heap
 
     args = build_parser().parse_args(argv)
     steady_heap()
-    from .cli_ldi import cmd_ldi
+    from .ldi import cmd_ldi
 
     handler = {"export": cmd_export, "snapshot": cmd_snapshot, "info": cmd_info, "bench": cmd_bench,
                "ldi": cmd_ldi}[args.command]

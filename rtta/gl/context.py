@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import moderngl
 
-from .errors import RttaError
+from ..errors import RttaError
 
 LAYER_EXTENSION = "GL_ARB_shader_viewport_layer_array"
 

@@ -7,8 +7,8 @@ from __future__ import annotations
 import moderngl
 import numpy as np
 
-from .parameterize import RECORD_DTYPE, Records
-from .scene import Scene
+from ..atlas.parameterize import RECORD_DTYPE, Records
+from ..scene.model import Scene
 
 VERTEX_LAYOUT = (("in_position", "3f", "12x"), ("in_normal", "3f", "12x"), ("in_object", "u4", "4x"))
 UV_LAYOUT = (("in_uv", "2f", "8x"),)
@@ -58,7 +58,7 @@ class GpuScene:
     def _upload_materials(self) -> None:
         """Pack the textures into the material atlas (mip levels 0..levels built by GL from
         the wrapped slots) and write, per object, where its texture lies."""
-        from .material_atlas import DEFAULT_MAX_SIZE, build_atlas
+        from ..scene.material_atlas import DEFAULT_MAX_SIZE, build_atlas
 
         max_size = min(DEFAULT_MAX_SIZE, self.ctx.info["GL_MAX_TEXTURE_SIZE"])
         atlas = build_atlas(self.scene.textures, max_size=max_size)

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .parameterize import Records
+from ..atlas.parameterize import Records
 
 EMPTY = {"color": 0, "normal": 0.0, "id": -1, "depth": 1.0}
 

@@ -8,11 +8,11 @@ import time
 import moderngl
 import numpy as np
 
-from . import glraw, glsl
-from .ldi import NIL, LayeredDepthImage
-from .ldi_pack import CompressedLDI, compress
-from .passes import mat_bytes
-from .targets import release_all
+from ..gl import glraw, glsl
+from ..gl.targets import release_all
+from ..passes.capture import mat_bytes
+from .pack import CompressedLDI, compress
+from .peel import NIL, LayeredDepthImage
 
 POINTS_WIDTH = 2048
 LOCAL_SIZE = 256      # ldi_classify.comp's local_size_x (injected); divides POINTS_WIDTH

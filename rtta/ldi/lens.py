@@ -11,10 +11,10 @@ from dataclasses import dataclass
 import moderngl
 import numpy as np
 
-from .errors import RttaError
-from .ldi import Peeler, build, closed_mesh
-from .ldi_gpu import LdiTextures
-from .scene import Scene
+from ..errors import RttaError
+from ..scene.model import Scene
+from .gpu import LdiTextures
+from .peel import Peeler, build, closed_mesh
 
 SHAPES = ("sphere", "box")
 RESOLUTION = 256
@@ -35,7 +35,7 @@ class Lens:
 
     @classmethod
     def shape(cls, kind: str, center, radius: float) -> Lens:
-        from . import shapes
+        from ..scene import shapes
 
         if kind not in SHAPES:
             raise RttaError(f"unknown lens shape {kind!r}; shapes: {', '.join(SHAPES)}, or an object name")

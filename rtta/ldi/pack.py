@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .ldi import NIL, LayeredDepthImage
+from .peel import NIL, LayeredDepthImage
 
 
 @dataclass

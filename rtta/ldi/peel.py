@@ -20,10 +20,10 @@ from dataclasses import dataclass, field
 import moderngl
 import numpy as np
 
-from . import glraw, glsl
-from .errors import RttaError
-from .passes import mat_bytes
-from .targets import release_all
+from ..errors import RttaError
+from ..gl import glraw, glsl
+from ..gl.targets import release_all
+from ..passes.capture import mat_bytes
 
 NIL = 4.0            # depth of "no surface" (> every linear depth in [0, 1])
 MAX_LAYERS = 256     # a closed mesh needing more is refused, not peeled forever

@@ -13,10 +13,10 @@ from __future__ import annotations
 import moderngl
 import numpy as np
 
+from ..gl.gpu import GpuScene
+from ..gl.targets import LayeredTarget
 from .bvh import Bvh, build_bvh, visible_leaves
-from .gpu import GpuScene
-from .passes import ScenePass
-from .targets import LayeredTarget
+from .capture import ScenePass
 
 
 class SeparatePass(ScenePass):

@@ -13,10 +13,10 @@ from collections.abc import Callable
 import moderngl
 import numpy as np
 
-from . import glraw, glsl
-from .gpu import GpuScene
-from .parameterize import Records
-from .targets import LayeredTarget
+from ..atlas.parameterize import Records
+from ..gl import glraw, glsl
+from ..gl.gpu import GpuScene
+from ..gl.targets import LayeredTarget
 
 
 def mat_bytes(m: np.ndarray) -> bytes:

@@ -15,11 +15,11 @@ from dataclasses import dataclass, field
 import moderngl
 import numpy as np
 
-from . import glraw, glsl
-from .gpu import GpuScene
-from .parameterize import Records
-from .passes import mat_bytes
-from .targets import SHRINK_AFTER_FRAMES, LayeredTarget, release_framebuffer, round_up
+from ..atlas.parameterize import Records
+from ..gl import glraw, glsl
+from ..gl.gpu import GpuScene
+from ..gl.targets import SHRINK_AFTER_FRAMES, LayeredTarget, release_framebuffer, round_up
+from .capture import mat_bytes
 
 MODES = ("sprites", "transparent", "ghosted", "ghosted-ao")
 LENS_MODES = ("ghosted", "ghosted-ao")    # where a lens cuts the context away

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .parameterize import Records
-from .readback import to_atlas
+from ..atlas.parameterize import Records
+from ..gl.readback import to_atlas
 
 
 def objects_at(atlas: dict[str, np.ndarray], records: Records, x: int, y: int) -> list[tuple[int, float]]:

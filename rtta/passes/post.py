@@ -16,10 +16,10 @@ from __future__ import annotations
 import moderngl
 import numpy as np
 
-from . import glraw, glsl
-from .gpu import GpuScene
-from .parameterize import Records
-from .targets import LayeredTarget, release_framebuffer
+from ..atlas.parameterize import Records
+from ..gl import glraw, glsl
+from ..gl.gpu import GpuScene
+from ..gl.targets import LayeredTarget, release_framebuffer
 
 STAGES = {"vertex_shader": "post.vert", "geometry_shader": "post.geom", "fragment_shader": "post.frag"}
 

@@ -16,10 +16,10 @@ from pathlib import Path
 import moderngl
 import numpy as np
 
-from .camera import Camera
-from .errors import RttaError
-from .gpu import GpuScene
-from .passes import ScenePass, mat_bytes
+from ..errors import RttaError
+from ..gl.gpu import GpuScene
+from ..scene.camera import Camera
+from .capture import ScenePass, mat_bytes
 
 BIAS = np.array([[0.5, 0, 0, 0.5], [0, 0.5, 0, 0.5], [0, 0, 0.5, 0.5], [0, 0, 0, 1.0]])
 SHADOW_SIZE = 1024
@@ -160,7 +160,7 @@ class ProjectorPass:
         self.depth.use(6)
 
     def release(self) -> None:
-        from .targets import release_framebuffer
+        from ..gl.targets import release_framebuffer
 
         release_framebuffer(self.ctx, self.fbo)
         self.shadow.release()

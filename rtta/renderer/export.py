@@ -14,9 +14,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .camera import Camera
-from .errors import RttaError
-from .imageio import save_png
+from ..errors import RttaError
+from ..imageio import save_png
+from ..scene.camera import Camera
 from .renderer import Renderer
 
 

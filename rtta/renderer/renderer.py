@@ -14,16 +14,16 @@ from dataclasses import dataclass
 import moderngl
 import numpy as np
 
-from . import glraw
-from .camera import Camera
-from .composite import LENS_MODES, CompositePass, CompositeTarget, Style
-from .context import Capabilities
-from .gpu import GpuScene
-from .parameterize import Records, default_atlas_max, parameterize
-from .passes import CapturePass, RttPass, StdPass
-from .post import AtlasPostPass
-from .scene import Scene
-from .targets import LayeredTarget
+from ..atlas.parameterize import Records, default_atlas_max, parameterize
+from ..gl import glraw
+from ..gl.context import Capabilities
+from ..gl.gpu import GpuScene
+from ..gl.targets import LayeredTarget
+from ..passes.capture import CapturePass, RttPass, StdPass
+from ..passes.composite import LENS_MODES, CompositePass, CompositeTarget, Style
+from ..passes.post import AtlasPostPass
+from ..scene.camera import Camera
+from ..scene.model import Scene
 
 
 @dataclass
@@ -129,7 +129,7 @@ class Renderer:
         lens = None
         if self.lens is not None and mode in LENS_MODES:
             if self._lens_pass is None:
-                from .lens import LensPass
+                from ..ldi.lens import LensPass
 
                 self._lens_pass = LensPass(self.ctx)
             with self._timed("lens"):
@@ -147,7 +147,7 @@ class Renderer:
         if self.projector is None:
             return None
         if self._projector_pass is None:
-            from .projector import ProjectorPass
+            from ..passes.projector import ProjectorPass
 
             self._projector_pass = ProjectorPass(self.ctx)
         with self._timed("projector"):

@@ -7,12 +7,12 @@ from pathlib import Path
 
 import numpy as np
 
-from .camera import Camera
-from .composite import BACKGROUND, MODES, Style
-from .errors import RttaError
-from .imageio import save_png
+from ..errors import RttaError
+from ..imageio import save_png
+from ..passes.composite import BACKGROUND, MODES, Style
+from ..scene.camera import Camera
+from ..scene.model import Scene
 from .renderer import Renderer
-from .scene import Scene
 
 SNAPSHOT_MODES = ("std", *MODES)
 

@@ -6,7 +6,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .errors import RttaError
+from ..errors import RttaError
 
 DEFAULT_ORBIT = (35.0, 25.0, 2.2)
 NEAR_RATIO = 1e-3   # near >= far * NEAR_RATIO: float32 depth keeps ~1e-4 relative precision at far

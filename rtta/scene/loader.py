@@ -12,10 +12,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import RttaError
+from ..errors import RttaError
+from .model import SUPPORTED, Scene, from_meshes
 from .precheck import check_size, precheck
 from .preprocess import DEFAULT_SMOOTH_ANGLE, index_vertices, smooth_normals
-from .scene import SUPPORTED, Scene, from_meshes
 from .textures import TextureTable
 
 MAX_FILE_BYTES = 2 * 1024**3

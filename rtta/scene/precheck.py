@@ -15,7 +15,7 @@ import struct
 from pathlib import Path
 from urllib.parse import unquote
 
-from .errors import RttaError
+from ..errors import RttaError
 
 BYTES_PER_VERTEX = 112     # trimesh float64 positions/normals + our float32 copies + GPU buffer
 BYTES_PER_TRIANGLE = 80    # trimesh int64 faces + face normals + our uint32 indices + GPU buffer

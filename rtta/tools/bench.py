@@ -13,12 +13,12 @@ from pathlib import Path
 
 import numpy as np
 
-from .camera import Camera
-from .context import create_headless_context
-from .generate import TABLE1, random_scene, table1_scene
-from .packing import pack_shelves
-from .parameterize import parameterize
-from .renderer import Renderer
+from ..atlas.packing import pack_shelves
+from ..atlas.parameterize import parameterize
+from ..gl.context import create_headless_context
+from ..renderer.renderer import Renderer
+from ..scene.camera import Camera
+from ..scene.generate import TABLE1, random_scene, table1_scene
 
 
 def shared_data() -> Path:
@@ -129,7 +129,7 @@ def _print_capture(rows, scaling, renderer, viewport) -> None:
 def composite_row(ctx, name, scene, viewport, frames: int) -> dict:
     """Full frame per mode (capture + post + composite) against STD, and a re-composite
     after a focus change (compositing only) against the full ghosted-ao frame."""
-    from .composite import MODES, Style
+    from ..passes.composite import MODES, Style
 
     r = Renderer(ctx, scene)
     cam = Camera.orbit(scene.center, scene.radius, 30.0, 20.0, 2.2)
@@ -156,8 +156,8 @@ def composite_row(ctx, name, scene, viewport, frames: int) -> dict:
 
 def run_composite(viewport: tuple[int, int], quick: bool = False, json_path: str | None = None,
                   ctx=None) -> int:
-    from .demo import demo_path
-    from .loader import load_scene
+    from ..scene.demo import demo_path
+    from ..scene.loader import load_scene
 
     ctx = ctx or create_headless_context()
     renderer = str(ctx.info["GL_RENDERER"])

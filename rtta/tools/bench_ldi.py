@@ -10,6 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .tables import print_table
+
 GPU_REPEATS = 9      # the GPU paths take ~15 ms: more repeats steady the best on a noisy VM
 
 
@@ -19,19 +21,11 @@ def _cow() -> Path:
     return shared_data() / "cow.glb"
 
 
-def print_table(columns, rows) -> None:
-    """Columns right-aligned to their widest cell."""
-    cells = [[str(c) for c in columns]] + [[str(v) for v in row] for row in rows]
-    widths = [max(len(r[i]) for r in cells) for i in range(len(columns))]
-    for r in cells:
-        print("  ".join(v.rjust(w) for v, w in zip(r, widths, strict=True)))
-
-
 def bench_meshes(quick: bool):
     """(name, trimesh) of the benchmark shapes; the cow when ../shared/data has it."""
     import trimesh
 
-    from . import shapes
+    from ..scene import shapes
 
     out = [(k, shapes.SHAPES[k]()) for k in ("sphere", "torus", "torus-knot", "vase")]
     if _cow().is_file() and not quick:
@@ -53,8 +47,8 @@ def error_by_resolution(ctx, name: str, mesh, points: int, resolutions, *, peele
     """Parity-test error against trimesh.contains (fraction of points classified differently)
     for LDIs of one mesh at each resolution, with peel and test times. Points are uniform in
     the bounding box; the viewpoint is chosen once (at the first resolution) unless given."""
-    from .ldi import Peeler, build, closed_mesh
-    from .ldi_gpu import ParityTest
+    from ..ldi.gpu import ParityTest
+    from ..ldi.peel import Peeler, build, closed_mesh
 
     v, f = closed_mesh(mesh.vertices, mesh.faces, name)
     own = peeler is None
@@ -79,11 +73,11 @@ def error_by_resolution(ctx, name: str, mesh, points: int, resolutions, *, peele
 
 
 def run_ldi(quick: bool = False, points: int = 1_000_000, resolution: int = 512, json_path: str | None = None) -> int:
-    from .cli_ldi import STATS_COLUMNS, stats_row
-    from .context import shared_context
-    from .ldi import Peeler, build, closed_mesh
-    from .ldi_gpu import ParityTest
-    from .ldi_pack import compress
+    from ..gl.context import shared_context
+    from ..ldi.gpu import ParityTest
+    from ..ldi.pack import compress
+    from ..ldi.peel import Peeler, build, closed_mesh
+    from ..ldi.stats import STATS_COLUMNS, stats_row
 
     ctx = shared_context()
     peeler = Peeler(ctx)

@@ -11,15 +11,15 @@ from dataclasses import replace
 from functools import partial
 from pathlib import Path
 
-from .batching import ChunkedStdPass, SeparatePass
+from ..gl.context import create_headless_context
+from ..gl.targets import LayeredTarget
+from ..passes.batching import ChunkedStdPass, SeparatePass
+from ..renderer.renderer import Renderer
+from ..scene.camera import Camera
+from ..scene.material_atlas import original_nbytes
+from ..scene.textured import textured_scene
 from .bench import _gl_timed, _median_ms
-from .bench_ldi import print_table
-from .camera import Camera
-from .context import create_headless_context
-from .material_atlas import original_nbytes
-from .renderer import Renderer
-from .targets import LayeredTarget
-from .textured import textured_scene
+from .tables import print_table
 
 COLUMNS = ["view", "method", "draw calls", "frame ms"]
 

@@ -11,11 +11,11 @@ import sys
 import time
 from pathlib import Path
 
-from .context import create_headless_context
-from .errors import RttaError
-from .generate import random_scene
+from ..errors import RttaError
+from ..gl.context import create_headless_context
+from ..renderer.renderer import Renderer
+from ..scene.generate import random_scene
 from .reliability import drift, soak, sweep
-from .renderer import Renderer
 
 
 def _progress(label: str, total: int):
@@ -38,8 +38,8 @@ def _scenes(quick: bool) -> dict:
     """Name -> a function making the scene: the demo, a large generated scene, and a
     textured one (material atlas, REPEAT emulation and mip levels under the same extreme
     cameras). Only the scenes asked for are made."""
-    from .loader import load_scene_or_demo
-    from .textured import textured_scene
+    from ..scene.loader import load_scene_or_demo
+    from ..scene.textured import textured_scene
 
     return {"demo": lambda: load_scene_or_demo(None),
             "random-2000": lambda: random_scene(200 if quick else 2000, seed=3, spread=40.0),

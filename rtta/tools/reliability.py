@@ -14,15 +14,15 @@ from dataclasses import dataclass, field
 import moderngl
 import numpy as np
 
-from .camera import Camera
+from ..gl.glraw import _lib
+from ..gl.readback import to_atlas
+from ..passes.composite import MODES, Style
+from ..renderer.renderer import Renderer
+from ..renderer.snapshot import over_background
+from ..scene.camera import Camera
+from ..scene.model import Scene
 from .compare import crease_limit, depth_mismatch, depth_tolerance, near_silhouettes
-from .composite import MODES, Style
-from .glraw import _lib
 from .memory import rss_bytes
-from .readback import to_atlas
-from .renderer import Renderer
-from .scene import Scene
-from .snapshot import over_background
 
 COLOR_TOL = 3            # of 255: the core's sprites-vs-STD tolerance
 COLOR_FRACTION = 0.995   # of pixels within COLOR_TOL; depth: rtta.compare.depth_mismatch

@@ -15,10 +15,10 @@ import re
 import time
 from pathlib import Path
 
+from ..errors import RttaError
+from ..imageio import atomic_write
 from . import report_runs as runs
 from .bench_reliability import _progress
-from .errors import RttaError
-from .imageio import atomic_write
 
 BEGIN = "<!-- rtta bench report: begin (generated; edit report.py, not this block) -->"
 END = "<!-- rtta bench report: end -->"
@@ -70,7 +70,7 @@ def _steps(quick: bool, scenes: int, meshes: int) -> int:
 
 
 def run_report(quick: bool = False, markdown: str | None = None, plots: str | None = None, ctx=None) -> int:
-    from .context import shared_context
+    from ..gl.context import shared_context
     from .report_plots import draw_all
 
     base = Path("out/report-quick") if quick else Path(".")
@@ -146,7 +146,7 @@ def render_markdown(res: dict, h: dict, images: dict, md_dir: Path) -> str:
 def _error_md(rows: list[dict]) -> str:
     cols = ["scene", "scale", "border", "frame ms", "pixels off > 3/255", "depth RMS", "depth max", "holes",
             "atlas WxHxL", "pareto"]
-    front = pareto(rows)
+    front = runs.pareto(rows)
     body = [[r["scene"], r["scale"], r["border"], f"{r['frame_ms']:.1f}", f"{r['color_off']:.3%}",
              f"{r['depth_rms']:.2e}", f"{r['depth_max']:.2e}", r["holes"], "x".join(map(str, r["atlas"])),
              "*" if id(r) in front else ""] for r in rows]
@@ -155,17 +155,6 @@ def _error_md(rows: list[dict]) -> str:
             "STD covers and sprites do not; pareto `*`: no other setting of the scene is both faster and "
             "more accurate.")
     return note + "\n\n" + table(cols, body)
-
-
-def pareto(rows: list[dict]) -> set[int]:
-    """ids of the rows no other row of the same scene beats in both frame time and error."""
-    out = set()
-    for r in rows:
-        same = [o for o in rows if o["scene"] == r["scene"] and o is not r]
-        if not any(o["frame_ms"] <= r["frame_ms"] and o["color_off"] <= r["color_off"]
-                   and (o["frame_ms"] < r["frame_ms"] or o["color_off"] < r["color_off"]) for o in same):
-            out.add(id(r))
-    return out
 
 
 def _packing_md(rows: list[dict], bounds: list[dict]) -> str:

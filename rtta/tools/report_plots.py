@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .imageio import atomic_write
+from ..imageio import atomic_write
 
 SCALE_COLORS = {0.25: "tab:red", 0.5: "tab:orange", 1.0: "tab:green", 2.0: "tab:blue"}
 BORDER_MARKERS = {0: "o", 1: "s", 2: "^", 4: "D"}
@@ -33,7 +33,7 @@ def _save(plt, fig, path: Path, header: dict, layout: bool = True) -> Path:
 
 
 def error_plot(rows: list[dict], header: dict, path: Path) -> Path:
-    from .report import pareto
+    from .report_runs import pareto
 
     scenes = list(dict.fromkeys(r["scene"] for r in rows))
     cols = min(3, len(scenes))

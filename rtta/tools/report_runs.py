@@ -8,12 +8,12 @@ import warnings
 
 import numpy as np
 
+from ..renderer.renderer import Renderer, Settings
+from ..scene.camera import Camera
+from ..scene.generate import TABLE1, random_scene, table1_scene
+from ..scene.model import Scene, from_meshes, oriented_corners
 from .bench import _gl_timed, _median_ms, _rectpack, _rpack, shared_data
-from .camera import Camera
-from .generate import TABLE1, random_scene, table1_scene
 from .reliability import COLOR_TOL, sprites_and_std
-from .renderer import Renderer, Settings
-from .scene import Scene, from_meshes, oriented_corners
 
 
 def sprites_error(r: Renderer, camera: Camera, viewport: tuple[int, int]) -> dict:
@@ -33,7 +33,7 @@ def sprites_error(r: Renderer, camera: Camera, viewport: tuple[int, int]) -> dic
 
 def report_scenes(quick: bool) -> list[tuple[str, Scene]]:
     """The demo, the 2-cylinder engine when ../shared/data has it, and the Table 1 scenes."""
-    from .loader import load_scene, load_scene_or_demo
+    from ..scene.loader import load_scene, load_scene_or_demo
 
     scenes = [("demo", load_scene_or_demo(None))]
     engine = shared_data() / "engine_2cyl.glb"
@@ -72,7 +72,7 @@ def error_vs_time(ctx, scenes, viewport, quick: bool, tick) -> list[dict]:
 def packing(ctx, viewport, quick: bool, tick) -> list[dict]:
     """Section 2: utilization and time per frame against object count, for our shelf packer
     (AABB and oriented bounds) and, on the same regions, rectpack and rectangle-packer."""
-    from .parameterize import parameterize
+    from ..atlas.parameterize import parameterize
 
     counts = (10, 100) if quick else (10, 100, 1000, 10000)
     frames = 3 if quick else 9
@@ -210,7 +210,7 @@ def _two_spheres(ratio: float) -> Scene:
 def stability(ctx, viewport, quick: bool, tick) -> list[dict]:
     """Section 4: sprites against STD under extreme near/far ratios, scene offsets and object
     size ratios, over a few orbit cameras each."""
-    from .loader import load_scene_or_demo
+    from ..scene.loader import load_scene_or_demo
 
     demo = load_scene_or_demo(None)
     angles = [(30.0, 20.0), (200.0, -35.0)] if quick else [(30.0, 20.0), (110.0, 60.0), (200.0, -35.0),
@@ -274,3 +274,14 @@ def ldi_error(ctx, meshes, quick: bool, tick) -> list[dict]:
         rows += error_by_resolution(ctx, name, mesh, points, resolutions)
         tick()
     return rows
+
+
+def pareto(rows: list[dict]) -> set[int]:
+    """ids of the rows no other row of the same scene beats in both frame time and error."""
+    out = set()
+    for r in rows:
+        same = [o for o in rows if o["scene"] == r["scene"] and o is not r]
+        if not any(o["frame_ms"] <= r["frame_ms"] and o["color_off"] <= r["color_off"]
+                   and (o["frame_ms"] < r["frame_ms"] or o["color_off"] < r["color_off"]) for o in same):
+            out.add(id(r))
+    return out

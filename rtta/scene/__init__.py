@@ -1,0 +1,13 @@
+"""Scene layer: what is drawn, before any GL.
+
+Loading files (prechecks against hostile or oversized input, trimesh, preprocessing of
+vertices and normals, textures and the material atlas they are packed into), the batched
+`Scene` (one vertex/index buffer, a per-vertex object id), the orbit `Camera`, generated
+scenes and the demo. The bottom layer: it imports only `rtta.errors` and `rtta.imageio`.
+"""
+
+from .camera import Camera
+from .loader import load_scene, load_scene_or_demo
+from .model import Scene, from_meshes
+
+__all__ = ["Camera", "Scene", "from_meshes", "load_scene", "load_scene_or_demo"]

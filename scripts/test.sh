@@ -3,7 +3,7 @@
 # the viewer's window tests start their own Xvfb).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/setup.sh test,viewer
+bash scripts/setup.sh test        # the base install carries the viewer: its tests run without any viewer extra
 .venv/bin/ruff check rtta viewer tests scripts
 .venv/bin/lint-imports              # the layers and no-cycle contracts in pyproject.toml
 exec .venv/bin/pytest "$@"

@@ -41,7 +41,7 @@ def main(argv: list[str] | None = None) -> int:
         import moderngl_window  # noqa: F401
         from imgui_bundle import imgui  # noqa: F401
     except ImportError as exc:
-        print(f"rtta-view: the viewer needs its extra: pip install 'rtta[viewer]' ({exc})", file=sys.stderr)
+        print(f"rtta-view: broken install ({exc}); reinstall rtta: pip install --force-reinstall rtta", file=sys.stderr)
         return 2
     from .run import run
 

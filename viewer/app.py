@@ -223,6 +223,11 @@ class Viewer:
         if np.isfinite(hit).all():
             p.center = tuple(float(v) for v in hit)
 
+    @property
+    def mouse(self) -> tuple[float, float]:
+        """The last mouse position in window pixels (the overlay's tooltip follows it)."""
+        return self.controls.mouse
+
     def _rect(self, vp: tuple[int, int]) -> tuple[int, int, int, int]:
         x, y, _, _ = self.layout.composite
         return (x, y, vp[0], vp[1])

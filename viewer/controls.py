@@ -21,7 +21,7 @@ from .state import VIEW_MODES
 from .views import contains
 
 if TYPE_CHECKING:
-    from .app import Viewer
+    from .commands import ControlsHost
 
 CLICK_SLOP_PX = 3
 DOUBLE_CLICK_S = 0.35
@@ -30,7 +30,7 @@ KEY_PAN_PX = 20
 
 
 class Controls:
-    def __init__(self, app: Viewer) -> None:
+    def __init__(self, app: ControlsHost) -> None:
         self.app = app
         self.mouse = (0.0, 0.0)
         self._press = None            # (x, y, button, in composite)

@@ -12,7 +12,7 @@ from imgui_bundle import imgui
 from .views import atlas_rects_on_screen, contains
 
 if TYPE_CHECKING:
-    from .app import Viewer
+    from .commands import OverlayHost
 
 REGION = imgui.IM_COL32(120, 200, 255, 140)
 TEXT = imgui.IM_COL32(235, 235, 240, 255)
@@ -23,7 +23,7 @@ def _col(rgba) -> int:
     return imgui.IM_COL32(r, g, b, a)
 
 
-def regions(app: Viewer):
+def regions(app: OverlayHost):
     """(object ids, screen boxes x0, y0, x1, y1) of every atlas region shown, per tile."""
     rec = app.records
     for layer, rect in app.atlas_tiles():
@@ -31,7 +31,7 @@ def regions(app: Viewer):
         yield layer, ids, atlas_rects_on_screen(rec.atlas_rect[ids], rec.atlas_size[:2], rect)
 
 
-def region_under(app: Viewer, x: float, y: float) -> int | None:
+def region_under(app: OverlayHost, x: float, y: float) -> int | None:
     """The object whose atlas region is under window point (x, y), if any."""
     if not contains(app.layout.atlas, x, y):
         return None
@@ -42,7 +42,7 @@ def region_under(app: Viewer, x: float, y: float) -> int | None:
     return None
 
 
-def draw(app: Viewer) -> None:
+def draw(app: OverlayHost) -> None:
     rec = app.records
     if not app.state.show_atlas or rec is None or app.layout.atlas[2] <= 0:
         return
@@ -58,7 +58,7 @@ def draw(app: Viewer) -> None:
     label = f"atlas {tw}x{th}, {td} layers ({shown})  utilization {100 * rec.utilization:.0f}%"
     ax, ay, _, _ = app.layout.atlas
     dl.add_text(imgui.ImVec2(ax + 6, ay + 4), TEXT, label)
-    oid = region_under(app, *app.controls.mouse)
+    oid = region_under(app, *app.mouse)
     if oid is not None and not imgui.get_io().want_capture_mouse:
         x, y, w, h = rec.atlas_rect[oid]
         imgui.set_tooltip(f"{app.renderer.scene.names[oid]}\nregion {w}x{h} at ({x}, {y}), layer "

@@ -18,14 +18,14 @@ from rtta.scene.model import BOUNDS
 from .state import ATLAS_MAX_CHOICES, VIEW_MODES
 
 if TYPE_CHECKING:
-    from .app import Viewer
+    from .commands import PanelsHost
 
 ERROR_COLOR = imgui.ImVec4(1.0, 0.45, 0.4, 1.0)
 LIST_HEIGHT = 170
 STAGES = ("parameterize", "capture", "post", "composite", "std", "ui")
 
 
-def draw(app: Viewer) -> None:
+def draw(app: PanelsHost) -> None:
     x, y, w, h = app.layout.panel
     if w <= 0 or h <= 0:
         return
@@ -47,7 +47,7 @@ def draw(app: Viewer) -> None:
     app.files.draw()
 
 
-def _scene(app: Viewer) -> None:
+def _scene(app: PanelsHost) -> None:
     imgui.text(f"{app.scene_label}  ({app.renderer.scene.count} objects)")
     if imgui.button("Open... (O)"):
         app.files.open(app.scene_dir)
@@ -60,7 +60,7 @@ def _scene(app: Viewer) -> None:
         imgui.pop_text_wrap_pos()
 
 
-def _mode(app: Viewer) -> None:
+def _mode(app: PanelsHost) -> None:
     s = app.state
     changed, i = imgui.combo("mode (M)", VIEW_MODES.index(s.mode), VIEW_MODES)
     if changed:
@@ -73,7 +73,7 @@ def _mode(app: Viewer) -> None:
         imgui.text_disabled("STD draws the scene directly: no highlights")
 
 
-def _objects(app: Viewer) -> None:
+def _objects(app: PanelsHost) -> None:
     s = app.state
     if not imgui.collapsing_header("Objects", imgui.TreeNodeFlags_.default_open):
         return
@@ -101,7 +101,7 @@ def _objects(app: Viewer) -> None:
     imgui.end_child()
 
 
-def _style(app: Viewer) -> None:
+def _style(app: PanelsHost) -> None:
     st = app.state.style
     if not imgui.collapsing_header("Style", imgui.TreeNodeFlags_.default_open):
         return
@@ -116,7 +116,7 @@ def _style(app: Viewer) -> None:
     _, st.ao_strength = imgui.slider_float("AO strength", st.ao_strength, 0.0, 2.0)
 
 
-def _projector(app: Viewer) -> None:
+def _projector(app: PanelsHost) -> None:
     p = app.state.projector
     if not imgui.collapsing_header("projector (P)"):
         return
@@ -131,7 +131,7 @@ def _projector(app: Viewer) -> None:
     _, p.shadows = imgui.checkbox("shadows", p.shadows)
 
 
-def _lens(app: Viewer) -> None:
+def _lens(app: PanelsHost) -> None:
     p = app.state.lens
     if not imgui.collapsing_header("lens (C)"):
         return
@@ -152,7 +152,7 @@ def _color(label: str, rgba) -> tuple[bool, tuple]:
     return changed, tuple(col)
 
 
-def _atlas(app: Viewer) -> None:
+def _atlas(app: PanelsHost) -> None:
     s = app.state
     if not imgui.collapsing_header("Atlas", imgui.TreeNodeFlags_.default_open):
         return
@@ -175,7 +175,7 @@ def _atlas(app: Viewer) -> None:
                                             "all" if s.atlas_layer < 0 else "%d")
 
 
-def _stats(app: Viewer) -> None:
+def _stats(app: PanelsHost) -> None:
     if not imgui.collapsing_header("Stats", imgui.TreeNodeFlags_.default_open):
         return
     st = app.stats

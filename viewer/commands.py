@@ -1,0 +1,79 @@
+"""What the panels, the controls and the overlay may read and call on the viewer app.
+
+They type against these protocols, not against `Viewer`, so they sit below `viewer.app`
+and never import it (no import cycle); `Viewer` satisfies all three as it is. Attributes
+here are only read (or mutated in place), never rebound by those modules.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Protocol
+
+if TYPE_CHECKING:
+    from pathlib import Path
+
+    from moderngl_window.context.base import BaseWindow
+    from moderngl_window.integrations.imgui_bundle import ModernglWindowRenderer
+
+    from rtta.atlas.parameterize import Records
+    from rtta.renderer.renderer import Renderer
+
+    from .files import FileBrowser, Stats
+    from .orbit import Orbit
+    from .state import ViewerState
+    from .views import Layout, Rect
+
+
+class Host(Protocol):
+    """What all three read: the user's choices, the screen layout, the renderer (its scene,
+    atlas and caps) and the last capture's records (None before the first capture)."""
+
+    state: ViewerState
+    layout: Layout
+    renderer: Renderer
+    records: Records | None
+
+
+class OverlayHost(Host, Protocol):
+    """The overlay: where the atlas layers are on screen, and where the mouse is."""
+
+    @property
+    def mouse(self) -> tuple[float, float]: ...
+
+    def atlas_tiles(self) -> list[tuple[int, Rect]]: ...
+
+
+class ControlsHost(Host, Protocol):
+    """The controls: the window (events, keys, buttons), imgui's event sink, the camera,
+    the file browser, and the app's actions."""
+
+    wnd: BaseWindow
+    imgui: ModernglWindowRenderer
+    orbit: Orbit
+    files: FileBrowser
+    scene_dir: Path
+
+    def move_lens(self, x: float, y: float) -> None: ...
+
+    def open_scene(self, path) -> bool: ...
+
+    def screenshot(self) -> list[Path]: ...
+
+
+class PanelsHost(Host, Protocol):
+    """The side panel: scene label and message, the camera, the file browser, frame
+    stats, the capture paths the GL offers, and where it leaves the object checkboxes."""
+
+    orbit: Orbit
+    files: FileBrowser
+    stats: Stats
+    scene_dir: Path
+    scene_label: str
+    message: str
+    message_is_error: bool
+    item_rects: dict[int, tuple]
+
+    @property
+    def capture_paths(self) -> list[str]: ...
+
+    def screenshot(self) -> list[Path]: ...

@@ -7,20 +7,14 @@ import os
 import sys
 from pathlib import Path
 
-import numpy as np
-
 from ..errors import RttaError
 from ..scene.preprocess import DEFAULT_SMOOTH_ANGLE
 
 
 def parse_size(text: str, what: str = "--size") -> tuple[int, int]:
-    try:
-        w, h = (int(v) for v in text.lower().split("x"))
-    except ValueError:
-        raise RttaError(f"{what} expects WxH (e.g. 1024x768), got '{text}'") from None
-    if not (1 <= w <= 16384 and 1 <= h <= 16384):
-        raise RttaError(f"{what} {text}: width and height must be between 1 and 16384")
-    return w, h
+    from ..renderer.api import check_size
+
+    return check_size(text, what)
 
 
 def _scene_arg(p: argparse.ArgumentParser) -> None:
@@ -145,17 +139,10 @@ def _load(args):
 
 
 def _settings(args):
-    from ..renderer.renderer import Settings
+    from ..renderer.api import make_settings
 
-    if args.border < 0 or args.border > 64:
-        raise RttaError(f"--border must be between 0 and 64, got {args.border}")
-    if args.max_layers is not None and args.max_layers < 1:
-        raise RttaError(f"--max-layers must be at least 1, got {args.max_layers}")
-    if not (0.25 <= args.region_scale <= 4):
-        raise RttaError(f"--region-scale must be between 0.25 and 4, got {args.region_scale}")
-    atlas_max = parse_size(args.atlas_max, "--atlas-max") if args.atlas_max else None
-    return Settings(border=args.border, atlas_max=atlas_max, max_layers=args.max_layers,
-                    capture_path=args.capture_path, region_scale=args.region_scale, bounds=args.bounds)
+    return make_settings(args.border, args.atlas_max, args.max_layers, args.capture_path, args.region_scale,
+                         args.bounds)
 
 
 def _renderer(ctx, scene, settings):
@@ -172,16 +159,15 @@ def _renderer(ctx, scene, settings):
 
 def cmd_export(args) -> int:
     from ..gl.context import shared_context
+    from ..renderer.api import orbit_camera
     from ..renderer.export import export
-    from ..scene.camera import DEFAULT_ORBIT, Camera, parse_orbit
 
     scene = _load(args)
     viewport = parse_size(args.size)
-    orbit = parse_orbit(args.camera) if args.camera else DEFAULT_ORBIT
+    camera = orbit_camera(scene, args.camera or None, args.fov)
     settings = _settings(args)
     ctx = shared_context()
     renderer = _renderer(ctx, scene, settings)
-    camera = Camera.orbit(scene.center, scene.radius, *orbit, fov_y=args.fov)
     try:
         out = export(renderer, camera, viewport, args.out)
     except ValueError as exc:
@@ -194,23 +180,17 @@ def cmd_export(args) -> int:
 
 def cmd_snapshot(args) -> int:
     from ..gl.context import shared_context
-    from ..passes.composite import Style
+    from ..renderer.api import make_style, orbit_camera
     from ..renderer.snapshot import SNAPSHOT_MODES, parse_opacities, render_modes, resolve_names, write_pngs
-    from ..scene.camera import DEFAULT_ORBIT, Camera, parse_orbit
 
     if args.mode not in SNAPSHOT_MODES:
         raise RttaError(f"--mode must be one of {', '.join(SNAPSHOT_MODES)}, got '{args.mode}'")
     scene = _load(args)
     viewport = parse_size(args.size)
-    orbit = parse_orbit(args.camera) if args.camera else DEFAULT_ORBIT
-    style = Style(focus=set(resolve_names(scene, args.focus, "--focus")), opacity=parse_opacities(scene, args.opacity))
-    if not (1 <= args.edge_width <= 8 and 0 < args.ao_radius <= 64 and 0 <= args.ao_strength <= 4):
-        raise RttaError("--edge-width must be 1..8, --ao-radius in (0, 64], --ao-strength in [0, 4]")
-    style.edge_width, style.ao_radius, style.ao_strength = args.edge_width, args.ao_radius, args.ao_strength
-    if args.context_opacity is not None:
-        if not 0.0 <= args.context_opacity <= 1.0:
-            raise RttaError(f"--context-opacity must be in [0, 1], got {args.context_opacity}")
-        style.context_opacity = args.context_opacity
+    camera = orbit_camera(scene, args.camera or None, args.fov)
+    style = make_style(resolve_names(scene, args.focus, "--focus"), parse_opacities(scene, args.opacity),
+                       context_opacity=args.context_opacity, edge_width=args.edge_width,
+                       ao_radius=args.ao_radius, ao_strength=args.ao_strength)
     if args.out:
         out = Path(args.out)
         if out.suffix.lower() != ".png":
@@ -225,7 +205,6 @@ def cmd_snapshot(args) -> int:
     if not parent.is_dir():
         raise RttaError("parent directory does not exist", parent)
     renderer = _renderer(shared_context(), scene, _settings(args))
-    camera = Camera.orbit(scene.center, scene.radius, *orbit, fov_y=args.fov)
     if args.projector:
         renderer.projector = _projector(args, scene, camera)
     if args.lens:
@@ -245,54 +224,16 @@ def cmd_snapshot(args) -> int:
 
 def _lens(args, scene, focus):
     """--lens SHAPE[,RADIUS] or --lens NAME, placed by --lens-at X,Y,Z (default: on the focus)."""
-    from ..ldi.lens import SHAPES, Lens, default_placement
-    from ..renderer.snapshot import resolve_names
+    from ..renderer.snapshot import make_lens
 
-    center, radius = default_placement(scene, focus)
-    if args.lens_at:
-        try:
-            center = np.array([float(v) for v in args.lens_at.split(",")], float)
-        except ValueError:
-            center = np.zeros(0)
-        if center.shape != (3,) or not np.isfinite(center).all():
-            raise RttaError(f"--lens-at must be X,Y,Z, got '{args.lens_at}'")
-    kind, _, size = args.lens.partition(",")
-    if kind in SHAPES:
-        try:
-            radius = float(size) if size else radius
-        except ValueError:
-            raise RttaError(f"--lens radius must be a number, got '{size}'") from None
-        return Lens.shape(kind, center, radius)
-    if size:
-        raise RttaError(f"--lens {kind}: an object lens takes no radius")
-    (oid,) = resolve_names(scene, [kind], "--lens")
-    lens = Lens.of_object(scene, oid)
-    if args.lens_at:
-        lens.center = center
-    return lens
+    return make_lens(scene, args.lens, args.lens_at or None, focus)
 
 
 def _projector(args, scene, camera):
     """--projector IMAGE[,AZ,EL,DIST]: the image file (or 'default') and where it stands."""
-    from ..passes.projector import Projector, default_image, load_image
-    from ..scene.camera import parse_orbit
+    from ..renderer.snapshot import make_projector
 
-    text = args.projector
-    name, orbit = text, None
-    parts = text.rsplit(",", 3)
-    if len(parts) == 4:
-        try:
-            orbit = parse_orbit(",".join(parts[1:]))
-            name = parts[0]
-        except RttaError:
-            orbit = None
-    if not 0.5 <= args.projector_fov <= 170:
-        raise RttaError(f"--projector-fov must be in [0.5, 170] degrees, got {args.projector_fov}")
-    image = default_image() if name == "default" else load_image(name)
-    kw = {"image": image, "fov_y": args.projector_fov, "shadows": not args.no_projector_shadows}
-    if orbit is None:
-        return Projector.at_camera(camera, scene.center, scene.radius, **kw)
-    return Projector.orbit(scene.center, scene.radius, *orbit, **kw)
+    return make_projector(scene, camera, args.projector, args.projector_fov, not args.no_projector_shadows)
 
 
 def cmd_info(args) -> int:

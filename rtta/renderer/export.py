@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..atlas.parameterize import Records
 from ..errors import RttaError
 from ..imageio import save_png
 from ..scene.camera import Camera
@@ -43,6 +44,17 @@ def records_json(renderer: Renderer, camera: Camera, records, viewport) -> dict:
     }
 
 
+def read_frame(renderer: Renderer, camera: Camera, viewport: tuple[int, int]) -> tuple[Records, dict | None, dict]:
+    """Capture once and read back what an export holds: (records, atlas images [layers, Th, Tw(, C)]
+    or None when nothing is visible, the direct render [1, H, W(, C)]); row 0 is the bottom row.
+    Shared by `export` and `rtta.capture`."""
+    records = renderer.capture(camera, viewport)
+    tw, th, td = records.atlas_size
+    atlas = renderer.atlas.read((tw, th), td) if td else None
+    std = renderer.std(camera, viewport).read(viewport, 1)
+    return records, atlas, std
+
+
 def export(renderer: Renderer, camera: Camera, viewport: tuple[int, int], out_dir: str | Path) -> Path:
     """Capture once and write the export format (see README) to out_dir atomically."""
     out_dir = Path(out_dir).resolve()
@@ -51,10 +63,8 @@ def export(renderer: Renderer, camera: Camera, viewport: tuple[int, int], out_di
     parent = out_dir.parent
     if not parent.is_dir():
         raise RttaError("parent directory does not exist", parent)
-    records = renderer.capture(camera, viewport)
-    tw, th, td = records.atlas_size
-    atlas = renderer.atlas.read((tw, th), td) if td else None
-    std = renderer.std(camera, viewport).read(viewport, 1)
+    records, atlas, std = read_frame(renderer, camera, viewport)
+    td = records.atlas_size[2]
     tmp = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.", dir=parent))
     try:
         (tmp / "records.json").write_text(json.dumps(records_json(renderer, camera, records, viewport), indent=1))

@@ -3,14 +3,18 @@
 from __future__ import annotations
 
 import difflib
+from collections.abc import Iterable, Sequence
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import RttaError
 from ..imageio import save_png
+from ..ldi.lens import SHAPES, Lens, default_placement
 from ..passes.composite import BACKGROUND, MODES, Style
-from ..scene.camera import Camera
+from ..passes.projector import Projector, default_image, load_image
+from ..scene.camera import Camera, parse_orbit
 from ..scene.model import Scene
 from .renderer import Renderer
 
@@ -42,6 +46,61 @@ def parse_opacities(scene: Scene, items: list[str]) -> dict[int, float]:
             raise RttaError(f"--opacity expects NAME=A with A in [0, 1], got '{item}'")
         out[resolve_names(scene, [name], "--opacity")[0]] = alpha
     return out
+
+
+def make_lens(scene: Scene, spec: str, at: str | Sequence[float] | None, focus: Iterable[int]) -> Lens:
+    """--lens SHAPE[,RADIUS] or --lens NAME, placed by --lens-at X,Y,Z (default: on the focus)."""
+    center, radius = default_placement(scene, focus)
+    if at is not None:
+        text = at if isinstance(at, str) else ",".join(str(v) for v in at)
+        try:
+            center = np.array([float(v) for v in text.split(",")], float)
+        except ValueError:
+            center = np.zeros(0)
+        if center.shape != (3,) or not np.isfinite(center).all():
+            raise RttaError(f"--lens-at must be X,Y,Z, got '{text}'")
+    kind, _, size = spec.partition(",")
+    if kind in SHAPES:
+        try:
+            radius = float(size) if size else radius
+        except ValueError:
+            raise RttaError(f"--lens radius must be a number, got '{size}'") from None
+        return Lens.shape(kind, center, radius)
+    if size:
+        raise RttaError(f"--lens {kind}: an object lens takes no radius")
+    (oid,) = resolve_names(scene, [kind], "--lens")
+    lens = Lens.of_object(scene, oid)
+    if at is not None:
+        lens.center = center
+    return lens
+
+
+def make_projector(scene: Scene, camera: Camera, spec: str, fov: float = 30.0, shadows: bool = True) -> Projector:
+    """--projector IMAGE[,AZ,EL,DIST]: the image file (or 'default') and where it stands
+    (without an orbit, at the camera)."""
+    name, orbit = spec, None
+    parts = spec.rsplit(",", 3)
+    if len(parts) == 4:
+        try:
+            orbit = parse_orbit(",".join(parts[1:]))
+            name = parts[0]
+        except RttaError:
+            orbit = None
+    if not 0.5 <= fov <= 170:
+        raise RttaError(f"--projector-fov must be in [0.5, 170] degrees, got {fov}")
+    image = _default_image() if name == "default" else load_image(name)
+    kw = {"image": image, "fov_y": fov, "shadows": shadows}
+    if orbit is None:
+        return Projector.at_camera(camera, scene.center, scene.radius, **kw)
+    return Projector.orbit(scene.center, scene.radius, *orbit, **kw)
+
+
+@lru_cache(maxsize=1)
+def _default_image() -> np.ndarray:
+    """One shipped image per process: the projector pass re-uploads only when the array changes."""
+    image = default_image()
+    image.setflags(write=False)
+    return image
 
 
 def over_background(rgba: np.ndarray, background=BACKGROUND[:3]) -> np.ndarray:

@@ -8,6 +8,7 @@ the composite and the atlas layer side by side with the panel on the left.
 from __future__ import annotations
 
 import itertools
+import re
 import time
 from pathlib import Path
 
@@ -16,9 +17,10 @@ import numpy as np
 from imgui_bundle import imgui, implot
 from moderngl_window.integrations.imgui_bundle import ModernglWindowRenderer
 
-from rtta.errors import RttaError
+from rtta.errors import RttaError, printable
 from rtta.imageio import save_png
 from rtta.ldi.lens import Lens, default_placement
+from rtta.outputs import check_file
 from rtta.passes.projector import Projector, default_image
 from rtta.renderer.renderer import Renderer
 from rtta.renderer.snapshot import over_background
@@ -87,13 +89,14 @@ class Viewer:
         except RttaError as exc:
             return self.say(str(exc), error=True)
         except Exception as exc:      # a broken file must never take the session down
-            return self.say(f"{Path(path).name}: cannot open ({type(exc).__name__}: {exc})", error=True)
+            reason = str(exc).strip().splitlines()[0][:200] if str(exc).strip() else ""
+            return self.say(f"{path}: cannot open ({type(exc).__name__}: {reason})", error=True)
         self.set_scene(scene)
         self.say("; ".join([f"opened {Path(path).name}", *(f"warning: {w}" for w in scene.warnings)]))
         return True
 
     def say(self, text: str, error: bool = False) -> bool:
-        self.message, self.message_is_error = text, error
+        self.message, self.message_is_error = printable(text), error
         return not error
 
     @property
@@ -254,16 +257,18 @@ class Viewer:
         """PNGs of the composite and the atlas (layers side by side); never overwrites."""
         images = {"composite": self.composite_image(), "atlas": self.atlas_image()}
         images = {k: v for k, v in images.items() if v is not None}
-        stem = Path(self.scene_label).stem
+        stem = re.sub(r"[^\w.-]", "_", Path(self.scene_label).stem)[:80] or "scene"
         for n in itertools.count(1):
             paths = {k: self.screenshot_dir / f"rtta-{stem}-{n:03d}-{k}.png" for k in images}
-            if any(p.exists() for p in paths.values()):
+            if any(p.exists() or p.is_symlink() for p in paths.values()):
                 continue
             try:
+                for p in paths.values():
+                    check_file(p, self.renderer.scene.inputs, suffix=".png", what="screenshot")
                 written = [save_png(paths[k], img, overwrite=False) for k, img in images.items()]
             except FileExistsError:
                 continue
-            except OSError as exc:
+            except (RttaError, OSError) as exc:
                 self.say(f"screenshot not written: {exc}", error=True)
                 return []
             self.say("saved " + ", ".join(p.name for p in written))

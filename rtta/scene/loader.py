@@ -6,19 +6,22 @@ objects). Expected failures raise RttaError naming the file and the problem.
 
 from __future__ import annotations
 
+import io
 import logging
+import re
 import warnings
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import RttaError
+from .files import MAX_FILE_BYTES, SafeResolver, regular_file
+from .gltf import prepare
 from .model import SUPPORTED, Scene, from_meshes
 from .precheck import check_size, precheck
 from .preprocess import DEFAULT_SMOOTH_ANGLE, index_vertices, smooth_normals
 from .textures import TextureTable
 
-MAX_FILE_BYTES = 2 * 1024**3
 MAX_COORDINATE = 1e15    # float64 keeps ~0.1 units of precision there; float32 offsets stay finite
 
 
@@ -27,30 +30,72 @@ def load_scene(path: str | Path, smooth_angle: float = DEFAULT_SMOOTH_ANGLE, smo
     normals are smoothed by `smooth_angle` degrees where the file has none, or everywhere
     with `smooth`."""
     path = Path(path)
-    if not path.exists():
-        raise RttaError("no such file", path)
-    if path.is_dir():
-        raise RttaError("is a directory, expected a scene file", path)
+    size = regular_file(path, "scene file")
     suffix = path.suffix.lower()
     if suffix not in SUPPORTED:
-        raise RttaError(f"unsupported file type '{suffix or '(none)'}'; "
+        raise RttaError(f"unsupported file type '{suffix[:16] or '(none)'}'; "
                         f"supported: {', '.join(SUPPORTED)}", path)
-    size = path.stat().st_size
     if size == 0:
         raise RttaError("file is empty", path)
     if size > MAX_FILE_BYTES:
         raise RttaError(f"file is larger than the {MAX_FILE_BYTES >> 30} GiB limit", path)
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")
-        notes = precheck(path)
-        loaded = _trimesh_load(path, suffix)
-        parts, colors, dropped, materials = _parts(loaded, path, smooth_angle, smooth)
+        notes, inputs, items = _read(path, suffix)
+        parts, colors, dropped, materials = _parts(items, path, smooth_angle, smooth)
+        notes += materials.pop("notes")
     if dropped:
         notes.append(f"{len(dropped)} object(s) with only degenerate (zero-area) triangles left out: "
                      + ", ".join(dropped[:5]) + (" ..." if len(dropped) > 5 else ""))
     scene = from_meshes(parts, colors, source=str(path), **materials)
     scene.warnings = notes + scene.warnings + _texture_notes(scene)
+    scene.inputs = [str(p) for p in dict.fromkeys([path.resolve(), *inputs])]
     return scene
+
+
+def _read(path: Path, suffix: str) -> tuple[list[str], list[Path], list[tuple]]:
+    """(warnings, files read besides `path`, [(name, trimesh geometry, 4x4 world transform)])
+    in file order. glTF's graph is walked by rtta.scene.gltf; the other formats' by trimesh."""
+    if suffix in (".gltf", ".glb"):
+        prepared = prepare(path)
+        loaded = _trimesh_load(io.BytesIO(prepared.data), "glb", path, None)
+        items = [(i.name, loaded.geometry.get(i.geometry), i.matrix) for i in prepared.instances]
+        return prepared.warnings, prepared.inputs, items
+    notes = precheck(path)
+    resolver = SafeResolver(path)
+    source, names = path, None
+    if suffix == ".obj":
+        data, names = obj_objects(path)
+        source = io.BytesIO(data)
+    loaded = _trimesh_load(source, suffix[1:], path, resolver)
+    items = []
+    order = {name: i for i, name in enumerate(loaded.geometry)}
+    for node in loaded.graph.nodes_geometry:
+        transform, geom_name = loaded.graph[node]
+        name, key = str(node), order.get(geom_name, len(order))
+        if names is not None and re.fullmatch(r"rtta\.o\.\d+", name) and int(name[7:]) < len(names):
+            name, key = names[int(name[7:])], int(name[7:])
+        items.append((key, name, loaded.geometry.get(geom_name), np.asarray(transform, np.float64)))
+    items.sort(key=lambda item: item[0])                  # file order
+    return notes + resolver.warnings, resolver.inputs, [item[1:] for item in items]
+
+
+def obj_objects(path: Path) -> tuple[bytes, list[str]]:
+    """The OBJ's bytes with each `o NAME` line made `o rtta.o.K` (trimesh merges objects of the
+    same name, and an unnamed one into its neighbour), and the names in file order, decoded
+    as UTF-8 or else Windows-1252."""
+    data = path.read_bytes()
+    names: list[str] = []
+
+    def rename(match: re.Match) -> bytes:
+        raw = (match.group(2) or b"").strip()
+        try:
+            names.append(raw.decode("utf-8"))
+        except UnicodeDecodeError:
+            names.append(raw.decode("cp1252", errors="replace"))
+        return match.group(1) + f"o rtta.o.{len(names) - 1}".encode()
+
+    return re.sub(rb"(^|\n)[ \t]*o(?:[ \t]+([^\r\n]*)|(?=[\r\n]|$))", rename, data), names
 
 
 def _texture_notes(scene: Scene) -> list[str]:
@@ -67,19 +112,21 @@ def _texture_notes(scene: Scene) -> list[str]:
     return [note] if note else []
 
 
-def _trimesh_load(path: Path, suffix: str):
+def _trimesh_load(source, file_type: str, path: Path, resolver):
     import trimesh
 
     logging.getLogger("trimesh").setLevel(logging.ERROR)
     try:
-        options = {"split_objects": True, "group_material": False} if suffix == ".obj" else {}
-        return trimesh.load(str(path), file_type=suffix[1:], force="scene", process=False, **options)
+        options = {"split_objects": True, "group_material": False} if file_type == "obj" else {}
+        return trimesh.load(source, file_type=file_type, force="scene", process=False, resolver=resolver, **options)
+    except (MemoryError, RecursionError) as exc:
+        raise RttaError(f"cannot read {path.suffix[1:].upper()} file ({type(exc).__name__})", path) from None
     except Exception as exc:  # trimesh raises many types for corrupt files
         reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        raise RttaError(f"cannot read {suffix[1:].upper()} file ({reason[:160]})", path) from None
+        raise RttaError(f"cannot read {path.suffix[1:].upper()} file ({reason[:160]})", path) from None
 
 
-def _parts(loaded, path: Path, smooth_angle: float, smooth: bool) -> tuple[list, list, list, dict]:
+def _parts(items: list[tuple], path: Path, smooth_angle: float, smooth: bool) -> tuple[list, list, list, dict]:
     """(name, world vertices, faces, normals) per object, their colours, the names of
     objects left out because every triangle is degenerate, and the from_meshes texture
     arguments (uvs, texture_ids, textures)."""
@@ -89,10 +136,7 @@ def _parts(loaded, path: Path, smooth_angle: float, smooth: bool) -> tuple[list,
     textures = TextureTable()
     uvs, texture_ids = [], []
     vertices = triangles = 0
-    graph = loaded.graph
-    for node in graph.nodes_geometry:
-        transform, geom_name = graph[node]
-        mesh = loaded.geometry.get(geom_name)
+    for node, mesh, transform in items:
         if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
             continue
         v = np.asarray(mesh.vertices, np.float64)
@@ -102,7 +146,11 @@ def _parts(loaded, path: Path, smooth_angle: float, smooth: bool) -> tuple[list,
         if f.min() < 0 or f.max() >= len(v):
             raise RttaError(f"object '{node}' has face indices out of range", path)
         m = np.asarray(transform, np.float64)
+        if not np.isfinite(m).all():
+            raise RttaError(f"object '{node}' has a transform that makes coordinates non-finite", path)
         world = v @ m[:3, :3].T + m[:3, 3]
+        if np.linalg.det(m[:3, :3]) < 0:
+            f = f[:, ::-1]                   # a mirroring transform turns the winding: keep faces front-facing
         normals = None if smooth or not _file_has_normals(mesh) else _world_normals(mesh, m)
         if not np.isfinite(world).all():
             raise RttaError(f"object '{node}' has a transform that makes coordinates non-finite", path)
@@ -127,7 +175,8 @@ def _parts(loaded, path: Path, smooth_angle: float, smooth: bool) -> tuple[list,
         raise RttaError("every triangle of the scene is degenerate (zero area)", path)
     if not parts:
         raise RttaError("scene has no objects with triangle geometry", path)
-    return parts, colors, dropped, {"uvs": uvs, "texture_ids": texture_ids, "textures": textures.images}
+    return parts, colors, dropped, {"uvs": uvs, "texture_ids": texture_ids, "textures": textures.images,
+                                    "notes": textures.notes}
 
 
 def _file_has_normals(mesh) -> bool:

@@ -1,0 +1,352 @@
+"""glTF/GLB scenes: the node graph is walked here, not by trimesh, so objects are named in
+file order (never with trimesh's random suffixes), cycles and absurd depths are errors
+rather than hangs, and nothing is dropped without a word.
+
+`prepare(path)` checks the document (rtta.scene.gltf_check), its buffers and base-colour
+images, walks the graph of the chosen scene (iteratively: no recursion, however deep),
+and rewrites the document for trimesh as one single-primitive mesh per (mesh, primitive)
+that is drawn, with one node each and no hierarchy, so trimesh only decodes geometry and
+textures. The world transform and the name of every object come from the walk.
+"""
+
+from __future__ import annotations
+
+import base64
+import binascii
+import io
+import json
+import math
+import struct
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import RttaError
+from .files import image_problem, local_file, memory_limit, read_limited
+from .gltf_check import COMPONENT_BYTES, TYPE_WIDTH, check, read_document
+
+MAX_DEPTH = 1000            # levels of the node graph
+MAX_OBJECTS = 200_000       # drawn (node path, primitive) pairs
+
+
+@dataclass
+class Instance:
+    """One object: a primitive of a mesh at the end of one path through the node graph."""
+
+    name: str
+    geometry: str            # the mesh name trimesh gives the rewritten single-primitive mesh
+    matrix: np.ndarray       # float64 [4, 4] world transform
+
+
+@dataclass
+class Prepared:
+    data: bytes                                   # the rewritten, self-contained GLB for trimesh
+    instances: list[Instance]
+    warnings: list[str] = field(default_factory=list)
+    inputs: list[Path] = field(default_factory=list)       # files it refers to
+
+
+def prepare(path: Path) -> Prepared:
+    doc, binary = read_document(path)
+    check(doc, path, None if binary is None else len(binary))
+    out = Prepared(b"", [])
+    _check_extensions(doc, path, out.warnings)
+    buffers = _buffers(doc, binary, path, out)
+    _check_memory(doc, path)
+    walk = _walk(doc, path, out.warnings)
+    pairs = _primitives(doc, walk, buffers, path, out.warnings)
+    images = _images(doc, buffers, path, out)
+    _colors(doc, out.warnings)
+    out.instances = [Instance(name, f"rtta.{m}.{p}", matrix)
+                     for name, mesh, matrix in walk for m, p in pairs if m == mesh]
+    if len(out.instances) > MAX_OBJECTS:
+        raise RttaError(f"the node graph makes {len(out.instances):,} objects (at most {MAX_OBJECTS:,})", path)
+    new, blob = _rewrite(doc, pairs, buffers, images)
+    text = json.dumps(new, allow_nan=False).encode()
+    text += b" " * (-len(text) % 4)
+    out.data = (struct.pack("<4sIII", b"glTF", 2, 28 + len(text) + len(blob), len(text)) + b"JSON" + text
+                + struct.pack("<I", len(blob)) + b"BIN\0" + blob)
+    return out
+
+
+def _check_extensions(doc: dict, path: Path, warnings: list[str]) -> None:
+    required = set(doc.get("extensionsRequired", []))
+    for name in sorted(required & {"KHR_draco_mesh_compression", "EXT_meshopt_compression"}):
+        if name == "KHR_draco_mesh_compression":
+            try:
+                import DracoPy  # noqa: F401
+                continue
+            except ImportError:
+                pass
+        raise RttaError(f"needs the glTF extension {name}, which rtta cannot decode here", path)
+    for i, acc in enumerate(doc.get("accessors", [])):
+        if "sparse" in acc:
+            warnings.append(f"accessor {i} is sparse; its sparse values are not applied")
+            break
+
+
+def _buffers(doc: dict, binary: bytes | None, path: Path, out: Prepared) -> list[bytes]:
+    """The bytes of every buffer; an error for a buffer that is a URL, outside the folder,
+    missing, not a regular file or shorter than it says."""
+    data: list[bytes] = []
+    for i, buf in enumerate(doc.get("buffers", [])):
+        uri = buf.get("uri")
+        if uri is None:
+            raw = binary or b""
+        elif uri.startswith("data:"):
+            raw = _data_uri(uri, path, f"buffers[{i}]")
+        else:
+            target = local_file(uri, path, "buffer")
+            raw = read_limited(target, path, f"buffer file '{uri}'")
+            out.inputs.append(target)
+        if len(raw) < buf["byteLength"]:
+            raise RttaError(f"buffer {i} has {len(raw):,} bytes, but its byteLength says {buf['byteLength']:,}", path)
+        data.append(raw)
+    return data
+
+
+def _data_uri(uri: str, path: Path, where: str) -> bytes:
+    head, _, body = uri.partition(",")
+    if not head.endswith(";base64"):
+        raise RttaError(f"glTF {where} is a data: URI that is not base64", path)
+    if len(body) * 3 // 4 > memory_limit():
+        raise RttaError(f"glTF {where} is a data: URI larger than the memory limit", path)
+    try:
+        return base64.b64decode(body, validate=False)
+    except (binascii.Error, ValueError):
+        raise RttaError(f"glTF {where} is a data: URI that is not valid base64", path) from None
+
+
+def _check_memory(doc: dict, path: Path) -> None:
+    """Accessors without a bufferView become arrays of zeros: their sizes count too."""
+    total = sum(a["count"] * COMPONENT_BYTES[a["componentType"]] * TYPE_WIDTH[a["type"]]
+                for a in doc.get("accessors", []) if "bufferView" not in a)
+    if total > memory_limit():
+        raise RttaError(f"the accessors without data declare {total / 2**20:,.0f} MiB, over the memory limit "
+                        "(RTTA_MEMORY_LIMIT_MB)", path)
+
+
+def _local(node: dict) -> np.ndarray:
+    if "matrix" in node:
+        return np.array(node["matrix"], np.float64).reshape(4, 4).T
+    m = np.identity(4)
+    if "scale" in node:
+        m = np.diag([*node["scale"], 1.0])
+    if "rotation" in node:
+        x, y, z, w = node["rotation"]
+        n = math.sqrt(x * x + y * y + z * z + w * w)
+        x, y, z, w = (x / n, y / n, z / n, w / n) if n > 0 else (0.0, 0.0, 0.0, 1.0)
+        r = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                      [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                      [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+        rot = np.identity(4)
+        rot[:3, :3] = r
+        m = rot @ m
+    if "translation" in node:
+        t = np.identity(4)
+        t[:3, 3] = node["translation"]
+        m = t @ m
+    return m
+
+
+def _walk(doc: dict, path: Path, warnings: list[str]) -> list[tuple[str, int, np.ndarray]]:
+    """(name, mesh, world matrix) of every node with a mesh, in depth-first file order, each
+    path through the graph once. Cycles and graphs deeper than MAX_DEPTH are errors; a node
+    with several parents is drawn under each, with a warning."""
+    nodes, scenes = doc.get("nodes", []), doc.get("scenes", [])
+    parents = [0] * len(nodes)
+    for node in nodes:
+        for child in node.get("children", []):
+            parents[child] += 1
+    if scenes:
+        roots = scenes[doc.get("scene", 0)].get("nodes", [])
+    else:
+        roots = [i for i, p in enumerate(parents) if p == 0]
+    shared = [i for i, p in enumerate(parents) if p > 1]
+    if shared:
+        warnings.append(f"{len(shared)} node(s) have more than one parent (glTF allows one); each is drawn "
+                        "under every parent: " + ", ".join(_node_name(nodes, i) for i in shared[:5]))
+    found: list[tuple[str, int, np.ndarray]] = []
+    on_path = [False] * len(nodes)
+    stack: list[tuple[int, np.ndarray, int, bool]] = [(r, np.identity(4), 1, False) for r in reversed(roots)]
+    visits = 0
+    while stack:
+        i, parent, depth, leaving = stack.pop()
+        if leaving:
+            on_path[i] = False
+            continue
+        if on_path[i]:
+            raise RttaError(f"glTF node graph has a cycle: node {i} ('{_node_name(nodes, i)}') is its own "
+                            "ancestor", path)
+        if depth > MAX_DEPTH:
+            raise RttaError(f"glTF node graph is deeper than {MAX_DEPTH} levels", path)
+        visits += 1
+        if visits > 4 * MAX_OBJECTS:
+            raise RttaError(f"glTF node graph has more than {4 * MAX_OBJECTS:,} node paths", path)
+        node = nodes[i]
+        world = parent @ _local(node)
+        if "mesh" in node:
+            found.append((_node_name(nodes, i), node["mesh"], world))
+        on_path[i] = True
+        stack.append((i, world, depth, True))
+        stack.extend((c, world, depth + 1, False) for c in reversed(node.get("children", [])))
+    return found
+
+
+def _node_name(nodes: list, i: int) -> str:
+    name = nodes[i].get("name")
+    return name if isinstance(name, str) and name else str(i)
+
+
+def _primitives(doc: dict, walk: list, buffers: list, path: Path, warnings: list[str]) -> list[tuple[int, int]]:
+    """(mesh, primitive) pairs that are drawn, in file order; a triangle fan gets its
+    triangle-list indices (prim["_fan"]); points and lines are left out with a warning."""
+    used = sorted({mesh for _, mesh, _ in walk})
+    meshes = doc.get("meshes", [])
+    pairs, skipped = [], {}
+    for m in used:
+        for p, prim in enumerate(meshes[m]["primitives"]):
+            mode = prim.get("mode", 4)
+            if mode == 6:
+                prim["_fan"] = _fan_indices(doc, prim, buffers)
+            if mode in (4, 5, 6):
+                pairs.append((m, p))
+            else:
+                kind = "points" if mode == 0 else "lines"
+                skipped[kind] = skipped.get(kind, 0) + 1
+    for kind, n in skipped.items():
+        warnings.append(f"{n} primitive(s) of {kind} left out (only surfaces are drawn)")
+    return pairs
+
+
+def _fan_indices(doc: dict, prim: dict, buffers: list) -> np.ndarray:
+    """A triangle fan's indices as a triangle list (uint32)."""
+    if "indices" in prim:
+        fan = _read_indices(doc, prim["indices"], buffers)
+    else:
+        fan = np.arange(doc["accessors"][prim["attributes"]["POSITION"]]["count"], dtype=np.uint32)
+    if len(fan) < 3:
+        return np.zeros(0, np.uint32)
+    k = np.arange(1, len(fan) - 1)
+    return np.stack([np.full(len(k), fan[0]), fan[k], fan[k + 1]], axis=1).astype(np.uint32).reshape(-1)
+
+
+def _read_indices(doc: dict, index: int, buffers: list) -> np.ndarray:
+    acc = doc["accessors"][index]
+    dtype = np.dtype({5121: np.uint8, 5123: np.uint16, 5125: np.uint32}[acc["componentType"]])
+    if "bufferView" not in acc:
+        return np.zeros(acc["count"], np.uint32)
+    view = doc["bufferViews"][acc["bufferView"]]
+    start = view.get("byteOffset", 0) + acc.get("byteOffset", 0)
+    stride = view.get("byteStride") or dtype.itemsize
+    raw = np.frombuffer(buffers[view["buffer"]], np.uint8, count=(acc["count"] - 1) * stride + dtype.itemsize,
+                        offset=start)
+    rows = np.lib.stride_tricks.as_strided(raw, (acc["count"], dtype.itemsize), (stride, 1))
+    return np.ascontiguousarray(rows).view(dtype).reshape(-1).astype(np.uint32)
+
+
+def _images(doc: dict, buffers: list, path: Path, out: Prepared) -> dict[int, bytes]:
+    """The bytes of every base-colour image that can be used. A missing, unreadable, corrupt
+    or oversized one (file, data: URI or embedded) is a warning and is left out, so its
+    objects keep their material colour; trimesh never opens a file itself."""
+    images, textures = doc.get("images", []), doc.get("textures", [])
+    used = sorted({textures[t]["source"] for t in _base_textures(doc) if "source" in textures[t]})
+    good = {}
+    for i in used:
+        image = images[i]
+        uri = image.get("uri")
+        label = uri if uri is not None and not uri.startswith("data:") else f"images[{i}] (embedded)"
+        try:
+            if uri is None and "bufferView" in image:
+                view = doc["bufferViews"][image["bufferView"]]
+                start = view.get("byteOffset", 0)
+                blob = buffers[view["buffer"]][start:start + view["byteLength"]]
+            elif uri is not None and uri.startswith("data:"):
+                blob = _data_uri(uri, path, f"images[{i}]")
+            elif uri is not None:
+                target = local_file(uri, path, "image")
+                out.inputs.append(target)
+                blob = read_limited(target, path, "")
+            else:
+                raise RttaError("has neither a uri nor a bufferView")
+            problem = image_problem(io.BytesIO(blob))
+            if problem:
+                raise RttaError(problem)
+            good[i] = blob
+        except RttaError as exc:
+            out.warnings.append(f"texture '{label}' {exc.message.strip()}; objects using it keep their material colour")
+    return good
+
+
+def _base_textures(doc: dict) -> list[int]:
+    out = []
+    for mat in doc.get("materials", []):
+        tex = mat.get("pbrMetallicRoughness", {}).get("baseColorTexture")
+        if tex is not None:
+            out.append(tex["index"])
+    return out
+
+
+def _colors(doc: dict, warnings: list[str]) -> None:
+    """Base colour factors made drawable: NaN or infinite components become 1 (glTF's
+    default), others are clamped to [0, 1]; each change is said once."""
+    fixed = []
+    for i, mat in enumerate(doc.get("materials", [])):
+        pbr = mat.get("pbrMetallicRoughness", {})
+        factor = pbr.get("baseColorFactor")
+        if factor is None:
+            continue
+        clean = [min(max(v, 0.0), 1.0) if math.isfinite(v) else 1.0 for v in factor]
+        if clean != factor:
+            fixed.append(mat.get("name") or f"materials[{i}]")
+            pbr["baseColorFactor"] = clean
+    if fixed:
+        warnings.append(f"{len(fixed)} material(s) with a baseColorFactor that is NaN, infinite or outside [0, 1] "
+                        "(NaN and infinite components drawn as 1, the rest clamped): " + ", ".join(fixed[:5]))
+
+
+def _rewrite(doc: dict, pairs: list, buffers: list[bytes], images: dict[int, bytes]) -> tuple[dict, bytes]:
+    """The self-contained document trimesh reads, and its binary chunk: every buffer, fan
+    index and used image in one blob; one mesh of one primitive per drawn (mesh, primitive),
+    one node each, flat; materials reduced to base colour and texture."""
+    blob, base = bytearray(), []
+    for data in buffers:
+        base.append(len(blob))
+        blob += data
+        blob += b"\0" * (-len(blob) % 4)
+    views = [{"buffer": 0, "byteOffset": base[v["buffer"]] + v.get("byteOffset", 0), "byteLength": v["byteLength"],
+              **({"byteStride": v["byteStride"]} if "byteStride" in v else {})} for v in doc.get("bufferViews", [])]
+    accessors = [{k: a[k] for k in ("bufferView", "byteOffset", "componentType", "count", "type", "normalized")
+                  if k in a} for a in doc.get("accessors", [])]
+
+    def append(data: bytes) -> int:
+        views.append({"buffer": 0, "byteOffset": len(blob), "byteLength": len(data)})
+        blob.extend(data)
+        blob.extend(b"\0" * (-len(blob) % 4))
+        return len(views) - 1
+
+    meshes = []
+    for m, p in pairs:
+        prim = doc["meshes"][m]["primitives"][p]
+        new = {"attributes": {k: v for k, v in prim["attributes"].items()
+                              if k in ("POSITION", "NORMAL", "TEXCOORD_0", "COLOR_0")}, "mode": prim.get("mode", 4)}
+        new.update({k: prim[k] for k in ("indices", "material") if k in prim})
+        if "_fan" in prim:
+            fan = prim["_fan"]
+            new["mode"] = 4
+            new["indices"] = len(accessors)
+            accessors.append({"bufferView": append(fan.tobytes()), "componentType": 5125, "count": len(fan),
+                              "type": "SCALAR"} if len(fan) else {"componentType": 5125, "count": 3, "type": "SCALAR"})
+        meshes.append({"name": f"rtta.{m}.{p}", "primitives": [new]})
+    new_images = [{"bufferView": append(images[i]), "mimeType": "image/png"} if i in images else {}
+                  for i in range(len(doc.get("images", [])))]
+    materials = [{"pbrMetallicRoughness": {k: v for k, v in mat.get("pbrMetallicRoughness", {}).items()
+                                           if k in ("baseColorFactor", "baseColorTexture")}}
+                 for mat in doc.get("materials", [])]
+    textures = [{"source": t["source"]} if "source" in t else {} for t in doc.get("textures", [])]
+    new_doc = {"asset": {"version": "2.0"}, "buffers": [{"byteLength": len(blob)}], "bufferViews": views,
+               "accessors": accessors, "meshes": meshes, "materials": materials, "textures": textures,
+               "images": new_images, "nodes": [{"mesh": j, "name": f"rtta.{j}"} for j in range(len(meshes))],
+               "scenes": [{"nodes": list(range(len(meshes)))}], "scene": 0}
+    return new_doc, bytes(blob)

@@ -18,9 +18,8 @@ from imgui_bundle import imgui, implot
 from moderngl_window.integrations.imgui_bundle import ModernglWindowRenderer
 
 from rtta.errors import RttaError, printable
-from rtta.imageio import save_png
+from rtta.imageio import check_file, save_png
 from rtta.ldi.lens import Lens, default_placement
-from rtta.outputs import check_file
 from rtta.passes.projector import Projector, default_image
 from rtta.renderer.renderer import Renderer
 from rtta.renderer.snapshot import over_background

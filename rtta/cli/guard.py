@@ -15,7 +15,7 @@ import signal
 import sys
 from collections.abc import Callable
 
-from .. import outputs
+from .. import imageio as outputs
 from ..errors import RttaError, printable
 
 

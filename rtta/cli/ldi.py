@@ -11,8 +11,8 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import RttaError, printable
+from ..imageio import check_file
 from ..ldi.stats import STATS_COLUMNS, stats_row
-from ..outputs import check_file
 
 
 def add_parser(sub) -> None:

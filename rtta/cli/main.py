@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from ..errors import RttaError, printable
-from ..outputs import check_file, check_folder, check_into_folder, os_error
+from ..imageio import check_file, check_folder, check_into_folder, os_error
 from ..scene.preprocess import DEFAULT_SMOOTH_ANGLE
 from .guard import OneLineParser, run_command, say
 

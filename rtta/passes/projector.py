@@ -16,7 +16,6 @@ from pathlib import Path
 import moderngl
 import numpy as np
 
-from ..errors import RttaError
 from ..gl.gpu import GpuScene
 from ..scene.camera import Camera
 from .capture import ScenePass, mat_bytes
@@ -47,7 +46,7 @@ def load_image(path: str | Path) -> np.ndarray:
     regular file, damaged, or too many pixels: checked from the header before decoding)."""
     from ..scene.files import open_image
 
-    with open_image(Path(path), "projector image") as im:
+    with open_image(Path(path), "image") as im:
         return np.asarray(im.convert("RGBA"))
 
 

@@ -13,6 +13,7 @@ import numpy as np
 from ..errors import RttaError, printable
 from ..imageio import check_file
 from ..ldi.stats import STATS_COLUMNS, stats_row
+from .guard import say
 
 
 def add_parser(sub) -> None:
@@ -40,6 +41,8 @@ def load_mesh(spec: str) -> tuple[str, np.ndarray, np.ndarray, list[str]]:
     from ..scene.loader import load_scene
 
     scene = load_scene(spec)
+    for note in scene.warnings:
+        say("warning", note, scene.source)
     vertices = scene.positions.astype(np.float64) + scene.origin
     v, f = closed_mesh(vertices, scene.indices.reshape(-1, 3), spec)
     return spec, v, f, scene.inputs
@@ -109,8 +112,11 @@ def cmd_ldi(args: argparse.Namespace) -> int:
     name, vertices, faces, files = load_mesh(args.mesh)
     if args.out:
         check_file(args.out, [*inputs, *files], suffix=".npy")
+    center, extent = (vertices.min(axis=0) + vertices.max(axis=0)) / 2, float(np.ptp(vertices, axis=0).max())
+    if points is not None:            # parity is unchanged by moving and scaling both: test at unit size,
+        points = (points - center) / extent        # so float32 depths work for meshes at 1e-30 or 1e12 units
     ctx = shared_context()
-    ldi = build(ctx, vertices, faces, args.resolution)
+    ldi = build(ctx, (vertices - center) / extent, faces, args.resolution)
     packed = compress(ldi)
     if args.stats:
         from ..tools.tables import print_table

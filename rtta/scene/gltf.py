@@ -25,9 +25,11 @@ import numpy as np
 from ..errors import RttaError
 from .files import image_problem, local_file, memory_limit, read_limited
 from .gltf_check import COMPONENT_BYTES, TYPE_WIDTH, check, read_document
+from .precheck import check_size
 
 MAX_DEPTH = 1000            # levels of the node graph
 MAX_OBJECTS = 200_000       # drawn (node path, primitive) pairs
+BUFFER_COPIES = 4           # the file, the rewritten blob, trimesh's slices of it, the GLB it reads
 
 
 @dataclass
@@ -53,7 +55,7 @@ def prepare(path: Path) -> Prepared:
     out = Prepared(b"", [])
     _check_extensions(doc, path, out.warnings)
     buffers = _buffers(doc, binary, path, out)
-    _check_memory(doc, path)
+    _check_memory(doc, buffers, path)
     walk = _walk(doc, path, out.warnings)
     pairs = _primitives(doc, walk, buffers, path, out.warnings)
     images = _images(doc, buffers, path, out)
@@ -62,6 +64,7 @@ def prepare(path: Path) -> Prepared:
                      for name, mesh, matrix in walk for m, p in pairs if m == mesh]
     if len(out.instances) > MAX_OBJECTS:
         raise RttaError(f"the node graph makes {len(out.instances):,} objects (at most {MAX_OBJECTS:,})", path)
+    _check_size(doc, walk, pairs, path)
     new, blob = _rewrite(doc, pairs, buffers, images)
     text = json.dumps(new, allow_nan=False).encode()
     text += b" " * (-len(text) % 4)
@@ -118,13 +121,30 @@ def _data_uri(uri: str, path: Path, where: str) -> bytes:
         raise RttaError(f"glTF {where} is a data: URI that is not valid base64", path) from None
 
 
-def _check_memory(doc: dict, path: Path) -> None:
-    """Accessors without a bufferView become arrays of zeros: their sizes count too."""
-    total = sum(a["count"] * COMPONENT_BYTES[a["componentType"]] * TYPE_WIDTH[a["type"]]
+def _check_memory(doc: dict, buffers: list[bytes], path: Path) -> None:
+    """Accessors without a bufferView become arrays of zeros: their sizes count too; and the
+    buffers are held about BUFFER_COPIES times while trimesh reads them."""
+    zeros = sum(a["count"] * COMPONENT_BYTES[a["componentType"]] * TYPE_WIDTH[a["type"]]
                 for a in doc.get("accessors", []) if "bufferView" not in a)
-    if total > memory_limit():
-        raise RttaError(f"the accessors without data declare {total / 2**20:,.0f} MiB, over the memory limit "
-                        "(RTTA_MEMORY_LIMIT_MB)", path)
+    need = zeros + BUFFER_COPIES * sum(len(b) for b in buffers)
+    if need > memory_limit():
+        raise RttaError(f"reading the file's buffers and accessors needs about {need / 2**20:,.0f} MiB, over "
+                        f"the memory limit of {memory_limit() / 2**20:,.0f} MiB (RTTA_MEMORY_LIMIT_MB)", path)
+
+
+def _check_size(doc: dict, walk: list, pairs: list, path: Path) -> None:
+    """The vertices and triangles the drawn primitives declare, every instance counted."""
+    uses: dict[int, int] = {}
+    for _, mesh, _ in walk:
+        uses[mesh] = uses.get(mesh, 0) + 1
+    accessors, vertices, triangles = doc.get("accessors", []), 0, 0
+    for m, p in pairs:
+        prim = doc["meshes"][m]["primitives"][p]
+        v = accessors[prim["attributes"]["POSITION"]]["count"]
+        n = accessors[prim["indices"]]["count"] if "indices" in prim else v
+        vertices += v * uses[m]
+        triangles += (n // 3 if prim.get("mode", 4) == 4 else max(n - 2, 0)) * uses[m]
+    check_size(vertices, triangles, path, "the file declares")
 
 
 def _local(node: dict) -> np.ndarray:
@@ -152,46 +172,65 @@ def _local(node: dict) -> np.ndarray:
 
 def _walk(doc: dict, path: Path, warnings: list[str]) -> list[tuple[str, int, np.ndarray]]:
     """(name, mesh, world matrix) of every node with a mesh, in depth-first file order, each
-    path through the graph once. Cycles and graphs deeper than MAX_DEPTH are errors; a node
-    with several parents is drawn under each, with a warning."""
+    path through the graph once. Cycles, graphs deeper than MAX_DEPTH and graphs whose paths
+    make more than MAX_OBJECTS objects are errors (found in one pass over the nodes, before
+    any path is followed); a node with several parents is drawn under each, with a warning."""
     nodes, scenes = doc.get("nodes", []), doc.get("scenes", [])
     parents = [0] * len(nodes)
     for node in nodes:
         for child in node.get("children", []):
             parents[child] += 1
-    if scenes:
-        roots = scenes[doc.get("scene", 0)].get("nodes", [])
-    else:
-        roots = [i for i, p in enumerate(parents) if p == 0]
+    roots = scenes[doc.get("scene", 0)].get("nodes", []) if scenes else [i for i, p in enumerate(parents) if p == 0]
+    _measure(nodes, roots, path)
     shared = [i for i, p in enumerate(parents) if p > 1]
     if shared:
         warnings.append(f"{len(shared)} node(s) have more than one parent (glTF allows one); each is drawn "
                         "under every parent: " + ", ".join(_node_name(nodes, i) for i in shared[:5]))
     found: list[tuple[str, int, np.ndarray]] = []
-    on_path = [False] * len(nodes)
-    stack: list[tuple[int, np.ndarray, int, bool]] = [(r, np.identity(4), 1, False) for r in reversed(roots)]
-    visits = 0
+    stack: list[tuple[int, np.ndarray]] = [(r, np.identity(4)) for r in reversed(roots)]
     while stack:
-        i, parent, depth, leaving = stack.pop()
-        if leaving:
-            on_path[i] = False
-            continue
-        if on_path[i]:
-            raise RttaError(f"glTF node graph has a cycle: node {i} ('{_node_name(nodes, i)}') is its own "
-                            "ancestor", path)
-        if depth > MAX_DEPTH:
-            raise RttaError(f"glTF node graph is deeper than {MAX_DEPTH} levels", path)
-        visits += 1
-        if visits > 4 * MAX_OBJECTS:
-            raise RttaError(f"glTF node graph has more than {4 * MAX_OBJECTS:,} node paths", path)
+        i, parent = stack.pop()
         node = nodes[i]
         world = parent @ _local(node)
         if "mesh" in node:
             found.append((_node_name(nodes, i), node["mesh"], world))
-        on_path[i] = True
-        stack.append((i, world, depth, True))
-        stack.extend((c, world, depth + 1, False) for c in reversed(node.get("children", [])))
+        stack.extend((c, world) for c in reversed(node.get("children", [])))
     return found
+
+
+def _measure(nodes: list, roots: list[int], path: Path) -> None:
+    """Cycle, depth and path-count checks over the nodes reachable from `roots`, iteratively
+    (each node once: a graph of shared children is not unfolded to count its paths)."""
+    state = [0] * len(nodes)           # 0 new, 1 on the current path, 2 done
+    depth = [0] * len(nodes)           # levels below and including the node
+    meshes = [0] * len(nodes)          # mesh nodes on all paths below and including it
+    for root in roots:
+        stack = [root]
+        while stack:
+            i = stack[-1]
+            if state[i] == 2:
+                stack.pop()
+                continue
+            children = nodes[i].get("children", [])
+            if state[i] == 1:
+                depth[i] = 1 + max((depth[c] for c in children), default=0)
+                meshes[i] = min(int("mesh" in nodes[i]) + sum(meshes[c] for c in children), 10 * MAX_OBJECTS)
+                state[i] = 2
+                stack.pop()
+                continue
+            state[i] = 1
+            for c in children:
+                if state[c] == 1:
+                    raise RttaError(f"glTF node graph has a cycle: node {c} ('{_node_name(nodes, c)}') is its "
+                                    "own ancestor", path)
+                if state[c] == 0:
+                    stack.append(c)
+    if max((depth[r] for r in roots), default=0) > MAX_DEPTH:
+        raise RttaError(f"glTF node graph is deeper than {MAX_DEPTH} levels", path)
+    total = sum(meshes[r] for r in roots)
+    if total > MAX_OBJECTS:
+        raise RttaError(f"glTF node graph has {total:,} or more node paths to meshes (at most {MAX_OBJECTS:,} "
+                        "objects)", path)
 
 
 def _node_name(nodes: list, i: int) -> str:
@@ -265,7 +304,11 @@ def _images(doc: dict, buffers: list, path: Path, out: Prepared) -> dict[int, by
             elif uri is not None and uri.startswith("data:"):
                 blob = _data_uri(uri, path, f"images[{i}]")
             elif uri is not None:
-                target = local_file(uri, path, "image")
+                try:
+                    target = local_file(uri, path, "texture")
+                except RttaError as exc:
+                    out.warnings.append(f"{exc.message}; objects using it keep their material colour")
+                    continue
                 out.inputs.append(target)
                 blob = read_limited(target, path, "")
             else:

@@ -131,13 +131,14 @@ class Checker:
             self.fail(f"{where}.{key}", f"must be an object, not {_kind(value)}")
         return value
 
-    def text(self, obj: dict, key: str, where: str) -> str | None:
+    def text(self, obj: dict, key: str, where: str, *, uri: bool = False) -> str | None:
+        """A string; a URI must not hold a NUL byte (no file name can)."""
         value = obj.get(key)
         if value is None:
             return None
         if not isinstance(value, str):
             self.fail(f"{where}.{key}", f"must be a string, not {_kind(value)}")
-        if "\0" in value:
+        if uri and "\0" in value:
             self.fail(f"{where}.{key}", "contains a NUL byte")
         return value
 
@@ -180,7 +181,7 @@ def _buffers(c: Checker, bin_size: int | None) -> None:
     for i, buf in enumerate(c.array("buffers")):
         where = f"buffers[{i}]"
         length = c.integer(buf, "byteLength", where, required=True)
-        uri = c.text(buf, "uri", where)
+        uri = c.text(buf, "uri", where, uri=True)
         if uri is None and i == 0 and bin_size is not None and length > bin_size:
             c.fail(f"{where}.byteLength", f"is {length:,}, but the GLB binary chunk has {bin_size:,} bytes")
         if uri is None and not (i == 0 and bin_size is not None):
@@ -309,6 +310,6 @@ def _materials(c: Checker) -> None:
         c.index(tex, "source", f"textures[{i}]", "images")
     for i, image in enumerate(c.array("images")):
         where = f"images[{i}]"
-        c.text(image, "uri", where)
+        c.text(image, "uri", where, uri=True)
         c.text(image, "mimeType", where)
         c.index(image, "bufferView", where, "bufferViews")

@@ -16,9 +16,13 @@ from pathlib import Path
 from ..errors import RttaError
 from .files import memory_limit
 
-BYTES_PER_VERTEX = 112     # trimesh float64 positions/normals + our float32 copies + GPU buffer
-BYTES_PER_TRIANGLE = 80    # trimesh int64 faces + face normals + our uint32 indices + GPU buffer
-XML_BYTES_FACTOR = 8       # peak memory per uncompressed byte of a 3MF (measured: see RELIABILITY.md)
+# Peak memory of loading, measured (RELIABILITY.md): with normals smoothed at load (a file
+# without normals) about 170 bytes per vertex and 1,300 per triangle (163,842 vertices and
+# 327,680 triangles: 435 MiB); a file with normals needs about a tenth of that. Half the
+# worst case is charged, so a scene the limit admits peaks below twice the limit.
+BYTES_PER_VERTEX = 120
+BYTES_PER_TRIANGLE = 720
+XML_BYTES_FACTOR = 24      # trimesh's 3MF reader: 559 MiB peak for a 27 MiB model (21 per byte)
 MAX_ZIP_MEMBERS = 10_000
 MAX_OBJECTS = 200_000
 

@@ -44,27 +44,32 @@ class Interrupted(KeyboardInterrupt):
 
 
 class _State:
-    depth = 0              # inside committing()
+    depth = 0              # inside committing() or quiet_signals(): a signal waits
     committed = False      # an output has replaced its old version: the run is no longer interrupted
-    raised = False         # one Interrupted has been raised: later signals only wait (cleanup runs)
-    pending: list[int] = []
+    raised = False         # Interrupted has been raised once: later signals only wait (cleanup runs)
+    requested: int | None = None       # the first signal before any commit
 
 
 def _handler(signum, frame) -> None:
-    if _State.depth or _State.committed or _State.raised:
-        _State.pending.append(signum)
-        return
+    if _State.committed:
+        return                             # the new output is in place: finish and say so
+    if _State.requested is None:
+        _State.requested = signum
+    if _State.depth or _State.raised:
+        return                             # raised at the next commit, or already unwinding
     _State.raised = True
     raise Interrupted(signum)
 
 
 def install_signal_handlers() -> dict:
     """Make SIGINT/SIGTERM/SIGHUP raise Interrupted (main thread only); returns the previous
-    handlers for restore_signal_handlers."""
-    _State.depth, _State.committed, _State.raised, _State.pending = 0, False, False, []
+    handlers for restore_signal_handlers. Signals ignored on purpose (nohup) stay ignored."""
+    _State.depth, _State.committed, _State.raised, _State.requested = 0, False, False, None
     old = {}
     for sig in SIGNALS:
         try:
+            if signal.getsignal(sig) is signal.SIG_IGN:
+                continue
             old[sig] = signal.signal(sig, _handler)
         except (ValueError, OSError):      # not the main thread, or not allowed: leave it
             pass
@@ -77,18 +82,23 @@ def restore_signal_handlers(old: dict) -> None:
 
 
 def committed() -> bool:
-    """Whether an output of this run has already replaced its old version."""
+    """Whether an output of this run has replaced its old version."""
     return _State.committed
 
 
-def pending_signal() -> int | None:
-    return _State.pending[0] if _State.pending else None
+def interrupt_requested() -> int | None:
+    """The signal that asked this run to stop, while no output has been committed (even if
+    a library swallowed the Interrupted it raised)."""
+    return None if _State.committed else _State.requested
 
 
 @contextmanager
 def committing() -> Iterator[None]:
     """Signals wait while the block renames outputs into place; once it has completed, the run
-    is past the point of no return and signals are not raised any more."""
+    is past the point of no return and signals are not raised any more. A signal that came
+    earlier (and was swallowed or waited) is raised here, before anything is replaced."""
+    if _State.requested is not None and not _State.committed:
+        raise Interrupted(_State.requested)
     _State.depth += 1
     try:
         yield

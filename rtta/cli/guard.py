@@ -79,24 +79,45 @@ def _subject(args: argparse.Namespace | None) -> str | None:
     return None
 
 
-def run_command(handler: Callable[[argparse.Namespace], int], args: argparse.Namespace) -> int:
-    """Run `handler(args)` under the one-line failure contract (see the module docstring)."""
+def run_command(handler: Callable[[argparse.Namespace], int], args: argparse.Namespace, *,
+                process: bool = False) -> int:
+    """Run `handler(args)` under the one-line failure contract (see the module docstring).
+    `process`: this is the whole process (the `rtta` command), so once an output has been
+    committed the signal handlers stay, and a late signal cannot kill the finished run."""
     old_handlers = outputs.install_signal_handlers()
     real_stdout = sys.stdout
     sys.stdout = _GuardedStdout(real_stdout)
     try:
         code = handler(args)
         sys.stdout.flush()
+        if outputs.interrupt_requested():           # a library swallowed it, and nothing was replaced
+            raise outputs.Interrupted(outputs.interrupt_requested())
         return code
-    except RttaError as exc:
-        say("error", str(exc))
-        return 2
     except outputs.Interrupted as exc:
         say("interrupted", f"{signal.Signals(exc.signum).name}; nothing was written")
         return 128 + exc.signum
     except KeyboardInterrupt:
         say("interrupted", "nothing was written")
         return 130
+    except Exception as exc:
+        signum = outputs.interrupt_requested()
+        if signum is None:
+            return _failed(exc, args)
+        say("interrupted", f"{signal.Signals(signum).name}; nothing was written")   # what failed was cut short
+        return 128 + signum
+    finally:
+        sys.stdout = real_stdout
+        if not (process and outputs.interrupt_requested() is None and outputs.committed()):
+            outputs.restore_signal_handlers(old_handlers)
+
+
+def _failed(exc: Exception, args) -> int:
+    """One line for an exception a command raised; its exit status."""
+    try:
+        raise exc
+    except RttaError as exc:
+        say("error", str(exc))
+        return 2
     except BrokenPipeError:          # `rtta info | head`: the reader left; say nothing more
         _silence_stdout()
         return 1
@@ -117,6 +138,3 @@ def run_command(handler: Callable[[argparse.Namespace], int], args: argparse.Nam
         say("error", f"cannot process ({type(exc).__name__}{': ' + reason if reason else ''}); "
                      "RTTA_DEBUG=1 shows where", _subject(args))
         return 2
-    finally:
-        sys.stdout = real_stdout
-        outputs.restore_signal_handlers(old_handlers)

@@ -304,7 +304,7 @@ def main(argv: list[str] | None = None) -> int:
     steady_heap()
     handler = {"export": cmd_export, "snapshot": cmd_snapshot, "info": cmd_info, "bench": cmd_bench,
                "ldi": cmd_ldi}[args.command]
-    return run_command(handler, args)
+    return run_command(handler, args, process=argv is None)
 
 
 if __name__ == "__main__":

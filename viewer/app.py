@@ -120,8 +120,11 @@ class Viewer:
         self.ctx.clear(*WINDOW_CLEAR, 1.0)
         if size[0] > 0 and size[1] > 0:
             self.renderer.timings.clear()
-            self._draw_composite()
-            self._draw_atlas()
+            try:
+                self._draw_composite()
+                self._draw_atlas()
+            except RttaError as exc:             # e.g. targets too large for a huge window: say so, keep going
+                self.say(str(exc), error=True)
             self.stats.stage_ms = dict(self.renderer.timings)     # what ran this frame
             self.stats.last_ms.update(self.renderer.timings)      # for the panel: the last run of each
         overlay.draw(self)

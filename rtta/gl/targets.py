@@ -15,6 +15,7 @@ from ..scene.files import memory_limit
 from . import glraw
 
 SHRINK_AFTER_FRAMES = 60
+MIN_TARGET_BYTES = 512 * 2**20     # render targets may always take this much, whatever the scene limit
 
 
 def release_framebuffer(ctx: moderngl.Context, fbo) -> None:
@@ -75,7 +76,7 @@ class LayeredTarget:
         w, h = max(1, int(size[0])), max(1, int(size[1]))
         n = max(1, int(layers))
         need = w * h * n * (4 + 4 * self.normals + 4 + 4)
-        if need > memory_limit() // 2:
+        if need > max(memory_limit() // 2, MIN_TARGET_BYTES):
             raise RttaError(f"the render targets would need {w}x{h}x{n} texels ({need / 2**20:,.0f} MiB), over half "
                             "the memory limit (RTTA_MEMORY_LIMIT_MB); use a smaller --size or --region-scale")
         try:

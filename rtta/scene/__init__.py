@@ -1,7 +1,9 @@
 """Scene layer: what is drawn, before any GL.
 
-Loading files (prechecks against hostile or oversized input, trimesh, preprocessing of
-vertices and normals, textures and the material atlas they are packed into), the batched
+Loading files (what may be read: `files`; declared sizes: `precheck`; glTF checked, its
+node graph walked and rewritten for trimesh: `gltf_check`, `gltf`, `gltf_rewrite`; trimesh;
+preprocessing of vertices and normals, textures and the material atlas they are packed
+into), the batched
 `Scene` (one vertex/index buffer, a per-vertex object id), the orbit `Camera`, generated
 scenes and the demo. The bottom layer: it imports only `rtta.errors` and `rtta.imageio`.
 """

@@ -130,6 +130,19 @@ def _stl_header(count: int, body_triangles: int) -> bytes:
     return b"\0" * 80 + struct.pack("<I", count) + body
 
 
+def many_objects_obj(n: int) -> str:
+    """An OBJ of `n` one-triangle objects."""
+    return "".join(f"o p{i}\nv {i} 0 0\nv {i + 1} 0 0\nv {i} 1 0\nf {3 * i + 1} {3 * i + 2} {3 * i + 3}\n"
+                   for i in range(n))
+
+
+def many_nodes_glb(n: int) -> bytes:
+    """A GLB of `n` nodes sharing one box mesh, side by side."""
+    doc, binary = bad_gltf.box_doc([{"mesh": 0, "translation": [i % 100, i // 100, 0]} for i in range(n)])
+    doc["scenes"] = [{"nodes": list(range(n))}]
+    return bad_gltf.glb(doc, binary)
+
+
 def make_corpus(folder: str | Path) -> list[Case]:
     """Write every case into `folder` (which must exist and be empty) and return them."""
     d = Path(folder)
@@ -207,6 +220,8 @@ def make_corpus(folder: str | Path) -> list[Case]:
     add("3mf_component_cycle.3mf", bf.threemf_cycle(), True, "cycle")
     add("3mf_2_pow_30_components.3mf", bf.threemf_explosion(30), True, "objects")
     add("3mf_entity_expansion.3mf", bf.threemf_entities(), True, "DTD")
+    add("obj_10001_objects.obj", many_objects_obj(10_001), True, "10,001 objects")
+    add("gltf_10001_nodes.glb", many_nodes_glb(10_001), True, "10,001")
     if bf.make_fifo(d / "fifo_scene.glb"):
         add("fifo_scene.glb", None, True, "not a regular file")
     if bf.make_link(d / "dev_zero.stl", "/dev/zero"):

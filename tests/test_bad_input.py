@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from bad_inputs import make_corpus
+from bad_inputs import make_corpus, many_nodes_glb, many_objects_obj
 
 from rtta.cli.main import main
 from rtta.errors import printable
@@ -144,7 +144,9 @@ def test_hostile_sizes_stay_fast_and_small(corpus, tmp_path):
     _, cases = corpus
     hostile = [c for c in cases if (c.category == "limits" and c.name != "too_large_for_limit.glb")  # 1 MiB's
                or c.name.startswith(("gltf_chain", "gltf_dag", "gltf_bufferless"))]
-    names = [str(c.path) for c in hostile]
+    (tmp_path / "at_limit.obj").write_text(many_objects_obj(10_000))          # the most objects allowed: loads
+    (tmp_path / "at_limit.glb").write_bytes(many_nodes_glb(10_000))
+    names = [str(c.path) for c in hostile] + [str(tmp_path / "at_limit.obj"), str(tmp_path / "at_limit.glb")]
     script = ("import resource, sys, time\nfrom rtta.cli.main import main\nfor p in sys.argv[1:]:\n"
               "    t = time.perf_counter(); code = main(['info', p])\n"
               "    print(p, code, round(time.perf_counter() - t, 2), file=sys.stderr)\n"
@@ -152,10 +154,10 @@ def test_hostile_sizes_stay_fast_and_small(corpus, tmp_path):
     proc = subprocess.run([sys.executable, "-c", script, *names], capture_output=True, text=True, timeout=300,
                           env={"RTTA_MEMORY_LIMIT_MB": "256", "PATH": "/usr/bin:/bin"}, cwd=tmp_path)
     timings = [line.rsplit(" ", 2) for line in proc.stderr.splitlines() if not line.startswith("rtta: ")]
-    assert len(timings) == len(hostile), proc.stderr[-2000:]
+    assert len(timings) == len(names), proc.stderr[-2000:]
     slow = [t for t in timings if float(t[2]) > 10]
     assert not slow, slow
-    expect = {str(c.path): 2 if c.error else 0 for c in hostile}
+    expect = {str(c.path): 2 if c.error else 0 for c in hostile} | {names[-2]: 0, names[-1]: 0}
     wrong = [(p, code) for p, code, _ in timings if int(code) != expect[p]]
     assert not wrong, wrong
     peak_mib = int(proc.stdout.strip().splitlines()[-1]) / 1024

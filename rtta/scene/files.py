@@ -20,6 +20,7 @@ from ..errors import RttaError
 DEFAULT_LIMIT_MB = 4096
 MAX_FILE_BYTES = 2 * 1024**3
 MAX_TEXTURE_PIXELS = 8192 * 8192       # 256 MiB as RGBA8; the material atlas halves anything over 4032 anyway
+MAX_OBJECTS = 10_000                   # objects a scene file may make (loading costs ~0.25 ms each, OBJ ~0.5)
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tga", ".tif", ".tiff", ".gif", ".webp")
 
 

@@ -23,13 +23,12 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import RttaError
-from .files import image_problem, local_file, memory_limit, read_limited
+from .files import MAX_OBJECTS, image_problem, local_file, memory_limit, read_limited
 from .gltf_check import COMPONENT_BYTES, TYPE_WIDTH, check, read_document
 from .gltf_rewrite import fan_indices, rewrite
 from .precheck import check_size
 
 MAX_DEPTH = 1000            # levels of the node graph
-MAX_OBJECTS = 200_000       # drawn (node path, primitive) pairs
 BUFFER_COPIES = 4           # the file, the rewritten blob, trimesh's slices of it, the GLB it reads
 
 

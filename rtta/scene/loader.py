@@ -15,11 +15,11 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import RttaError
-from .files import MAX_FILE_BYTES, SafeResolver, regular_file
+from .files import MAX_FILE_BYTES, MAX_OBJECTS, SafeResolver, regular_file
 from .gltf import prepare
 from .model import SUPPORTED, Scene, from_meshes
 from .precheck import check_size, precheck
-from .preprocess import DEFAULT_SMOOTH_ANGLE, index_vertices, smooth_normals
+from .preprocess import DEFAULT_SMOOTH_ANGLE, preprocess_objects
 from .textures import TextureTable
 
 MAX_COORDINATE = 1e15    # float64 keeps ~0.1 units of precision there; float32 offsets stay finite
@@ -66,6 +66,8 @@ def _read(path: Path, suffix: str) -> tuple[list[str], list[Path], list[tuple]]:
     source, names = path, None
     if suffix == ".obj":
         data, names = obj_objects(path)
+        if len(names) > MAX_OBJECTS:
+            raise RttaError(f"OBJ file has {len(names):,} objects ('o' statements; at most {MAX_OBJECTS:,})", path)
         source = io.BytesIO(data)
     loaded = _trimesh_load(source, suffix[1:], path, resolver)
     items = []
@@ -129,54 +131,90 @@ def _trimesh_load(source, file_type: str, path: Path, resolver):
 def _parts(items: list[tuple], path: Path, smooth_angle: float, smooth: bool) -> tuple[list, list, list, dict]:
     """(name, world vertices, faces, normals) per object, their colours, the names of
     objects left out because every triangle is degenerate, and the from_meshes texture
-    arguments (uvs, texture_ids, textures)."""
-    import trimesh
-
-    parts, colors, dropped = [], [], []
+    arguments (uvs, texture_ids, textures). What depends on the geometry alone is done once
+    per geometry, and preprocessing once for all objects (rtta.scene.preprocess)."""
     textures = TextureTable()
-    uvs, texture_ids = [], []
+    geometry: dict[int, tuple | None] = {}
+    names, raw, colors, texture_ids = [], [], [], []
     vertices = triangles = 0
     for node, mesh, transform in items:
-        if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
+        if id(mesh) not in geometry:
+            geometry[id(mesh)] = _geometry(mesh, node, path, textures, smooth)
+        geo = geometry[id(mesh)]
+        if geo is None:
             continue
-        v = np.asarray(mesh.vertices, np.float64)
-        if not np.isfinite(v).all():
-            raise RttaError(f"object '{node}' has NaN or infinite vertex coordinates", path)
-        f = np.asarray(mesh.faces, np.int64)
-        if f.min() < 0 or f.max() >= len(v):
-            raise RttaError(f"object '{node}' has face indices out of range", path)
+        v, f, n, uv, texture, color = geo
         m = np.asarray(transform, np.float64)
-        if not np.isfinite(m).all():
-            raise RttaError(f"object '{node}' has a transform that makes coordinates non-finite", path)
-        world = v @ m[:3, :3].T + m[:3, 3]
-        if np.linalg.det(m[:3, :3]) < 0:
-            f = f[:, ::-1]                   # a mirroring transform turns the winding: keep faces front-facing
-        normals = None if smooth or not _file_has_normals(mesh) else _world_normals(mesh, m)
+        world = v @ m[:3, :3].T + m[:3, 3] if np.isfinite(m).all() else np.full(1, np.nan)
         if not np.isfinite(world).all():
             raise RttaError(f"object '{node}' has a transform that makes coordinates non-finite", path)
         if np.abs(world).max() > MAX_COORDINATE:
             raise RttaError(f"object '{node}' has coordinates up to {np.abs(world).max():.3g}, beyond "
                             f"the ±{MAX_COORDINATE:.0e} this program handles", path)
+        if np.linalg.det(m[:3, :3]) < 0:
+            f = f[:, ::-1]                   # a mirroring transform turns the winding: keep faces front-facing
         vertices, triangles = vertices + len(v), triangles + len(f)
         check_size(vertices, triangles, path)
-        if not _has_area(world, f):
-            dropped.append(str(node))
-            continue
-        uv, texture = textures.of(mesh)
-        if normals is None:
-            world, f, normals, uv = smooth_normals(world, f, uv, smooth_angle)
-        else:
-            world, f, normals, uv = index_vertices(world, f, normals, uv)
-        parts.append((str(node), world, f, normals))
-        colors.append(_color(mesh))
-        uvs.append(uv)
+        names.append(str(node))
+        raw.append((world, f, None if n is None else _transform_normals(n, m), uv))
+        colors.append(color)
         texture_ids.append(texture)
-    if not parts and dropped:
+    area = _has_area(raw)
+    dropped = [name for name, ok in zip(names, area, strict=True) if not ok]
+    keep = np.flatnonzero(area)
+    if not keep.size and dropped:
         raise RttaError("every triangle of the scene is degenerate (zero area)", path)
-    if not parts:
+    if not keep.size:
         raise RttaError("scene has no objects with triangle geometry", path)
-    return parts, colors, dropped, {"uvs": uvs, "texture_ids": texture_ids, "textures": textures.images,
-                                    "notes": textures.notes}
+    done = preprocess_objects([raw[i] for i in keep], smooth_angle, smooth)
+    parts = [(names[i], *d[:3]) for i, d in zip(keep, done, strict=True)]
+    return parts, [colors[i] for i in keep], dropped, {
+        "uvs": [d[3] for d in done], "texture_ids": [texture_ids[i] for i in keep], "textures": textures.images,
+        "notes": textures.notes}
+
+
+def _geometry(mesh, node, path: Path, textures: TextureTable, smooth: bool) -> tuple | None:
+    """(vertices, faces, file normals or None, uv, texture, colour) of a trimesh geometry,
+    checked; None for what is not a triangle mesh."""
+    import trimesh
+
+    if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
+        return None
+    v = np.asarray(mesh.vertices, np.float64)
+    if not np.isfinite(v).all():
+        raise RttaError(f"object '{node}' has NaN or infinite vertex coordinates", path)
+    f = np.asarray(mesh.faces, np.int64)
+    if f.min() < 0 or f.max() >= len(v):
+        raise RttaError(f"object '{node}' has face indices out of range", path)
+    n = None if smooth or not _file_has_normals(mesh) else _file_normals(mesh)
+    uv, texture = textures.of(mesh)
+    return v, f, n, uv, texture, _color(mesh)
+
+
+def _transform_normals(n: np.ndarray, m: np.ndarray) -> np.ndarray | None:
+    """Normals by the inverse transpose of the transform, unit length; None if it is singular."""
+    try:
+        normal_matrix = np.linalg.inv(m[:3, :3]).T
+    except np.linalg.LinAlgError:
+        return None
+    out = n @ normal_matrix.T
+    length = np.linalg.norm(out, axis=1, keepdims=True)
+    return (out / np.where(length > 0, length, 1.0)).astype(np.float32)
+
+
+def _has_area(parts: list[tuple]) -> np.ndarray:
+    """Per object: whether any triangle has a non-zero area (relative to its size); all
+    objects at once."""
+    if not parts:
+        return np.zeros(0, bool)
+    v = np.concatenate([p[0] for p in parts])
+    starts = np.cumsum([0] + [len(p[0]) for p in parts[:-1]])
+    f = np.concatenate([p[1] + s for p, s in zip(parts, starts, strict=True)])
+    fstarts = np.cumsum([0] + [len(p[1]) for p in parts[:-1]])
+    cross = np.linalg.norm(np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]), axis=1)
+    largest = np.maximum.reduceat(cross, fstarts)
+    extent = (np.maximum.reduceat(v, starts) - np.minimum.reduceat(v, starts)).max(axis=1)
+    return (extent > 0) & (largest > (extent * 1e-12) ** 2)
 
 
 def _file_has_normals(mesh) -> bool:
@@ -185,28 +223,13 @@ def _file_has_normals(mesh) -> bool:
     return cache is None or "vertex_normals" in cache
 
 
-def _has_area(v: np.ndarray, f: np.ndarray) -> bool:
-    """Whether any triangle has a non-zero area (relative to the object's size)."""
-    cross = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
-    extent = float(np.ptp(v, axis=0).max()) if len(v) else 0.0
-    return bool(extent > 0 and (np.linalg.norm(cross, axis=1) > (extent * 1e-12) ** 2).any())
-
-
-def _world_normals(mesh, m: np.ndarray) -> np.ndarray | None:
-    """File normals (or trimesh's computed ones) by the inverse transpose; None if unusable."""
+def _file_normals(mesh) -> np.ndarray | None:
+    """The file's vertex normals (float64), or None if unusable."""
     try:
         n = np.asarray(mesh.vertex_normals, np.float64)
     except Exception:
         return None
-    if n.shape != mesh.vertices.shape or not np.isfinite(n).all():
-        return None
-    try:
-        normal_matrix = np.linalg.inv(m[:3, :3]).T
-    except np.linalg.LinAlgError:
-        return None
-    n = n @ normal_matrix.T
-    length = np.linalg.norm(n, axis=1, keepdims=True)
-    return (n / np.where(length > 0, length, 1.0)).astype(np.float32)
+    return n if n.shape == mesh.vertices.shape and np.isfinite(n).all() else None
 
 
 def _color(mesh) -> list[float] | None:

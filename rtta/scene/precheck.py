@@ -14,7 +14,7 @@ import zipfile
 from pathlib import Path
 
 from ..errors import RttaError
-from .files import memory_limit
+from .files import MAX_OBJECTS, memory_limit
 
 # Peak memory of loading, measured (RELIABILITY.md): with normals smoothed at load (a file
 # without normals) about 170 bytes per vertex and 1,300 per triangle (163,842 vertices and
@@ -24,7 +24,6 @@ BYTES_PER_VERTEX = 120
 BYTES_PER_TRIANGLE = 720
 XML_BYTES_FACTOR = 24      # trimesh's 3MF reader: 559 MiB peak for a 27 MiB model (21 per byte)
 MAX_ZIP_MEMBERS = 10_000
-MAX_OBJECTS = 200_000
 
 
 def check_size(vertices: int, triangles: int, path: Path, what: str = "") -> None:

@@ -226,6 +226,7 @@ def gltf_loading_files() -> dict[str, tuple[bytes, str]]:
     out["pictures_small_box_at_1e7.glb"] = (glb(doc, binary), "cannot be placed")
     out["pictures_corrupt_embedded_texture.glb"] = (_textured(png()[:40]), "embedded")
     out["pictures_oversized_embedded_texture.glb"] = (_textured(_bomb_png()), "too large")
+    out["limits_twelve_2048px_textures.glb"] = (_textured(png((2048, 2048)), copies=12), "memory limit")
     return out
 
 
@@ -245,9 +246,10 @@ def _fan_file() -> bytes:
     return glb(doc, binary)
 
 
-def _textured(image: bytes) -> bytes:
-    """The box with a texture embedded in a bufferView (and texture coordinates)."""
-    doc, binary = box_doc()
+def _textured(image: bytes, copies: int = 1) -> bytes:
+    """The box with a texture embedded in a bufferView (and texture coordinates); with
+    `copies`, that many primitives, each with its own material, texture and image."""
+    doc, binary = box_doc(prims=copies)
     uv = np.zeros((24, 2), np.float32)
     start = len(binary)
     binary += uv.tobytes()
@@ -257,11 +259,12 @@ def _textured(image: bytes) -> bytes:
     doc["bufferViews"] += [{"buffer": 0, "byteOffset": start, "byteLength": uv.nbytes},
                            {"buffer": 0, "byteOffset": img_start, "byteLength": len(image)}]
     doc["accessors"].append({"bufferView": 3, "componentType": 5126, "count": 24, "type": "VEC2"})
-    doc["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"] = 3
-    doc["meshes"][0]["primitives"][0]["material"] = 0
-    doc["materials"] = [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]
-    doc["textures"] = [{"source": 0}]
-    doc["images"] = [{"bufferView": 4, "mimeType": "image/png"}]
+    for k, prim in enumerate(doc["meshes"][0]["primitives"]):
+        prim["attributes"]["TEXCOORD_0"] = 3
+        prim["material"] = k
+    doc["materials"] = [{"pbrMetallicRoughness": {"baseColorTexture": {"index": k}}} for k in range(copies)]
+    doc["textures"] = [{"source": k} for k in range(copies)]
+    doc["images"] = [{"bufferView": 4, "mimeType": "image/png"} for _ in range(copies)]
     return glb(doc, binary)
 
 

@@ -272,7 +272,7 @@ def make_corpus(folder: str | Path) -> list[Case]:
 
     category = "pictures"
     for name, (data, says) in bad_gltf.gltf_loading_files().items():
-        category = "names" if name.startswith("names_") else "pictures"
+        category = name.split("_")[0]
         add(name, data, False, says)
     return cases
 

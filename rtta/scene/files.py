@@ -20,6 +20,7 @@ from ..errors import RttaError
 DEFAULT_LIMIT_MB = 4096
 MAX_FILE_BYTES = 2 * 1024**3
 MAX_TEXTURE_PIXELS = 8192 * 8192       # 256 MiB as RGBA8; the material atlas halves anything over 4032 anyway
+TEXTURE_BYTES_PER_PIXEL = 12           # decoded RGBA, the atlas copy, its mip levels
 MAX_OBJECTS = 10_000                   # objects a scene file may make (loading costs ~0.25 ms each, OBJ ~0.5)
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tga", ".tif", ".tiff", ".gif", ".webp")
 
@@ -90,9 +91,26 @@ def read_limited(target: Path, path: Path, what: str) -> bytes:
         raise RttaError(f"{what} cannot be read ({exc.strerror or type(exc).__name__})", path) from None
 
 
-def image_problem(stream: io.BytesIO) -> str | None:
+class TextureBudget:
+    """The memory a scene's textures may take together (decoded RGBA, the material atlas's
+    copy and its mip levels: TEXTURE_BYTES_PER_PIXEL each), half the memory limit; many
+    large textures that each compress to a few KiB must not add up to gigabytes."""
+
+    def __init__(self) -> None:
+        self.left = memory_limit() // 2
+
+    def take(self, w: int, h: int) -> str | None:
+        need = w * h * TEXTURE_BYTES_PER_PIXEL
+        if need > self.left:
+            return f"is {w}x{h} pixels, more than the textures' share of the memory limit has left"
+        self.left -= need
+        return None
+
+
+def image_problem(stream: io.BytesIO, budget: TextureBudget | None = None) -> str | None:
     """Why an image cannot be used as a texture (None if it can): not an image, damaged,
-    or more pixels than MAX_TEXTURE_PIXELS. Only the header and structure are read."""
+    more pixels than MAX_TEXTURE_PIXELS, or over what `budget` has left. Only the header
+    and structure are read."""
     from PIL import Image
 
     with warnings.catch_warnings():
@@ -102,14 +120,14 @@ def image_problem(stream: io.BytesIO) -> str | None:
                 w, h = im.size
                 if w < 1 or h < 1:
                     return "is an empty image"
-                if w * h > MAX_TEXTURE_PIXELS or w * h * 8 > memory_limit():
+                if w * h > MAX_TEXTURE_PIXELS:
                     return f"is {w}x{h} pixels, too large to use (at most {MAX_TEXTURE_PIXELS:,} pixels)"
                 im.verify()
         except Image.DecompressionBombError:
             return "is too large to decode (a decompression bomb?)"
         except Exception:
             return "cannot be read as an image"
-    return None
+    return budget.take(w, h) if budget is not None else None
 
 
 def open_image(path: Path, what: str = "image"):
@@ -148,6 +166,7 @@ class SafeResolver:
         self.file_path = str(scene)
         self.inputs: list[Path] = []
         self.warnings: list[str] = []
+        self.budget = TextureBudget()
 
     def get(self, name: str) -> bytes:
         name = str(name)
@@ -161,7 +180,7 @@ class SafeResolver:
                 problem = problem or exc.message.strip()
                 continue
             if target.suffix.lower() in IMAGE_SUFFIXES:
-                bad = image_problem(io.BytesIO(data))
+                bad = image_problem(io.BytesIO(data), self.budget)
                 if bad:
                     self._warn(name, bad)
                     raise OSError(bad)

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import RttaError
-from .files import MAX_OBJECTS, image_problem, local_file, memory_limit, read_limited
+from .files import MAX_OBJECTS, TextureBudget, image_problem, local_file, memory_limit, read_limited
 from .gltf_check import COMPONENT_BYTES, TYPE_WIDTH, check, read_document
 from .gltf_rewrite import fan_indices, rewrite
 from .precheck import check_size
@@ -265,7 +265,7 @@ def _images(doc: dict, buffers: list, path: Path, out: Prepared) -> dict[int, by
     objects keep their material colour; trimesh never opens a file itself."""
     images, textures = doc.get("images", []), doc.get("textures", [])
     used = sorted({textures[t]["source"] for t in _base_textures(doc) if "source" in textures[t]})
-    good = {}
+    good, budget = {}, TextureBudget()
     for i in used:
         image = images[i]
         uri = image.get("uri")
@@ -287,7 +287,7 @@ def _images(doc: dict, buffers: list, path: Path, out: Prepared) -> dict[int, by
                 blob = read_limited(target, path, "")
             else:
                 raise RttaError("has neither a uri nor a bufferView")
-            problem = image_problem(io.BytesIO(blob))
+            problem = image_problem(io.BytesIO(blob), budget)
             if problem:
                 raise RttaError(problem)
             good[i] = blob

@@ -265,7 +265,7 @@ def _lens(args, scene, focus):
         return Lens.shape(kind, center, radius)
     if size:
         raise RttaError(f"--lens {kind}: an object lens takes no radius")
-    (oid,) = resolve_names(scene, [kind], "--lens")
+    (oid,) = resolve_names(scene, [kind], "--lens", groups=False)
     lens = Lens.of_object(scene, oid)
     if args.lens_at:
         lens.center = center

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import difflib
 from pathlib import Path
 
 import numpy as np
@@ -12,22 +11,11 @@ from ..imageio import save_png
 from ..passes.composite import BACKGROUND, MODES, Style
 from ..scene.camera import Camera
 from ..scene.model import Scene
+from ..scene.select import resolve_names
 from .renderer import Renderer
 
 SNAPSHOT_MODES = ("std", *MODES)
-
-
-def resolve_names(scene: Scene, names: list[str], flag: str) -> list[int]:
-    """Object ids for names; an unknown name is an error that lists close matches."""
-    ids = []
-    for name in names:
-        if name in scene.names:
-            ids.append(scene.index(name))
-            continue
-        close = difflib.get_close_matches(name, scene.names, n=4, cutoff=0.5)
-        hint = f"; did you mean {', '.join(close)}?" if close else "; `rtta info` lists the objects"
-        raise RttaError(f"{flag}: no object named '{name}' in {Path(scene.source).name}{hint}")
-    return ids
+__all__ = ["SNAPSHOT_MODES", "over_background", "parse_opacities", "render_modes", "resolve_names", "write_pngs"]
 
 
 def parse_opacities(scene: Scene, items: list[str]) -> dict[int, float]:
@@ -40,7 +28,8 @@ def parse_opacities(scene: Scene, items: list[str]) -> dict[int, float]:
             alpha = float("nan")
         if not sep or not np.isfinite(alpha) or not 0.0 <= alpha <= 1.0:
             raise RttaError(f"--opacity expects NAME=A with A in [0, 1], got '{item}'")
-        out[resolve_names(scene, [name], "--opacity")[0]] = alpha
+        for oid in resolve_names(scene, [name], "--opacity"):
+            out[oid] = alpha
     return out
 
 

@@ -1,0 +1,63 @@
+"""Objects by name: an object's name, a group of the part tree ('engine/head', or its last
+part 'head' when that is unambiguous), or a glob over both ('head/*', 'IfcWindow*').
+
+One function, `resolve_names`, for the command line and the library alike: an unknown name
+is an error that lists close matches.
+"""
+
+from __future__ import annotations
+
+import difflib
+import fnmatch
+from pathlib import Path
+
+from ..errors import RttaError
+from .model import Scene
+
+GLOB = set("*?[")
+
+
+def full_names(scene: Scene) -> list[str]:
+    """'group/.../name' per object (its name alone in a flat file)."""
+    return ["/".join((*scene.path_of(i), n)) for i, n in enumerate(scene.names)]
+
+
+def resolve_names(scene: Scene, names: list[str], flag: str, groups: bool = True) -> list[int]:
+    """Object ids for names, groups and globs, each id once, in the order given (a group's in
+    tree order); an unknown name is an RttaError naming `flag` and listing close matches.
+    With groups=False only exact object names are accepted (one id per name)."""
+    ids: list[int] = []
+    for name in names:
+        found = _lookup(scene, name) if groups else ([scene.index(name)] if name in scene.names else [])
+        if not found:
+            raise RttaError(f"{flag}: {_unknown(scene, name, groups)}")
+        ids.extend(found)
+    return list(dict.fromkeys(ids))
+
+
+def _lookup(scene: Scene, name: str) -> list[int]:
+    if name in scene.names:
+        return [scene.index(name)]
+    tree = scene.groups
+    if name in tree:
+        return list(tree[name])
+    short = [g for g in tree if g.rsplit("/", 1)[-1] == name]
+    if short:
+        return [i for g in short for i in tree[g]]
+    if not GLOB & set(name):
+        return []
+    full = full_names(scene)
+    hits = [i for i in range(scene.count)
+            if fnmatch.fnmatchcase(scene.names[i], name) or fnmatch.fnmatchcase(full[i], name)]
+    for g, members in tree.items():
+        if fnmatch.fnmatchcase(g, name) or fnmatch.fnmatchcase(g.rsplit("/", 1)[-1], name):
+            hits.extend(members)
+    return sorted(set(hits))
+
+
+def _unknown(scene: Scene, name: str, groups: bool) -> str:
+    what = "object or group" if groups and scene.paths is not None else "object"
+    pool = scene.names + ([g.rsplit("/", 1)[-1] for g in scene.groups] if groups else [])
+    close = difflib.get_close_matches(name, list(dict.fromkeys(pool)), n=4, cutoff=0.5)
+    hint = f"; did you mean {', '.join(close)}?" if close else "; `rtta info --tree` lists the objects and groups"
+    return f"no {what} named '{name}' in {Path(scene.source).name}{hint}"

@@ -46,13 +46,15 @@ def _lookup(scene: Scene, name: str) -> list[int]:
         return [i for g in short for i in tree[g]]
     if not GLOB & set(name):
         return []
-    full = full_names(scene)
-    hits = [i for i in range(scene.count)
-            if fnmatch.fnmatchcase(scene.names[i], name) or fnmatch.fnmatchcase(full[i], name)]
-    for g, members in tree.items():
-        if fnmatch.fnmatchcase(g, name) or fnmatch.fnmatchcase(g.rsplit("/", 1)[-1], name):
-            hits.extend(members)
-    return sorted(set(hits))
+    hits = [i for i in range(scene.count) if any(fnmatch.fnmatchcase(t, name) for t in _tails(scene, i))]
+    return hits
+
+
+def _tails(scene: Scene, oid: int) -> list[str]:
+    """The object's name and its tree path from every group down: 'Storey 2/*' matches the
+    objects below any group named 'Storey 2', wherever it sits."""
+    parts = (*scene.path_of(oid), scene.names[oid])
+    return ["/".join(parts[k:]) for k in range(len(parts))]
 
 
 def _unknown(scene: Scene, name: str, groups: bool) -> str:

@@ -40,7 +40,7 @@ def read(path: Path, left_out: tuple[str, ...] = LEFT_OUT) -> Assembly:
     settings.set("use-world-coords", True)
     exclude = [e for kind in left_out for e in model.by_type(kind)]
     products = [p for p in model.by_type("IfcProduct") if p.Representation is not None]
-    if not [p for p in products if not p.is_a() in left_out]:
+    if not [p for p in products if p.is_a() not in left_out]:
         raise RttaError("the IFC file has no products with geometry", path)
     try:
         it = ifcopenshell.geom.iterator(settings, model, max(1, min(4, os.cpu_count() or 1)), exclude=exclude or None)

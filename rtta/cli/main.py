@@ -185,7 +185,7 @@ def cmd_export(args) -> int:
     settings = _settings(args)
     ctx = shared_context()
     renderer = _renderer(ctx, scene, settings)
-    camera = Camera.orbit(scene.center, scene.radius, *orbit, fov_y=args.fov)
+    camera = Camera.orbit(scene.center, scene.radius, *orbit, fov_y=args.fov, up_axis=scene.up_axis)
     try:
         out = export(renderer, camera, viewport, args.out)
     except ValueError as exc:
@@ -229,7 +229,7 @@ def cmd_snapshot(args) -> int:
     if not parent.is_dir():
         raise RttaError("parent directory does not exist", parent)
     renderer = _renderer(shared_context(), scene, _settings(args))
-    camera = Camera.orbit(scene.center, scene.radius, *orbit, fov_y=args.fov)
+    camera = Camera.orbit(scene.center, scene.radius, *orbit, fov_y=args.fov, up_axis=scene.up_axis)
     if args.projector:
         renderer.projector = _projector(args, scene, camera)
     if args.lens:

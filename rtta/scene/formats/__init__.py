@@ -10,7 +10,9 @@ from __future__ import annotations
 
 import importlib
 import os
+import re
 import sys
+import tempfile
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -65,18 +67,29 @@ def read(path: Path) -> Assembly:
 
 
 @contextmanager
-def quiet_stdout():
-    """Send what native libraries print (OpenCASCADE's progress) to stderr, not stdout:
-    a command's stdout stays what it prints itself, whoever parses it."""
+def native_output():
+    """Catch what native libraries print (OpenCASCADE's progress and errors) on the process's
+    stdout and stderr: a command's output stays its own (one error line, a parseable stdout).
+    Yields a list that holds the caught lines, ANSI colours removed, once the block ends."""
+    caught: list[str] = []
     sys.stdout.flush()
-    saved = os.dup(1)
-    try:
-        os.dup2(2, 1)
-        yield
-    finally:
-        sys.stdout.flush()
-        os.dup2(saved, 1)
-        os.close(saved)
+    sys.stderr.flush()
+    saved = os.dup(1), os.dup(2)
+    with tempfile.TemporaryFile() as sink:       # anonymous: never next to the user's file
+        try:
+            os.dup2(sink.fileno(), 1)
+            os.dup2(sink.fileno(), 2)
+            yield caught
+        finally:
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os.dup2(saved[0], 1)
+            os.dup2(saved[1], 2)
+            os.close(saved[0])
+            os.close(saved[1])
+            sink.seek(0)
+            text = re.sub(r"\x1b\[[0-9;]*m", "", sink.read(1 << 20).decode("utf-8", "replace"))
+            caught.extend(line.strip() for line in text.splitlines() if line.strip())
 
 
 def srgb_from_linear(c) -> list[float]:

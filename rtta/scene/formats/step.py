@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import RttaError
-from . import Assembly, quiet_stdout, srgb_from_linear
+from . import Assembly, native_output, srgb_from_linear
 
 UNITS_M = {"mm": 1e-3, "cm": 1e-2, "m": 1.0, "km": 1e3, "in": 0.0254, "ft": 0.3048, "um": 1e-6}
 SI_PREFIX = {".MILLI.": "mm", ".CENTI.": "cm", "$": "m", ".KILO.": "km", ".MICRO.": "um"}
@@ -35,10 +35,12 @@ def read(path: Path) -> Assembly:
     _check_text(text, path)
     import cascadio
 
-    with quiet_stdout():
+    with native_output() as said:
         glb = cascadio.to_glb_bytes(data, tol_linear=TOLERANCE, tol_relative=True)
     if not glb:
-        raise RttaError("cannot read STEP file (OpenCASCADE found no shapes in it)", path)
+        errors = [line.strip("* ") for line in said if "ERR" in line or "Fail" in line]
+        why = errors[0][:120] if errors else "OpenCASCADE found no shapes in it"
+        raise RttaError(f"cannot read STEP file ({why})", path)
     unit = length_unit(text)
     out = Assembly(unit=unit, up_axis="z")
     _walk(glb, out, 1.0 / UNITS_M.get(unit, 1.0), _product_names(text), path)

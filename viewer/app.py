@@ -88,7 +88,7 @@ class Viewer:
         if ids is None:
             ids = [i for i in range(scene.count) if i not in self.state.hidden] or range(scene.count)
         ids = np.asarray(list(ids), np.int64)
-        corners = np.concatenate([scene.aabb_min[ids], scene.aabb_max[ids]])
+        corners = scene.box_corners("aabb")[ids].reshape(-1, 3) + scene.origin
         _, _, w, h = self.layout.composite
         self.orbit.frame(corners=corners, aspect=w / h if w > 0 and h > 0 else 1.0)
 

@@ -86,8 +86,8 @@ class Orbit:
 
     def frame(self, center=None, radius: float | None = None, aspect: float = 1.0, corners=None) -> None:
         """Fit in view, keeping the direction, with a margin on all four sides whatever the
-        aspect (width / height): the box `corners` (world [k, 3], e.g. the visible objects'
-        bounds), about their centre; else a sphere (default: the whole scene)."""
+        aspect (width / height): the points `corners` (world [k, 3], e.g. the 8 corners of
+        each visible object's box), about the centre of their bounds; else a sphere (default: the whole scene)."""
         if corners is not None and len(corners):
             pts = np.asarray(corners, np.float64).reshape(-1, 3)
             c = (pts.min(axis=0) + pts.max(axis=0)) / 2.0

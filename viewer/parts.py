@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
+OPEN_ROWS = 100     # a tree opens level by level while it shows at most this many rows
+
 
 class PartTree:
     def __init__(self, names: list[str], paths: list[tuple[str, ...]] | None) -> None:
@@ -56,9 +58,20 @@ class PartTree:
         for node in np.flatnonzero(~is_obj)[::-1]:          # innermost groups first
             kids = np.arange(node + 1, self.end[node])
             self.parent[kids[self.parent[kids] < 0]] = node
-        self.open: set[int] = {int(n) for n in np.flatnonzero(~is_obj & (self.depth < 2))}
         self._rows_key: tuple | None = None
         self._rows = np.zeros(0, np.int64)
+        self.open: set[int] = set()
+        self.open_levels()
+
+    def open_levels(self, rows: int = OPEN_ROWS) -> None:
+        """Open the groups level by level from the top while at most `rows` rows show."""
+        groups = np.flatnonzero(self.obj < 0)
+        for d in range(int(self.depth[groups].max()) + 1 if groups.size else 0):
+            before = set(self.open)
+            self.open |= {int(n) for n in groups[self.depth[groups] == d]}
+            if d > 0 and len(self.rows()) > rows:
+                self.open = before
+                break
 
     @property
     def has_groups(self) -> bool:

@@ -38,7 +38,7 @@ def draw(app: PanelsHost) -> None:
     rows = tree.rows(s.filter)
     imgui.begin_child("objects", imgui.ImVec2(0, LIST_HEIGHT), imgui.ChildFlags_.borders)
     app.item_rects.clear()
-    tree.rects = {}
+    tree.rects = {}                       # rows on screen: node -> checkbox rect (tests click them)
     focus, hidden = tree.counts(s.highlighted), tree.counts(s.hidden)
     sizes = tree.last - tree.first
     height = imgui.get_frame_height_with_spacing()
@@ -59,14 +59,14 @@ def draw(app: PanelsHost) -> None:
 
 def _toolbar(app: PanelsHost) -> None:
     s = app.state
-    if imgui.small_button("hide highlighted"):
-        s.hide(s.highlighted)
-    imgui.same_line()
-    if imgui.small_button("isolate"):
-        s.isolate(s.highlighted)
-    imgui.same_line()
-    if imgui.small_button("show all"):
-        s.show_all()
+    s.tree.buttons = {}
+    for k, (label, act) in enumerate((("hide highlighted", lambda: s.hide(s.highlighted)),
+                                      ("isolate", lambda: s.isolate(s.highlighted)), ("show all", s.show_all))):
+        if k:
+            imgui.same_line()
+        if imgui.small_button(label):
+            act()
+        s.tree.buttons[label] = (*imgui.get_item_rect_min(), *imgui.get_item_rect_max())   # tests click them
     if s.hidden:
         imgui.same_line()
         imgui.text_disabled(f"{len(s.hidden)} hidden")

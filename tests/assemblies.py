@@ -136,3 +136,142 @@ def write_ifc(path: Path, storeys: int = 2) -> dict:
             expected["IfcDoor 'Front door'"] = (where, (3000, 0, 0), (3900, 50, 2100))
     f.write(str(path))
     return expected
+
+
+def _box_mesh(size):
+    sx, sy, sz = size
+    v = np.array([[x, y, z] for z in (0, sz) for y in (0, sy) for x in (0, sx)], float)
+    f = np.array([[0, 2, 1], [1, 2, 3], [4, 5, 6], [5, 7, 6], [0, 1, 4], [1, 5, 4],
+                  [2, 6, 3], [3, 6, 7], [0, 4, 2], [2, 4, 6], [1, 3, 5], [3, 7, 5]])
+    return v, f
+
+
+# COLLADA / USD / 3DXML: plant > (base), arm > (link), arm > hand > (finger, finger); centimetres, Z up
+TREE_PARTS = {  # object name: (group path, translation, box size)
+    "base": (("plant",), (0, 0, 0), (40, 40, 10)),
+    "link": (("plant", "arm"), (15, 15, 10), (10, 10, 50)),
+    "finger": (("plant", "arm", "hand"), (12, 15, 60), (2, 2, 10)),
+    "finger_2": (("plant", "arm", "hand"), (26, 15, 60), (2, 2, 10)),
+}
+
+
+def write_collada(path: Path) -> dict:
+    """TREE_PARTS as nested COLLADA nodes (the fingers instance one geometry), in cm, Z up."""
+    from collada import Collada, asset, geometry, material, scene, source
+
+    dae = Collada()
+    dae.assetInfo.unitmeter, dae.assetInfo.unitname, dae.assetInfo.upaxis = 0.01, "centimeter", asset.UP_AXIS.Z_UP
+    effect = material.Effect("effect0", [], "phong", diffuse=(0.8, 0.3, 0.1, 1.0))
+    mat = material.Material("material0", "orange", effect)
+    dae.effects.append(effect)
+    dae.materials.append(mat)
+    geoms = {}
+    for name, (_, _, size) in TREE_PARTS.items():
+        if size in geoms:
+            continue
+        v, f = _box_mesh(size)
+        src = source.FloatSource(f"v{len(geoms)}", v.reshape(-1), ("X", "Y", "Z"))
+        g = geometry.Geometry(dae, f"g{len(geoms)}", name, [src])
+        inputs = source.InputList()
+        inputs.addInput(0, "VERTEX", f"#v{len(geoms)}")
+        g.primitives.append(g.createTriangleSet(f.reshape(-1), inputs, "mat"))
+        dae.geometries.append(g)
+        geoms[size] = g
+
+    def leaf(name):
+        _, t, size = TREE_PARTS[name]
+        gnode = scene.GeometryNode(geoms[size], [scene.MaterialNode("mat", mat, inputs=[])])
+        return scene.Node(name, children=[gnode], transforms=[scene.TranslateTransform(*t)], name=name)
+
+    hand = scene.Node("hand", children=[leaf("finger"), leaf("finger_2")], name="hand")
+    arm = scene.Node("arm", children=[leaf("link"), hand], name="arm")
+    root = scene.Node("plant", children=[leaf("base"), arm], name="plant")
+    dae.scenes.append(scene.Scene("scene", [root]))
+    dae.scene = dae.scenes[0]
+    dae.write(str(path))
+    return TREE_PARTS
+
+
+def write_usd(path: Path) -> dict:
+    """TREE_PARTS as prims in cm, Z up; the fingers are two instances of one prototype."""
+    from pxr import Gf, Usd, UsdGeom
+
+    stage = Usd.Stage.CreateNew(str(path))
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
+    UsdGeom.SetStageMetersPerUnit(stage, 0.01)
+
+    def mesh(at, size):
+        v, f = _box_mesh(size)
+        m = UsdGeom.Mesh.Define(stage, at)
+        m.GetPointsAttr().Set([Gf.Vec3f(*p) for p in v])
+        m.GetFaceVertexCountsAttr().Set([3] * len(f))
+        m.GetFaceVertexIndicesAttr().Set([int(i) for i in f.reshape(-1)])
+        m.GetDisplayColorAttr().Set([Gf.Vec3f(0.2, 0.6, 0.3)])
+        return m
+
+    root = UsdGeom.Xform.Define(stage, "/plant")
+    stage.SetDefaultPrim(root.GetPrim())
+    UsdGeom.Xform.Define(stage, "/plant/arm")
+    UsdGeom.Xform.Define(stage, "/plant/arm/hand")
+    stage.CreateClassPrim("/_finger")
+    mesh("/_finger/geom", TREE_PARTS["finger"][2])
+    for name in TREE_PARTS:
+        group, t, size = TREE_PARTS[name]
+        where = "/" + "/".join((*group, name))
+        if name.startswith("finger"):
+            x = UsdGeom.Xform.Define(stage, where)
+            x.GetPrim().GetReferences().AddInternalReference("/_finger")
+            x.GetPrim().SetInstanceable(True)
+        else:
+            x = mesh(where, size)
+        x.AddTranslateOp().Set(Gf.Vec3d(*t))
+    stage.GetRootLayer().Save()
+    return TREE_PARTS
+
+
+def write_3dxml(path: Path) -> dict:
+    """TREE_PARTS as a 3DXML product structure (products plant > arm > hand; the fingers are
+    two instances of one part), in millimetres as 3DXML stores them."""
+    import zipfile
+
+    refs = {"plant": 1, "arm": 2, "hand": 3, "base": 4, "link": 5, "finger": 6}
+    parent = {"arm": "plant", "hand": "arm", "base": "plant", "link": "arm", "finger": "hand"}
+    items, next_id = [], 100
+    for name, rid in refs.items():
+        items.append(f'<Reference3D id="{rid}" name="{name}"/>')
+    for name, (_, t, _) in TREE_PARTS.items():
+        part = name.split("_")[0]
+        items.append(f'<Instance3D id="{next_id}" name="{name}.1"><IsAggregatedBy>{refs[parent[part]]}'
+                     f'</IsAggregatedBy><IsInstanceOf>{refs[part]}</IsInstanceOf><RelativeMatrix>'
+                     f'1 0 0 0 1 0 0 0 1 {t[0]} {t[1]} {t[2]}</RelativeMatrix></Instance3D>')
+        next_id += 1
+    for group in ("arm", "hand"):
+        items.append(f'<Instance3D id="{next_id}" name="{group}.1"><IsAggregatedBy>{refs[parent[group]]}'
+                     f'</IsAggregatedBy><IsInstanceOf>{refs[group]}</IsInstanceOf><RelativeMatrix>'
+                     '1 0 0 0 1 0 0 0 1 0 0 0</RelativeMatrix></Instance3D>')
+        next_id += 1
+    reps = {}
+    for part in ("base", "link", "finger"):
+        v, f = _box_mesh(TREE_PARTS[part][2])
+        n = np.tile([0.0, 0.0, 1.0], (len(v), 1))
+        reps[f"{part}.3DRep"] = (
+            '<?xml version="1.0"?><XMLRepresentation xmlns="http://www.3ds.com/xsd/3DXML"><Root>'
+            f'<Rep><Faces><Face triangles="{" ".join(map(str, f.reshape(-1)))}"><SurfaceAttributes>'
+            '<Color xsi:type="RGBAColorType" xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance" '
+            'red="0.8" green="0.3" blue="0.1" alpha="1"/></SurfaceAttributes></Face></Faces><VertexBuffer>'
+            f'<Positions>{", ".join(" ".join(map(str, p)) for p in v)}</Positions>'
+            f'<Normals>{", ".join(" ".join(map(str, p)) for p in n)}</Normals></VertexBuffer></Rep>'
+            '</Root></XMLRepresentation>')
+        items.append(f'<ReferenceRep id="{next_id}" name="{part}_rep" format="TESSELLATED" '
+                     f'associatedFile="urn:3DXML:{part}.3DRep"/>')
+        items.append(f'<InstanceRep id="{next_id + 1}"><IsAggregatedBy>{refs[part]}</IsAggregatedBy>'
+                     f'<IsInstanceOf>{next_id}</IsInstanceOf></InstanceRep>')
+        next_id += 2
+    product = ('<?xml version="1.0"?><Model_3dxml xmlns="http://www.3ds.com/xsd/3DXML">'
+               f'<ProductStructure root="1">{"".join(items)}</ProductStructure></Model_3dxml>')
+    with zipfile.ZipFile(path, "w") as z:
+        z.writestr("Manifest.xml", '<?xml version="1.0"?><Manifest><Root>plant.3dxml</Root></Manifest>')
+        z.writestr("plant.3dxml", product)
+        for name, text in reps.items():
+            z.writestr(name, text)
+    return TREE_PARTS

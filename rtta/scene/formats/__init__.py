@@ -28,6 +28,10 @@ from ..preprocess import smooth_normals
 READERS = {
     ".step": ("step", "cascadio", "cad"), ".stp": ("step", "cascadio", "cad"),
     ".ifc": ("ifc", "ifcopenshell", "bim"),
+    ".dae": ("collada", "collada", "all"), ".zae": ("collada", "collada", "all"),
+    ".usd": ("usd", "pxr", "usd"), ".usda": ("usd", "pxr", "usd"), ".usdc": ("usd", "pxr", "usd"),
+    ".usdz": ("usd", "pxr", "usd"),
+    ".3dxml": ("threedxml", "trimesh", "all"),
 }
 SUFFIXES = tuple(READERS)
 MAX_COORDINATE = 1e15    # as the mesh loader's: float64 keeps ~0.1 units of precision there
@@ -90,6 +94,34 @@ def native_output():
             sink.seek(0)
             text = re.sub(r"\x1b\[[0-9;]*m", "", sink.read(1 << 20).decode("utf-8", "replace"))
             caught.extend(line.strip() for line in text.splitlines() if line.strip())
+
+
+UNIT_NAMES = {1e-3: "mm", 1e-2: "cm", 1.0: "m", 0.0254: "in", 0.3048: "ft", 1e3: "km"}
+MAX_ARCHIVE_BYTES = 2 * 1024**3
+
+
+def unit_name(meters: float) -> str:
+    """'mm', 'cm', 'm', 'in', 'ft' for a length unit in metres; else e.g. '0.5 m'."""
+    return next((n for s, n in UNIT_NAMES.items() if abs(s - meters) <= 1e-9 * s), f"{meters:g} m")
+
+
+def check_archive(path: Path) -> None:
+    """A zip archive (.zae, .usdz, .3dxml) that is whole and not a zip bomb, with no member
+    outside it (absolute or '..' names), before a library unpacks it."""
+    import zipfile
+
+    try:
+        with zipfile.ZipFile(path) as z:
+            members = z.infolist()
+    except (zipfile.BadZipFile, OSError, ValueError) as exc:
+        raise RttaError(f"not a readable zip archive ({exc})", path) from None
+    total = sum(m.file_size for m in members)
+    if total > MAX_ARCHIVE_BYTES:
+        raise RttaError(f"the archive unpacks to {total:,} bytes, over the {MAX_ARCHIVE_BYTES >> 30} GiB limit", path)
+    for m in members:
+        name = m.filename.replace("\\", "/")
+        if name.startswith("/") or ".." in name.split("/") or ":" in name.split("/")[0]:
+            raise RttaError(f"archive member '{m.filename}' points outside the archive", path)
 
 
 def srgb_from_linear(c) -> list[float]:

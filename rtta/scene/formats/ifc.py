@@ -14,10 +14,9 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import RttaError
-from . import Assembly
+from . import Assembly, unit_name
 
 LEFT_OUT = ("IfcOpeningElement", "IfcSpace")
-UNIT_NAMES = {1e-3: "mm", 1e-2: "cm", 1.0: "m", 0.0254: "in", 0.3048: "ft"}
 
 
 def read(path: Path, left_out: tuple[str, ...] = LEFT_OUT) -> Assembly:
@@ -34,8 +33,7 @@ def read(path: Path, left_out: tuple[str, ...] = LEFT_OUT) -> Assembly:
         scale = float(ifcopenshell.util.unit.calculate_unit_scale(model))
     except Exception:
         scale = 1.0
-    unit = next((n for s, n in UNIT_NAMES.items() if abs(s - scale) < 1e-9 * s), f"{scale:g} m")
-    out = Assembly(unit=unit, up_axis="z")
+    out = Assembly(unit=unit_name(scale), up_axis="z")
     settings = ifcopenshell.geom.settings()
     settings.set("use-world-coords", True)
     exclude = [e for kind in left_out for e in model.by_type(kind)]

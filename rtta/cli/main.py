@@ -126,6 +126,9 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--markdown", default=None, help="markdown file whose report block is replaced "
                                                     "(default: BENCHMARKS.md)")
     b.add_argument("--plots", default=None, help="folder for the PNG plots (default: docs/bench)")
+    b = bsub.add_parser("formats", help="load time of every scene file: the format's library against rtta")
+    b.add_argument("files", nargs="*", help="scene files (default: every one in ../shared/data)")
+    b.add_argument("--json", default=None)
     from .ldi import add_parser as add_ldi
 
     add_ldi(sub)
@@ -332,6 +335,10 @@ def cmd_bench(args) -> int:
         if args.objects < 1 or args.max_vertices < 3:
             raise RttaError("--objects must be at least 1 and --max-vertices at least 3")
         return run_material(args.objects, quick=args.quick, json_path=args.json, max_vertices=args.max_vertices)
+    if args.bench == "formats":
+        from ..tools.bench_formats import run_formats
+
+        return run_formats(args.files, json_path=args.json)
     if args.bench == "report":
         from ..tools.report import run_report
 

@@ -52,6 +52,7 @@ def load_scene(path: str | Path, smooth_angle: float = DEFAULT_SMOOTH_ANGLE, smo
         notes.append(f"{len(dropped)} object(s) with only degenerate (zero-area) triangles left out: "
                      + ", ".join(dropped[:5]) + (" ..." if len(dropped) > 5 else ""))
     scene = from_meshes(parts, colors, source=str(path), **materials)
+    scene.paths = formats.graph_paths(loaded, [p[0] for p in parts])
     scene.warnings = notes + scene.warnings + _texture_notes(scene)
     return scene
 

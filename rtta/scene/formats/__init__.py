@@ -169,3 +169,20 @@ def has_area(v: np.ndarray, f: np.ndarray) -> bool:
     cross = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
     extent = float(np.ptp(v, axis=0).max()) if len(v) else 0.0
     return bool(extent > 0 and (np.linalg.norm(cross, axis=1) > (extent * 1e-12) ** 2).any())
+
+
+def graph_paths(loaded, nodes: list[str]) -> list[tuple[str, ...]] | None:
+    """The tree above each node of a trimesh scene graph (glTF, OBJ...): its ancestors' names,
+    root first, the base frame left out; None when every node sits at the top (a flat file)."""
+    parents = loaded.graph.transforms.parents
+    base = loaded.graph.base_frame
+    out = []
+    for node in nodes:
+        chain, current = [], node
+        while current in parents and len(chain) < 256:
+            current = parents[current]
+            if current == base:
+                break
+            chain.append(str(current).replace("/", "\u2215"))
+        out.append(tuple(reversed(chain)))
+    return out if any(out) else None

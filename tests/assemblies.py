@@ -275,3 +275,16 @@ def write_3dxml(path: Path) -> dict:
         for name, text in reps.items():
             z.writestr(name, text)
     return TREE_PARTS
+
+
+def write_zae(path: Path) -> dict:
+    """The COLLADA file in a .zae archive (with the manifest naming it)."""
+    import zipfile
+
+    dae = path.with_suffix(".dae")
+    write_collada(dae)
+    with zipfile.ZipFile(path, "w") as z:
+        z.write(dae, "plant.dae")
+        z.writestr("manifest.xml", '<?xml version="1.0"?><dae_root>./plant.dae</dae_root>')
+    dae.unlink()
+    return TREE_PARTS

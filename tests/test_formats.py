@@ -95,6 +95,9 @@ def test_focus_by_group_and_glob_selects_the_subtree(ifc_file):
     assert resolve_names(s, ["/".join((*IFC_TREE, "Storey 2"))], "--focus") == storey2
     windows = resolve_names(s, ["IfcWindow*"], "--focus")
     assert [s.names[i] for i in windows] == ["IfcWindow 'Window 1'", "IfcWindow 'Window 2'"]
+    assert resolve_names(s, ["IfcWindow"], "--focus") == windows            # the class
+    assert resolve_names(s, ["IfcWindow 'Window 2'", "Storey 2"], "--focus") == [windows[1], *(
+        i for i in storey2 if i != windows[1])]                               # each id once
     with pytest.raises(RttaError, match="did you mean Storey 2"):
         resolve_names(s, ["Storey 22"], "--focus")
     with pytest.raises(RttaError, match="--focus: no object or group named 'Nothing\\*'"):

@@ -8,15 +8,15 @@ import zipfile
 
 import numpy as np
 import pytest
-from assemblies import TREE_PARTS, write_3dxml, write_collada, write_usd
+from assemblies import TREE_PARTS, write_3dxml, write_collada, write_usd, write_zae
 
 from rtta.cli.main import main
 from rtta.errors import RttaError
 from rtta.scene.loader import load_scene
 from rtta.scene.select import resolve_names
 
-WRITERS = {".dae": (write_collada, "cm"), ".usda": (write_usd, "cm"), ".usdc": (write_usd, "cm"),
-           ".3dxml": (write_3dxml, "mm")}
+WRITERS = {".dae": (write_collada, "cm"), ".zae": (write_zae, "cm"), ".usda": (write_usd, "cm"),
+           ".usdc": (write_usd, "cm"), ".3dxml": (write_3dxml, "mm")}
 
 
 @pytest.mark.parametrize("suffix", list(WRITERS))

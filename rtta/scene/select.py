@@ -1,5 +1,6 @@
 """Objects by name: an object's name, a group of the part tree ('engine/head', or its last
-part 'head' when that is unambiguous), or a glob over both ('head/*', 'IfcWindow*').
+part 'head'; every group of that name), a class of labelled objects ('IfcWall' for
+"IfcWall 'name'"), or a glob over names and paths ('head/*', 'IfcWindow*').
 
 One function, `resolve_names`, for the command line and the library alike: an unknown name
 is an error that lists close matches.
@@ -44,6 +45,9 @@ def _lookup(scene: Scene, name: str) -> list[int]:
     short = [g for g in tree if g.rsplit("/", 1)[-1] == name]
     if short:
         return [i for g in short for i in tree[g]]
+    kind = [i for i, n in enumerate(scene.names) if n.startswith((f"{name} '", f"{name} #"))]
+    if kind:                                    # a class of labelled objects: 'IfcWall' -> IfcWall 'a', ...
+        return kind
     if not GLOB & set(name):
         return []
     hits = [i for i in range(scene.count) if any(fnmatch.fnmatchcase(t, name) for t in _tails(scene, i))]

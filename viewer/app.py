@@ -199,7 +199,7 @@ class Viewer:
         kw = {"image": self._projector_image, "fov_y": p.fov, "strength": p.strength, "shadows": p.shadows}
         if p.attached:
             return Projector.at_camera(camera, scene.center, scene.radius, **kw)
-        return Projector.orbit(scene.center, scene.radius, p.az, p.el, p.dist, **kw)
+        return Projector.orbit(scene.center, scene.radius, p.az, p.el, p.dist, up_axis=scene.up_axis, **kw)
 
     def _lens(self):
         """The Lens the panel describes (None when off); its geometry is made once per shape."""

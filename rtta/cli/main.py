@@ -299,7 +299,7 @@ def _projector(args, scene, camera):
     kw = {"image": image, "fov_y": args.projector_fov, "shadows": not args.no_projector_shadows}
     if orbit is None:
         return Projector.at_camera(camera, scene.center, scene.radius, **kw)
-    return Projector.orbit(scene.center, scene.radius, *orbit, **kw)
+    return Projector.orbit(scene.center, scene.radius, *orbit, up_axis=scene.up_axis, **kw)
 
 
 def cmd_info(args) -> int:

@@ -75,8 +75,9 @@ class Projector:
     far: float = 100.0
 
     @classmethod
-    def orbit(cls, center, radius: float, az: float, el: float, dist: float, **kw) -> Projector:
-        cam = Camera.orbit(center, radius, az, el, dist)
+    def orbit(cls, center, radius: float, az: float, el: float, dist: float, up_axis: str = "y",
+              **kw) -> Projector:
+        cam = Camera.orbit(center, radius, az, el, dist, up_axis=up_axis)
         return cls(eye=cam.eye, target=cam.target, up=cam.up, **kw).fit_depth(center, radius)
 
     @classmethod

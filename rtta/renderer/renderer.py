@@ -173,7 +173,7 @@ class Renderer:
 
             self._projector_pass = ProjectorPass(self.ctx)
         with self._timed("projector"):
-            self._projector_pass.render(gpu=self.gpu, projector=self.projector)
+            self._projector_pass.render(gpu=self.gpu, projector=self.projector, ranges=self.shown_ranges())
         return self._projector_pass, self.projector
 
     def post_process(self, style: Style) -> AtlasPostPass:

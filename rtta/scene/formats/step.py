@@ -140,7 +140,8 @@ def _walk(glb: bytes, out: Assembly, scale: float, assemblies: dict, path: Path)
             if len(f):
                 world = (v @ m[:3, :3].T + m[:3, 3]) * scale
                 color = _color(materials, mat)
-                out.add(mesh.get("name") or name or "part", world, f, color, groups)
+                label = mesh.get("name") or ("" if GENERIC.match(name) else name) or "part"
+                out.add(label, world, f, color, groups)
         if n.get("children"):
             if GENERIC.match(name):
                 name = assemblies.get(leaves(i), "") or f"assembly {len(groups) + 1}"

@@ -54,7 +54,8 @@ def test_hover_outlines_and_click_reveals(tree_driven):
     comp = _region(shots["hover"], (x, y, w, h))
     outline = (np.abs(comp - [255, 200, 80]).max(-1) < 40)
     assert outline.sum() > 20                             # the hover colour around the door's bounds
-    assert result["picked_selected"] is not None and result["door_row_shown"]
+    assert result["picked_expected"] is not None and result["picked_selected"] == result["picked_expected"]
+    assert result["picked_row"] not in result["rows_before_reveal"] and result["picked_row_shown"]
 
 
 def test_framing_leaves_a_margin_on_all_sides(tree_driven):
@@ -75,3 +76,12 @@ def test_a_100000_object_tree_emits_only_the_rows_on_screen(tree_driven):
     assert result["many_rows"] == 100_000 + 1 + 20 + 1000
     assert 5 <= result["many_emitted"] <= 40               # the list clipper: what fits in the list, no more
     assert result["gl_errors"] == []                       # imgui's buffers did not overflow
+
+
+def test_double_click_fits_the_object(tree_driven):
+    result, _ = tree_driven
+    assert result["double_click_target"] == pytest.approx(result["window_center"])
+    x0, y0, x1, y1 = result["window_rect"]
+    w, h = result["window_viewport"]
+    margins = x0 / w, (w - x1) / w, y0 / h, (h - y1) / h
+    assert min(margins) >= 0.02 and min(margins[0] + margins[1], margins[2] + margins[3]) < 0.5, margins

@@ -93,6 +93,7 @@ result["isolated_visible"] = [int(i) for i in np.flatnonzero(app.records.visible
 click(*centre(s.tree.buttons["show all"]))
 click(*centre(app.item_rects[wall]))                    # highlight off
 frames(2, shot="shown")
+result["focus_after_shown"] = sorted(s.highlighted)
 result["shown_visible"] = int(app.records.visible.sum())
 
 door = house.index("IfcDoor 'Front door'")
@@ -104,16 +105,35 @@ result["hover_node"] = int(s.tree.row_of[door])
 result["hover_rect"] = [int(v) for v in app.records.viewport_rect[door]]
 result["layout_hover"] = list(app.layout.composite)
 
-s.tree.open.clear()                                      # every group closed: the door's row is not shown
+s.tree.open.clear()                                      # every group closed: no object row is shown
 move(5, 5)
 frames(2)
 cx, cy, cw, ch = app.layout.composite
 vx0, vy0, vx1, vy1 = app.records.viewport_rect[door]
-click(cx + (vx0 + vx1) / 2, cy + ch - 1 - (vy0 + vy1) / 2)
+px, py = cx + (vx0 + vx1) / 2, cy + ch - 1 - (vy0 + vy1) / 2
+expected = app.controls.object_at(px, py)                # what the click picks (ghosted: maybe the wall)
+result["rows_before_reveal"] = [int(n) for n in s.tree.rows()]
+click(px, py)
 frames(2, shot="revealed")
+result["picked_expected"] = expected
 result["picked_selected"] = s.selected
-result["door_row_shown"] = bool(np.isin(s.tree.row_of[door], s.tree.rows()))
+result["picked_row"] = int(s.tree.row_of[expected]) if expected is not None else None
+result["picked_row_shown"] = bool(np.isin(result["picked_row"], s.tree.rows()))
 
+
+window = house.index("IfcWindow 'Window 2'")              # double-click: orbit around it and fit it
+frames(2)
+wx0, wy0, wx1, wy1 = app.records.viewport_rect[window]
+point = (cx + (wx0 + wx1) / 2, cy + ch - 1 - (wy0 + wy1) / 2)
+for _ in range(2):
+    h = wnd.size[1]
+    pw.dispatch_event("on_mouse_press", int(point[0]), h - int(point[1]), mouse.LEFT, 0)
+    pw.dispatch_event("on_mouse_release", int(point[0]), h - int(point[1]), mouse.LEFT, 0)
+frames(3, shot="double_click")
+result["double_click_target"] = app.orbit.target.tolist()
+result["window_center"] = ((house.aabb_min[window] + house.aabb_max[window]) / 2).tolist()
+result["window_rect"] = [int(v) for v in app.records.viewport_rect[window]]
+result["window_viewport"] = list(app.records.viewport)
 
 
 def many(n: int) -> Scene:

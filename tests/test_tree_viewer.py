@@ -85,3 +85,9 @@ def test_double_click_fits_the_object(tree_driven):
     w, h = result["window_viewport"]
     margins = x0 / w, (w - x1) / w, y0 / h, (h - y1) / h
     assert min(margins) >= 0.02 and min(margins[0] + margins[1], margins[2] + margins[3]) < 0.5, margins
+
+
+def test_group_opacity_sets_its_subtree(tree_driven):
+    result, _ = tree_driven
+    assert sorted(int(k) for k in result["opacities"]) == result["storey1"]
+    assert all(v < 0.05 for v in result["opacities"].values())

@@ -121,10 +121,22 @@ result["picked_row"] = int(s.tree.row_of[expected]) if expected is not None else
 result["picked_row_shown"] = bool(np.isin(result["picked_row"], s.tree.rows()))
 
 
+s.mode = "transparent"                                    # a group's opacity slider sets its subtree's
+frames(2)
+storey1 = node("Storey 1")
+sx0, sy0, sx1, sy1 = s.tree.sliders[storey1]
+click(sx0 + 2, (sy0 + sy1) / 2)                           # the slider's left end: opacity 0
+frames(2, shot="group_opacity")
+result["storey1"] = [int(i) for i in s.tree.members(storey1)]
+result["opacities"] = {str(k): v for k, v in s.style.opacity.items()}
+s.mode = "ghosted-ao"
+
 window = house.index("IfcWindow 'Window 2'")              # double-click: orbit around it and fit it
 frames(2)
 wx0, wy0, wx1, wy1 = app.records.viewport_rect[window]
 point = (cx + (wx0 + wx1) / 2, cy + ch - 1 - (wy0 + wy1) / 2)
+window = app.controls.object_at(*point)                 # the object the double-click lands on
+move(*point)
 for _ in range(2):
     h = wnd.size[1]
     pw.dispatch_event("on_mouse_press", int(point[0]), h - int(point[1]), mouse.LEFT, 0)

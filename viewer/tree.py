@@ -39,6 +39,7 @@ def draw(app: PanelsHost) -> None:
     imgui.begin_child("objects", imgui.ImVec2(0, LIST_HEIGHT), imgui.ChildFlags_.borders)
     app.item_rects.clear()
     tree.rects = {}                       # rows on screen: node -> checkbox rect (tests click them)
+    tree.sliders = {}
     focus, hidden = tree.counts(s.highlighted), tree.counts(s.hidden)
     sizes = tree.last - tree.first
     height = imgui.get_frame_height_with_spacing()
@@ -134,6 +135,7 @@ def _opacity(app: PanelsHost, node: int) -> None:
     imgui.set_next_item_width(90)
     current = s.opacity(int(ids[0])) if len(ids) else s.style.default_opacity
     changed, a = imgui.slider_float("##a", current, 0.0, 1.0, "%.2f")
+    s.tree.sliders[node] = (*imgui.get_item_rect_min(), *imgui.get_item_rect_max())   # tests drag them
     if changed:
         for oid in ids:
             s.style.opacity[int(oid)] = a

@@ -18,6 +18,7 @@ if TYPE_CHECKING:
     from .commands import PanelsHost
 
 LIST_HEIGHT = 220
+SLIDER_W = 64
 INDENT = 12.0
 MIXED = int(imgui.internal.ItemFlagsPrivate_.mixed_value)
 SELECTED = imgui.IM_COL32(255, 200, 80, 255)
@@ -88,6 +89,8 @@ def _row(app: PanelsHost, node: int, focus: np.ndarray, hidden: np.ndarray, size
     if mixed:
         imgui.push_item_flag(MIXED, True)
     label = tree.labels[node] if oid >= 0 else f"{tree.labels[node]}  ({n})"
+    if s.mode == "transparent":              # room for the opacity slider on the right
+        label = _fit(label, imgui.get_window_width() - SLIDER_W - 40 - imgui.get_cursor_pos_x())
     if off == n:
         imgui.push_style_color(imgui.Col_.text, HIDDEN_TEXT)
     changed, _ = imgui.checkbox(label, n > 0 and on == n)
@@ -131,11 +134,21 @@ def _menu(app: PanelsHost, node: int, all_hidden: bool) -> None:
 def _opacity(app: PanelsHost, node: int) -> None:
     s = app.state
     ids = s.tree.members(node)
-    imgui.same_line(max(imgui.get_cursor_pos_x(), imgui.get_window_width() - 100))
-    imgui.set_next_item_width(90)
+    imgui.same_line(max(imgui.get_cursor_pos_x(), imgui.get_window_width() - SLIDER_W - 14))
+    imgui.set_next_item_width(SLIDER_W)
     current = s.opacity(int(ids[0])) if len(ids) else s.style.default_opacity
     changed, a = imgui.slider_float("##a", current, 0.0, 1.0, "%.2f")
     s.tree.sliders[node] = (*imgui.get_item_rect_min(), *imgui.get_item_rect_max())   # tests drag them
     if changed:
         for oid in ids:
             s.style.opacity[int(oid)] = a
+
+
+def _fit(label: str, width: float) -> str:
+    """The label, shortened with '...' to fit `width` pixels (the text, not its checkbox)."""
+    if imgui.calc_text_size(label).x <= width:
+        return label
+    text = label
+    while len(text) > 1 and imgui.calc_text_size(text + "...").x > width:
+        text = text[:-1]
+    return text + "..."

@@ -130,6 +130,8 @@ def test_ifc_truncated_is_refused(ifc_file, tmp_path):
     (".step", b"glTF\x02\x00\x00\x00" + bytes(40), "not a STEP file"),
     (".stp", b"ISO-10303-21;\nHEADER;\nENDSEC;\nDATA;\n#1=PRODUCT('a','a','',(#2));\n", "STEP file is truncated"),
     (".step", b"ISO-10303-21;\nHEADER;\nENDSEC;\nDATA;\nENDSEC;\nEND-ISO-10303-21;\n", "cannot read STEP file"),
+    (".step", b"ISO-10303-21;\nDATA;\n#1=DOCUMENT_FILE('/etc/passwd','',$,#2,'',$);\nENDSEC;\nEND-ISO-10303-21;\n",
+     "outside the file's folder"),
     (".ifc", b"solid x\nendsolid x\n", "not an IFC file"),
     (".ifc", b"ISO-10303-21;\nHEADER;\nENDSEC;\nDATA;\nENDSEC;\nEND-ISO-10303-21;\n", "cannot read IFC file"),
 ])

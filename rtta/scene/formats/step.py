@@ -53,6 +53,11 @@ def _check_text(text: str, path: Path) -> None:
         raise RttaError("not a STEP file (no 'ISO-10303-21;' header)", path)
     if "END-ISO-10303-21" not in text[-4096:]:
         raise RttaError("STEP file is truncated (no 'END-ISO-10303-21;' at its end)", path)
+    for ref in re.findall(r"(?:EXTERNAL_SOURCE|DOCUMENT_FILE)\s*\(\s*'([^']*)'", text):
+        name = ref.replace("\\", "/")
+        if re.match(r"^[a-zA-Z][a-zA-Z0-9+.-]*:", name) or name.startswith("/") or ".." in name.split("/"):
+            raise RttaError(f"external reference '{ref}' is outside the file's folder; only the file itself "
+                            "is read", path)
 
 
 def length_unit(text: str) -> str:

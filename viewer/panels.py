@@ -15,13 +15,13 @@ from rtta.ldi.lens import SHAPES as LENS_SHAPES
 from rtta.passes.composite import LENS_MODES
 from rtta.scene.model import BOUNDS
 
+from . import tree
 from .state import ATLAS_MAX_CHOICES, VIEW_MODES
 
 if TYPE_CHECKING:
     from .commands import PanelsHost
 
 ERROR_COLOR = imgui.ImVec4(1.0, 0.45, 0.4, 1.0)
-LIST_HEIGHT = 170
 STAGES = ("parameterize", "capture", "post", "composite", "std", "ui")
 
 
@@ -68,37 +68,13 @@ def _mode(app: PanelsHost) -> None:
     _, s.show_atlas = imgui.checkbox("atlas view (A)", s.show_atlas)
     imgui.same_line()
     if imgui.button("frame all (F)"):
-        app.orbit.frame()
+        app.frame_objects()
     if s.mode == "std":
         imgui.text_disabled("STD draws the scene directly: no highlights")
 
 
 def _objects(app: PanelsHost) -> None:
-    s = app.state
-    if not imgui.collapsing_header("Objects", imgui.TreeNodeFlags_.default_open):
-        return
-    _, s.filter = imgui.input_text_with_hint("##filter", "filter by name", s.filter)
-    for how in ("all", "none", "invert"):
-        imgui.same_line()
-        if imgui.small_button(how):
-            s.select(how)
-    imgui.begin_child("objects", imgui.ImVec2(0, LIST_HEIGHT), imgui.ChildFlags_.borders)
-    app.item_rects.clear()
-    slider_x = imgui.get_cursor_pos_x() + imgui.get_content_region_avail().x - 90
-    for oid in s.filtered():
-        imgui.push_id(oid)
-        changed, on = imgui.checkbox(app.renderer.scene.names[oid], oid in s.highlighted)
-        app.item_rects[oid] = (*imgui.get_item_rect_min(), *imgui.get_item_rect_max())
-        if changed:
-            s.toggle(oid)
-        if s.mode == "transparent":
-            imgui.same_line(slider_x)
-            imgui.set_next_item_width(90)
-            changed, a = imgui.slider_float("##a", s.opacity(oid), 0.0, 1.0, "%.2f")
-            if changed:
-                s.style.opacity[oid] = a
-        imgui.pop_id()
-    imgui.end_child()
+    tree.draw(app)
 
 
 def _style(app: PanelsHost) -> None:

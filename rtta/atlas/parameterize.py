@@ -131,12 +131,13 @@ def viewport_rects(vis: np.ndarray, lo: np.ndarray, hi: np.ndarray, size: tuple[
 
 def parameterize(corners: np.ndarray, vpm: np.ndarray, viewport: tuple[int, int], *,
                  border: int = 1, atlas_max: tuple[int, int] | None = None,
-                 max_layers: int = 2048, region_scale: float = 1.0) -> Records:
+                 max_layers: int = 2048, region_scale: float = 1.0, hidden: np.ndarray | None = None) -> Records:
     """Algorithm 1: records for all objects, given B_world corners [n, 8, 3] (or several
     enclosing boxes per object [k, n, 8, 3], whose projections are intersected) and VPM.
 
     region_scale: atlas texels per viewport pixel wanted for every region (below 1 saves
-    atlas memory and fill, above 1 supersamples); lowered per object only where it must be."""
+    atlas memory and fill, above 1 supersamples); lowered per object only where it must be.
+    hidden: bool [n], objects the user hid: culled like those outside the view (no region)."""
     n = corners.shape[-3]
     W, H = int(viewport[0]), int(viewport[1])
     if W < 1 or H < 1:
@@ -147,6 +148,8 @@ def parameterize(corners: np.ndarray, vpm: np.ndarray, viewport: tuple[int, int]
     if max_w < 1 + 2 * border or max_h < 1 + 2 * border:
         raise ValueError(f"atlas maximum {max_w}x{max_h} cannot hold a 1-pixel region with border {border}")
     vis, lo, hi = project_bounds(corners, vpm) if corners.ndim == 3 else _intersected(corners, vpm)
+    if hidden is not None:
+        vis = vis & ~np.asarray(hidden, bool)
     vis, rect = viewport_rects(vis, lo, hi, (W, H))
     inner = (rect[:, 2:] - rect[:, :2]).astype(np.float64)
     fit = np.minimum((max_w - 2 * border) / np.maximum(inner[:, 0], 1),

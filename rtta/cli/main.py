@@ -18,7 +18,8 @@ def parse_size(text: str, what: str = "--size") -> tuple[int, int]:
 
 
 def _scene_arg(p: argparse.ArgumentParser) -> None:
-    p.add_argument("scene", nargs="?", help="glTF/GLB/OBJ/STL/PLY/3MF/OFF file (default: the built-in demo)")
+    p.add_argument("scene", nargs="?", help="glTF/GLB/OBJ/STL/PLY/3MF/OFF, STEP, IFC, COLLADA, USD or 3DXML "
+                                            "file (default: the built-in demo)")
     add_load_options(p)
 
 
@@ -75,8 +76,11 @@ def build_parser() -> argparse.ArgumentParser:
     out = p.add_mutually_exclusive_group(required=True)
     out.add_argument("--out", help="PNG file to write")
     out.add_argument("--all-modes", metavar="DIR", help="write <mode>.png for every mode into DIR")
-    p = sub.add_parser("info", help="list the objects of a scene")
+    p = sub.add_parser("info", help="list the objects of a scene (--tree: its part tree), its unit and up axis")
     _scene_arg(p)
+    from .info import add_arguments
+
+    add_arguments(p)
     p = sub.add_parser("bench", help="benchmarks that print tables")
     bsub = p.add_subparsers(dest="bench", required=True)
     b = bsub.add_parser("capture", help="STD / RTT / RTTA frame times on the paper's Table 1 sizes")
@@ -116,6 +120,9 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--markdown", default=None, help="markdown file whose report block is replaced "
                                                     "(default: BENCHMARKS.md)")
     b.add_argument("--plots", default=None, help="folder for the PNG plots (default: docs/bench)")
+    b = bsub.add_parser("formats", help="load time of every scene file: the format's library against rtta")
+    b.add_argument("files", nargs="*", help="scene files (default: every one in ../shared/data)")
+    b.add_argument("--json", default=None)
     from .ldi import add_parser as add_ldi
 
     add_ldi(sub)
@@ -237,14 +244,9 @@ def _projector(args, scene, camera):
 
 
 def cmd_info(args) -> int:
-    scene = _load(args)
-    lo, hi = scene.bounds
-    print(f"{scene.source}: {scene.count} objects, {scene.vertex_count} vertices, "
-          f"{len(scene.indices) // 3} triangles, bounds {lo.round(4).tolist()} .. {hi.round(4).tolist()}")
-    for oid, name in enumerate(scene.names):
-        first, count = scene.index_ranges[oid]
-        print(f"{oid:5d}  {name}  ({count // 3} triangles)")
-    return 0
+    from .info import run
+
+    return run(_load(args), args.tree)
 
 
 def cmd_bench(args) -> int:
@@ -274,6 +276,10 @@ def cmd_bench(args) -> int:
         if args.objects < 1 or args.max_vertices < 3:
             raise RttaError("--objects must be at least 1 and --max-vertices at least 3")
         return run_material(args.objects, quick=args.quick, json_path=args.json, max_vertices=args.max_vertices)
+    if args.bench == "formats":
+        from ..tools.bench_formats import run_formats
+
+        return run_formats(args.files, json_path=args.json)
     if args.bench == "report":
         from ..tools.report import run_report
 

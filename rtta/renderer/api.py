@@ -88,7 +88,7 @@ def orbit_camera(scene: Scene, camera: Camera | str | Sequence[float] | None, fo
         orbit = DEFAULT_ORBIT
     else:
         orbit = parse_orbit(camera if isinstance(camera, str) else ",".join(str(v) for v in camera))
-    return Camera.orbit(scene.center, scene.radius, *orbit, fov_y=fov)
+    return Camera.orbit(scene.center, scene.radius, *orbit, fov_y=fov, up_axis=scene.up_axis)
 
 
 def check_size(size: str | Sequence[int], what: str = "size") -> tuple[int, int]:
@@ -282,7 +282,8 @@ def _opacities(scene: Scene, opacity: Mapping[str, float]) -> dict[int, float]:
     for name, alpha in opacity.items():
         if not (isinstance(alpha, (int, float)) and np.isfinite(alpha) and 0.0 <= alpha <= 1.0):
             raise RttaError(f"opacity expects name -> alpha in [0, 1], got {name!r}: {alpha!r}")
-        out[resolve_names(scene, [name], "opacity")[0]] = float(alpha)
+        for oid in resolve_names(scene, [name], "opacity"):       # a group or glob sets each of its objects
+            out[oid] = float(alpha)
     return out
 
 

@@ -60,6 +60,7 @@ class Renderer:
         self._projector_pass = None
         self.lens = None                   # a Lens cutting the context away in the ghosted modes, or None
         self._lens_pass = None
+        self.hidden: set[int] = set()      # objects the user hid: not packed, captured, composited or drawn
         self.measure = False               # time each stage (waits for the GPU after each)
         self.timings: dict[str, float] = {}  # stage -> ms of its last run, when measuring
         self.warnings: list[str] = []      # what was degraded (each said once)
@@ -90,7 +91,28 @@ class Renderer:
         atlas_max = (min(atlas_max[0], self.caps.max_texture), min(atlas_max[1], self.caps.max_texture))
         max_layers = min(s.max_layers or self.caps.max_layers, self.caps.max_layers)
         return parameterize(self.scene.box_corners(s.bounds), proj @ view, viewport, border=s.border,
-                            atlas_max=atlas_max, max_layers=max_layers, region_scale=s.region_scale)
+                            atlas_max=atlas_max, max_layers=max_layers, region_scale=s.region_scale,
+                            hidden=self.hidden_mask())
+
+    def hidden_mask(self) -> np.ndarray | None:
+        """bool [n] of the hidden objects (None when none is hidden)."""
+        if not self.hidden:
+            return None
+        mask = np.zeros(self.scene.count, bool)
+        mask[[i for i in self.hidden if 0 <= i < self.scene.count]] = True
+        return mask
+
+    def shown_ranges(self) -> list[tuple[int, int]] | None:
+        """(first, count) index runs of the objects not hidden (None: all of them, one run).
+        Objects lie contiguously in object order, so hiding k objects makes at most k + 1 runs."""
+        mask = self.hidden_mask()
+        if mask is None:
+            return None
+        shown = ~mask
+        edges = np.flatnonzero(np.diff(np.concatenate([[False], shown, [False]]).astype(np.int8)))
+        ranges = self.scene.index_ranges
+        return [(int(ranges[a, 0]), int(ranges[b - 1].sum() - ranges[a, 0]))
+                for a, b in zip(edges[::2], edges[1::2], strict=True)]
 
     def capture_pass(self, path: str | None = None) -> CapturePass:
         path = self.caps.capture_path(path or self.settings.capture_path)
@@ -151,7 +173,7 @@ class Renderer:
 
             self._projector_pass = ProjectorPass(self.ctx)
         with self._timed("projector"):
-            self._projector_pass.render(gpu=self.gpu, projector=self.projector)
+            self._projector_pass.render(gpu=self.gpu, projector=self.projector, ranges=self.shown_ranges())
         return self._projector_pass, self.projector
 
     def post_process(self, style: Style) -> AtlasPostPass:
@@ -180,7 +202,7 @@ class Renderer:
         projection = self._projection()
         with self._timed("std"):
             self._std.render(gpu=self.gpu, view=view, proj=proj, target=self.single_target, viewport=viewport,
-                             projection=projection)
+                             projection=projection, ranges=self.shown_ranges())
             self._throttle.flush()
         return self.single_target
 

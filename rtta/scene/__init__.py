@@ -1,8 +1,10 @@
 """Scene layer: what is drawn, before any GL.
 
 Loading files (prechecks against hostile or oversized input, trimesh, preprocessing of
-vertices and normals, textures and the material atlas they are packed into), the batched
-`Scene` (one vertex/index buffer, a per-vertex object id), the orbit `Camera`, generated
+vertices and normals, textures and the material atlas they are packed into; assemblies with
+their part tree in `formats/`: STEP, IFC, COLLADA, USD, 3DXML), the batched `Scene` (one
+vertex/index buffer, a per-vertex object id; each object's path in the tree, the unit and
+up axis), names, groups and globs resolved to objects (`select`), the orbit `Camera`, generated
 scenes and the demo. The bottom layer: it imports only `rtta.errors` and `rtta.imageio`.
 """
 

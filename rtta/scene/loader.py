@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import RttaError
+from . import formats
 from .model import SUPPORTED, Scene, from_meshes
 from .precheck import check_size, precheck
 from .preprocess import DEFAULT_SMOOTH_ANGLE, index_vertices, smooth_normals
@@ -32,9 +33,9 @@ def load_scene(path: str | Path, smooth_angle: float = DEFAULT_SMOOTH_ANGLE, smo
     if path.is_dir():
         raise RttaError("is a directory, expected a scene file", path)
     suffix = path.suffix.lower()
-    if suffix not in SUPPORTED:
+    if suffix not in SUPPORTED + formats.SUFFIXES:
         raise RttaError(f"unsupported file type '{suffix or '(none)'}'; "
-                        f"supported: {', '.join(SUPPORTED)}", path)
+                        f"supported: {', '.join(SUPPORTED + formats.SUFFIXES)}", path)
     size = path.stat().st_size
     if size == 0:
         raise RttaError("file is empty", path)
@@ -42,6 +43,8 @@ def load_scene(path: str | Path, smooth_angle: float = DEFAULT_SMOOTH_ANGLE, smo
         raise RttaError(f"file is larger than the {MAX_FILE_BYTES >> 30} GiB limit", path)
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")
+        if suffix in formats.SUFFIXES:
+            return formats.load(path, 180.0 if smooth else smooth_angle)
         notes = precheck(path)
         loaded = _trimesh_load(path, suffix)
         parts, colors, dropped, materials = _parts(loaded, path, smooth_angle, smooth)
@@ -49,6 +52,7 @@ def load_scene(path: str | Path, smooth_angle: float = DEFAULT_SMOOTH_ANGLE, smo
         notes.append(f"{len(dropped)} object(s) with only degenerate (zero-area) triangles left out: "
                      + ", ".join(dropped[:5]) + (" ..." if len(dropped) > 5 else ""))
     scene = from_meshes(parts, colors, source=str(path), **materials)
+    scene.paths = formats.graph_paths(loaded, [p[0] for p in parts])
     scene.warnings = notes + scene.warnings + _texture_notes(scene)
     return scene
 

@@ -32,13 +32,13 @@ flat in float g_scale;
 flat in int g_layer;
 flat in ivec4 g_rect;
 flat in float g_opacity;
+flat in vec2 g_shade;      // (uses AO, uses edges): the object's role (WITH_AO)
 layout(location = 0) out vec4 out_color;
 
-vec3 shade(vec3 rgb, ivec3 t) {
+vec3 shade(vec3 rgb, vec2 post) {
 #ifdef WITH_AO
-    vec2 post = texelFetch(u_post, t, 0).rg;
-    rgb *= post.r;
-    rgb = mix(rgb, u_edge_color.rgb, post.g * u_edge_color.a);
+    rgb *= mix(1.0, post.r, g_shade.x);
+    rgb = mix(rgb, u_edge_color.rgb, post.g * g_shade.y * u_edge_color.a);
 #endif
     return rgb;
 }
@@ -49,9 +49,72 @@ bool outside(ivec2 s) { return any(lessThan(s, g_rect.xy)) || any(greaterThan(s,
 // The atlas is depth-keyed (targets.py): empty texels have depth 1 and stale colour.
 bool covered(ivec3 s) { return !outside(s.xy) && texelFetch(u_depth, s, 0).r < 1.0; }
 
+// What a pixel takes from its object's atlas images: colour, window depth, (ao, edge), and
+// the texel it is nearest to (normals for the projector).
+struct Sample { vec3 rgb; float depth; vec2 post; ivec3 t; };
+
+// Depth-aware upsampling of a region captured below one texel per pixel (context objects
+// at the context scale): the 2x2 texels around the pixel's atlas position, bilinear
+// weights over the texels that are the object's own (inside B_atlas, depth < 1) and lie on
+// the same surface as the nearest of them (view distance within 2%: 1 - window depth is
+// proportional to 1 / distance), renormalised. The pixel is covered where the own texels
+// hold at least half the weight, so the silhouette follows the bilinear coverage: no
+// background, no neighbouring region and no surface behind a depth edge ever blends in.
+bool upsampled(vec2 px, out Sample o) {
+    vec2 a = g_map.xy + g_scale * (px - g_map.zw) - 0.5;
+    ivec2 lo = ivec2(floor(a));
+    vec2 f = a - vec2(lo);
+    // gather components: x (lo.x, lo.y+1), y (lo.x+1, lo.y+1), z (lo.x+1, lo.y), w (lo.x, lo.y)
+    vec4 d = textureGather(u_depth, vec3((vec2(lo) + 1.0) / vec2(textureSize(u_depth, 0).xy), float(g_layer)), 0);
+    ivec2 offs[4] = ivec2[](ivec2(0, 1), ivec2(1, 1), ivec2(1, 0), ivec2(0, 0));
+    vec4 w = vec4((1.0 - f.x) * f.y, f.x * f.y, f.x * (1.0 - f.y), (1.0 - f.x) * (1.0 - f.y));
+    for (int i = 0; i < 4; ++i)
+        if (outside(lo + offs[i]) || d[i] >= 1.0) w[i] = 0.0;
+    if (w.x + w.y + w.z + w.w < 0.5) return false;
+    int best = 0;
+    for (int i = 1; i < 4; ++i)
+        if (w[i] > w[best]) best = i;
+    float ref = 1.0 - d[best];
+    o.t = ivec3(lo + offs[best], g_layer);
+    o.rgb = vec3(0.0);
+    o.depth = 0.0;
+    o.post = vec2(0.0);
+    float sum = 0.0;
+    for (int i = 0; i < 4; ++i) {
+        if (w[i] == 0.0 || abs(d[i] - d[best]) > 0.02 * ref) continue;
+        ivec3 s = ivec3(lo + offs[i], g_layer);
+        o.rgb += w[i] * texelFetch(u_color, s, 0).rgb;
+        o.depth += w[i] * d[i];
+#ifdef WITH_AO
+        o.post += w[i] * texelFetch(u_post, s, 0).rg;
+#endif
+        sum += w[i];
+    }
+    o.rgb /= sum;
+    o.depth /= sum;
+    o.post /= sum;
+    return true;
+}
+
+// The pixel's sample: the nearest texel at one texel per pixel or more, else upsampled.
+bool sampled(vec2 px, out Sample o) {
+    if (g_scale < 0.999) return upsampled(px, o);
+    o.t = atlas_texel(g_map, g_scale, g_layer, px);
+    if (outside(o.t.xy)) return false;
+    o.depth = texelFetch(u_depth, o.t, 0).r;
+    if (o.depth >= 1.0) return false;
+    o.rgb = texelFetch(u_color, o.t, 0).rgb;
+#ifdef WITH_AO
+    o.post = texelFetch(u_post, o.t, 0).rg;
+#else
+    o.post = vec2(1.0, 0.0);
+#endif
+    return true;
+}
+
 void main() {
-    ivec3 t = atlas_texel(g_map, g_scale, g_layer, gl_FragCoord.xy);
 #ifdef MODE_OUTLINE
+    ivec3 t = atlas_texel(g_map, g_scale, g_layer, gl_FragCoord.xy);
     // a silhouette texel: the object's own, with a neighbour within the width that is not
     if (!covered(t)) discard;
     bool near_other = false;
@@ -61,10 +124,10 @@ void main() {
     if (!near_other) discard;
     out_color = vec4(u_edge_color.rgb, 1.0);
 #else
-    if (outside(t.xy)) discard;
-    float depth = texelFetch(u_depth, t, 0).r;
-    if (depth >= 1.0) discard;
-    vec3 rgb = texelFetch(u_color, t, 0).rgb;
+    Sample o;
+    if (!sampled(gl_FragCoord.xy, o)) discard;
+    float depth = o.depth;
+    vec3 rgb = o.rgb;
 #if defined(PROJECTOR) || defined(LENS)
     vec4 ndc = vec4(gl_FragCoord.xy / u_viewport * 2.0 - 1.0, depth * 2.0 - 1.0, 1.0);
     vec4 world = u_inv_view_proj * ndc;
@@ -76,9 +139,9 @@ void main() {
         discard;
 #endif
 #ifdef PROJECTOR
-    rgb = painted(rgb, surface_light(normalize(texelFetch(u_normal, t, 0).xyz * 2.0 - 1.0)), world.xyz);
+    rgb = painted(rgb, surface_light(normalize(texelFetch(u_normal, o.t, 0).xyz * 2.0 - 1.0)), world.xyz);
 #endif
-    rgb = shade(rgb, t);
+    rgb = shade(rgb, o.post);
 #ifdef MODE_SPRITE
     gl_FragDepth = depth;
     out_color = vec4(rgb, 1.0);

@@ -15,6 +15,7 @@ flat out float g_scale;    // atlas texels per viewport pixel
 flat out int g_layer;
 flat out ivec4 g_rect;     // B_atlas's first and last texel (x0, y0, x1, y1), border included
 flat out float g_opacity;  // the style's opacity
+flat out vec2 g_shade;     // the style's (uses AO, uses edges)
 
 void main() {
     Record r = records[v_object[0]];
@@ -28,6 +29,7 @@ void main() {
         g_layer = r.info.x;
         g_rect = ivec4(r.atlas.xy, r.atlas.xy + r.atlas.zw - 1.0);
         g_opacity = styles[v_object[0]].params.x;
+        g_shade = styles[v_object[0]].params.zw;
         gl_Position = vec4(corners[i], 0.0, 1.0);
         EmitVertex();
     }

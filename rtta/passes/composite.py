@@ -24,6 +24,7 @@ from .capture import mat_bytes
 MODES = ("sprites", "transparent", "ghosted", "ghosted-ao")
 LENS_MODES = ("ghosted", "ghosted-ao")    # where a lens cuts the context away
 BACKGROUND = (0.93, 0.93, 0.95, 1.0)
+ROLES = ("focus", "all")                  # which objects get AO / edges in ghosted-ao
 
 
 @dataclass
@@ -41,6 +42,18 @@ class Style:
     edge_width: int = 1
     ao_radius: float = 6.0
     ao_strength: float = 1.0
+    ao_objects: str = "all"            # ghosted-ao: AO on 'focus' objects only (the paper) or on 'all'
+    edge_objects: str = "all"          # ghosted-ao: edges on 'focus' objects only or on 'all'
+
+    def shaded(self, n: int) -> tuple[np.ndarray, np.ndarray]:
+        """(uses AO, uses edges) per object [n] bool, in ghosted-ao."""
+        focus = np.zeros(n, bool)
+        focus[[o for o in self.focus if 0 <= o < n]] = True
+        for name, value in (("ao_objects", self.ao_objects), ("edge_objects", self.edge_objects)):
+            if value not in ROLES:
+                raise ValueError(f"{name} must be one of {', '.join(ROLES)}, got {value!r}")
+        every = np.ones(n, bool)
+        return (every if self.ao_objects == "all" else focus), (every if self.edge_objects == "all" else focus)
 
 
 class CompositeTarget:
@@ -167,6 +180,9 @@ class CompositePass:
             params[oid, 0] = float(np.clip(a, 0.0, 1.0))
         focus = np.array(sorted(o for o in style.focus if 0 <= o < n), np.int64)
         params[focus, 1] = 1.0
+        if mode == "ghosted-ao":
+            ao, edges = style.shaded(n)
+            params[:n, 2], params[:n, 3] = ao, edges
         self._upload(self.styles, params.tobytes())
         self.passes = []
         target.ensure(records.viewport)

@@ -1,5 +1,5 @@
 #version 430
-// defines: MODE_SPRITE MODE_BLEND MODE_OUTLINE WITH_AO PROJECTOR LENS
+// defines: MODE_SPRITE MODE_BLEND MODE_OUTLINE WITH_AO PROJECTOR LENS UPSAMPLE
 // Per-object compositing from the atlas:
 //   MODE_SPRITE  depth sprite: atlas colour, gl_FragDepth = atlas depth (focus objects, `sprites`)
 //   MODE_BLEND   premultiplied blend with the object's opacity (`transparent`, ghosted context)
@@ -7,6 +7,8 @@
 //   WITH_AO      shade with the atlas post-process (ambient occlusion, edges) of `ghosted-ao`
 //   PROJECTOR    paint with the projector at the world position reconstructed from the atlas depth
 //   LENS         cut away (discard) texels whose world position is inside the lens (parity test)
+//   UPSAMPLE     the objects' regions hold less than one texel per pixel: depth-aware upsampling
+//                (a variant, not a branch: on llvmpipe both sides of a branch cost)
 #include "composite.glsl"
 #include "projector.glsl"
 #include "ldi.glsl"
@@ -66,39 +68,37 @@ bool upsampled(vec2 px, out Sample o) {
     vec2 f = a - vec2(lo);
     // gather components: x (lo.x, lo.y+1), y (lo.x+1, lo.y+1), z (lo.x+1, lo.y), w (lo.x, lo.y)
     vec4 d = textureGather(u_depth, vec3((vec2(lo) + 1.0) / vec2(textureSize(u_depth, 0).xy), float(g_layer)), 0);
-    ivec2 offs[4] = ivec2[](ivec2(0, 1), ivec2(1, 1), ivec2(1, 0), ivec2(0, 0));
-    vec4 w = vec4((1.0 - f.x) * f.y, f.x * f.y, f.x * (1.0 - f.y), (1.0 - f.x) * (1.0 - f.y));
-    for (int i = 0; i < 4; ++i)
-        if (outside(lo + offs[i]) || d[i] >= 1.0) w[i] = 0.0;
+    // which of the 2x2 lie inside B_atlas: column lo.x (x, w) or lo.x + 1 (y, z), row lo.y (z, w) or lo.y + 1 (x, y)
+    bvec2 col = bvec2(lo.x >= g_rect.x && lo.x <= g_rect.z, lo.x + 1 >= g_rect.x && lo.x + 1 <= g_rect.z);
+    bvec2 row = bvec2(lo.y >= g_rect.y && lo.y <= g_rect.w, lo.y + 1 >= g_rect.y && lo.y + 1 <= g_rect.w);
+    vec4 inside = vec4(col.x && row.y, col.y && row.y, col.y && row.x, col.x && row.x);
+    vec4 w = vec4((1.0 - f.x) * f.y, f.x * f.y, f.x * (1.0 - f.y), (1.0 - f.x) * (1.0 - f.y))
+           * inside * vec4(lessThan(d, vec4(1.0)));
     if (w.x + w.y + w.z + w.w < 0.5) return false;
-    int best = 0;
-    for (int i = 1; i < 4; ++i)
-        if (w[i] > w[best]) best = i;
-    float ref = 1.0 - d[best];
-    o.t = ivec3(lo + offs[best], g_layer);
-    o.rgb = vec3(0.0);
-    o.depth = 0.0;
-    o.post = vec2(0.0);
-    float sum = 0.0;
-    for (int i = 0; i < 4; ++i) {
-        if (w[i] == 0.0 || abs(d[i] - d[best]) > 0.02 * ref) continue;
-        ivec3 s = ivec3(lo + offs[i], g_layer);
-        o.rgb += w[i] * texelFetch(u_color, s, 0).rgb;
-        o.depth += w[i] * d[i];
+    float m = max(max(w.x, w.y), max(w.z, w.w));
+    float dref = w.x == m ? d.x : w.y == m ? d.y : w.z == m ? d.z : d.w;
+    w *= vec4(lessThanEqual(abs(d - dref), vec4(0.02 * (1.0 - dref))));
+    w /= w.x + w.y + w.z + w.w;       // the nearest texel is always in: the sum is > 0
+    ivec3 t00 = ivec3(lo, g_layer);
+    ivec3 tx = t00 + ivec3(0, 1, 0), ty = t00 + ivec3(1, 1, 0), tz = t00 + ivec3(1, 0, 0);
+    o.t = w.x == m ? tx : w.y == m ? ty : w.z == m ? tz : t00;
+    o.rgb = w.x * texelFetch(u_color, tx, 0).rgb + w.y * texelFetch(u_color, ty, 0).rgb
+          + w.z * texelFetch(u_color, tz, 0).rgb + w.w * texelFetch(u_color, t00, 0).rgb;
+    o.depth = dot(w, d);
 #ifdef WITH_AO
-        o.post += w[i] * texelFetch(u_post, s, 0).rg;
+    o.post = w.x * texelFetch(u_post, tx, 0).rg + w.y * texelFetch(u_post, ty, 0).rg
+           + w.z * texelFetch(u_post, tz, 0).rg + w.w * texelFetch(u_post, t00, 0).rg;
+#else
+    o.post = vec2(1.0, 0.0);
 #endif
-        sum += w[i];
-    }
-    o.rgb /= sum;
-    o.depth /= sum;
-    o.post /= sum;
     return true;
 }
 
-// The pixel's sample: the nearest texel at one texel per pixel or more, else upsampled.
+// The pixel's sample: upsampled, or the nearest texel at one texel per pixel or more.
 bool sampled(vec2 px, out Sample o) {
-    if (g_scale < 0.999) return upsampled(px, o);
+#ifdef UPSAMPLE
+    return upsampled(px, o);
+#endif
     o.t = atlas_texel(g_map, g_scale, g_layer, px);
     if (outside(o.t.xy)) return false;
     o.depth = texelFetch(u_depth, o.t, 0).r;

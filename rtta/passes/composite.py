@@ -24,6 +24,7 @@ from .capture import mat_bytes
 MODES = ("sprites", "transparent", "ghosted", "ghosted-ao")
 LENS_MODES = ("ghosted", "ghosted-ao")    # where a lens cuts the context away
 BACKGROUND = (0.93, 0.93, 0.95, 1.0)
+UPSAMPLE_BELOW = 0.999                    # regions with fewer texels per pixel are upsampled
 ROLES = ("focus", "all")                  # which objects get AO / edges in ghosted-ao
 
 
@@ -213,18 +214,28 @@ class CompositePass:
                        desaturate=style.desaturate, depth_test=True, ao=with_ao, cut=True)
             self._draw(focus, style, records, outline=True)
 
-    def _draw(self, ids, style: Style, records: Records, *, sprite=False, blend=False, outline=False,
-              desaturate=0.0, depth_test=False, ao=False, cut=False) -> None:
+    def _draw(self, ids, style: Style, records: Records, **how) -> None:
+        """Draw `ids` in order: one draw per run of objects captured at one texel per pixel
+        or more, and per run below it (those are upsampled); outlines read texels as they are."""
         ids = np.asarray(ids, np.int32)
         ids = ids[records.visible[ids]] if len(ids) else ids
         if len(ids) == 0:
             return
+        low = records.scale[ids] < UPSAMPLE_BELOW
+        if how.get("outline") or not low.any():
+            return self._draw_run(ids, style, records, **how)
+        cuts = np.flatnonzero(np.diff(low.astype(np.int8))) + 1
+        for run in np.split(ids, cuts):
+            self._draw_run(run, style, records, upsample=bool(records.scale[run[0]] < UPSAMPLE_BELOW), **how)
+
+    def _draw_run(self, ids, style: Style, records: Records, *, sprite=False, blend=False, outline=False,
+                  desaturate=0.0, depth_test=False, ao=False, cut=False, upsample=False) -> None:
         self._upload(self.order, ids.astype(np.int32).tobytes())
         self.order.bind_to_storage_buffer(3)
         projection = None if outline else self._projection
         lens = self._lens if cut else None
         mode = {"MODE_SPRITE": sprite, "MODE_BLEND": blend, "MODE_OUTLINE": outline, "WITH_AO": ao and not outline,
-                "PROJECTOR": projection is not None, "LENS": lens is not None}
+                "PROJECTOR": projection is not None, "LENS": lens is not None, "UPSAMPLE": upsample}
         on = [k for k, v in mode.items() if v]
         self.passes.append("+".join(k.removeprefix("MODE_").lower() for k in on))
         prog, vao = self._program(**{k: True for k in on})

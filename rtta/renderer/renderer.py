@@ -191,7 +191,7 @@ class Renderer:
         need = np.where(ao, 2, np.where(edges, 1, 0)).astype(np.int8)
         full = np.flatnonzero((need == 2) & (self._post_done < 2))
         edge_only = np.flatnonzero((need == 1) & (self._post_done < 1))
-        if len(full) or len(edge_only):
+        if len(full) or len(edge_only) or self._post.texture is None:
             with self._timed("post"):
                 self._post.render(atlas=self.atlas, records=records, gpu=self.gpu, proj=proj, style=style,
                                   full=full, edges=edge_only)

@@ -1,9 +1,11 @@
 #version 430
-// defines: MODE_SPRITE MODE_BLEND MODE_OUTLINE WITH_AO PROJECTOR LENS UPSAMPLE
+// defines: MODE_SPRITE MODE_BLEND MODE_OUTLINE MODE_COLLECT WITH_AO PROJECTOR LENS UPSAMPLE
 // Per-object compositing from the atlas:
 //   MODE_SPRITE  depth sprite: atlas colour, gl_FragDepth = atlas depth (focus objects, `sprites`)
 //   MODE_BLEND   premultiplied blend with the object's opacity (`transparent`, ghosted context)
 //   MODE_OUTLINE the object's silhouette from its own unoccluded coverage (ghosted focus)
+//   MODE_COLLECT as MODE_BLEND, but appended to the pixel's list (oit.glsl) for a per-pixel
+//                sorted blend (`--order pixel`); writes no colour
 //   WITH_AO      shade with the atlas post-process (ambient occlusion, edges) of `ghosted-ao`
 //   PROJECTOR    paint with the projector at the world position reconstructed from the atlas depth
 //   LENS         cut away (discard) texels whose world position is inside the lens (parity test)
@@ -12,6 +14,9 @@
 #include "composite.glsl"
 #include "projector.glsl"
 #include "ldi.glsl"
+#ifdef MODE_COLLECT
+#include "oit.glsl"
+#endif
 
 layout(binding = 0) uniform sampler2DArray u_color;
 layout(binding = 1) uniform sampler2DArray u_depth;
@@ -149,8 +154,18 @@ void main() {
     float a = g_opacity;
     float grey = dot(rgb, vec3(0.299, 0.587, 0.114));
     rgb = mix(rgb, vec3(grey), u_desaturate);
+#ifdef MODE_COLLECT
+    uint i = atomicAdd(node_count, 1u);
+    if (i < node_capacity) {
+        ivec2 p = ivec2(gl_FragCoord.xy);
+        uint next = atomicExchange(heads[p.y * int(u_viewport.x) + p.x], i);
+        nodes[i] = uvec4(floatBitsToUint(depth), packUnorm4x8(vec4(rgb, a)), next, 0u);
+    }
+    out_color = vec4(0.0);
+#else
     gl_FragDepth = depth;
     out_color = vec4(rgb * a, a);
+#endif
 #endif
 #endif
 }

@@ -49,6 +49,9 @@ def _view_args(p: argparse.ArgumentParser) -> None:
                    help="atlas texels per viewport pixel (0.25 to 4; default 1)")
     p.add_argument("--bounds", choices=("aabb", "obb"), default="aabb",
                    help="object bounds projected per frame: the paper's AABB or the tighter oriented box")
+    p.add_argument("--context-scale", type=float, default=None,
+                   help="region scale of objects outside the focus, as a fraction of --region-scale "
+                        "(0.25 to 1; default: the library's, see README); upsampled depth-aware when composited")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -69,6 +72,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--edge-width", type=int, default=1, help="edge detection distance in pixels (ghosted-ao)")
     p.add_argument("--ao-radius", type=float, default=6.0, help="ambient occlusion radius in pixels (ghosted-ao)")
     p.add_argument("--ao-strength", type=float, default=1.0, help="ambient occlusion strength (ghosted-ao)")
+    p.add_argument("--ao-objects", choices=("focus", "all"), default=None,
+                   help="ambient occlusion on the focus objects only or on all (ghosted-ao; default: see README)")
+    p.add_argument("--edge-objects", choices=("focus", "all"), default=None,
+                   help="edges on the focus objects only or on all (ghosted-ao; default: see README)")
     p.add_argument("--projector", default=None, metavar="IMAGE[,AZ,EL,DIST]",
                    help="paint the scene with IMAGE ('default': the shipped grid) from an orbit position "
                         "(as --camera); without one the projector sits at the camera")
@@ -153,9 +160,13 @@ def _settings(args):
         raise RttaError(f"--max-layers must be at least 1, got {args.max_layers}")
     if not (0.25 <= args.region_scale <= 4):
         raise RttaError(f"--region-scale must be between 0.25 and 4, got {args.region_scale}")
+    context_scale = Settings.context_scale if args.context_scale is None else args.context_scale
+    if not (0.25 <= context_scale <= 1):
+        raise RttaError(f"--context-scale must be between 0.25 and 1, got {args.context_scale}")
     atlas_max = parse_size(args.atlas_max, "--atlas-max") if args.atlas_max else None
     return Settings(border=args.border, atlas_max=atlas_max, max_layers=args.max_layers,
-                    capture_path=args.capture_path, region_scale=args.region_scale, bounds=args.bounds)
+                    capture_path=args.capture_path, region_scale=args.region_scale, bounds=args.bounds,
+                    context_scale=context_scale)
 
 
 def _renderer(ctx, scene, settings):
@@ -207,6 +218,8 @@ def cmd_snapshot(args) -> int:
     if not (1 <= args.edge_width <= 8 and 0 < args.ao_radius <= 64 and 0 <= args.ao_strength <= 4):
         raise RttaError("--edge-width must be 1..8, --ao-radius in (0, 64], --ao-strength in [0, 4]")
     style.edge_width, style.ao_radius, style.ao_strength = args.edge_width, args.ao_radius, args.ao_strength
+    style.ao_objects = args.ao_objects or style.ao_objects
+    style.edge_objects = args.edge_objects or style.edge_objects
     if args.context_opacity is not None:
         if not 0.0 <= args.context_opacity <= 1.0:
             raise RttaError(f"--context-opacity must be in [0, 1], got {args.context_opacity}")

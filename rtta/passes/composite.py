@@ -20,6 +20,7 @@ from ..gl import glraw, glsl
 from ..gl.gpu import GpuScene
 from ..gl.targets import SHRINK_AFTER_FRAMES, LayeredTarget, release_framebuffer, round_up
 from .capture import mat_bytes
+from .oit import ORDERS, PixelOrderPass
 
 MODES = ("sprites", "transparent", "ghosted", "ghosted-ao")
 LENS_MODES = ("ghosted", "ghosted-ao")    # where a lens cuts the context away
@@ -45,6 +46,7 @@ class Style:
     ao_strength: float = 1.0
     ao_objects: str = "all"            # ghosted-ao: AO on 'focus' objects only (the paper) or on 'all'
     edge_objects: str = "all"          # ghosted-ao: edges on 'focus' objects only or on 'all'
+    order: str = "object"              # transparency: 'object' (bounds centres) or 'pixel' (surfaces)
 
     def shaded(self, n: int) -> tuple[np.ndarray, np.ndarray]:
         """(uses AO, uses edges) per object [n] bool, in ghosted-ao."""
@@ -144,6 +146,8 @@ class CompositePass:
         self.styles = ctx.buffer(reserve=16)
         self.order = ctx.buffer(reserve=16)
         self.passes: list[str] = []        # the draws of the last render, for inspection
+        self._pixel_order = None           # PixelOrderPass, made on first use
+        self.fallbacks = 0                 # frames that asked for pixel order and got object order
         self._projection = self._lens = self._inv_view_proj = None
 
     def _program(self, **defines) -> tuple[moderngl.Program, moderngl.VertexArray]:
@@ -200,7 +204,7 @@ class CompositePass:
             self._draw(everyone, style, records, sprite=True)
             self._draw(focus, style, records, outline=True)      # highlights, seen through
         elif mode == "transparent":
-            self._draw(back_to_front(records, view_depth, everyone), style, records, blend=True, desaturate=0.0)
+            self._blend(back_to_front(records, view_depth, everyone), style, records, target, desaturate=0.0)
             self._draw(focus, style, records, outline=True)
         else:
             with_ao = mode == "ghosted-ao"
@@ -213,6 +217,24 @@ class CompositePass:
             self._draw(back_to_front(records, view_depth, context), style, records, blend=True,
                        desaturate=style.desaturate, depth_test=True, ao=with_ao, cut=True)
             self._draw(focus, style, records, outline=True)
+
+    def _blend(self, ids, style: Style, records: Records, target: CompositeTarget, **how) -> None:
+        """Blend `ids` (back to front) over the target: object by object, or per pixel in the
+        order of their surfaces (style.order 'pixel'; object order when over MAX_NODES)."""
+        if style.order not in ORDERS:
+            raise ValueError(f"order must be one of {', '.join(ORDERS)}, got {style.order!r}")
+        if style.order == "pixel" and len(ids):
+            if self._pixel_order is None:
+                self._pixel_order = PixelOrderPass(self.ctx)
+            ids = np.asarray(ids, np.int64)
+            ids = ids[records.visible[ids]]
+            if self._pixel_order.begin(records.viewport, ids, records):
+                self._draw(ids, style, records, collect=True, **how)
+                self._pixel_order.resolve(target.fbo)
+                self.passes.append("resolve")
+                return
+            self.fallbacks += 1
+        self._draw(ids, style, records, blend=True, **how)
 
     def _draw(self, ids, style: Style, records: Records, **how) -> None:
         """Draw `ids` in order: one draw per run of objects captured at one texel per pixel
@@ -229,12 +251,13 @@ class CompositePass:
             self._draw_run(run, style, records, upsample=bool(records.scale[run[0]] < UPSAMPLE_BELOW), **how)
 
     def _draw_run(self, ids, style: Style, records: Records, *, sprite=False, blend=False, outline=False,
-                  desaturate=0.0, depth_test=False, ao=False, cut=False, upsample=False) -> None:
+                  desaturate=0.0, depth_test=False, ao=False, cut=False, upsample=False, collect=False) -> None:
         self._upload(self.order, ids.astype(np.int32).tobytes())
         self.order.bind_to_storage_buffer(3)
         projection = None if outline else self._projection
         lens = self._lens if cut else None
-        mode = {"MODE_SPRITE": sprite, "MODE_BLEND": blend, "MODE_OUTLINE": outline, "WITH_AO": ao and not outline,
+        mode = {"MODE_SPRITE": sprite, "MODE_BLEND": blend, "MODE_OUTLINE": outline, "MODE_COLLECT": collect,
+                "WITH_AO": ao and not outline,
                 "PROJECTOR": projection is not None, "LENS": lens is not None, "UPSAMPLE": upsample}
         on = [k for k, v in mode.items() if v]
         self.passes.append("+".join(k.removeprefix("MODE_").lower() for k in on))
@@ -263,11 +286,15 @@ class CompositePass:
         self.ctx.blend_func = moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA
         fbo = self.ctx.fbo
         fbo.depth_mask = bool(sprite)
+        fbo.color_mask = (not collect,) * 4
         fbo.use()
         vao.render(moderngl.POINTS, vertices=len(ids))
         fbo.depth_mask = True
+        fbo.color_mask = (True,) * 4
 
     def release(self) -> None:
+        if self._pixel_order is not None:
+            self._pixel_order.release()
         for obj in [*self._vaos.values(), *self._programs.values(), self.styles, self.order]:
             obj.release()
         self._vaos.clear()

@@ -99,13 +99,14 @@ class Renderer:
     def parameterize(self, camera: Camera, viewport: tuple[int, int], matrices=None, focus=()) -> Records:
         view, proj = matrices or self.matrices(camera, viewport)
         s = self.settings
-        atlas_max = s.atlas_max or default_atlas_max(viewport, s.border, max(s.region_scale, s.region_scale * s.context_scale))
+        largest = max(s.region_scale, s.region_scale * s.context_scale)
+        atlas_max = s.atlas_max or default_atlas_max(viewport, s.border, largest)
         atlas_max = (min(atlas_max[0], self.caps.max_texture), min(atlas_max[1], self.caps.max_texture))
         max_layers = min(s.max_layers or self.caps.max_layers, self.caps.max_layers)
         return parameterize(self.scene.box_corners(s.bounds), proj @ view, viewport, border=s.border,
                             atlas_max=atlas_max, max_layers=max_layers, region_scale=self.region_scales(focus))
 
-    def _scaled_for(self, focus) -> frozenset[int]:
+    def scaled_for(self, focus) -> frozenset[int]:
         """The focus as far as it changes the capture (empty when every object has one scale)."""
         return frozenset() if self.settings.context_scale == 1.0 else frozenset(focus)
 
@@ -119,7 +120,7 @@ class Renderer:
         """Parameterize and capture every visible object into the atlas; returns R. With a
         context scale below 1, `focus` objects get full-scale regions and the rest smaller ones."""
         view, proj = self.matrices(camera, viewport)
-        self.captured_focus = self._scaled_for(focus)
+        self.captured_focus = self.scaled_for(focus)
         self._view = (camera, viewport, path)
         with self._timed("parameterize"):
             records = self.parameterize(camera, viewport, (view, proj), self.captured_focus)
@@ -136,7 +137,7 @@ class Renderer:
         if self.last is None:
             raise RuntimeError("composite() needs a capture() first")
         style = style or Style()
-        if self._scaled_for(style.focus) != self.captured_focus:
+        if self.scaled_for(style.focus) != self.captured_focus:
             self.capture(*self._view, focus=style.focus)    # the focus decides the region scales
         records, view, proj = self.last
         if self._composite is None:

@@ -81,3 +81,44 @@ def test_pixel_order_overflow_keeps_nearest(make_renderer, monkeypatch):
     assert r._composite.fallbacks == 1 and np.array_equal(fallback, by_object)
     with pytest.raises(ValueError, match="order"):
         r.composite("transparent", Style(order="depth"))
+
+
+def test_more_surfaces_than_kept_merge_behind(make_renderer):
+    """12 concentric spheres: every pixel of the innermost has 12 surfaces, more than the K
+    the resolve keeps. The K nearest blend in order; the farther ones form one layer behind
+    them, with their opacity-weighted mean colour and opacity 1 - prod(1 - a): the numpy
+    blend of that fallback matches, the exact one does not."""
+    k_kept, n = 8, 12
+    parts = [(f"s{i}", np.asarray(trimesh.creation.icosphere(3, 1.0 - 0.07 * i).vertices),
+              np.asarray(trimesh.creation.icosphere(3, 1.0).faces), None) for i in range(n)]
+    inner = [(0.9, 0.1, 0.1, 1), (0.1, 0.8, 0.1, 1), (0.1, 0.1, 0.9, 1), (0.9, 0.9, 0.1, 1)]
+    scene = from_meshes(parts, [(0.5, 0.5, 0.5, 1)] * k_kept + inner)
+    r = make_renderer(scene)
+    cam = Camera.orbit(scene.center, scene.radius, 0, 0, 2.5)
+    r.capture(cam, VP)
+    # faint outer shells (the 8 nearest), strong inner ones: their order shows through
+    opacity = {i: 0.08 if i < k_kept else 0.9 for i in range(n)}
+    got = r.composite("transparent", Style(order="pixel", opacity=opacity)).read()[0][..., :3].astype(np.float64)
+    records = r.last[0]
+    tw, th, td = records.atlas_size
+    atlas = r.atlas.read((tw, th), td)
+    maps = [map_back({"color": atlas["color"], "depth": atlas["depth"]}, records, o) for o in range(n)]
+    depth = np.stack([m["depth"] for m in maps])
+    color = np.stack([m["color"][..., :3] for m in maps]).astype(np.float64)
+    alpha = np.array([opacity[i] for i in range(n)])
+    y, x = VP[1] // 2, VP[0] // 2                       # the centre: all 12 cover it
+    assert (depth[:, y, x] < 1).all()
+    near = np.argsort(depth[:, y, x])                  # nearest first
+    kept, rest = near[:k_kept], near[k_kept:]
+    w = alpha[rest]
+    tail_rgb = (w[:, None] * color[rest, y, x]).sum(0) / w.sum()
+    tail_a = 1 - np.prod(1 - w)
+    out = np.array(BACKGROUND[:3]) * 255
+    out = tail_rgb * tail_a + out * (1 - tail_a)
+    for o in kept[::-1]:
+        out = color[o, y, x] * alpha[o] + out * (1 - alpha[o])
+    exact = np.array(BACKGROUND[:3]) * 255
+    for o in near[::-1]:
+        exact = color[o, y, x] * alpha[o] + exact * (1 - alpha[o])
+    assert np.abs(got[y, x] - out).max() <= 3, (got[y, x], out, exact)
+    assert np.abs(exact - out).max() > 3, "the fallback equals the exact blend here: the test proves nothing"

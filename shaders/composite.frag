@@ -16,6 +16,8 @@
 #include "ldi.glsl"
 #ifdef MODE_COLLECT
 #include "oit.glsl"
+flat in uint g_node_base;   // the object's first node
+flat in int g_vp_width;     // its B_viewport's width
 #endif
 
 layout(binding = 0) uniform sampler2DArray u_color;
@@ -155,12 +157,12 @@ void main() {
     float grey = dot(rgb, vec3(0.299, 0.587, 0.114));
     rgb = mix(rgb, vec3(grey), u_desaturate);
 #ifdef MODE_COLLECT
-    uint i = atomicAdd(node_count, 1u);
-    if (i < node_capacity) {
-        ivec2 p = ivec2(gl_FragCoord.xy);
-        uint next = atomicExchange(heads[p.y * int(u_viewport.x) + p.x], i);
-        nodes[i] = uvec4(floatBitsToUint(depth), packUnorm4x8(vec4(rgb, a)), next, 0u);
-    }
+    // the node's place is fixed by the pixel's place in B_viewport: no shared counter
+    ivec2 p = ivec2(gl_FragCoord.xy);
+    ivec2 origin = ivec2(g_map.zw);                 // B_viewport's first pixel
+    uint i = g_node_base + uint((p.y - origin.y) * g_vp_width + (p.x - origin.x));
+    uint next = atomicExchange(heads[p.y * int(u_viewport.x) + p.x], i);
+    nodes[i] = uvec4(floatBitsToUint(depth), packUnorm4x8(vec4(rgb, a)), next, 0u);
     out_color = vec4(0.0);
 #else
     gl_FragDepth = depth;

@@ -1,5 +1,5 @@
 #version 430
-// defines:
+// defines: MODE_COLLECT
 // Point-sprite expansion: a screen-aligned quad over the object's B_viewport (its atlas
 // bounds mapped back through T^-1). What the fragments need of the record and the style
 // goes as flat values: no fragment reads the buffers (per-fragment loads cost on llvmpipe).
@@ -16,6 +16,11 @@ flat out int g_layer;
 flat out ivec4 g_rect;     // B_atlas's first and last texel (x0, y0, x1, y1), border included
 flat out float g_opacity;  // the style's opacity
 flat out vec2 g_shade;     // the style's (uses AO, uses edges)
+#ifdef MODE_COLLECT
+layout(std430, binding = 7) readonly buffer NodeBase { uint node_base[]; };
+flat out uint g_node_base; // the object's first node: one per pixel of its B_viewport (oit.glsl)
+flat out int g_vp_width;   // B_viewport's width in pixels
+#endif
 
 void main() {
     Record r = records[v_object[0]];
@@ -30,6 +35,10 @@ void main() {
         g_rect = ivec4(r.atlas.xy, r.atlas.xy + r.atlas.zw - 1.0);
         g_opacity = styles[v_object[0]].params.x;
         g_shade = styles[v_object[0]].params.zw;
+#ifdef MODE_COLLECT
+        g_node_base = node_base[v_object[0]];
+        g_vp_width = int(r.viewport.z - r.viewport.x);
+#endif
         gl_Position = vec4(corners[i], 0.0, 1.0);
         EmitVertex();
     }

@@ -182,3 +182,21 @@ def test_context_scale_follows_the_focus(make_renderer, demo_scene):
     r.composite("ghosted", Style(focus={3}))
     rec = r.last[0]
     assert rec.scale[3] == 1.0 and rec.scale[2] == 0.5
+
+
+def test_cli_importance_flags(tmp_path, capsys):
+    """--context-scale, --ao-objects, --edge-objects and --order reach the snapshot; a context
+    scale out of range is one error line and exit 2."""
+    from rtta.cli.main import main
+
+    out = tmp_path / "g.png"
+    assert main(["snapshot", "--mode", "ghosted-ao", "--size", "160x120", "--focus", "piston_1",
+                 "--context-scale", "0.5", "--ao-objects", "focus", "--edge-objects", "all",
+                 "--out", str(out)]) == 0
+    assert out.is_file()
+    assert main(["snapshot", "--mode", "transparent", "--size", "160x120", "--order", "pixel",
+                 "--out", str(tmp_path / "t.png")]) == 0
+    capsys.readouterr()
+    assert main(["snapshot", "--context-scale", "0.1", "--out", str(tmp_path / "x.png")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--context-scale" in err[0] and not (tmp_path / "x.png").exists()

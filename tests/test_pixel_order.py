@@ -84,20 +84,21 @@ def test_pixel_order_overflow_keeps_nearest(make_renderer, monkeypatch):
 
 
 def test_more_surfaces_than_kept_merge_behind(make_renderer):
-    """12 concentric spheres: every pixel of the innermost has 12 surfaces, more than the K
-    the resolve keeps. The K nearest blend in order; the farther ones form one layer behind
-    them, with their opacity-weighted mean colour and opacity 1 - prod(1 - a): the numpy
-    blend of that fallback matches, the exact one does not."""
+    """12 nested spheres, more than the K = 8 surfaces the resolve sorts: the stated fallback.
+    The list holds the objects in reverse draw order (back to front by bounds centre; the
+    centres tie here, so by id): the 8 drawn last are blended in exact depth order, the
+    others merged into one layer behind them (opacity-weighted mean colour, opacity
+    1 - prod(1 - a)). The numpy blend of that rule matches; the exact blend does not."""
     k_kept, n = 8, 12
-    parts = [(f"s{i}", np.asarray(trimesh.creation.icosphere(3, 1.0 - 0.07 * i).vertices),
+    parts = [(f"s{i}", np.asarray(trimesh.creation.icosphere(3, 0.5 + 0.05 * i).vertices),
               np.asarray(trimesh.creation.icosphere(3, 1.0).faces), None) for i in range(n)]
-    inner = [(0.9, 0.1, 0.1, 1), (0.1, 0.8, 0.1, 1), (0.1, 0.1, 0.9, 1), (0.9, 0.9, 0.1, 1)]
-    scene = from_meshes(parts, [(0.5, 0.5, 0.5, 1)] * k_kept + inner)
+    strong = [(0.9, 0.1, 0.1, 1), (0.1, 0.8, 0.1, 1), (0.1, 0.1, 0.9, 1), (0.9, 0.9, 0.1, 1)]
+    scene = from_meshes(parts, strong + [(0.5, 0.5, 0.5, 1)] * k_kept)
     r = make_renderer(scene)
     cam = Camera.orbit(scene.center, scene.radius, 0, 0, 2.5)
     r.capture(cam, VP)
-    # faint outer shells (the 8 nearest), strong inner ones: their order shows through
-    opacity = {i: 0.08 if i < k_kept else 0.9 for i in range(n)}
+    # strong inner spheres (ids 0-3, drawn first: merged), faint outer shells (kept)
+    opacity = {i: 0.9 if i < 4 else 0.08 for i in range(n)}
     got = r.composite("transparent", Style(order="pixel", opacity=opacity)).read()[0][..., :3].astype(np.float64)
     records = r.last[0]
     tw, th, td = records.atlas_size
@@ -108,17 +109,17 @@ def test_more_surfaces_than_kept_merge_behind(make_renderer):
     alpha = np.array([opacity[i] for i in range(n)])
     y, x = VP[1] // 2, VP[0] // 2                       # the centre: all 12 cover it
     assert (depth[:, y, x] < 1).all()
-    near = np.argsort(depth[:, y, x])                  # nearest first
-    kept, rest = near[:k_kept], near[k_kept:]
+    drawn = np.arange(n)                               # equal centres: drawn by id
+    kept, rest = drawn[-k_kept:], drawn[:-k_kept]
     w = alpha[rest]
     tail_rgb = (w[:, None] * color[rest, y, x]).sum(0) / w.sum()
     tail_a = 1 - np.prod(1 - w)
     out = np.array(BACKGROUND[:3]) * 255
     out = tail_rgb * tail_a + out * (1 - tail_a)
-    for o in kept[::-1]:
+    for o in kept[np.argsort(-depth[kept, y, x])]:     # farthest first
         out = color[o, y, x] * alpha[o] + out * (1 - alpha[o])
     exact = np.array(BACKGROUND[:3]) * 255
-    for o in near[::-1]:
+    for o in np.argsort(-depth[:, y, x]):
         exact = color[o, y, x] * alpha[o] + exact * (1 - alpha[o])
     assert np.abs(got[y, x] - out).max() <= 3, (got[y, x], out, exact)
     assert np.abs(exact - out).max() > 3, "the fallback equals the exact blend here: the test proves nothing"

@@ -13,6 +13,7 @@ from imgui_bundle import imgui, implot
 
 from rtta.ldi.lens import SHAPES as LENS_SHAPES
 from rtta.passes.composite import LENS_MODES, ROLES
+from rtta.passes.oit import ORDERS
 from rtta.scene.model import BOUNDS
 
 from .state import ATLAS_MAX_CHOICES, VIEW_MODES
@@ -114,10 +115,11 @@ def _style(app: PanelsHost) -> None:
     _, st.outline_color = _color("outline colour", st.outline_color)
     _, st.ao_radius = imgui.slider_float("AO radius (px)", st.ao_radius, 1.0, 16.0)
     _, st.ao_strength = imgui.slider_float("AO strength", st.ao_strength, 0.0, 2.0)
-    for label, attr in (("AO on", "ao_objects"), ("edges on", "edge_objects")):
-        changed, i = imgui.combo(label, ROLES.index(getattr(st, attr)), list(ROLES))
+    for label, attr, choices in (("AO on", "ao_objects", ROLES), ("edges on", "edge_objects", ROLES),
+                                 ("transparency order", "order", ORDERS)):
+        changed, i = imgui.combo(label, choices.index(getattr(st, attr)), list(choices))
         if changed:
-            setattr(st, attr, ROLES[i])
+            setattr(st, attr, choices[i])
 
 
 def _projector(app: PanelsHost) -> None:

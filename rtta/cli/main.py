@@ -74,6 +74,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--ao-strength", type=float, default=1.0, help="ambient occlusion strength (ghosted-ao)")
     p.add_argument("--ao-objects", choices=("focus", "all"), default=None,
                    help="ambient occlusion on the focus objects only or on all (ghosted-ao; default: see README)")
+    p.add_argument("--order", choices=("object", "pixel"), default=None,
+                   help="transparency order: by object (bounds centres) or per pixel (each object's surface "
+                        "depth; nested parts blend right); default: see README")
     p.add_argument("--edge-objects", choices=("focus", "all"), default=None,
                    help="edges on the focus objects only or on all (ghosted-ao; default: see README)")
     p.add_argument("--projector", default=None, metavar="IMAGE[,AZ,EL,DIST]",
@@ -220,6 +223,7 @@ def cmd_snapshot(args) -> int:
     style.edge_width, style.ao_radius, style.ao_strength = args.edge_width, args.ao_radius, args.ao_strength
     style.ao_objects = args.ao_objects or style.ao_objects
     style.edge_objects = args.edge_objects or style.edge_objects
+    style.order = args.order or style.order
     if args.context_opacity is not None:
         if not 0.0 <= args.context_opacity <= 1.0:
             raise RttaError(f"--context-opacity must be in [0, 1], got {args.context_opacity}")

@@ -153,8 +153,9 @@ class CompositePass:
     def _program(self, **defines) -> tuple[moderngl.Program, moderngl.VertexArray]:
         key = tuple(sorted(defines.items()))
         if key not in self._programs:
+            geom = {k: v for k, v in defines.items() if k in glsl.declared_defines("composite.geom")}
             prog = self.ctx.program(vertex_shader=glsl.load("composite.vert"),
-                                    geometry_shader=glsl.load("composite.geom"),
+                                    geometry_shader=glsl.load("composite.geom", **geom),
                                     fragment_shader=glsl.load("composite.frag", **defines))
             self._programs[key] = prog
             self._vaos[key] = self.ctx.vertex_array(prog, [])

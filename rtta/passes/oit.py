@@ -2,19 +2,17 @@
 surfaces, which the atlas holds for every object (nested and interpenetrating parts blend
 correctly, where the object order by bounding-box centre cannot).
 
-Chosen by measurement over depth peeling (BENCHMARKS.md): one pass over the sprite quads
-appends every covered (pixel, object) surface to a per-pixel linked list (an atomic counter
-and an atomic exchange of the pixel's head, shaders/oit.glsl), then one full-screen pass
-sorts each list and blends it (shaders/oit_resolve.frag). Peeling would draw every sprite
-quad once per layer. The node buffer holds the sum of the drawn objects' viewport
-rectangles, an upper bound on their surfaces, so no surface is dropped; a frame whose bound
-passes MAX_NODES is blended in object order instead (the caller is told). More than
-oit_resolve.frag's K surfaces at one pixel: the farthest are merged behind the K nearest
-(weighted blended, order-independent)."""
+One pass over the sprite quads writes every covered (pixel, object) surface into a per-pixel
+linked list (an atomic exchange of the pixel's head; a surface's node is fixed by its pixel's
+place in the object's B_viewport, so no counter is shared), then one full-screen pass walks
+each list front to back (shaders/oit_resolve.frag: the K = 8 nearest in exact order, the
+rest merged behind them, weighted blended). Chosen over depth peeling, which draws every
+sprite quad once per layer (BENCHMARKS.md). The nodes need 16 bytes per pixel of the drawn
+objects' viewport rectangles; a frame needing more than MAX_NODES blends in object order
+instead (the caller counts it).
+"""
 
 from __future__ import annotations
-
-import struct
 
 import moderngl
 import numpy as np
@@ -24,14 +22,18 @@ from ..gl import glsl
 
 MAX_NODES = 1 << 23            # 8 Mi surfaces, 128 MiB of nodes
 NODE_BYTES = 16
-HEADER_BYTES = 16
 ORDERS = ("object", "pixel")
 
 
-def node_bound(records: Records, ids: np.ndarray) -> int:
-    """Upper bound on the (pixel, object) surfaces of `ids`: their viewport rectangles' area."""
+def node_bases(records: Records, ids: np.ndarray) -> tuple[np.ndarray, int]:
+    """(first node per object id [n] uint32, nodes in all): one node per pixel of each drawn
+    object's B_viewport, objects one after the other."""
     r = records.viewport_rect[ids]
-    return int(((r[:, 2] - r[:, 0]) * (r[:, 3] - r[:, 1])).sum())
+    area = (r[:, 2] - r[:, 0]) * (r[:, 3] - r[:, 1])
+    base = np.zeros(len(records.visible), np.int64)
+    base[ids] = np.cumsum(area) - area
+    total = int(area.sum())
+    return np.minimum(base, 0xFFFFFFFF).astype(np.uint32), total
 
 
 class PixelOrderPass:
@@ -41,27 +43,31 @@ class PixelOrderPass:
     def __init__(self, ctx: moderngl.Context) -> None:
         self.ctx = ctx
         self.heads = ctx.buffer(reserve=4)
-        self.nodes = ctx.buffer(reserve=HEADER_BYTES + NODE_BYTES)
+        self.nodes = ctx.buffer(reserve=NODE_BYTES)
+        self.bases = ctx.buffer(reserve=4)
         self.program = ctx.program(vertex_shader=glsl.load("oit_resolve.vert"),
                                    fragment_shader=glsl.load("oit_resolve.frag"))
         self.vao = ctx.vertex_array(self.program, [])
         self._width = 1
 
     def begin(self, viewport: tuple[int, int], ids: np.ndarray, records: Records) -> bool:
-        capacity = max(node_bound(records, ids), 1)
+        bases, capacity = node_bases(records, ids)
         if capacity > MAX_NODES:
             return False
         w, h = int(viewport[0]), int(viewport[1])
         self._width = w
         if self.heads.size < 4 * w * h:
             self.heads.orphan(4 * w * h)
-        need = HEADER_BYTES + NODE_BYTES * capacity
+        need = NODE_BYTES * max(capacity, 1)
         if self.nodes.size < need or self.nodes.size > 4 * need:     # shrink when far too big
             self.nodes.orphan(need)
+        if self.bases.size < bases.nbytes:
+            self.bases.orphan(max(bases.nbytes, 2 * self.bases.size))
+        self.bases.write(bases.tobytes())
         self.heads.clear(size=4 * w * h, chunk=b"\xff\xff\xff\xff")
-        self.nodes.write(struct.pack("<4I", 0, capacity, 0, 0))
         self.heads.bind_to_storage_buffer(5)
         self.nodes.bind_to_storage_buffer(6)
+        self.bases.bind_to_storage_buffer(7)
         return True
 
     def resolve(self, fbo) -> None:
@@ -79,8 +85,8 @@ class PixelOrderPass:
 
     @property
     def nbytes(self) -> int:
-        return self.heads.size + self.nodes.size
+        return self.heads.size + self.nodes.size + self.bases.size
 
     def release(self) -> None:
-        for obj in (self.vao, self.program, self.heads, self.nodes):
+        for obj in (self.vao, self.program, self.heads, self.nodes, self.bases):
             obj.release()

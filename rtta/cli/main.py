@@ -102,6 +102,8 @@ def build_parser() -> argparse.ArgumentParser:
     b = bsub.add_parser("composite", help="per-mode frame time against STD, and re-composite time")
     b.add_argument("--size", default="1024x1024")
     b.add_argument("--quick", action="store_true")
+    b.add_argument("--scene", nargs="+", default=None, metavar="NAME",
+                   help="demo, table1-N, random-N or a file (default: the demo and the Table 1 rows)")
     b.add_argument("--json", default=None)
     b = bsub.add_parser("reliability", help="random extreme cameras against STD, and a soak (RELIABILITY.md)")
     b.add_argument("--sweep", type=int, default=10000, help="random cameras per scene")
@@ -329,7 +331,7 @@ def cmd_bench(args) -> int:
     if args.bench == "capture":
         return bench.run_capture(parse_size(args.size), quick=args.quick, json_path=args.json)
     if args.bench == "composite":
-        return bench.run_composite(parse_size(args.size), quick=args.quick, json_path=args.json)
+        return bench.run_composite(parse_size(args.size), quick=args.quick, json_path=args.json, scenes=args.scene)
     if args.bench == "reliability":
         from ..tools.bench_reliability import run_reliability
 

@@ -44,7 +44,8 @@ class Style:
     edge_width: int = 1
     ao_radius: float = 6.0
     ao_strength: float = 1.0
-    ao_objects: str = "all"            # ghosted-ao: AO on 'focus' objects only (the paper) or on 'all'
+    # defaults from `rtta bench composite` on the demo at 1024² (README, BENCHMARKS.md)
+    ao_objects: str = "focus"          # ghosted-ao: AO on 'focus' objects only (the paper) or on 'all'
     edge_objects: str = "all"          # ghosted-ao: edges on 'focus' objects only or on 'all'
     order: str = "object"              # transparency: 'object' (bounds centres) or 'pixel' (surfaces)
 

@@ -4,7 +4,7 @@ and save in time (issue 24). Per scene: `ghosted` at context scales 1, 0.5, 0.25
 and in pixel order. Error is against the full-quality output of the same mode (scale 1, AO
 and edges on every object; for `transparent` the exact per-pixel order): the share of pixels
 off by more than 8/255 and the mean absolute error; time is a whole frame (capture, post,
-composite), median after glFinish, with STD from the same run for the ratio."""
+composite) after glFinish, STD and every setting taking turns within each round."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ import numpy as np
 
 from ..passes.composite import Style
 from ..renderer.renderer import Renderer, Settings
-from .bench import _gl_timed, _median_ms
+from .bench import _gl_timed, _interleaved_ms
 
 SCALES = (1.0, 0.5, 0.25)
 TOLERANCE = 8            # /255: a pixel is off beyond it
@@ -48,33 +48,43 @@ def steps(scenes: int, quick: bool) -> int:
     return scenes * len(_configs(quick))
 
 
+def _frame(r: Renderer, cam, viewport, mode: str, style: Style):
+    def frame():
+        r.capture(cam, viewport, focus=style.focus)
+        return r.composite(mode, style)
+    return frame
+
+
 def importance_rows(ctx, scenes, viewport, quick: bool, tick) -> list[dict]:
+    """One row per scene and setting; STD and the settings take turns within each round
+    (bench._interleaved_ms), and the ratio to STD is the median over rounds of the ratio
+    within a round, so a slow phase of a shared machine cancels."""
     from .report_runs import _orbit
 
-    frames = 2 if quick else 5
+    frames = 3 if quick else 7
     rows = []
     for name, scene in scenes:
         cam = _orbit(scene)
         focus = {0, scene.count // 2}
-        std = Renderer(ctx, scene)
-        std_ms = _median_ms(_gl_timed(ctx, lambda r=std, cam=cam: r.std(cam, viewport)), frames)
-        std.release()
-        refs = {}
-        for c in _configs(quick):
-            r = Renderer(ctx, scene, Settings(context_scale=c["scale"]))
-            style = _style(c, focus)
-
-            def frame(r=r, cam=cam, c=c, style=style):
-                r.capture(cam, viewport, focus=style.focus)
-                return r.composite(c["mode"], style)
-
-            img = frame().read()[0][..., :3].astype(np.int64)
-            refs.setdefault(c["mode"], img)      # the first config of a mode is its reference
-            ms = _median_ms(_gl_timed(ctx, frame), frames)
-            r.release()
-            diff = np.abs(img - refs[c["mode"]])
-            rows.append({"scene": name, **c, "frame_ms": ms, "std_ms": std_ms,
+        configs = _configs(quick)
+        renderers = [Renderer(ctx, scene, Settings(context_scale=c["scale"])) for c in configs]
+        frames_of = {k: _frame(r, cam, viewport, c["mode"], _style(c, focus))
+                     for k, (c, r) in enumerate(zip(configs, renderers, strict=True))}
+        refs, images = {}, {}
+        for k, c in enumerate(configs):
+            images[k] = frames_of[k]().read()[0][..., :3].astype(np.int64)
+            refs.setdefault(c["mode"], images[k])       # the first setting of a mode is its reference
+        fns = {"std": _gl_timed(ctx, lambda r=renderers[0], cam=cam: r.std(cam, viewport))}
+        fns.update({k: _gl_timed(ctx, f) for k, f in frames_of.items()})
+        times = _interleaved_ms(fns, frames)
+        std = np.array(times["std"])
+        for k, c in enumerate(configs):
+            diff = np.abs(images[k] - refs[c["mode"]])
+            rows.append({"scene": name, **c, "frame_ms": float(np.median(times[k])), "std_ms": float(np.median(std)),
+                         "ratio": float(np.median(np.array(times[k]) / std)),
                          "over": float((diff.max(-1) > TOLERANCE).mean()), "mae": float(diff.mean() / 255.0),
                          "default": _is_default(c)})
             tick()
+        for r in renderers:
+            r.release()
     return rows

@@ -162,7 +162,7 @@ def importance_plot(rows: list[dict], header: dict, path: Path) -> Path:
     for ax, scene in zip(np.atleast_1d(axes).flat, scenes, strict=False):
         for r in (r for r in rows if r["scene"] == scene):
             face = colors.get(r["scale"], "k") if r["ao"] != "focus" and r["order"] != "pixel" else "white"
-            ax.scatter(r["frame_ms"] / r["std_ms"], 100 * r["over"] + 1e-3, marker=marks[r["mode"]], s=60 if
+            ax.scatter(r["ratio"], 100 * r["over"] + 1e-3, marker=marks[r["mode"]], s=60 if
                        r["default"] else 30, facecolors=face, edgecolors=colors.get(r["scale"], "k"),
                        linewidths=2.0 if r["default"] else 0.8)
         ax.axhline(100 * BUDGET, color="gray", ls=":", lw=0.8)

@@ -1,9 +1,11 @@
 #version 430
-// defines: MODE_SPRITE MODE_BLEND MODE_OUTLINE MODE_COLLECT WITH_AO PROJECTOR LENS UPSAMPLE
+// defines: MODE_SPRITE MODE_BLEND MODE_OUTLINE MODE_COLLECT MODE_HALO WITH_AO PROJECTOR LENS UPSAMPLE
 // Per-object compositing from the atlas:
 //   MODE_SPRITE  depth sprite: atlas colour, gl_FragDepth = atlas depth (focus objects, `sprites`)
 //   MODE_BLEND   premultiplied blend with the object's opacity (`transparent`, ghosted context)
 //   MODE_OUTLINE the object's silhouette from its own unoccluded coverage (ghosted focus)
+//   MODE_HALO    around a focus object, where context lies behind it: a halo that fades over
+//                u_halo_width pixels from its silhouette (depth from its own atlas image)
 //   MODE_COLLECT as MODE_BLEND, but appended to the pixel's list (oit.glsl) for a per-pixel
 //                sorted blend (`--order pixel`); writes no colour
 //   WITH_AO      shade with the atlas post-process (ambient occlusion, edges) of `ghosted-ao`
@@ -34,6 +36,9 @@ uniform int u_lens_object;      // a scene object used as the lens is not cut (-
 uniform float u_desaturate;     // context desaturation in [0, 1] (MODE_BLEND)
 uniform vec4 u_edge_color;
 uniform int u_outline_width;    // pixels (MODE_OUTLINE)
+uniform int u_halo_width;       // pixels (MODE_HALO)
+uniform vec4 u_halo_color;      // (rgb, strength)
+layout(binding = 5) uniform sampler2D u_context_depth;   // farthest context depth per pixel, 0: none (MODE_HALO)
 
 flat in int g_object;
 flat in vec4 g_map;
@@ -133,6 +138,26 @@ void main() {
             if (!covered(t + ivec3(dx, dy, 0))) { near_other = true; break; }
     if (!near_other) discard;
     out_color = vec4(u_edge_color.rgb, 1.0);
+#elif defined(MODE_HALO)
+    // the nearest own texel within the width (squared distance), and its depth
+    ivec3 t = atlas_texel(g_map, g_scale, g_layer, gl_FragCoord.xy);
+    if (covered(t)) discard;
+    int w = u_halo_width, best = w * w + 1;
+    float near_depth = 1.0;
+    for (int dy = -w; dy <= w; ++dy)
+        for (int dx = -w; dx <= w; ++dx) {
+            ivec3 s = t + ivec3(dx, dy, 0);
+            int r2 = dx * dx + dy * dy;
+            if (r2 < best && !outside(s.xy)) {
+                float d = texelFetch(u_depth, s, 0).r;
+                if (d < 1.0) { best = r2; near_depth = d; }
+            }
+        }
+    float context = texelFetch(u_context_depth, ivec2(gl_FragCoord.xy), 0).r;
+    if (best > w * w || context <= near_depth) discard;   // none near, or no context behind
+    float a = u_halo_color.a * (1.0 - sqrt(float(best)) / float(w + 1));
+    gl_FragDepth = near_depth;     // tested against the focus sprites: a nearer focus object stays clear
+    out_color = vec4(u_halo_color.rgb * a, a);
 #else
     Sample o;
     if (!sampled(gl_FragCoord.xy, o)) discard;

@@ -1,5 +1,5 @@
 #version 430
-// defines: MODE_COLLECT
+// defines: MODE_COLLECT MODE_HALO
 // Point-sprite expansion: a screen-aligned quad over the object's B_viewport (its atlas
 // bounds mapped back through T^-1). What the fragments need of the record and the style
 // goes as flat values: no fragment reads the buffers (per-fragment loads cost on llvmpipe).
@@ -22,10 +22,18 @@ flat out uint g_node_base; // the object's first node: one per pixel of its B_vi
 flat out int g_vp_width;   // B_viewport's width in pixels
 #endif
 
+#ifdef MODE_HALO
+uniform int u_halo_width;  // the quad reaches this far beyond B_viewport (pixels)
+#endif
+
 void main() {
     Record r = records[v_object[0]];
     if (r.info.y == 0) return;
+#ifdef MODE_HALO
+    vec4 ndc = (r.viewport + vec4(-u_halo_width, -u_halo_width, u_halo_width, u_halo_width)) / u_viewport.xyxy * 2.0 - 1.0;
+#else
     vec4 ndc = r.viewport / u_viewport.xyxy * 2.0 - 1.0;
+#endif
     vec2 corners[4] = vec2[](ndc.xy, ndc.zy, ndc.xw, ndc.zw);
     for (int i = 0; i < 4; ++i) {
         g_object = v_object[0];

@@ -200,3 +200,48 @@ def test_cli_importance_flags(tmp_path, capsys):
     assert main(["snapshot", "--context-scale", "0.1", "--out", str(tmp_path / "x.png")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--context-scale" in err[0] and not (tmp_path / "x.png").exists()
+
+
+def test_halo_where_context_lies_behind(make_renderer):
+    """--halo W in numpy: a pixel outside the focus object's silhouette gets the halo exactly
+    where a focus pixel lies within W (Euclidean) and the farthest context surface at the
+    pixel lies behind that focus pixel's depth; over the background nothing changes."""
+    from rtta.gl.readback import map_back
+
+    plate = trimesh.creation.box(extents=(2.0, 1.2, 0.1))
+    cube = trimesh.creation.box(extents=(0.5, 0.5, 0.5))
+    parts = [("plate", np.asarray(plate.vertices) + (0.6, 0, -1.0), np.asarray(plate.faces), None),
+             ("cube", np.asarray(cube.vertices), np.asarray(cube.faces), None)]
+    scene = from_meshes(parts, [(0.7, 0.7, 0.7, 1), (0.2, 0.4, 0.8, 1)])
+    r = make_renderer(scene)
+    cam = Camera.orbit(scene.center, scene.radius, 0, 0, 2.2)
+    rec = r.capture(cam, VP)
+    width = 5
+    plain = r.composite("ghosted", Style(focus={1}, outline_width=0)).read()[0][..., :3].astype(int)
+    halo = r.composite("ghosted", Style(focus={1}, outline_width=0, halo=width)).read()[0][..., :3].astype(int)
+    tw, th, td = rec.atlas_size
+    atlas = r.atlas.read((tw, th), td)
+    atlas = {"depth": atlas["depth"]}
+    focus_d = map_back(atlas, rec, 1)["depth"]
+    plate_d = map_back(atlas, rec, 0)["depth"]
+    context_far = np.where(plate_d < 1, plate_d, 0.0)
+    h, w = focus_d.shape
+    best = np.full((h, w), np.inf)
+    near = np.ones((h, w))
+    for dy in range(-width, width + 1):
+        for dx in range(-width, width + 1):
+            r2 = dx * dx + dy * dy
+            shifted = np.ones((h, w))
+            ys, xs = slice(max(dy, 0), h + min(dy, 0)), slice(max(dx, 0), w + min(dx, 0))
+            yd, xd = slice(max(-dy, 0), h + min(-dy, 0)), slice(max(-dx, 0), w + min(-dx, 0))
+            shifted[yd, xd] = focus_d[ys, xs]
+            take = (shifted < 1) & (r2 < best)
+            best[take], near[take] = r2, shifted[take]
+    expect = (focus_d >= 1) & (best <= width * width) & (context_far > near)
+    strong = expect & (np.sqrt(best) <= 0.6 * width)
+    changed = np.abs(halo - plain).max(-1) > 2
+    assert strong.sum() > 200 and (focus_d < 1).sum() > 500
+    assert not (changed & ~expect).any(), f"{int((changed & ~expect).sum())} halo pixels where none belongs"
+    assert changed[strong].all(), f"{int((strong & ~changed).sum())} pixels lack the halo"
+    background = (focus_d >= 1) & (plate_d >= 1) & (best <= width * width)
+    assert background.sum() > 50 and not changed[background].any()

@@ -115,6 +115,7 @@ def _style(app: PanelsHost) -> None:
     _, st.outline_color = _color("outline colour", st.outline_color)
     _, st.ao_radius = imgui.slider_float("AO radius (px)", st.ao_radius, 1.0, 16.0)
     _, st.ao_strength = imgui.slider_float("AO strength", st.ao_strength, 0.0, 2.0)
+    _, st.halo = imgui.slider_int("halo (px)", st.halo, 0, 16)
     for label, attr, choices in (("AO on", "ao_objects", ROLES), ("edges on", "edge_objects", ROLES),
                                  ("transparency order", "order", ORDERS)):
         changed, i = imgui.combo(label, choices.index(getattr(st, attr)), list(choices))

@@ -74,6 +74,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--ao-strength", type=float, default=1.0, help="ambient occlusion strength (ghosted-ao)")
     p.add_argument("--ao-objects", choices=("focus", "all"), default=None,
                    help="ambient occlusion on the focus objects only or on all (ghosted-ao; default: see README)")
+    p.add_argument("--halo", type=int, default=0, metavar="WIDTH",
+                   help="ghosted modes: a dark halo WIDTH pixels wide around focus objects where context lies behind")
     p.add_argument("--order", choices=("object", "pixel"), default=None,
                    help="transparency order: by object (bounds centres) or per pixel (each object's surface "
                         "depth; nested parts blend right); default: see README")
@@ -226,6 +228,9 @@ def cmd_snapshot(args) -> int:
     style.ao_objects = args.ao_objects or style.ao_objects
     style.edge_objects = args.edge_objects or style.edge_objects
     style.order = args.order or style.order
+    if not 0 <= args.halo <= 32:
+        raise RttaError(f"--halo must be 0..32 pixels, got {args.halo}")
+    style.halo = args.halo
     if args.context_opacity is not None:
         if not 0.0 <= args.context_opacity <= 1.0:
             raise RttaError(f"--context-opacity must be in [0, 1], got {args.context_opacity}")

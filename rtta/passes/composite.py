@@ -48,6 +48,8 @@ class Style:
     ao_objects: str = "focus"          # ghosted-ao: AO on 'focus' objects only (the paper) or on 'all'
     edge_objects: str = "all"          # ghosted-ao: edges on 'focus' objects only or on 'all'
     order: str = "object"              # transparency: 'object' (bounds centres) or 'pixel' (surfaces)
+    halo: int = 0                      # ghosted modes: halo width (pixels) around focus objects, 0: none
+    halo_color: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.6)   # (rgb, strength)
 
     def shaded(self, n: int) -> tuple[np.ndarray, np.ndarray]:
         """(uses AO, uses edges) per object [n] bool, in ghosted-ao."""
@@ -148,6 +150,7 @@ class CompositePass:
         self.order = ctx.buffer(reserve=16)
         self.passes: list[str] = []        # the draws of the last render, for inspection
         self._pixel_order = None           # PixelOrderPass, made on first use
+        self._context_depth = self._context_fbo = None    # front-most context depth, for halos
         self.fallbacks = 0                 # frames that asked for pixel order and got object order
         self._projection = self._lens = self._inv_view_proj = None
 
@@ -218,7 +221,35 @@ class CompositePass:
             self._upload(self.styles, params.tobytes())
             self._draw(back_to_front(records, view_depth, context), style, records, blend=True,
                        desaturate=style.desaturate, depth_test=True, ao=with_ao, cut=True)
+            if style.halo > 0 and len(focus):
+                self._halo(focus, context, style, records, target)
             self._draw(focus, style, records, outline=True)
+
+    def _halo(self, focus, context, style: Style, records: Records, target: CompositeTarget) -> None:
+        """Halos around the focus objects where context lies behind them: the farthest
+        context depth per pixel first (a depth-only sprite pass; focus objects are often
+        inside the context, so the front-most context surface is in front of them), then one
+        quad per focus object reaching `style.halo` pixels beyond its B_viewport."""
+        if not 1 <= int(style.halo) <= 32:
+            raise ValueError(f"halo width must be 0..32 pixels, got {style.halo}")
+        if self._context_depth is None or self._context_depth.size != target.size:
+            self._release_context_depth()
+            self._context_depth = self.ctx.depth_texture(target.size)
+            self._context_depth.compare_func = ""
+            self._context_fbo = self.ctx.framebuffer(depth_attachment=self._context_depth)
+        self._context_fbo.viewport = (0, 0, *target.viewport)
+        self._context_fbo.use()
+        self._context_fbo.clear(depth=0.0)
+        self._draw(context, style, records, sprite=True, cut=True, farthest=True)
+        target.fbo.use()
+        self._context_depth.use(5)
+        self._draw(focus, style, records, halo=True, depth_test=True)
+
+    def _release_context_depth(self) -> None:
+        if self._context_depth is not None:
+            release_framebuffer(self.ctx, self._context_fbo)
+            self._context_depth.release()
+        self._context_depth = self._context_fbo = None
 
     def _blend(self, ids, style: Style, records: Records, target: CompositeTarget, **how) -> None:
         """Blend `ids` (back to front) over the target: object by object, or per pixel in the
@@ -246,19 +277,21 @@ class CompositePass:
         if len(ids) == 0:
             return
         low = records.scale[ids] < UPSAMPLE_BELOW
-        if how.get("outline") or not low.any():
+        if how.get("outline") or how.get("halo") or not low.any():
             return self._draw_run(ids, style, records, **how)
         cuts = np.flatnonzero(np.diff(low.astype(np.int8))) + 1
         for run in np.split(ids, cuts):
             self._draw_run(run, style, records, upsample=bool(records.scale[run[0]] < UPSAMPLE_BELOW), **how)
 
     def _draw_run(self, ids, style: Style, records: Records, *, sprite=False, blend=False, outline=False,
-                  desaturate=0.0, depth_test=False, ao=False, cut=False, upsample=False, collect=False) -> None:
+                  desaturate=0.0, depth_test=False, ao=False, cut=False, upsample=False, collect=False,
+                  halo=False, farthest=False) -> None:
         self._upload(self.order, ids.astype(np.int32).tobytes())
         self.order.bind_to_storage_buffer(3)
-        projection = None if outline else self._projection
+        projection = None if outline or halo else self._projection
         lens = self._lens if cut else None
         mode = {"MODE_SPRITE": sprite, "MODE_BLEND": blend, "MODE_OUTLINE": outline, "MODE_COLLECT": collect,
+                "MODE_HALO": halo,
                 "WITH_AO": ao and not outline,
                 "PROJECTOR": projection is not None, "LENS": lens is not None, "UPSAMPLE": upsample}
         on = [k for k, v in mode.items() if v]
@@ -275,26 +308,31 @@ class CompositePass:
             lens_pass.bind(prog, lens_, origin)
         edge_color = style.outline_color if outline else style.edge_color
         for name, value in (("u_desaturate", desaturate), ("u_edge_color", edge_color),
-                            ("u_outline_width", style.outline_width)):
+                            ("u_outline_width", style.outline_width), ("u_halo_width", int(style.halo)),
+                            ("u_halo_color", tuple(style.halo_color))):
             if name in prog:       # the compiler drops what a variant does not use
                 prog[name].value = value
         flags = moderngl.NOTHING
         if sprite or depth_test:
             flags |= moderngl.DEPTH_TEST
-        if blend:
+        if blend or halo:
             flags |= moderngl.BLEND
         self.ctx.enable_only(flags)
-        self.ctx.depth_func = "<"
+        self.ctx.depth_func = ">" if farthest else "<"
         self.ctx.blend_func = moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA
         fbo = self.ctx.fbo
         fbo.depth_mask = bool(sprite)
-        fbo.color_mask = (not collect,) * 4
+        if collect:
+            fbo.color_mask = (False,) * 4
         fbo.use()
         vao.render(moderngl.POINTS, vertices=len(ids))
         fbo.depth_mask = True
-        fbo.color_mask = (True,) * 4
+        self.ctx.depth_func = "<"
+        if collect:
+            fbo.color_mask = (True,) * 4
 
     def release(self) -> None:
+        self._release_context_depth()
         if self._pixel_order is not None:
             self._pixel_order.release()
         for obj in [*self._vaos.values(), *self._programs.values(), self.styles, self.order]:

@@ -170,6 +170,7 @@ def importance_plot(rows: list[dict], header: dict, path: Path) -> Path:
         ax.set_xlabel("frame time / STD")
         ax.set_ylabel(f"pixels off by > {TOLERANCE}/255 (%)")
         ax.set_yscale("symlog", linthresh=0.01)
+        ax.set_ylim(bottom=0)
         ax.grid(alpha=0.3)
     handles = [plt.Line2D([], [], ls="", marker=m, color="gray", label=k) for k, m in marks.items()]
     handles += [plt.Line2D([], [], ls="", marker="o", color=c, label=f"context scale {s:g}") for s, c in colors.items()]

@@ -106,7 +106,8 @@ class ViewerState:
         s = self.style
         return (self.mode, tuple(sorted(s.focus)), tuple(sorted(s.opacity.items())), s.default_opacity,
                 s.context_opacity, s.desaturate, tuple(s.edge_color), tuple(s.outline_color),
-                s.outline_width, s.edge_width, s.ao_radius, s.ao_strength, s.ao_objects, s.edge_objects, s.order, s.halo)
+                s.outline_width, s.edge_width, s.ao_radius, s.ao_strength, s.ao_objects, s.edge_objects,
+                s.order, s.halo)
 
     def capture_key(self) -> tuple:
         """Changes whenever the atlas must be captured again (besides camera and viewport)."""

@@ -5,7 +5,11 @@ Modes: `sprites` (depth sprites, reconstruct STD), `transparent` (every object b
 with its opacity, back to front); in both, highlighted (focus) objects get their silhouette
 drawn over everything. `ghosted` (focus opaque and visible through the faded,
 desaturated context, with silhouettes), `ghosted-ao` (ghosted, shaded with ambient
-occlusion and edges computed on each object's own atlas images).
+occlusion and edges computed on each object's own atlas images; by default AO on the focus
+objects only, Style.ao_objects / edge_objects). Regions captured below one texel per pixel
+(context objects at Settings.context_scale) are upsampled depth-aware (UPSAMPLE variant);
+`transparent` blends per pixel in surface order with Style.order 'pixel' (oit.py); Style.halo
+draws halos around focus objects where context lies behind them.
 """
 
 from __future__ import annotations

@@ -44,9 +44,13 @@ def test_composite_bench_quick(gl, tmp_path, capsys):
     assert data["renderer"] == gl.info["GL_RENDERER"]
     assert [s["name"] for s in data["scenes"]] == ["demo", "table1-5", "table1-21"]
     for s in data["scenes"]:
-        assert set(s["modes"]) == {"sprites", "transparent", "ghosted", "ghosted-ao"}
+        assert set(s["modes"]) == {"sprites", "transparent", "ghosted", "ghosted-ao", "ghosted-ao full",
+                                   "transparent pixel"}
         assert all(v > 0 for v in s["modes"].values()) and s["std_ms"] > 0 and s["recomposite_ms"] > 0
+        assert s["pixel_over_object"] > 0 and 0 <= s["ao_error"]["over_8"] <= 1
     assert "recomposite" in capsys.readouterr().out
+    assert bench.run_composite((160, 120), quick=True, ctx=gl, scenes=["random-30"]) == 0
+    assert "random-30" in capsys.readouterr().out
 
 
 def test_ldi_bench_quick(gl, tmp_path, capsys):

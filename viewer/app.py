@@ -153,10 +153,11 @@ class Viewer:
 
     def _capture(self, camera) -> None:
         vp = self.viewport
-        key = (tuple(camera.eye), tuple(camera.target), vp, self.state.capture_key())
+        focus = self.renderer.scaled_for(self.state.style.focus)     # empty unless a context scale
+        key = (tuple(camera.eye), tuple(camera.target), vp, self.state.capture_key(), focus)
         if key != self._capture_key:
             self.renderer.hidden = self.state.hidden
-            self.records = self.renderer.capture(camera, vp)
+            self.records = self.renderer.capture(camera, vp, focus=focus)
             self._capture_key, self._composite_key = key, None
 
     def _draw_composite(self) -> None:

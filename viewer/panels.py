@@ -12,7 +12,8 @@ import numpy as np
 from imgui_bundle import imgui, implot
 
 from rtta.ldi.lens import SHAPES as LENS_SHAPES
-from rtta.passes.composite import LENS_MODES
+from rtta.passes.composite import LENS_MODES, ROLES
+from rtta.passes.oit import ORDERS
 from rtta.scene.model import BOUNDS
 
 from . import tree
@@ -90,6 +91,12 @@ def _style(app: PanelsHost) -> None:
     _, st.outline_color = _color("outline colour", st.outline_color)
     _, st.ao_radius = imgui.slider_float("AO radius (px)", st.ao_radius, 1.0, 16.0)
     _, st.ao_strength = imgui.slider_float("AO strength", st.ao_strength, 0.0, 2.0)
+    _, st.halo = imgui.slider_int("halo (px)", st.halo, 0, 16)
+    for label, attr, choices in (("AO on", "ao_objects", ROLES), ("edges on", "edge_objects", ROLES),
+                                 ("transparency order", "order", ORDERS)):
+        changed, i = imgui.combo(label, choices.index(getattr(st, attr)), list(choices))
+        if changed:
+            setattr(st, attr, choices[i])
 
 
 def _projector(app: PanelsHost) -> None:
@@ -137,6 +144,7 @@ def _atlas(app: PanelsHost) -> None:
     if changed:
         s.set_atlas_max(ATLAS_MAX_CHOICES[i])
     _, s.settings.region_scale = imgui.slider_float("region scale", s.settings.region_scale, 0.25, 2.0, "%.2f")
+    _, s.settings.context_scale = imgui.slider_float("context scale", s.settings.context_scale, 0.25, 1.0, "%.2f")
     changed, i = imgui.combo("bounds", BOUNDS.index(s.settings.bounds), list(BOUNDS))
     if changed:
         s.settings.bounds = BOUNDS[i]

@@ -144,9 +144,11 @@ class ViewerState:
         s = self.style
         return (self.mode, tuple(sorted(s.focus)), tuple(sorted(s.opacity.items())), s.default_opacity,
                 s.context_opacity, s.desaturate, tuple(s.edge_color), tuple(s.outline_color),
-                s.outline_width, s.edge_width, s.ao_radius, s.ao_strength)
+                s.outline_width, s.edge_width, s.ao_radius, s.ao_strength, s.ao_objects, s.edge_objects,
+                s.order, s.halo)
 
     def capture_key(self) -> tuple:
         """Changes whenever the atlas must be captured again (besides camera and viewport)."""
         s = self.settings
-        return (s.border, s.atlas_max, s.max_layers, s.capture_path, s.region_scale, s.bounds, self.hidden_rev)
+        return (s.border, s.atlas_max, s.max_layers, s.capture_path, s.region_scale, s.context_scale, s.bounds,
+                self.hidden_rev)

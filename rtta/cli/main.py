@@ -44,6 +44,9 @@ def _view_args(p: argparse.ArgumentParser) -> None:
                    help="atlas texels per viewport pixel (0.25 to 4; default 1)")
     p.add_argument("--bounds", choices=("aabb", "obb"), default="aabb",
                    help="object bounds projected per frame: the paper's AABB or the tighter oriented box")
+    p.add_argument("--context-scale", type=float, default=None,
+                   help="region scale of objects outside the focus, as a fraction of --region-scale "
+                        "(0.25 to 1; default: the library's, see README); upsampled depth-aware when composited")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -64,6 +67,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--edge-width", type=int, default=1, help="edge detection distance in pixels (ghosted-ao)")
     p.add_argument("--ao-radius", type=float, default=6.0, help="ambient occlusion radius in pixels (ghosted-ao)")
     p.add_argument("--ao-strength", type=float, default=1.0, help="ambient occlusion strength (ghosted-ao)")
+    p.add_argument("--ao-objects", choices=("focus", "all"), default=None,
+                   help="ambient occlusion on the focus objects only or on all (ghosted-ao; default: see README)")
+    p.add_argument("--halo", type=int, default=0, metavar="WIDTH",
+                   help="ghosted modes: a dark halo WIDTH pixels wide around focus objects where context lies behind")
+    p.add_argument("--order", choices=("object", "pixel"), default=None,
+                   help="transparency order: by object (bounds centres) or per pixel (each object's surface "
+                        "depth; nested parts blend right); default: see README")
+    p.add_argument("--edge-objects", choices=("focus", "all"), default=None,
+                   help="edges on the focus objects only or on all (ghosted-ao; default: see README)")
     p.add_argument("--projector", default=None, metavar="IMAGE[,AZ,EL,DIST]",
                    help="paint the scene with IMAGE ('default': the shipped grid) from an orbit position "
                         "(as --camera); without one the projector sits at the camera")
@@ -90,6 +102,8 @@ def build_parser() -> argparse.ArgumentParser:
     b = bsub.add_parser("composite", help="per-mode frame time against STD, and re-composite time")
     b.add_argument("--size", default="1024x1024")
     b.add_argument("--quick", action="store_true")
+    b.add_argument("--scene", nargs="+", default=None, metavar="NAME",
+                   help="demo, table1-N, random-N or a file (default: the demo and the Table 1 rows)")
     b.add_argument("--json", default=None)
     b = bsub.add_parser("reliability", help="random extreme cameras against STD, and a soak (RELIABILITY.md)")
     b.add_argument("--sweep", type=int, default=10000, help="random cameras per scene")
@@ -149,7 +163,7 @@ def _settings(args):
     from ..renderer.api import make_settings
 
     return make_settings(args.border, args.atlas_max, args.max_layers, args.capture_path, args.region_scale,
-                         args.bounds)
+                         args.bounds, getattr(args, "context_scale", None))
 
 
 def _renderer(ctx, scene, settings):
@@ -197,7 +211,8 @@ def cmd_snapshot(args) -> int:
     camera = orbit_camera(scene, args.camera or None, args.fov)
     style = make_style(resolve_names(scene, args.focus, "--focus"), parse_opacities(scene, args.opacity),
                        context_opacity=args.context_opacity, edge_width=args.edge_width,
-                       ao_radius=args.ao_radius, ao_strength=args.ao_strength)
+                       ao_radius=args.ao_radius, ao_strength=args.ao_strength, ao_objects=args.ao_objects,
+                       edge_objects=args.edge_objects, order=args.order, halo=args.halo)
     if args.out:
         out = Path(args.out)
         if out.suffix.lower() != ".png":
@@ -255,7 +270,7 @@ def cmd_bench(args) -> int:
     if args.bench == "capture":
         return bench.run_capture(parse_size(args.size), quick=args.quick, json_path=args.json)
     if args.bench == "composite":
-        return bench.run_composite(parse_size(args.size), quick=args.quick, json_path=args.json)
+        return bench.run_composite(parse_size(args.size), quick=args.quick, json_path=args.json, scenes=args.scene)
     if args.bench == "reliability":
         from ..tools.bench_reliability import run_reliability
 

@@ -1,4 +1,4 @@
-"""The `rtta` command: export, snapshot, info, bench. Expected failures print one line and exit 2."""
+"""The `rtta` command: export, snapshot, info, ldi, dataset, bench. Expected failures print one line and exit 2."""
 
 from __future__ import annotations
 
@@ -122,9 +122,11 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--markdown", default=None, help="markdown file whose report block is replaced "
                                                     "(default: BENCHMARKS.md)")
     b.add_argument("--plots", default=None, help="folder for the PNG plots (default: docs/bench)")
+    from .dataset import add_parsers as add_dataset
     from .ldi import add_parser as add_ldi
 
     add_ldi(sub)
+    add_dataset(sub, bsub, (add_load_options, load_options, parse_size))
     return parser
 
 
@@ -333,6 +335,10 @@ def cmd_bench(args) -> int:
         if args.objects < 1 or args.max_vertices < 3:
             raise RttaError("--objects must be at least 1 and --max-vertices at least 3")
         return run_material(args.objects, quick=args.quick, json_path=args.json, max_vertices=args.max_vertices)
+    if args.bench == "dataset":
+        from .dataset import cmd_bench_dataset
+
+        return cmd_bench_dataset(args)
     if args.bench == "report":
         from ..tools.report import run_report
 
@@ -345,10 +351,11 @@ def main(argv: list[str] | None = None) -> int:
 
     args = build_parser().parse_args(argv)
     steady_heap()
+    from .dataset import cmd_dataset
     from .ldi import cmd_ldi
 
     handler = {"export": cmd_export, "snapshot": cmd_snapshot, "info": cmd_info, "bench": cmd_bench,
-               "ldi": cmd_ldi}[args.command]
+               "ldi": cmd_ldi, "dataset": cmd_dataset}[args.command]
     try:
         return handler(args)
     except RttaError as exc:

@@ -177,10 +177,15 @@ def merge(inputs: list[Path], out: Path) -> dict:
             images[key] = image
             key_of[image["id"]] = key
         for a in doc["annotations"]:
-            a = dict(a, category=category[a["category_id"]])
+            name = category[a["category_id"]]
+            a = {k: v for k, v in a.items() if k not in ("id", "category_id")} | {"category": name}
             if "appearance" in a:
                 a["appearance"] = _rebased(a["appearance"], path.resolve().parent, base, ("file",))
-            annotations[(key_of[a["image_id"]], a["object_id"])] = a
+            key = (key_of[a["image_id"]], a["object_id"])
+            if key in annotations and {**annotations[key], "image_id": 0} != {**a, "image_id": 0}:
+                raise RttaError(f"object {key[1]} of image {key[0]} appears in several inputs with different "
+                                "content", path)
+            annotations[key] = a
     ids = [im["id"] for im in images.values()]
     if len(set(ids)) != len(ids):
         renumber = {key: k + 1 for k, key in enumerate(images)}

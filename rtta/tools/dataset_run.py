@@ -23,8 +23,9 @@ from .dataset_view import MAX_PNG_ID, annotate, camera_entry, depth_scale, rende
 class Worker:
     """Renders views, one scene loaded at a time (the last one is kept for the next chunk)."""
 
-    def __init__(self, s: dict, out: Path) -> None:
+    def __init__(self, s: dict, out: Path, scenes: dict | None = None) -> None:
         self.s, self.out = s, Path(out)
+        self.given = scenes or {}             # in-memory scenes by their SCENE argument (library, tests)
         self.index: int | None = None
         self.renderer = None
         self.meta: list[dict] = []
@@ -41,7 +42,8 @@ class Worker:
 
         self.close()
         sc = self.s["scenes"][index]
-        scene = load_scene(sc["file"], smooth_angle=self.s["smooth_angle"], smooth=self.s["smooth"])
+        scene = self.given.get(sc["file"]) or load_scene(sc["file"], smooth_angle=self.s["smooth_angle"],
+                                                         smooth=self.s["smooth"])
         for note in scene.warnings:
             print(f"rtta: warning: {scene.source}: {note}", file=sys.stderr)
         self.meta = object_meta(scene, self.s["category_by"])
@@ -198,8 +200,9 @@ def _task(chunk):
         _worker.writer.wait()           # the chunk's views are on disk before it is reported
 
 
-def execute(s: dict, how: Run, todo: list[tuple[int, int]]) -> set[int]:
-    """Render the views in `todo`; returns the scenes that could not be read."""
+def execute(s: dict, how: Run, todo: list[tuple[int, int]], scenes: dict | None = None) -> set[int]:
+    """Render the views in `todo`; returns the scenes that could not be read. `scenes`:
+    in-memory scenes by SCENE argument (this process only, so not with workers > 1)."""
     failed: set[int] = set()
     if not todo:
         return failed
@@ -207,7 +210,7 @@ def execute(s: dict, how: Run, todo: list[tuple[int, int]]) -> set[int]:
     workers = max(1, min(how.workers, len(todo)))
     try:
         if workers == 1:
-            worker = Worker(s, how.out)
+            worker = Worker(s, how.out, scenes)
             try:
                 for chunk in chunks(todo, 1):
                     if chunk[0][0] in failed:
@@ -217,6 +220,8 @@ def execute(s: dict, how: Run, todo: list[tuple[int, int]]) -> set[int]:
             finally:
                 worker.close()
         else:
+            if scenes:
+                raise ValueError("in-memory scenes are rendered in this process: workers must be 1")
             size = max(1, min(8, len(todo) // (workers * 4)))
             pool = multiprocessing.get_context("spawn").Pool(workers, _init, (s, str(how.out)))
             try:
@@ -255,7 +260,7 @@ def _bar(total: int, progress: bool | None):
                 file=sys.stderr, dynamic_ncols=True)
 
 
-def run(opts: Options, how: Run) -> int:
+def run(opts: Options, how: Run, scenes: dict | None = None) -> int:
     """Render the shard's missing views, then assemble its annotations; 0, or 2 when a scene
     could not be read (after the others with keep_going, at once without)."""
     paths = ds.expand_scenes(opts.scenes)
@@ -265,15 +270,14 @@ def run(opts: Options, how: Run) -> int:
     keys = [sc["key"] for sc in s["scenes"]]
     todo = [it for it in items if not complete(how.out, keys[it[0]], it[1])]
     t0 = time.perf_counter()
-    failed = execute(s, how, todo)
+    failed = execute(s, how, todo, scenes)
     elapsed = time.perf_counter() - t0
     if failed and not how.keep_going:
         return 2
     target, doc = ds.assemble(how.out, s, items, ds.annotations_name(how.shard))
     rendered = len(todo) - sum(1 for it in todo if it[0] in failed)
     rate = f", {rendered / elapsed:.2f} views/s" if rendered and elapsed > 0 else ""
+    skipped = f", {len(failed)} scene(s) skipped" if failed else ""
     print(f"wrote {target}: {len(doc['images'])} images, {len(doc['annotations'])} annotations "
-          f"({rendered} views rendered, {len(items) - len(todo)} already complete{rate})")
-    if failed:
-        print(f"rtta: error: {len(failed)} scene(s) could not be read and were skipped", file=sys.stderr)
+          f"({rendered} views rendered, {len(items) - len(todo)} already complete{skipped}{rate})")
     return 2 if failed else 0

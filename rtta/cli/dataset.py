@@ -4,6 +4,8 @@
 from __future__ import annotations
 
 import argparse
+import signal
+import threading
 from pathlib import Path
 
 from ..errors import RttaError
@@ -25,7 +27,7 @@ def add_parsers(sub, bench_sub, common: tuple) -> None:
     p.add_argument("--seed", type=int, default=0, help="seed of the camera sampling")
     p.add_argument("--size", default="640x480", help="image WxH")
     for name, default, what in (("azimuth", "0,360", "degrees about +Y"), ("elevation", "10,60", "degrees"),
-                                ("distance", "1.8,3", "bounding radii"), ("fov", "40,60", "vertical, degrees")):
+                                ("distance", "1.4,2.6", "bounding radii"), ("fov", "40,60", "vertical, degrees")):
         p.add_argument(f"--{name}", default=default, metavar="LO,HI",
                        help=f"range sampled uniformly, {what} (one value: fixed; default {default})")
     p.add_argument("--cameras", default=None, metavar="FILE.json",
@@ -98,7 +100,17 @@ def cmd_dataset(args: argparse.Namespace) -> int:
                    smooth_angle=load["smooth_angle"], smooth=load["smooth"])
     how = Run(out=Path(args.out).absolute(), shard=_shard(args.shard), workers=args.workers,
               keep_going=args.keep_going, progress=False if args.no_progress else None)
-    return run(opts, how)
+    main_thread = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGTERM, _interrupted) if main_thread else None   # a scheduler's kill
+    try:
+        return run(opts, how)
+    finally:
+        if main_thread:
+            signal.signal(signal.SIGTERM, previous)
+
+
+def _interrupted(*_) -> None:
+    raise KeyboardInterrupt
 
 
 def _merge(args: argparse.Namespace) -> int:

@@ -38,7 +38,7 @@ class Options:
     size: tuple[int, int] = (640, 480)
     azimuth: tuple[float, float] = (0.0, 360.0)
     elevation: tuple[float, float] = (10.0, 60.0)
-    distance: tuple[float, float] = (1.8, 3.0)       # bounding radii
+    distance: tuple[float, float] = (1.4, 2.6)       # bounding radii
     fov: tuple[float, float] = (40.0, 60.0)
     cameras: list[dict] | None = None                # explicit cameras (--cameras FILE.json)
     depth: str = "png"

@@ -160,12 +160,16 @@ def _add(times: dict | None, stage: str, seconds: float) -> None:
 
 
 def _clean_stale(out: Path, key: str, view: int) -> None:
-    """Temporary folders a killed run left for this view (only this shard writes this view)."""
+    """Temporaries a killed run left for this view: a folder beside its folder, a file beside
+    its part (only this shard writes this view, so nothing else is writing them)."""
     import shutil
 
-    parent = out / view_dir(key, view)
-    for tmp in parent.parent.glob(f".{parent.name}.*"):
-        shutil.rmtree(tmp, ignore_errors=True)
+    folder, part = out / view_dir(key, view), part_path(out, key, view)
+    for tmp in [*folder.parent.glob(f".{folder.name}.*"), *part.parent.glob(f".{part.name}.*")]:
+        if tmp.is_dir():
+            shutil.rmtree(tmp, ignore_errors=True)
+        else:
+            tmp.unlink(missing_ok=True)
 
 
 def chunks(todo: list[tuple[int, int]], size: int) -> list[list[tuple[int, int]]]:

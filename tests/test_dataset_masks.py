@@ -104,3 +104,32 @@ def test_camera_k_and_depth_against_numpy(tmp_path, nested):
     expected = camera.eye[2] - 1.0
     assert np.abs(face - expected).max() <= first["depth_scale"], (face.min(), face.max(), expected)
     assert (depth[0, 0] == 0) and first["depth_scale"] == pytest.approx(first["camera"]["far"] / 65535)
+
+
+def test_scaled_down_regions_map_back_through_t(make_renderer):
+    """An atlas too small for the view scales regions down; the gather then follows T's nearest
+    texel per pixel instead of a shift: it equals rtta.gl.readback.map_back (the export's and
+    the core tests' mapping) on every pixel, and still finds every object."""
+    from rtta.gl.readback import map_back
+    from rtta.renderer.renderer import Settings
+    from rtta.scene.camera import Camera
+    from rtta.tools.dataset_alone import alone_rtta
+
+    scene = load_scene(demo_path())
+    camera = Camera.orbit(scene.center, scene.radius, 35, 25, 1.6)
+    exact = alone_rtta(make_renderer(scene), camera, (240, 180))
+    small = make_renderer(scene, Settings(atlas_max=(128, 128), max_layers=1))
+    scaled = alone_rtta(small, camera, (240, 180))
+    records = small.last[0]
+    assert (records.scale[records.visible] < 0.9).all() and np.array_equal(exact.rects, scaled.rects)
+    tw, th, td = records.atlas_size
+    atlas = small.atlas.read((tw, th), td, ("depth",))
+    for i, (oid, (x, y, w, h)) in enumerate(zip(scaled.oids, scaled.rects, strict=True)):
+        a, b = scaled.lay["offsets"][i:i + 2]
+        crop = scaled.mask[a:b].reshape(w, h + 2)[:, 1:-1].T
+        mapped = map_back(atlas, records, int(oid))["depth"][::-1][y:y + h, x:x + w] < 1.0
+        assert np.array_equal(crop, mapped), oid
+    starts = exact.lay["offsets"][:-1]
+    both = np.add.reduceat(exact.mask & scaled.mask, starts)
+    either = np.add.reduceat(exact.mask | scaled.mask, starts)
+    assert (either > 0).all() and (both / either).min() > 0.5

@@ -18,13 +18,16 @@ from ..gl.context import shared_context
 from ..renderer.renderer import Renderer
 from ..scene.generate import random_scene, table1_scene
 from .bench import shared_data
+from .coco import encode_flat
 from .compare import near_edges
-from .dataset import Options, part_path, settings
+from .dataset import Options, camera_for, part_path, settings
+from .dataset_alone import alone_rtt, alone_rtta
 from .dataset_objects import object_meta
 from .dataset_run import Writer, produce_view
 from .dataset_view import render_rtt, render_rtta
 
 METHODS = {"rtta": render_rtta, "rtt": render_rtt}
+STAGES = {"rtta": alone_rtta, "rtt": alone_rtt}
 PER_ROUND = 2      # views a method renders in a row (so that writing overlaps the next view, as in a run)
 
 
@@ -95,9 +98,33 @@ def bench_scene(ctx, name: str, scene, size: tuple[int, int], views: int, appear
         row["ratio_median"] = float(np.median(np.array(wall["rtt"]) / np.array(wall["rtta"])))   # per round
         row["only_one"], row["off_band_px"], row["differing_px"] = disagreement(
             _amodal(tmp / "rtta", name, 0), _amodal(tmp / "rtt", name, 0))
+        row["stage"] = amodal_stage(ctx, renderer, s, name, views)
     finally:
         renderer.release()
     return row
+
+
+def amodal_stage(ctx, renderer, s: dict, key: str, views: int) -> dict:
+    """The amodal masks alone, without what both methods share (STD, visible masks, files):
+    one capture and the gather, or every object drawn alone and read back; then the same
+    encoding. The methods take turns view by view."""
+    w, h = s["size"]
+    scene = renderer.scene
+    wall = {m: [] for m in STAGES}
+    masks = {m: 0 for m in STAGES}
+    for v in range(views):
+        camera, _ = camera_for(s, key, v, scene.center, scene.radius)
+        for method, alone in STAGES.items():
+            ctx.finish()
+            t0 = time.perf_counter()
+            objects = alone(renderer, camera, (w, h))
+            _, areas, _ = encode_flat(objects.mask, objects.rects, h, w)
+            wall[method].append(time.perf_counter() - t0)
+            masks[method] += int((areas > 0).sum())
+    out = {m: {"masks_per_s": masks[m] / float(np.sum(wall[m])), "ms_per_view": float(np.mean(wall[m])) * 1e3}
+           for m in STAGES}
+    out["ratio"] = out["rtta"]["masks_per_s"] / out["rtt"]["masks_per_s"]
+    return out
 
 
 def run_bench(size: tuple[int, int], views: int = 5, quick: bool = False, appearance: bool = False,
@@ -126,14 +153,19 @@ def _print(rows: list[dict], gl_renderer: str, size, views: int, appearance: boo
           f"{' with --appearance' if appearance else ''}")
     print(f"{'scene':>12} {'parts':>6} {'masks':>6} | {'RTTA v/s':>8} {'masks/s':>8} | {'RTT v/s':>8} "
           f"{'masks/s':>8} | {'ratio':>6} {'median':>6} | {'RTTA render/annot/write ms':>27} | "
-          f"{'RTT render ms':>13} | {'diff px (off band)':>18}")
+          f"{'RTT render ms':>13} | {'diff px (off band)':>18} || {'amodal only: RTTA ms':>20} "
+          f"{'RTT ms':>7} {'ratio':>6}")
     for r in rows:
         a, b = r["rtta"], r["rtt"]
         split = "/".join(f"{a['ms_per_view'].get(k, 0):.0f}" for k in ("render", "annotate", "write"))
         print(f"{r['name']:>12} {r['parts']:>6} {a['masks_per_view']:>6.0f} | {a['views_per_s']:>8.2f} "
               f"{a['masks_per_s']:>8.0f} | {b['views_per_s']:>8.2f} {b['masks_per_s']:>8.0f} | "
               f"{r['ratio_masks']:>5.2f}x {r['ratio_median']:>5.2f}x | {split:>27} | "
-              f"{b['ms_per_view'].get('render', 0):>13.0f} | {r['differing_px']:>9} ({r['off_band_px']})")
+              f"{b['ms_per_view'].get('render', 0):>13.0f} | {r['differing_px']:>9} ({r['off_band_px']}) || "
+              f"{r['stage']['rtta']['ms_per_view']:>20.1f} {r['stage']['rtt']['ms_per_view']:>7.1f} "
+              f"{r['stage']['ratio']:>5.2f}x")
     print(f"masks: amodal masks (annotations) per view; ratio: RTTA masks/s over RTT masks/s; median: of the "
           f"ratios per turn of {PER_ROUND} views; ms: per view (write: on the writer thread, overlapping the "
-          f"next view); diff px: amodal pixels of view 0 where the two differ (off the 1-px silhouette band)")
+          f"next view); diff px: amodal pixels of view 0 where the two differ (off the 1-px silhouette band); "
+          f"amodal only: ms per view to the encoded amodal masks (one capture and its gather, or every object "
+          f"drawn alone and read back; no STD, no visible masks, no files), ratio of masks/s")

@@ -33,16 +33,21 @@ def _mask_api():
 def layout(rects: np.ndarray) -> dict[str, np.ndarray]:
     """The flat layout of crops at `rects` (x, y, w, h: image pixels, y down) that encoding
     reads: per object its columns left to right, each a zero, the column's h pixels top to
-    bottom, a zero. `offsets` [N + 1] start each object; per element its object, column, row
-    (-1 and h on the zeros) and whether it is a pixel."""
+    bottom, a zero. Per object `offsets` [N + 1]; per column (C of them) its object
+    `col_obj`, its place in the object `col_index` and its start `col_start`; per element its
+    column `col` and `row` (-1 and h on the zeros) and whether it is a `pixel`. Per-element
+    values are best derived from per-column ones: gathers from small arrays are cheap."""
     rects = np.asarray(rects, np.int64).reshape(-1, 4)
-    tall = rects[:, 3] + 2
-    offsets = np.concatenate(([0], np.cumsum(rects[:, 2] * tall)))
-    obj = np.repeat(np.arange(len(rects)), rects[:, 2] * tall)
-    column, row = np.divmod(np.arange(int(offsets[-1])) - offsets[obj], tall[obj])
-    row -= 1
-    return {"offsets": offsets, "obj": obj, "column": column, "row": row,
-            "pixel": (row >= 0) & (row < rects[obj, 3])}
+    widths, tall = rects[:, 2], rects[:, 3] + 2
+    offsets = np.concatenate(([0], np.cumsum(widths * tall)))
+    col_obj = np.repeat(np.arange(len(rects)), widths)
+    col_index = np.arange(len(col_obj)) - np.repeat(np.cumsum(widths) - widths, widths)
+    col_len = tall[col_obj]
+    col_start = offsets[col_obj] + col_index * col_len
+    col = np.repeat(np.arange(len(col_obj), dtype=np.int32), col_len)
+    row = np.arange(int(offsets[-1]), dtype=np.int64) - col_start[col] - 1
+    return {"offsets": offsets, "col_obj": col_obj, "col_index": col_index, "col_start": col_start,
+            "col": col, "row": row, "pixel": (row >= 0) & (row < (col_len - 2)[col])}
 
 
 def flatten(crops: list[np.ndarray], rects: np.ndarray, fill=0) -> np.ndarray:

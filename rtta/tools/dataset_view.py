@@ -20,7 +20,8 @@ from PIL import Image
 from ..renderer.export import replace_dir, world_matrices
 from ..renderer.renderer import Renderer
 from ..scene.camera import Camera
-from .coco import encode_flat, flatten, layout
+from .coco import encode_flat
+from .dataset_alone import Alone, alone_rtt, alone_rtta
 
 PNG_LEVEL = 1          # zlib level of every PNG written: 3-4x faster than Pillow's 6, files ~20% larger
 MAX_PNG_ID = 65534     # visible_id.png holds id + 1 in 16 bits; larger scenes get visible_id.npy
@@ -55,25 +56,20 @@ def linear_depth(window: np.ndarray, proj: np.ndarray) -> np.ndarray:
     return np.where(window < 1.0, z, 0.0).astype(np.float32)
 
 
-def _in_view(records, height: int) -> tuple[np.ndarray, np.ndarray]:
-    """Visible objects with a non-empty rectangle, and their rectangles in image pixels."""
-    oids = np.flatnonzero(records.visible)
-    r = records.viewport_rect[oids].astype(np.int64)
-    rects = np.stack([r[:, 0], height - r[:, 3], r[:, 2] - r[:, 0], r[:, 3] - r[:, 1]], 1).reshape(-1, 4)
-    keep = (rects[:, 2] > 0) & (rects[:, 3] > 0)
-    return oids[keep], rects[keep]
-
-
-def _view(std: dict, proj, oids, rects, lay: dict, alone: np.ndarray, alone_depth: np.ndarray,
-          raw_colors: list | None) -> View:
-    """The view from each object's image alone (flat `alone` mask and depth) and the direct
-    render: visible = STD's id, amodal = alone or visible, nearest depth, appearance."""
+def _view(std: dict, proj, objects: Alone) -> View:
+    """The view from each object's image alone and the direct render: visible = STD's id,
+    amodal = alone or visible, nearest depth, appearance."""
+    oids, rects, lay, alone, alone_depth = objects.oids, objects.rects, objects.lay, objects.mask, objects.depth
+    raw_colors = objects.colors
     h, w = std["id"].shape
-    obj, pix = lay["obj"], lay["pixel"]
-    at = np.clip(rects[obj, 1] + lay["row"], 0, h - 1) * w + rects[obj, 0] + lay["column"]
-    visible = (std["id"].ravel()[at] == oids[obj]) & pix
+    col, pix = lay["col"], lay["pixel"]
+    co = lay["col_obj"]
+    at = ((rects[co, 1] * w + rects[co, 0] + lay["col_index"])[col] + lay["row"] * w)   # image pixel, pads off
+    ids = np.ascontiguousarray(std["id"]).ravel()
+    visible = (ids.take(at, mode="clip") == oids[co][col]) & pix
     amodal = alone | visible
-    depth = np.where(alone, alone_depth, np.where(visible, std["depth"].ravel()[at], 1.0))
+    std_depth = np.ascontiguousarray(std["depth"]).ravel().take(at, mode="clip")
+    depth = np.where(alone, alone_depth, np.where(visible, std_depth, 1.0))
     nearest = np.minimum.reduceat(depth, lay["offsets"][:-1]) if len(oids) else np.zeros(0)
     colors = None
     if raw_colors is not None:
@@ -95,63 +91,15 @@ def _view(std: dict, proj, oids, rects, lay: dict, alone: np.ndarray, alone_dept
 
 
 def render_rtta(renderer: Renderer, camera: Camera, viewport: tuple[int, int], appearance: bool = False) -> View:
-    """The view from ONE capture: each object's atlas region, mapped back through T, is its
-    image alone; all objects are gathered in one numpy pass."""
-    records = renderer.capture(camera, viewport)
-    tw, th, td = records.atlas_size
-    atlas = renderer.atlas.read((tw, th), td, ("color", "depth") if appearance else ("depth",)) if td else None
-    std = _std(renderer, camera, viewport)
-    oids, rects = _in_view(records, viewport[1])
-    lay = layout(rects)
-    obj, column, row = lay["obj"], lay["column"], lay["row"]
-    o = oids[obj]
-    ax = records.atlas_rect[o, 0] + records.border
-    ay = records.atlas_rect[o, 1] + records.border
-    scale = records.scale[oids]
-    if np.all(scale == 1):
-        tx, ty = ax + column, ay + rects[obj, 3] - 1 - row
-    else:                                        # scaled-down regions: T's nearest texel per pixel
-        gx, gy = rects[obj, 0] + column, viewport[1] - 1 - (rects[obj, 1] + row)
-        s = scale[obj]
-        tx = np.floor(ax + s * (gx + 0.5 - records.viewport_rect[o, 0])).astype(np.int64)
-        ty = np.floor(ay + s * (gy + 0.5 - records.viewport_rect[o, 1])).astype(np.int64)
-    if atlas is None:
-        depth = np.ones(len(obj), np.float32)
-    else:
-        depth = atlas["depth"][records.layer[o], np.clip(ty, 0, th - 1), np.clip(tx, 0, tw - 1)]
-    alone = (depth < 1.0) & lay["pixel"]
-    raw = None
-    if appearance:
-        raw = []
-        for i, oid in enumerate(oids):
-            a, b = lay["offsets"][i:i + 2]
-            shape = (rects[i, 2], rects[i, 3] + 2)
-            cols, rows = (v[a:b].reshape(shape)[:, 1:-1].T for v in (tx, ty))
-            raw.append(atlas["color"][records.layer[oid], rows, cols])
-    return _view(std, renderer.matrices(camera, viewport)[1], oids, rects, lay, alone, depth, raw)
+    """The view from ONE capture: every object's image alone from its atlas region, and STD."""
+    alone = alone_rtta(renderer, camera, viewport, appearance)
+    return _view(_std(renderer, camera, viewport), renderer.matrices(camera, viewport)[1], alone)
 
 
 def render_rtt(renderer: Renderer, camera: Camera, viewport: tuple[int, int], appearance: bool = False) -> View:
-    """The baseline: each object in view drawn alone (RTT) and read back, as tools without an
-    atlas do; the same objects (frustum culling by projected bounds) and the same outputs."""
-    records = renderer.parameterize(camera, viewport)
-    std = _std(renderer, camera, viewport)
-    oids, rects = _in_view(records, viewport[1])
-    parts = ("color", "depth") if appearance else ("depth",)
-    depths, colors = [], []
-
-    def consume(oid: int, target) -> None:
-        alone = target.read(viewport, 1, parts)
-        x0, y0, x1, y1 = (int(v) for v in records.viewport_rect[oid])
-        depths.append(alone["depth"][0, y0:y1, x0:x1][::-1])
-        if appearance:
-            colors.append(alone["color"][0, y0:y1, x0:x1][::-1])
-
-    renderer.rtt(camera, viewport, oids, consume)
-    lay = layout(rects)
-    depth = flatten(depths, rects, 1.0).astype(np.float32)
-    return _view(std, renderer.matrices(camera, viewport)[1], oids, rects, lay, depth < 1.0, depth,
-                 colors if appearance else None)
+    """The baseline: every object in view drawn alone with RTT and read back, and STD."""
+    alone = alone_rtt(renderer, camera, viewport, appearance)
+    return _view(_std(renderer, camera, viewport), renderer.matrices(camera, viewport)[1], alone)
 
 
 def camera_entry(renderer: Renderer, camera: Camera, viewport: tuple[int, int]) -> dict:

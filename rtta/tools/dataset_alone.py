@@ -32,9 +32,13 @@ def in_view(records, height: int) -> tuple[np.ndarray, np.ndarray]:
     return oids[keep], rects[keep]
 
 
-def alone_rtta(renderer: Renderer, camera: Camera, viewport: tuple[int, int], appearance: bool = False) -> Alone:
-    """ONE capture; every object's atlas region gathered in one numpy pass."""
+def alone_rtta(renderer: Renderer, camera: Camera, viewport: tuple[int, int], appearance: bool = False,
+               queue=None) -> Alone:
+    """ONE capture; every object's atlas region gathered in one numpy pass. `queue()`, when
+    given, issues more GPU work after the capture (the STD draw): it runs while the gather does."""
     records = renderer.capture(camera, viewport)
+    if queue is not None:
+        queue()
     tw, th, td = records.atlas_size
     atlas = renderer.atlas.read((tw, th), td, ("color", "depth") if appearance else ("depth",)) if td else None
     oids, rects = in_view(records, viewport[1])

@@ -43,8 +43,9 @@ class View:
     colors: list[np.ndarray] | None = None   # RGBA [h, w, 4] of each object alone, alpha = amodal
 
 
-def _std(renderer: Renderer, camera: Camera, viewport) -> dict[str, np.ndarray]:
-    std = renderer.std(camera, viewport).read(viewport, 1)
+def _std(renderer: Renderer, viewport) -> dict[str, np.ndarray]:
+    """The STD render drawn last (Renderer.std), read back in image orientation."""
+    std = renderer.single_target.read(viewport, 1)
     return {k: v[0][::-1] for k, v in std.items()}
 
 
@@ -92,14 +93,15 @@ def _view(std: dict, proj, objects: Alone) -> View:
 
 def render_rtta(renderer: Renderer, camera: Camera, viewport: tuple[int, int], appearance: bool = False) -> View:
     """The view from ONE capture: every object's image alone from its atlas region, and STD."""
-    alone = alone_rtta(renderer, camera, viewport, appearance)
-    return _view(_std(renderer, camera, viewport), renderer.matrices(camera, viewport)[1], alone)
+    alone = alone_rtta(renderer, camera, viewport, appearance, queue=lambda: renderer.std(camera, viewport))
+    return _view(_std(renderer, viewport), renderer.matrices(camera, viewport)[1], alone)
 
 
 def render_rtt(renderer: Renderer, camera: Camera, viewport: tuple[int, int], appearance: bool = False) -> View:
     """The baseline: every object in view drawn alone with RTT and read back, and STD."""
-    alone = alone_rtt(renderer, camera, viewport, appearance)
-    return _view(_std(renderer, camera, viewport), renderer.matrices(camera, viewport)[1], alone)
+    renderer.std(camera, viewport)
+    std = _std(renderer, viewport)             # before RTT, which draws into the same target
+    return _view(std, renderer.matrices(camera, viewport)[1], alone_rtt(renderer, camera, viewport, appearance))
 
 
 def camera_entry(renderer: Renderer, camera: Camera, viewport: tuple[int, int]) -> dict:

@@ -97,3 +97,29 @@ def test_merge_keeps_shard_ids_and_renumbers_collisions(tmp_path):
     (b / "junk.json").write_text("[1, 2]")
     with pytest.raises(RttaError, match="not a COCO annotations file"):
         coco.merge([b / "junk.json"], b / "m.json")
+
+
+def test_view_files_for_scenes_beyond_16_bit_ids(tmp_path):
+    """visible_id.png holds id + 1 in 16 bits; a scene with more objects gets visible_id.npy
+    (uint32, id + 1). A failed write leaves no folder in place and no temporary."""
+    from PIL import Image
+
+    from rtta.tools.dataset_view import View, view_files, write_view
+
+    ids = np.array([[-1, 0], [70000, 65533]], np.int32)
+    view = View(rgb=np.zeros((2, 2, 3), np.uint8), depth=np.array([[0, 1.5], [2.0, 3.0]], np.float32), ids=ids,
+                oids=np.zeros(0, np.int64), rects=np.zeros((0, 4), np.int64), amodal=np.zeros(0, bool),
+                visible=np.zeros(0, bool), nearest=np.zeros(0))
+    write_view(view, tmp_path / "big", "png", 3.0 / 65535, big=True)
+    assert np.array_equal(np.load(tmp_path / "big/visible_id.npy"), ids.astype(np.int64) + 1)
+    assert view_files("v", "png", True)["visible_id_file"] == "v/visible_id.npy"
+    small = View(**{**view.__dict__, "ids": np.array([[-1, 0], [3, 65533]], np.int32)})
+    write_view(small, tmp_path / "small", "png", 3.0 / 65535)
+    stored = np.asarray(Image.open(tmp_path / "small/visible_id.png"))
+    assert stored.dtype == np.uint16 and stored.tolist() == [[0, 1], [4, 65534]]
+    steps = np.asarray(Image.open(tmp_path / "small/depth.png")).astype(float)
+    assert np.allclose(steps * 3.0 / 65535, view.depth, atol=3.0 / 65535)
+    bad = View(**{**view.__dict__, "rgb": np.zeros((2, 2, 7), np.uint8)})      # PIL cannot write it
+    with pytest.raises(TypeError):
+        write_view(bad, tmp_path / "bad", "png", 1.0)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["big", "small"]

@@ -54,6 +54,9 @@ def test_same_seed_same_bytes_other_seed_not(scenes, reference, tmp_path):
     assert main(["dataset", str(scenes), "--views", "3", "--seed", "7", "--out", str(again), *SMALL]) == 0
     assert _bytes(again / "annotations.json") == _bytes(reference / "annotations.json")
     assert _bytes(again / "images/nested/00002/depth.png") == _bytes(reference / "images/nested/00002/depth.png")
+    globbed = tmp_path / "globbed"                     # a glob names the same scenes as the folder
+    assert main(["dataset", str(scenes / "*.glb"), "--views", "3", "--seed", "7", "--out", str(globbed), *SMALL]) == 0
+    assert _bytes(globbed / "annotations.json") == _bytes(reference / "annotations.json")
     other = tmp_path / "other"
     assert main(["dataset", str(scenes), "--views", "3", "--seed", "8", "--out", str(other), *SMALL]) == 0
     assert _bytes(other / "annotations.json") != _bytes(reference / "annotations.json")

@@ -19,8 +19,6 @@ from rtta.tools.dataset import Options, Run
 from rtta.tools.dataset_run import run
 
 pytest.importorskip("pycocotools")
-# pycocotools' decode under numpy 2 (its own code, not ours)
-pytestmark = pytest.mark.filterwarnings("ignore:__array__ implementation doesn't accept a copy:DeprecationWarning")
 
 
 def make(out, scenes, views=2, size=(200, 150), given=None, **options):

@@ -98,3 +98,19 @@ def test_reliability_bench_scene_choice(gl, tmp_path, capsys):
     assert main(["bench", "reliability", "--scenes", "demo,nope"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "nope" in err[0] and "textured-64" in err[0]
+
+
+def test_dataset_bench_quick(gl, tmp_path, capsys):
+    """Both methods write the same annotations (no amodal pixel differs off the silhouette band)."""
+    from rtta.tools.bench_dataset import run_bench
+
+    out = tmp_path / "dataset.json"
+    assert run_bench((0, 0), quick=True, json_path=str(out), ctx=gl) == 0
+    data = json.loads(out.read_text())
+    assert data["renderer"] == gl.info["GL_RENDERER"] and data["size"] == [320, 240]
+    assert [s["name"] for s in data["scenes"]] == ["demo", "random-200"]
+    for s in data["scenes"]:
+        assert s["only_one"] == 0 and s["off_band_px"] == 0, s
+        assert s["rtta"]["masks_per_view"] == s["rtt"]["masks_per_view"] > 0
+        assert math.isfinite(s["ratio_masks"]) and s["ratio_masks"] > 0
+    assert "RTTA v/s" in capsys.readouterr().out

@@ -1,4 +1,4 @@
-"""The `rtta` command: export, snapshot, info, bench. Expected failures print one line and exit 2."""
+"""The `rtta` command: export, snapshot, info, ldi, dataset, bench. Expected failures print one line and exit 2."""
 
 from __future__ import annotations
 
@@ -137,9 +137,11 @@ def build_parser() -> argparse.ArgumentParser:
     b = bsub.add_parser("formats", help="load time of every scene file: the format's library against rtta")
     b.add_argument("files", nargs="*", help="scene files (default: every one in ../shared/data)")
     b.add_argument("--json", default=None)
+    from .dataset import add_parsers as add_dataset
     from .ldi import add_parser as add_ldi
 
     add_ldi(sub)
+    add_dataset(sub, bsub, (add_load_options, load_options, parse_size))
     return parser
 
 
@@ -295,6 +297,10 @@ def cmd_bench(args) -> int:
         from ..tools.bench_formats import run_formats
 
         return run_formats(args.files, json_path=args.json)
+    if args.bench == "dataset":
+        from .dataset import cmd_bench_dataset
+
+        return cmd_bench_dataset(args)
     if args.bench == "report":
         from ..tools.report import run_report
 
@@ -307,10 +313,11 @@ def main(argv: list[str] | None = None) -> int:
 
     args = build_parser().parse_args(argv)
     steady_heap()
+    from .dataset import cmd_dataset
     from .ldi import cmd_ldi
 
     handler = {"export": cmd_export, "snapshot": cmd_snapshot, "info": cmd_info, "bench": cmd_bench,
-               "ldi": cmd_ldi}[args.command]
+               "ldi": cmd_ldi, "dataset": cmd_dataset}[args.command]
     try:
         return handler(args)
     except RttaError as exc:

@@ -5,10 +5,11 @@ are committed: every command (export, snapshot, ldi) and the viewer's screenshot
 An output never replaces an input of the same run (the scene file and the files it refers
 to, a projector image, a points file), never replaces a folder that `rtta export` did not
 write (recognised by its records.json and its file names), and never a mount point. Outputs
-are written beside their place and renamed into it; `committing()` marks that rename, after
-which SIGINT/SIGTERM/SIGHUP no longer interrupt the run (the new output is in place, so the
-run finishes and says so). Before it, `install_signal_handlers()` turns those signals into
-`Interrupted`, so every `finally` that removes a temporary runs.
+are written beside their place and renamed into it; `committing()` marks that rename (signals
+wait while it happens); once the output that ends a command is in place, SIGINT/SIGTERM/
+SIGHUP no longer interrupt the run (it finishes and says so). Before that,
+`install_signal_handlers()` turns those signals into `Interrupted`, so every `finally` that
+removes a temporary runs.
 """
 
 from __future__ import annotations
@@ -36,7 +37,7 @@ SIGNALS = tuple(s for s in (getattr(signal, n, None) for n in ("SIGINT", "SIGTER
 
 
 class Interrupted(KeyboardInterrupt):
-    """A signal (SIGINT, SIGTERM, SIGHUP) arrived while nothing had been committed yet."""
+    """A signal (SIGINT, SIGTERM, SIGHUP) arrived before the command's output was in place."""
 
     def __init__(self, signum: int) -> None:
         super().__init__(signum)
@@ -45,14 +46,14 @@ class Interrupted(KeyboardInterrupt):
 
 class _State:
     depth = 0              # inside committing() or quiet_signals(): a signal waits
-    committed = False      # an output has replaced its old version: the run is no longer interrupted
+    finished = False       # the output that ends the command is in place: signals are not raised any more
     raised = False         # Interrupted has been raised once: later signals only wait (cleanup runs)
-    requested: int | None = None       # the first signal before any commit
+    requested: int | None = None       # the first signal while not finished
 
 
 def _handler(signum, frame) -> None:
-    if _State.committed:
-        return                             # the new output is in place: finish and say so
+    if _State.finished:
+        return                             # the run's output is in place: finish and say so
     if _State.requested is None:
         _State.requested = signum
     if _State.depth or _State.raised:
@@ -64,7 +65,7 @@ def _handler(signum, frame) -> None:
 def install_signal_handlers() -> dict:
     """Make SIGINT/SIGTERM/SIGHUP raise Interrupted (main thread only); returns the previous
     handlers for restore_signal_handlers. Signals ignored on purpose (nohup) stay ignored."""
-    _State.depth, _State.committed, _State.raised, _State.requested = 0, False, False, None
+    _State.depth, _State.finished, _State.raised, _State.requested = 0, False, False, None
     old = {}
     for sig in SIGNALS:
         try:
@@ -81,30 +82,36 @@ def restore_signal_handlers(old: dict) -> None:
         signal.signal(sig, handler)
 
 
-def committed() -> bool:
-    """Whether an output of this run has replaced its old version."""
-    return _State.committed
+def finished() -> bool:
+    """Whether the output that ends this run has replaced its old version."""
+    return _State.finished
 
 
 def interrupt_requested() -> int | None:
-    """The signal that asked this run to stop, while no output has been committed (even if
+    """The signal that asked this run to stop before its final output was in place (even if
     a library swallowed the Interrupted it raised)."""
-    return None if _State.committed else _State.requested
+    return None if _State.finished else _State.requested
 
 
 @contextmanager
-def committing() -> Iterator[None]:
-    """Signals wait while the block renames outputs into place; once it has completed, the run
-    is past the point of no return and signals are not raised any more. A signal that came
-    earlier (and was swallowed or waited) is raised here, before anything is replaced."""
-    if _State.requested is not None and not _State.committed:
+def committing(final: bool = False) -> Iterator[None]:
+    """Signals wait while the block renames an output into place. A signal that came earlier
+    (and was swallowed or waited) is raised here, before anything is replaced. `final`: this
+    output ends the command (an export, a snapshot, an LDI result); once it is in place the
+    run finishes and signals are not raised any more. After other outputs (a dataset's
+    views) signals stop the run again as before."""
+    if _State.requested is not None and not _State.finished:
         raise Interrupted(_State.requested)
     _State.depth += 1
     try:
         yield
     finally:
         _State.depth -= 1
-    _State.committed = True
+    if final:
+        _State.finished = True
+    elif _State.requested is not None and not _State.raised:
+        _State.raised = True
+        raise Interrupted(_State.requested)       # it came during the rename: stop now, the file is whole
 
 
 @contextmanager
@@ -265,10 +272,10 @@ def remove_tree(path: Path) -> None:
         shutil.rmtree(path, ignore_errors=True)
 
 
-def replace_dir(new: Path, target: Path) -> None:
+def replace_dir(new: Path, target: Path, *, final: bool = False) -> None:
     """Swap folder `new` into `target`: the old folder is moved aside first and removed last;
-    signals wait until the swap is done."""
-    with committing():
+    signals wait until the swap is done (`final`: see committing)."""
+    with committing(final):
         try:
             if not target.exists():
                 os.replace(new, target)
@@ -291,7 +298,8 @@ def to_image(rgba_gl: np.ndarray) -> Image.Image:
     return Image.fromarray(np.ascontiguousarray(rgba_gl[::-1]))
 
 
-def atomic_write(path: str | Path, write: Callable[[str], None], *, overwrite: bool = True) -> Path:
+def atomic_write(path: str | Path, write: Callable[[str], None], *, overwrite: bool = True,
+                 final: bool = False) -> Path:
     """Let `write(tmp)` fill a temporary file beside `path`, then move it into place: an old
     file stays whole until the new one is complete. With overwrite=False an existing file is
     a FileExistsError, checked atomically (hard link), so a file that appears meanwhile is
@@ -312,7 +320,7 @@ def atomic_write(path: str | Path, write: Callable[[str], None], *, overwrite: b
         os.umask(umask)
         os.chmod(tmp, 0o666 & ~umask)          # mkstemp makes 0600; a saved file gets the user's usual mode
         write(tmp)
-        with committing():
+        with committing(final):
             if overwrite:
                 os.replace(tmp, path)
             else:
@@ -327,6 +335,7 @@ def atomic_write(path: str | Path, write: Callable[[str], None], *, overwrite: b
     return path
 
 
-def save_png(path: str | Path, rgba_gl: np.ndarray, *, overwrite: bool = True) -> Path:
+def save_png(path: str | Path, rgba_gl: np.ndarray, *, overwrite: bool = True, final: bool = False) -> Path:
     """Write a GL-convention array as PNG, atomically (see atomic_write)."""
-    return atomic_write(path, lambda tmp: to_image(rgba_gl).save(tmp, format="PNG"), overwrite=overwrite)
+    return atomic_write(path, lambda tmp: to_image(rgba_gl).save(tmp, format="PNG"), overwrite=overwrite,
+                        final=final)

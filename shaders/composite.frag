@@ -1,15 +1,26 @@
 #version 430
-// defines: MODE_SPRITE MODE_BLEND MODE_OUTLINE WITH_AO PROJECTOR LENS
+// defines: MODE_SPRITE MODE_BLEND MODE_OUTLINE MODE_COLLECT MODE_HALO WITH_AO PROJECTOR LENS UPSAMPLE
 // Per-object compositing from the atlas:
 //   MODE_SPRITE  depth sprite: atlas colour, gl_FragDepth = atlas depth (focus objects, `sprites`)
 //   MODE_BLEND   premultiplied blend with the object's opacity (`transparent`, ghosted context)
 //   MODE_OUTLINE the object's silhouette from its own unoccluded coverage (ghosted focus)
+//   MODE_HALO    around a focus object, where context lies behind it: a halo that fades over
+//                u_halo_width pixels from its silhouette (depth from its own atlas image)
+//   MODE_COLLECT as MODE_BLEND, but appended to the pixel's list (oit.glsl) for a per-pixel
+//                sorted blend (`--order pixel`); writes no colour
 //   WITH_AO      shade with the atlas post-process (ambient occlusion, edges) of `ghosted-ao`
 //   PROJECTOR    paint with the projector at the world position reconstructed from the atlas depth
 //   LENS         cut away (discard) texels whose world position is inside the lens (parity test)
+//   UPSAMPLE     the objects' regions hold less than one texel per pixel: depth-aware upsampling
+//                (a variant, not a branch: on llvmpipe both sides of a branch cost)
 #include "composite.glsl"
 #include "projector.glsl"
 #include "ldi.glsl"
+#ifdef MODE_COLLECT
+#include "oit.glsl"
+flat in uint g_node_base;   // the object's first node
+flat in int g_vp_width;     // its B_viewport's width
+#endif
 
 layout(binding = 0) uniform sampler2DArray u_color;
 layout(binding = 1) uniform sampler2DArray u_depth;
@@ -25,6 +36,9 @@ uniform int u_lens_object;      // a scene object used as the lens is not cut (-
 uniform float u_desaturate;     // context desaturation in [0, 1] (MODE_BLEND)
 uniform vec4 u_edge_color;
 uniform int u_outline_width;    // pixels (MODE_OUTLINE)
+uniform int u_halo_width;       // pixels (MODE_HALO)
+uniform vec4 u_halo_color;      // (rgb, strength)
+layout(binding = 5) uniform sampler2D u_context_depth;   // farthest context depth per pixel, 0: none (MODE_HALO)
 
 flat in int g_object;
 flat in vec4 g_map;
@@ -32,13 +46,13 @@ flat in float g_scale;
 flat in int g_layer;
 flat in ivec4 g_rect;
 flat in float g_opacity;
+flat in vec2 g_shade;      // (uses AO, uses edges): the object's role (WITH_AO)
 layout(location = 0) out vec4 out_color;
 
-vec3 shade(vec3 rgb, ivec3 t) {
+vec3 shade(vec3 rgb, vec2 post) {
 #ifdef WITH_AO
-    vec2 post = texelFetch(u_post, t, 0).rg;
-    rgb *= post.r;
-    rgb = mix(rgb, u_edge_color.rgb, post.g * u_edge_color.a);
+    rgb *= mix(1.0, post.r, g_shade.x);
+    rgb = mix(rgb, u_edge_color.rgb, post.g * g_shade.y * u_edge_color.a);
 #endif
     return rgb;
 }
@@ -49,9 +63,73 @@ bool outside(ivec2 s) { return any(lessThan(s, g_rect.xy)) || any(greaterThan(s,
 // The atlas is depth-keyed (targets.py): empty texels have depth 1 and stale colour.
 bool covered(ivec3 s) { return !outside(s.xy) && texelFetch(u_depth, s, 0).r < 1.0; }
 
+// What a pixel takes from its object's atlas images: colour, window depth, (ao, edge), and
+// the texel it is nearest to (normals for the projector).
+struct Sample { vec3 rgb; float depth; vec2 post; ivec3 t; };
+
+// Depth-aware upsampling of a region captured below one texel per pixel (context objects
+// at the context scale): the 2x2 texels around the pixel's atlas position, bilinear
+// weights over the texels that are the object's own (inside B_atlas, depth < 1) and lie on
+// the same surface as the nearest of them (view distance within 2%: 1 - window depth is
+// proportional to 1 / distance), renormalised. The pixel is covered where the own texels
+// hold at least half the weight, so the silhouette follows the bilinear coverage: no
+// background, no neighbouring region and no surface behind a depth edge ever blends in.
+bool upsampled(vec2 px, out Sample o) {
+    vec2 a = g_map.xy + g_scale * (px - g_map.zw) - 0.5;
+    ivec2 lo = ivec2(floor(a));
+    vec2 f = a - vec2(lo);
+    // gather components: x (lo.x, lo.y+1), y (lo.x+1, lo.y+1), z (lo.x+1, lo.y), w (lo.x, lo.y)
+    vec4 d = textureGather(u_depth, vec3((vec2(lo) + 1.0) / vec2(textureSize(u_depth, 0).xy), float(g_layer)), 0);
+    // which of the 2x2 lie inside B_atlas: column lo.x (x, w) or lo.x + 1 (y, z), row lo.y (z, w) or lo.y + 1 (x, y)
+    bvec2 col = bvec2(lo.x >= g_rect.x && lo.x <= g_rect.z, lo.x + 1 >= g_rect.x && lo.x + 1 <= g_rect.z);
+    bvec2 row = bvec2(lo.y >= g_rect.y && lo.y <= g_rect.w, lo.y + 1 >= g_rect.y && lo.y + 1 <= g_rect.w);
+    vec4 inside = vec4(col.x && row.y, col.y && row.y, col.y && row.x, col.x && row.x);
+    vec4 w = vec4((1.0 - f.x) * f.y, f.x * f.y, f.x * (1.0 - f.y), (1.0 - f.x) * (1.0 - f.y))
+           * inside * vec4(lessThan(d, vec4(1.0)));
+    if (w.x + w.y + w.z + w.w < 0.5) return false;
+    float m = max(max(w.x, w.y), max(w.z, w.w));
+    float dref = w.x == m ? d.x : w.y == m ? d.y : w.z == m ? d.z : d.w;
+    w *= vec4(lessThanEqual(abs(d - dref), vec4(0.02 * (1.0 - dref))));
+    w /= w.x + w.y + w.z + w.w;       // the nearest texel is always in: the sum is > 0
+    ivec3 t00 = ivec3(lo, g_layer);
+    ivec3 tx = t00 + ivec3(0, 1, 0), ty = t00 + ivec3(1, 1, 0), tz = t00 + ivec3(1, 0, 0);
+    o.t = w.x == m ? tx : w.y == m ? ty : w.z == m ? tz : t00;
+    o.rgb = w.x * texelFetch(u_color, tx, 0).rgb + w.y * texelFetch(u_color, ty, 0).rgb
+          + w.z * texelFetch(u_color, tz, 0).rgb + w.w * texelFetch(u_color, t00, 0).rgb;
+    o.depth = dot(w, d);
+#ifdef WITH_AO
+    o.post = w.x * texelFetch(u_post, tx, 0).rg + w.y * texelFetch(u_post, ty, 0).rg
+           + w.z * texelFetch(u_post, tz, 0).rg + w.w * texelFetch(u_post, t00, 0).rg;
+    // an edge texel spans 1 / scale pixels: keep its middle only, nearer the 1-pixel lines of
+    // a full-scale capture (share of pixels over 8/255 on the demo's ghosted-ao at 0.5: 3.2 -> 2.4%)
+    o.post.g = clamp((o.post.g - 0.5) * 2.0, 0.0, 1.0);
+#else
+    o.post = vec2(1.0, 0.0);
+#endif
+    return true;
+}
+
+// The pixel's sample: upsampled, or the nearest texel at one texel per pixel or more.
+bool sampled(vec2 px, out Sample o) {
+#ifdef UPSAMPLE
+    return upsampled(px, o);
+#endif
+    o.t = atlas_texel(g_map, g_scale, g_layer, px);
+    if (outside(o.t.xy)) return false;
+    o.depth = texelFetch(u_depth, o.t, 0).r;
+    if (o.depth >= 1.0) return false;
+    o.rgb = texelFetch(u_color, o.t, 0).rgb;
+#ifdef WITH_AO
+    o.post = texelFetch(u_post, o.t, 0).rg;
+#else
+    o.post = vec2(1.0, 0.0);
+#endif
+    return true;
+}
+
 void main() {
-    ivec3 t = atlas_texel(g_map, g_scale, g_layer, gl_FragCoord.xy);
 #ifdef MODE_OUTLINE
+    ivec3 t = atlas_texel(g_map, g_scale, g_layer, gl_FragCoord.xy);
     // a silhouette texel: the object's own, with a neighbour within the width that is not
     if (!covered(t)) discard;
     bool near_other = false;
@@ -60,11 +138,31 @@ void main() {
             if (!covered(t + ivec3(dx, dy, 0))) { near_other = true; break; }
     if (!near_other) discard;
     out_color = vec4(u_edge_color.rgb, 1.0);
+#elif defined(MODE_HALO)
+    // the nearest own texel within the width (squared distance), and its depth
+    ivec3 t = atlas_texel(g_map, g_scale, g_layer, gl_FragCoord.xy);
+    if (covered(t)) discard;
+    int w = u_halo_width, best = w * w + 1;
+    float near_depth = 1.0;
+    for (int dy = -w; dy <= w; ++dy)
+        for (int dx = -w; dx <= w; ++dx) {
+            ivec3 s = t + ivec3(dx, dy, 0);
+            int r2 = dx * dx + dy * dy;
+            if (r2 < best && !outside(s.xy)) {
+                float d = texelFetch(u_depth, s, 0).r;
+                if (d < 1.0) { best = r2; near_depth = d; }
+            }
+        }
+    float context = texelFetch(u_context_depth, ivec2(gl_FragCoord.xy), 0).r;
+    if (best > w * w || context <= near_depth) discard;   // none near, or no context behind
+    float a = u_halo_color.a * (1.0 - sqrt(float(best)) / float(w + 1));
+    gl_FragDepth = near_depth;     // tested against the focus sprites: a nearer focus object stays clear
+    out_color = vec4(u_halo_color.rgb * a, a);
 #else
-    if (outside(t.xy)) discard;
-    float depth = texelFetch(u_depth, t, 0).r;
-    if (depth >= 1.0) discard;
-    vec3 rgb = texelFetch(u_color, t, 0).rgb;
+    Sample o;
+    if (!sampled(gl_FragCoord.xy, o)) discard;
+    float depth = o.depth;
+    vec3 rgb = o.rgb;
 #if defined(PROJECTOR) || defined(LENS)
     vec4 ndc = vec4(gl_FragCoord.xy / u_viewport * 2.0 - 1.0, depth * 2.0 - 1.0, 1.0);
     vec4 world = u_inv_view_proj * ndc;
@@ -76,9 +174,9 @@ void main() {
         discard;
 #endif
 #ifdef PROJECTOR
-    rgb = painted(rgb, surface_light(normalize(texelFetch(u_normal, t, 0).xyz * 2.0 - 1.0)), world.xyz);
+    rgb = painted(rgb, surface_light(normalize(texelFetch(u_normal, o.t, 0).xyz * 2.0 - 1.0)), world.xyz);
 #endif
-    rgb = shade(rgb, t);
+    rgb = shade(rgb, o.post);
 #ifdef MODE_SPRITE
     gl_FragDepth = depth;
     out_color = vec4(rgb, 1.0);
@@ -86,8 +184,18 @@ void main() {
     float a = g_opacity;
     float grey = dot(rgb, vec3(0.299, 0.587, 0.114));
     rgb = mix(rgb, vec3(grey), u_desaturate);
+#ifdef MODE_COLLECT
+    // the node's place is fixed by the pixel's place in B_viewport: no shared counter
+    ivec2 p = ivec2(gl_FragCoord.xy);
+    ivec2 origin = ivec2(g_map.zw);                 // B_viewport's first pixel
+    uint i = g_node_base + uint((p.y - origin.y) * g_vp_width + (p.x - origin.x));
+    uint next = atomicExchange(heads[p.y * int(u_viewport.x) + p.x], i);
+    nodes[i] = uvec4(floatBitsToUint(depth), packUnorm4x8(vec4(rgb, a)), next, 0u);
+    out_color = vec4(0.0);
+#else
     gl_FragDepth = depth;
     out_color = vec4(rgb * a, a);
+#endif
 #endif
 #endif
 }

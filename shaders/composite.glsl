@@ -2,7 +2,7 @@
 #include "records.glsl"
 
 struct Style {
-    vec4 params;   // (opacity, focus, unused, unused)
+    vec4 params;   // (opacity, focus, uses AO, uses edges)
 };
 layout(std430, binding = 2) readonly buffer StyleBuffer { Style styles[]; };
 layout(std430, binding = 3) readonly buffer OrderBuffer { int order[]; };

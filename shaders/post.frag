@@ -1,5 +1,5 @@
 #version 450
-// defines: EDGE_QUAD
+// defines: EDGE_QUAD EDGES_ONLY
 // Atlas post-processing for `ghosted-ao`: per texel, ambient occlusion and edge strength
 // from the object's OWN unoccluded depth/normal images, so hidden objects get complete
 // shading and silhouettes. Drawn as one quad per object over its atlas rectangle
@@ -14,6 +14,7 @@
 // EDGE_QUAD (edge width 1): the neighbour in the same 2x2 quad comes from the fine
 // derivatives of the texel's own fetches, and one depth gather covers the texel and its
 // two other neighbours, so two normals and one gather are fetched.
+// EDGES_ONLY: no AO (written as 1), for objects shaded with edges alone (--ao-objects focus).
 
 layout(binding = 0) uniform sampler2DArray u_depth;    // window depth, 1 where empty
 layout(binding = 1) uniform sampler2DArray u_normal;   // view normal * 0.5 + 0.5 (RGBA8); stale where empty
@@ -133,7 +134,11 @@ void main() {
     g_n = normalize(nd.xyz);
     g_dist = nd.w;
     g_p = view_position(g_t.xy, depth);
+#ifdef EDGES_ONLY
+    float ao = 1.0;
+#else
     float ao = quad_ambient_occlusion(!outside(g_t.xy) && depth < 1.0);
+#endif
 #ifdef EDGE_QUAD
     // the quad partner (x ^ 1, y ^ 1) from the derivatives, the other side fetched
     ivec2 partner = g_t.xy + 1 - 2 * odd;

@@ -1,9 +1,10 @@
 #version 430
 // defines:
-// One point per object (gl_VertexID is its id); no vertex buffer. post.geom expands it.
+// One point per object to shade (gl_VertexID indexes the list); no vertex buffer. post.geom expands it.
+layout(std430, binding = 3) readonly buffer ObjectList { int objects[]; };
 flat out int v_object;
 
 void main() {
-    v_object = gl_VertexID;
+    v_object = objects[gl_VertexID];
     gl_Position = vec4(0.0, 0.0, 0.0, 1.0);
 }

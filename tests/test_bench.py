@@ -44,9 +44,13 @@ def test_composite_bench_quick(gl, tmp_path, capsys):
     assert data["renderer"] == gl.info["GL_RENDERER"]
     assert [s["name"] for s in data["scenes"]] == ["demo", "table1-5", "table1-21"]
     for s in data["scenes"]:
-        assert set(s["modes"]) == {"sprites", "transparent", "ghosted", "ghosted-ao"}
+        assert set(s["modes"]) == {"sprites", "transparent", "ghosted", "ghosted-ao", "ghosted-ao full",
+                                   "transparent pixel"}
         assert all(v > 0 for v in s["modes"].values()) and s["std_ms"] > 0 and s["recomposite_ms"] > 0
+        assert s["pixel_over_object"] > 0 and 0 <= s["ao_error"]["over_8"] <= 1
     assert "recomposite" in capsys.readouterr().out
+    assert bench.run_composite((160, 120), quick=True, ctx=gl, scenes=["random-30"]) == 0
+    assert "random-30" in capsys.readouterr().out
 
 
 def test_ldi_bench_quick(gl, tmp_path, capsys):
@@ -94,3 +98,19 @@ def test_reliability_bench_scene_choice(gl, tmp_path, capsys):
     assert main(["bench", "reliability", "--scenes", "demo,nope"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "nope" in err[0] and "textured-64" in err[0]
+
+
+def test_dataset_bench_quick(gl, tmp_path, capsys):
+    """Both methods write the same annotations (no amodal pixel differs off the silhouette band)."""
+    from rtta.tools.bench_dataset import run_bench
+
+    out = tmp_path / "dataset.json"
+    assert run_bench((0, 0), quick=True, json_path=str(out), ctx=gl) == 0
+    data = json.loads(out.read_text())
+    assert data["renderer"] == gl.info["GL_RENDERER"] and data["size"] == [320, 240]
+    assert [s["name"] for s in data["scenes"]] == ["demo", "random-200"]
+    for s in data["scenes"]:
+        assert s["only_one"] == 0 and s["off_band_px"] == 0, s
+        assert s["rtta"]["masks_per_view"] == s["rtt"]["masks_per_view"] > 0
+        assert math.isfinite(s["ratio_masks"]) and s["ratio_masks"] > 0
+    assert "RTTA v/s" in capsys.readouterr().out

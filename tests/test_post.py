@@ -113,7 +113,7 @@ def test_post_process_matches_numpy(make_renderer, demo_scene, edge_width, borde
     r = make_renderer(demo_scene, Settings(border=border))
     cam = Camera.orbit(demo_scene.center, demo_scene.radius, *DEFAULT_ORBIT)
     records = r.capture(cam, VP)
-    style = Style(edge_width=edge_width, ao_radius=12.0, ao_strength=1.5)
+    style = Style(edge_width=edge_width, ao_radius=12.0, ao_strength=1.5, ao_objects="all")
     post = r.post_process(style)
     post.texture.write(np.full(post.texture.size[:2] + (post.texture.layers, 4), SENTINEL, np.uint8))
     r._post_key = None                      # run again over the sentinel

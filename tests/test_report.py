@@ -81,7 +81,7 @@ def test_numbers_parse_and_are_plausible(quick_report):
 def test_plots_are_drawn(quick_report):
     _, plots = quick_report
     names = sorted(p.name for p in plots.glob("*.png"))
-    assert names == ["capture.png", "error_vs_time.png", "ldi.png", "packing.png", "stability.png"]
+    assert names == ["capture.png", "error_vs_time.png", "importance.png", "ldi.png", "packing.png", "stability.png"]
     for name in names:
         img = np.asarray(Image.open(plots / name).convert("L"))
         assert img.shape[0] > 300 and img.shape[1] > 600 and img.std() > 10     # not blank
@@ -105,3 +105,20 @@ def test_half_a_marker_is_refused_untouched(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "B.md" in err[0] and "marker" in err[0]
     assert md.read_text() == f"# x\n{BEGIN}\nno end\n"
+
+
+def test_importance_section(quick_report):
+    """Section 7: each mode's reference row has no error, the defaults are marked, and
+    context scale 0.5 changes ghosted-ao (the axis measures something)."""
+    text = quick_report[0].read_text()
+    section = text.split("### 7.")[1]
+    rows = [[c.strip() for c in line.strip("|").split("|")] for line in section.splitlines()
+            if line.startswith("| ") and not line.startswith("| scene")]
+    assert len(rows) == 2 * 8
+    first = {}
+    for r in rows:
+        first.setdefault((r[0], r[1]), r)
+    assert all(r[7] == "0.000%" and r[8] == "0.00" for r in first.values())
+    assert sum(r[9] == "**yes**" for r in rows) == 2 * 3          # ghosted, ghosted-ao, transparent
+    half = [r for r in rows if r[1] == "ghosted-ao" and r[2] == "0.5"]
+    assert half and all(float(r[8]) > 0 for r in half)

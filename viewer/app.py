@@ -67,7 +67,7 @@ class Viewer:
     # ---- scene -------------------------------------------------------------------------
     def set_scene(self, scene: Scene, mode: str | None = None) -> None:
         old = self.state if self.renderer is not None else None
-        state = ViewerState(scene.names, mode=mode or old.mode)
+        state = ViewerState(scene.names, mode=mode or old.mode, paths=scene.paths)
         if old is not None:
             state.settings, state.atlas_max, state.show_atlas = old.settings, old.atlas_max, old.show_atlas
             state.measure = old.measure
@@ -75,11 +75,23 @@ class Viewer:
         self.state = state
         self.renderer = Renderer(self.ctx, scene, state.settings)
         self.renderer.measure = state.measure
-        self.orbit = Orbit.default(scene.center, scene.radius)
+        self.orbit = Orbit.default(scene.center, scene.radius, up_axis=scene.up_axis)
         self.records = None
         self.scene_label = Path(scene.source).name
         self.scene_dir = Path(scene.source).parent if Path(scene.source).exists() else Path.cwd()
         self._capture_key = self._composite_key = self._std_key = None
+        self.frame_objects()
+
+    def frame_objects(self, ids=None) -> None:
+        """Fit these objects (default: every one not hidden) in the composite, with a margin
+        on all four sides at the composite's aspect; the view direction is kept."""
+        scene = self.renderer.scene
+        if ids is None:
+            ids = [i for i in range(scene.count) if i not in self.state.hidden] or range(scene.count)
+        ids = np.asarray(list(ids), np.int64)
+        corners = scene.box_corners("aabb")[ids].reshape(-1, 3) + scene.origin
+        _, _, w, h = self.layout.composite
+        self.orbit.frame(corners=corners, aspect=w / h if w > 0 and h > 0 else 1.0)
 
     def open_scene(self, path) -> bool:
         """Load `path`; on failure show the error in the panel and keep the current scene."""
@@ -146,9 +158,11 @@ class Viewer:
 
     def _capture(self, camera) -> None:
         vp = self.viewport
-        key = (tuple(camera.eye), tuple(camera.target), vp, self.state.capture_key())
+        focus = self.renderer.scaled_for(self.state.style.focus)     # empty unless a context scale
+        key = (tuple(camera.eye), tuple(camera.target), vp, self.state.capture_key(), focus)
         if key != self._capture_key:
-            self.records = self.renderer.capture(camera, vp)
+            self.renderer.hidden = self.state.hidden
+            self.records = self.renderer.capture(camera, vp, focus=focus)
             self._capture_key, self._composite_key = key, None
 
     def _draw_composite(self) -> None:
@@ -164,8 +178,9 @@ class Viewer:
         if s.mode != "std" or atlas_visible:
             self._capture(camera)
         if s.mode == "std":
-            key = (tuple(camera.eye), tuple(camera.target), vp, painted)
+            key = (tuple(camera.eye), tuple(camera.target), vp, painted, s.hidden_rev)
             if key != self._std_key:          # a static view is not drawn again
+                r.hidden = s.hidden
                 r.std(camera, vp)
                 self._std_key = key
             target = r.single_target
@@ -190,7 +205,7 @@ class Viewer:
         kw = {"image": self._projector_image, "fov_y": p.fov, "strength": p.strength, "shadows": p.shadows}
         if p.attached:
             return Projector.at_camera(camera, scene.center, scene.radius, **kw)
-        return Projector.orbit(scene.center, scene.radius, p.az, p.el, p.dist, **kw)
+        return Projector.orbit(scene.center, scene.radius, p.az, p.el, p.dist, up_axis=scene.up_axis, **kw)
 
     def _lens(self):
         """The Lens the panel describes (None when off); its geometry is made once per shape."""

@@ -98,10 +98,12 @@ class Controls:
             app.state.toggle(oid)                  # undo the first click's toggle
             scene = app.renderer.scene
             app.orbit.orbit_around((scene.aabb_min[oid] + scene.aabb_max[oid]) / 2.0)
+            app.frame_objects([oid])               # then fit it, as F fits everything
             self._last_click = (0.0, None)
             return oid
         if oid is not None:
             app.state.toggle(oid)
+            app.state.reveal(oid)                  # its row in the tree: opened, scrolled to, marked
         return oid
 
     def object_at(self, x: float, y: float, front_most: bool = False) -> int | None:
@@ -149,7 +151,7 @@ class Controls:
         elif key in (keys.MINUS, keys.PAGE_DOWN):
             orbit.zoom(-1)
         elif key == keys.F:
-            orbit.frame()
+            app.frame_objects()
         elif key == keys.A:
             app.state.show_atlas = not app.state.show_atlas
         elif key == keys.M:

@@ -10,6 +10,7 @@ from pathlib import Path
 
 from imgui_bundle import imgui
 
+from rtta.scene.formats import SUFFIXES as ASSEMBLIES
 from rtta.scene.model import SUPPORTED
 
 POPUP = "Open scene"
@@ -28,7 +29,7 @@ def listing(folder: Path) -> tuple[list[Path], list[Path]]:
         try:
             if p.is_dir():
                 dirs.append(p)
-            elif p.suffix.lower() in SUPPORTED:
+            elif p.suffix.lower() in SUPPORTED + ASSEMBLIES:
                 files.append(p)
         except OSError:
             continue

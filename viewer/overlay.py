@@ -16,6 +16,8 @@ if TYPE_CHECKING:
 
 REGION = imgui.IM_COL32(120, 200, 255, 140)
 TEXT = imgui.IM_COL32(235, 235, 240, 255)
+HOVER = imgui.IM_COL32(255, 200, 80, 255)
+HOVER_MAX = 2000          # outlines drawn for a hovered group at most (imgui's buffers are finite)
 
 
 def _col(rgba) -> int:
@@ -42,17 +44,38 @@ def region_under(app: OverlayHost, x: float, y: float) -> int | None:
     return None
 
 
+def hovered(app: OverlayHost) -> np.ndarray:
+    """Object ids of the tree row under the mouse that have a region now (at most HOVER_MAX)."""
+    s, rec = app.state, app.records
+    if s.hover is None or rec is None:
+        return np.zeros(0, np.int64)
+    ids = s.tree.members(s.hover)
+    return ids[rec.visible[ids]][:HOVER_MAX]
+
+
+def _hover(app: OverlayHost, dl) -> None:
+    """Outline the hovered row's objects: their projected bounds in the composite."""
+    ids = hovered(app)
+    if not ids.size:
+        return
+    cx, cy, _, ch = app.layout.composite
+    for x0, y0, x1, y1 in app.records.viewport_rect[ids]:
+        dl.add_rect(imgui.ImVec2(cx + x0, cy + ch - y1), imgui.ImVec2(cx + x1, cy + ch - y0), HOVER, 0.0, 0, 2.0)
+
+
 def draw(app: OverlayHost) -> None:
     rec = app.records
+    dl = imgui.get_background_draw_list()
+    _hover(app, dl)
     if not app.state.show_atlas or rec is None or app.layout.atlas[2] <= 0:
         return
-    dl = imgui.get_background_draw_list()
     focus_col = _col(app.state.style.outline_color)
+    hover = set(hovered(app).tolist())
     for _, ids, boxes in regions(app):
         for oid, (x0, y0, x1, y1) in zip(ids, boxes, strict=True):
             on = int(oid) in app.state.highlighted
-            dl.add_rect(imgui.ImVec2(x0, y0), imgui.ImVec2(x1, y1), focus_col if on else REGION,
-                        0.0, 0, 2.0 if on else 1.0)
+            col = HOVER if int(oid) in hover else focus_col if on else REGION
+            dl.add_rect(imgui.ImVec2(x0, y0), imgui.ImVec2(x1, y1), col, 0.0, 0, 2.0 if on or col == HOVER else 1.0)
     tw, th, td = rec.atlas_size
     shown = "all layers" if app.state.atlas_layer < 0 else f"layer {app.state.atlas_layer}"
     label = f"atlas {tw}x{th}, {td} layers ({shown})  utilization {100 * rec.utilization:.0f}%"

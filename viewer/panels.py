@@ -12,16 +12,17 @@ import numpy as np
 from imgui_bundle import imgui, implot
 
 from rtta.ldi.lens import SHAPES as LENS_SHAPES
-from rtta.passes.composite import LENS_MODES
+from rtta.passes.composite import LENS_MODES, ROLES
+from rtta.passes.oit import ORDERS
 from rtta.scene.model import BOUNDS
 
+from . import tree
 from .state import ATLAS_MAX_CHOICES, VIEW_MODES
 
 if TYPE_CHECKING:
     from .commands import PanelsHost
 
 ERROR_COLOR = imgui.ImVec4(1.0, 0.45, 0.4, 1.0)
-LIST_HEIGHT = 170
 STAGES = ("parameterize", "capture", "post", "composite", "std", "ui")
 
 
@@ -68,37 +69,13 @@ def _mode(app: PanelsHost) -> None:
     _, s.show_atlas = imgui.checkbox("atlas view (A)", s.show_atlas)
     imgui.same_line()
     if imgui.button("frame all (F)"):
-        app.orbit.frame()
+        app.frame_objects()
     if s.mode == "std":
         imgui.text_disabled("STD draws the scene directly: no highlights")
 
 
 def _objects(app: PanelsHost) -> None:
-    s = app.state
-    if not imgui.collapsing_header("Objects", imgui.TreeNodeFlags_.default_open):
-        return
-    _, s.filter = imgui.input_text_with_hint("##filter", "filter by name", s.filter)
-    for how in ("all", "none", "invert"):
-        imgui.same_line()
-        if imgui.small_button(how):
-            s.select(how)
-    imgui.begin_child("objects", imgui.ImVec2(0, LIST_HEIGHT), imgui.ChildFlags_.borders)
-    app.item_rects.clear()
-    slider_x = imgui.get_cursor_pos_x() + imgui.get_content_region_avail().x - 90
-    for oid in s.filtered():
-        imgui.push_id(oid)
-        changed, on = imgui.checkbox(app.renderer.scene.names[oid], oid in s.highlighted)
-        app.item_rects[oid] = (*imgui.get_item_rect_min(), *imgui.get_item_rect_max())
-        if changed:
-            s.toggle(oid)
-        if s.mode == "transparent":
-            imgui.same_line(slider_x)
-            imgui.set_next_item_width(90)
-            changed, a = imgui.slider_float("##a", s.opacity(oid), 0.0, 1.0, "%.2f")
-            if changed:
-                s.style.opacity[oid] = a
-        imgui.pop_id()
-    imgui.end_child()
+    tree.draw(app)
 
 
 def _style(app: PanelsHost) -> None:
@@ -114,6 +91,12 @@ def _style(app: PanelsHost) -> None:
     _, st.outline_color = _color("outline colour", st.outline_color)
     _, st.ao_radius = imgui.slider_float("AO radius (px)", st.ao_radius, 1.0, 16.0)
     _, st.ao_strength = imgui.slider_float("AO strength", st.ao_strength, 0.0, 2.0)
+    _, st.halo = imgui.slider_int("halo (px)", st.halo, 0, 16)
+    for label, attr, choices in (("AO on", "ao_objects", ROLES), ("edges on", "edge_objects", ROLES),
+                                 ("transparency order", "order", ORDERS)):
+        changed, i = imgui.combo(label, choices.index(getattr(st, attr)), list(choices))
+        if changed:
+            setattr(st, attr, choices[i])
 
 
 def _projector(app: PanelsHost) -> None:
@@ -161,6 +144,7 @@ def _atlas(app: PanelsHost) -> None:
     if changed:
         s.set_atlas_max(ATLAS_MAX_CHOICES[i])
     _, s.settings.region_scale = imgui.slider_float("region scale", s.settings.region_scale, 0.25, 2.0, "%.2f")
+    _, s.settings.context_scale = imgui.slider_float("context scale", s.settings.context_scale, 0.25, 1.0, "%.2f")
     changed, i = imgui.combo("bounds", BOUNDS.index(s.settings.bounds), list(BOUNDS))
     if changed:
         s.settings.bounds = BOUNDS[i]

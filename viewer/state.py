@@ -11,6 +11,8 @@ from dataclasses import dataclass, field
 from rtta.passes.composite import MODES, Style
 from rtta.renderer.renderer import Settings
 
+from .parts import PartTree
+
 VIEW_MODES = ("std", *MODES)
 ATLAS_MAX_CHOICES = ("viewport", "512", "1024", "2048", "4096")
 
@@ -65,10 +67,46 @@ class ViewerState:
     measure: bool = True           # time each stage (waits for the GPU after each: costs a little)
     projector: ProjectorState = field(default_factory=lambda: ProjectorState())
     lens: LensState = field(default_factory=lambda: LensState())
+    paths: list[tuple[str, ...]] | None = None   # the part tree (Scene.paths)
+    hidden: set[int] = field(default_factory=set)  # not captured, drawn or packed
+    hidden_rev: int = 0            # bumped on every change of `hidden` (a cheap capture key)
+    hover: int | None = None       # tree node under the mouse: its objects are outlined
+    selected: int | None = None    # object picked in the composite: its row is revealed
+    scroll_to: int | None = None   # tree node the panel scrolls to on its next frame
 
     def __post_init__(self) -> None:
         if self.mode not in VIEW_MODES:
             raise ValueError(f"unknown mode {self.mode!r}; modes: {', '.join(VIEW_MODES)}")
+        self.tree = PartTree(self.names, self.paths)
+
+    def hide(self, ids, on: bool = True) -> None:
+        """Hide (or show again) these objects."""
+        ids = {int(i) for i in ids}
+        self.hidden = (self.hidden | ids) if on else (self.hidden - ids)
+        self.hidden_rev += 1
+
+    def isolate(self, ids) -> None:
+        """Hide every object but these."""
+        self.hidden = set(range(len(self.names))) - {int(i) for i in ids}
+        self.hidden_rev += 1
+
+    def show_all(self) -> None:
+        self.hidden = set()
+        self.hidden_rev += 1
+
+    def toggle_group(self, ids) -> None:
+        """A group's checkbox: all of its objects highlighted, or (when they all are) none."""
+        ids = {int(i) for i in ids}
+        if ids <= self.style.focus:
+            self.style.focus -= ids
+        else:
+            self.style.focus |= ids
+
+    def reveal(self, oid: int) -> None:
+        """Select object `oid`: open the groups above its row and scroll the panel to it."""
+        self.selected = oid
+        self.filter = "" if self.filter and self.filter.strip().lower() not in self.names[oid].lower() else self.filter
+        self.scroll_to = self.tree.reveal(oid)
 
     @property
     def highlighted(self) -> set[int]:
@@ -106,9 +144,11 @@ class ViewerState:
         s = self.style
         return (self.mode, tuple(sorted(s.focus)), tuple(sorted(s.opacity.items())), s.default_opacity,
                 s.context_opacity, s.desaturate, tuple(s.edge_color), tuple(s.outline_color),
-                s.outline_width, s.edge_width, s.ao_radius, s.ao_strength)
+                s.outline_width, s.edge_width, s.ao_radius, s.ao_strength, s.ao_objects, s.edge_objects,
+                s.order, s.halo)
 
     def capture_key(self) -> tuple:
         """Changes whenever the atlas must be captured again (besides camera and viewport)."""
         s = self.settings
-        return (s.border, s.atlas_max, s.max_layers, s.capture_path, s.region_scale, s.bounds)
+        return (s.border, s.atlas_max, s.max_layers, s.capture_path, s.region_scale, s.context_scale, s.bounds,
+                self.hidden_rev)

@@ -131,22 +131,26 @@ def viewport_rects(vis: np.ndarray, lo: np.ndarray, hi: np.ndarray, size: tuple[
 
 def parameterize(corners: np.ndarray, vpm: np.ndarray, viewport: tuple[int, int], *,
                  border: int = 1, atlas_max: tuple[int, int] | None = None,
-                 max_layers: int = 2048, region_scale: float = 1.0) -> Records:
+                 max_layers: int = 2048, region_scale: float | np.ndarray = 1.0,
+                 hidden: np.ndarray | None = None) -> Records:
     """Algorithm 1: records for all objects, given B_world corners [n, 8, 3] (or several
     enclosing boxes per object [k, n, 8, 3], whose projections are intersected) and VPM.
 
     region_scale: atlas texels per viewport pixel wanted for every region (below 1 saves
-    atlas memory and fill, above 1 supersamples); lowered per object only where it must be."""
+    atlas memory and fill, above 1 supersamples); lowered per object only where it must be.
+    A float, or one per object [n] (importance: focus objects at 1, context ones lower).
+    hidden: bool [n], objects the user hid: culled like those outside the view (no region)."""
     n = corners.shape[-3]
     W, H = int(viewport[0]), int(viewport[1])
     if W < 1 or H < 1:
         raise ValueError(f"viewport must be at least 1x1, got {W}x{H}")
-    if not (np.isfinite(region_scale) and 0 < region_scale <= 16):
-        raise ValueError(f"region scale must be in (0, 16], got {region_scale}")
-    max_w, max_h = atlas_max or default_atlas_max((W, H), border, region_scale)
+    region_scale = _checked_scale(region_scale, n)
+    max_w, max_h = atlas_max or default_atlas_max((W, H), border, float(region_scale.max(initial=1e-3)))
     if max_w < 1 + 2 * border or max_h < 1 + 2 * border:
         raise ValueError(f"atlas maximum {max_w}x{max_h} cannot hold a 1-pixel region with border {border}")
     vis, lo, hi = project_bounds(corners, vpm) if corners.ndim == 3 else _intersected(corners, vpm)
+    if hidden is not None:
+        vis = vis & ~np.asarray(hidden, bool)
     vis, rect = viewport_rects(vis, lo, hi, (W, H))
     inner = (rect[:, 2:] - rect[:, :2]).astype(np.float64)
     fit = np.minimum((max_w - 2 * border) / np.maximum(inner[:, 0], 1),
@@ -168,6 +172,19 @@ def parameterize(corners: np.ndarray, vpm: np.ndarray, viewport: tuple[int, int]
     return Records(visible=vis, viewport_rect=rect, atlas_rect=atlas_rect, layer=layer,
                    scale=scale, transform=transform, clip_ndc=clip_ndc, viewport=(W, H),
                    atlas_size=(packing.width, packing.height, packing.layers), border=border)
+
+
+def _checked_scale(region_scale, n: int) -> np.ndarray:
+    """The region scale as one float per object, each in (0, 16]."""
+    scale = np.asarray(region_scale, np.float64)
+    if scale.ndim == 0:
+        scale = np.full(n, float(scale))
+    if scale.shape != (n,):
+        raise ValueError(f"region scale must be a float or one per object ({n}), got shape {scale.shape}")
+    if not (np.isfinite(scale).all() and (scale > 0).all() and (scale <= 16).all()):
+        bad = scale[~(np.isfinite(scale) & (scale > 0) & (scale <= 16))][0]
+        raise ValueError(f"region scale must be in (0, 16], got {bad}")
+    return scale
 
 
 def default_atlas_max(viewport: tuple[int, int], border: int, region_scale: float = 1.0) -> tuple[int, int]:

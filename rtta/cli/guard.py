@@ -2,8 +2,8 @@
 
 `OneLineParser` turns argparse's errors into an RttaError; `run_command` runs a handler with
 the signal handlers of rtta.outputs installed and maps every failure to one line and an
-exit status (2: bad input or a failure to write; 130/143/129: interrupted before any output
-was committed; 1: a reader closed the pipe early). `RTTA_DEBUG=1` lets an unexpected
+exit status (2: bad input or a failure to write; 130: interrupted by SIGINT, SIGTERM or
+SIGHUP before the command's output was in place; 1: a reader closed the pipe early). `RTTA_DEBUG=1` lets an unexpected
 exception through with its traceback.
 """
 
@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import signal
 import sys
 from collections.abc import Callable
 
@@ -90,24 +89,20 @@ def run_command(handler: Callable[[argparse.Namespace], int], args: argparse.Nam
     try:
         code = handler(args)
         sys.stdout.flush()
-        if outputs.interrupt_requested():           # a library swallowed it, and nothing was replaced
+        if outputs.interrupt_requested():           # a library swallowed it before the output was in place
             raise outputs.Interrupted(outputs.interrupt_requested())
         return code
-    except outputs.Interrupted as exc:
-        say("interrupted", f"{signal.Signals(exc.signum).name}; nothing was written")
-        return 128 + exc.signum
-    except KeyboardInterrupt:
-        say("interrupted", "nothing was written")
+    except KeyboardInterrupt:                       # Interrupted too: the run stops, its temporaries gone
+        print("rtta: interrupted", file=sys.stderr)
         return 130
     except Exception as exc:
-        signum = outputs.interrupt_requested()
-        if signum is None:
+        if outputs.interrupt_requested() is None:
             return _failed(exc, args)
-        say("interrupted", f"{signal.Signals(signum).name}; nothing was written")   # what failed was cut short
-        return 128 + signum
+        print("rtta: interrupted", file=sys.stderr)   # what failed was the work the signal cut short
+        return 130
     finally:
         sys.stdout = real_stdout
-        if not (process and outputs.interrupt_requested() is None and outputs.committed()):
+        if not (process and outputs.finished()):
             outputs.restore_signal_handlers(old_handlers)
 
 

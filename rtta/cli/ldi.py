@@ -92,7 +92,7 @@ def write_npy(path: str, array: np.ndarray) -> None:
         with open(tmp, "wb") as fh:          # a file object: np.save would add ".npy" to a bare name
             np.save(fh, array)
 
-    atomic_write(path, save)
+    atomic_write(path, save, final=True)
 
 
 def cmd_ldi(args: argparse.Namespace) -> int:

@@ -1,4 +1,4 @@
-"""The `rtta` command: export, snapshot, info, bench. Expected failures print one line and exit 2."""
+"""The `rtta` command: export, snapshot, info, ldi, dataset, bench. Expected failures print one line and exit 2."""
 
 from __future__ import annotations
 
@@ -19,7 +19,8 @@ def parse_size(text: str, what: str = "--size") -> tuple[int, int]:
 
 
 def _scene_arg(p: argparse.ArgumentParser) -> None:
-    p.add_argument("scene", nargs="?", help="glTF/GLB/OBJ/STL/PLY/3MF/OFF file (default: the built-in demo)")
+    p.add_argument("scene", nargs="?", help="glTF/GLB/OBJ/STL/PLY/3MF/OFF, STEP, IFC, COLLADA, USD or 3DXML "
+                                            "file (default: the built-in demo)")
     add_load_options(p)
 
 
@@ -44,6 +45,9 @@ def _view_args(p: argparse.ArgumentParser) -> None:
                    help="atlas texels per viewport pixel (0.25 to 4; default 1)")
     p.add_argument("--bounds", choices=("aabb", "obb"), default="aabb",
                    help="object bounds projected per frame: the paper's AABB or the tighter oriented box")
+    p.add_argument("--context-scale", type=float, default=None,
+                   help="region scale of objects outside the focus, as a fraction of --region-scale "
+                        "(0.25 to 1; default: the library's, see README); upsampled depth-aware when composited")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -64,6 +68,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--edge-width", type=int, default=1, help="edge detection distance in pixels (ghosted-ao)")
     p.add_argument("--ao-radius", type=float, default=6.0, help="ambient occlusion radius in pixels (ghosted-ao)")
     p.add_argument("--ao-strength", type=float, default=1.0, help="ambient occlusion strength (ghosted-ao)")
+    p.add_argument("--ao-objects", choices=("focus", "all"), default=None,
+                   help="ambient occlusion on the focus objects only or on all (ghosted-ao; default: see README)")
+    p.add_argument("--halo", type=int, default=0, metavar="WIDTH",
+                   help="ghosted modes: a dark halo WIDTH pixels wide around focus objects where context lies behind")
+    p.add_argument("--order", choices=("object", "pixel"), default=None,
+                   help="transparency order: by object (bounds centres) or per pixel (each object's surface "
+                        "depth; nested parts blend right); default: see README")
+    p.add_argument("--edge-objects", choices=("focus", "all"), default=None,
+                   help="edges on the focus objects only or on all (ghosted-ao; default: see README)")
     p.add_argument("--projector", default=None, metavar="IMAGE[,AZ,EL,DIST]",
                    help="paint the scene with IMAGE ('default': the shipped grid) from an orbit position "
                         "(as --camera); without one the projector sits at the camera")
@@ -76,8 +89,11 @@ def build_parser() -> argparse.ArgumentParser:
     out = p.add_mutually_exclusive_group(required=True)
     out.add_argument("--out", help="PNG file to write")
     out.add_argument("--all-modes", metavar="DIR", help="write <mode>.png for every mode into DIR")
-    p = sub.add_parser("info", help="list the objects of a scene")
+    p = sub.add_parser("info", help="list the objects of a scene (--tree: its part tree), its unit and up axis")
     _scene_arg(p)
+    from .info import add_arguments
+
+    add_arguments(p)
     p = sub.add_parser("bench", help="benchmarks that print tables")
     bsub = p.add_subparsers(dest="bench", required=True)
     b = bsub.add_parser("capture", help="STD / RTT / RTTA frame times on the paper's Table 1 sizes")
@@ -87,6 +103,8 @@ def build_parser() -> argparse.ArgumentParser:
     b = bsub.add_parser("composite", help="per-mode frame time against STD, and re-composite time")
     b.add_argument("--size", default="1024x1024")
     b.add_argument("--quick", action="store_true")
+    b.add_argument("--scene", nargs="+", default=None, metavar="NAME",
+                   help="demo, table1-N, random-N or a file (default: the demo and the Table 1 rows)")
     b.add_argument("--json", default=None)
     b = bsub.add_parser("reliability", help="random extreme cameras against STD, and a soak (RELIABILITY.md)")
     b.add_argument("--sweep", type=int, default=10000, help="random cameras per scene")
@@ -117,9 +135,14 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--markdown", default=None, help="markdown file whose report block is replaced "
                                                     "(default: BENCHMARKS.md)")
     b.add_argument("--plots", default=None, help="folder for the PNG plots (default: docs/bench)")
+    b = bsub.add_parser("formats", help="load time of every scene file: the format's library against rtta")
+    b.add_argument("files", nargs="*", help="scene files (default: every one in ../shared/data)")
+    b.add_argument("--json", default=None)
+    from .dataset import add_parsers as add_dataset
     from .ldi import add_parser as add_ldi
 
     add_ldi(sub)
+    add_dataset(sub, bsub, (add_load_options, load_options, parse_size))
     return parser
 
 
@@ -143,7 +166,7 @@ def _settings(args):
     from ..renderer.api import make_settings
 
     return make_settings(args.border, args.atlas_max, args.max_layers, args.capture_path, args.region_scale,
-                         args.bounds)
+                         args.bounds, getattr(args, "context_scale", None))
 
 
 def _renderer(ctx, scene, settings):
@@ -193,7 +216,8 @@ def cmd_snapshot(args) -> int:
     camera = orbit_camera(scene, args.camera, args.fov)
     style = make_style(resolve_names(scene, args.focus, "--focus"), parse_opacities(scene, args.opacity),
                        context_opacity=args.context_opacity, edge_width=args.edge_width,
-                       ao_radius=args.ao_radius, ao_strength=args.ao_strength)
+                       ao_radius=args.ao_radius, ao_strength=args.ao_strength, ao_objects=args.ao_objects,
+                       edge_objects=args.edge_objects, order=args.order, halo=args.halo)
     targets = _snapshot_targets(args, [*scene.inputs, *_projector_files(args)])
     renderer = _renderer(shared_context(), scene, _settings(args))
     if args.projector is not None:
@@ -248,14 +272,9 @@ def _projector(args, scene, camera):
 
 
 def cmd_info(args) -> int:
-    scene = _load(args)
-    lo, hi = scene.bounds
-    print(f"{printable(scene.source)}: {scene.count} objects, {scene.vertex_count} vertices, "
-          f"{len(scene.indices) // 3} triangles, bounds {lo.round(4).tolist()} .. {hi.round(4).tolist()}")
-    for oid, name in enumerate(scene.names):
-        first, count = scene.index_ranges[oid]
-        print(f"{oid:5d}  {printable(name)}  ({count // 3} triangles)")
-    return 0
+    from .info import run
+
+    return run(_load(args), args.tree)
 
 
 def cmd_bench(args) -> int:
@@ -264,7 +283,7 @@ def cmd_bench(args) -> int:
     if args.bench == "capture":
         return bench.run_capture(parse_size(args.size), quick=args.quick, json_path=args.json)
     if args.bench == "composite":
-        return bench.run_composite(parse_size(args.size), quick=args.quick, json_path=args.json)
+        return bench.run_composite(parse_size(args.size), quick=args.quick, json_path=args.json, scenes=args.scene)
     if args.bench == "reliability":
         from ..tools.bench_reliability import run_reliability
 
@@ -285,6 +304,14 @@ def cmd_bench(args) -> int:
         if args.objects < 1 or args.max_vertices < 3:
             raise RttaError("--objects must be at least 1 and --max-vertices at least 3")
         return run_material(args.objects, quick=args.quick, json_path=args.json, max_vertices=args.max_vertices)
+    if args.bench == "formats":
+        from ..tools.bench_formats import run_formats
+
+        return run_formats(args.files, json_path=args.json)
+    if args.bench == "dataset":
+        from .dataset import cmd_bench_dataset
+
+        return cmd_bench_dataset(args)
     if args.bench == "report":
         from ..tools.report import run_report
 
@@ -294,6 +321,7 @@ def cmd_bench(args) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     from ..tools.memory import steady_heap
+    from .dataset import cmd_dataset
     from .ldi import cmd_ldi
 
     try:
@@ -303,7 +331,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     steady_heap()
     handler = {"export": cmd_export, "snapshot": cmd_snapshot, "info": cmd_info, "bench": cmd_bench,
-               "ldi": cmd_ldi}[args.command]
+               "ldi": cmd_ldi, "dataset": cmd_dataset}[args.command]
     return run_command(handler, args, process=argv is None)
 
 

@@ -108,7 +108,9 @@ class StdPass(ScenePass):
         self._painted: ScenePass | None = None
 
     def render(self, *, gpu: GpuScene, view: np.ndarray, proj: np.ndarray,
-               target: LayeredTarget, viewport: tuple[int, int], projection=None) -> None:
+               target: LayeredTarget, viewport: tuple[int, int], projection=None,
+               ranges: list[tuple[int, int]] | None = None) -> None:
+        """ranges: (first, count) index runs to draw (None: the whole batch in one call)."""
         target.ensure(viewport, 1)
         target.clear()
         scene_pass: ScenePass = self
@@ -121,7 +123,10 @@ class StdPass(ScenePass):
             pass_, projector = projection
             pass_.bind(scene_pass.program, projector, gpu.scene.origin)
         target.bind((0, 0, *viewport))
-        vao.render(moderngl.TRIANGLES)
+        if ranges is None:
+            vao.render(moderngl.TRIANGLES)
+        for first, count in ranges or ():
+            vao.render(moderngl.TRIANGLES, vertices=count, first=first)
 
     def release(self) -> None:
         super().release()

@@ -5,7 +5,11 @@ Modes: `sprites` (depth sprites, reconstruct STD), `transparent` (every object b
 with its opacity, back to front); in both, highlighted (focus) objects get their silhouette
 drawn over everything. `ghosted` (focus opaque and visible through the faded,
 desaturated context, with silhouettes), `ghosted-ao` (ghosted, shaded with ambient
-occlusion and edges computed on each object's own atlas images).
+occlusion and edges computed on each object's own atlas images; by default AO on the focus
+objects only, Style.ao_objects / edge_objects). Regions captured below one texel per pixel
+(context objects at Settings.context_scale) are upsampled depth-aware (UPSAMPLE variant);
+`transparent` blends per pixel in surface order with Style.order 'pixel' (oit.py); Style.halo
+draws halos around focus objects where context lies behind them.
 """
 
 from __future__ import annotations
@@ -20,10 +24,13 @@ from ..gl import glraw, glsl
 from ..gl.gpu import GpuScene
 from ..gl.targets import SHRINK_AFTER_FRAMES, LayeredTarget, release_framebuffer, round_up
 from .capture import mat_bytes
+from .oit import ORDERS, PixelOrderPass
 
 MODES = ("sprites", "transparent", "ghosted", "ghosted-ao")
 LENS_MODES = ("ghosted", "ghosted-ao")    # where a lens cuts the context away
 BACKGROUND = (0.93, 0.93, 0.95, 1.0)
+UPSAMPLE_BELOW = 0.999                    # regions with fewer texels per pixel are upsampled
+ROLES = ("focus", "all")                  # which objects get AO / edges in ghosted-ao
 
 
 @dataclass
@@ -41,6 +48,22 @@ class Style:
     edge_width: int = 1
     ao_radius: float = 6.0
     ao_strength: float = 1.0
+    # defaults from `rtta bench composite` on the demo at 1024² (README, BENCHMARKS.md)
+    ao_objects: str = "focus"          # ghosted-ao: AO on 'focus' objects only (the paper) or on 'all'
+    edge_objects: str = "all"          # ghosted-ao: edges on 'focus' objects only or on 'all'
+    order: str = "object"              # transparency: 'object' (bounds centres) or 'pixel' (surfaces)
+    halo: int = 0                      # ghosted modes: halo width (pixels) around focus objects, 0: none
+    halo_color: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.6)   # (rgb, strength)
+
+    def shaded(self, n: int) -> tuple[np.ndarray, np.ndarray]:
+        """(uses AO, uses edges) per object [n] bool, in ghosted-ao."""
+        focus = np.zeros(n, bool)
+        focus[[o for o in self.focus if 0 <= o < n]] = True
+        for name, value in (("ao_objects", self.ao_objects), ("edge_objects", self.edge_objects)):
+            if value not in ROLES:
+                raise ValueError(f"{name} must be one of {', '.join(ROLES)}, got {value!r}")
+        every = np.ones(n, bool)
+        return (every if self.ao_objects == "all" else focus), (every if self.edge_objects == "all" else focus)
 
 
 class CompositeTarget:
@@ -130,13 +153,17 @@ class CompositePass:
         self.styles = ctx.buffer(reserve=16)
         self.order = ctx.buffer(reserve=16)
         self.passes: list[str] = []        # the draws of the last render, for inspection
+        self._pixel_order = None           # PixelOrderPass, made on first use
+        self._context_depth = self._context_fbo = None    # front-most context depth, for halos
+        self.fallbacks = 0                 # frames that asked for pixel order and got object order
         self._projection = self._lens = self._inv_view_proj = None
 
     def _program(self, **defines) -> tuple[moderngl.Program, moderngl.VertexArray]:
         key = tuple(sorted(defines.items()))
         if key not in self._programs:
+            geom = {k: v for k, v in defines.items() if k in glsl.declared_defines("composite.geom")}
             prog = self.ctx.program(vertex_shader=glsl.load("composite.vert"),
-                                    geometry_shader=glsl.load("composite.geom"),
+                                    geometry_shader=glsl.load("composite.geom", **geom),
                                     fragment_shader=glsl.load("composite.frag", **defines))
             self._programs[key] = prog
             self._vaos[key] = self.ctx.vertex_array(prog, [])
@@ -167,6 +194,9 @@ class CompositePass:
             params[oid, 0] = float(np.clip(a, 0.0, 1.0))
         focus = np.array(sorted(o for o in style.focus if 0 <= o < n), np.int64)
         params[focus, 1] = 1.0
+        if mode == "ghosted-ao":
+            ao, edges = style.shaded(n)
+            params[:n, 2], params[:n, 3] = ao, edges
         self._upload(self.styles, params.tobytes())
         self.passes = []
         target.ensure(records.viewport)
@@ -183,7 +213,7 @@ class CompositePass:
             self._draw(everyone, style, records, sprite=True)
             self._draw(focus, style, records, outline=True)      # highlights, seen through
         elif mode == "transparent":
-            self._draw(back_to_front(records, view_depth, everyone), style, records, blend=True, desaturate=0.0)
+            self._blend(back_to_front(records, view_depth, everyone), style, records, target, desaturate=0.0)
             self._draw(focus, style, records, outline=True)
         else:
             with_ao = mode == "ghosted-ao"
@@ -195,20 +225,79 @@ class CompositePass:
             self._upload(self.styles, params.tobytes())
             self._draw(back_to_front(records, view_depth, context), style, records, blend=True,
                        desaturate=style.desaturate, depth_test=True, ao=with_ao, cut=True)
+            if style.halo > 0 and len(focus):
+                self._halo(focus, context, style, records, target)
             self._draw(focus, style, records, outline=True)
 
-    def _draw(self, ids, style: Style, records: Records, *, sprite=False, blend=False, outline=False,
-              desaturate=0.0, depth_test=False, ao=False, cut=False) -> None:
+    def _halo(self, focus, context, style: Style, records: Records, target: CompositeTarget) -> None:
+        """Halos around the focus objects where context lies behind them: the farthest
+        context depth per pixel first (a depth-only sprite pass; focus objects are often
+        inside the context, so the front-most context surface is in front of them), then one
+        quad per focus object reaching `style.halo` pixels beyond its B_viewport."""
+        if not 1 <= int(style.halo) <= 32:
+            raise ValueError(f"halo width must be 0..32 pixels, got {style.halo}")
+        if self._context_depth is None or self._context_depth.size != target.size:
+            self._release_context_depth()
+            self._context_depth = self.ctx.depth_texture(target.size)
+            self._context_depth.compare_func = ""
+            self._context_fbo = self.ctx.framebuffer(depth_attachment=self._context_depth)
+        self._context_fbo.viewport = (0, 0, *target.viewport)
+        self._context_fbo.use()
+        self._context_fbo.clear(depth=0.0)
+        self._draw(context, style, records, sprite=True, cut=True, farthest=True)
+        target.fbo.use()
+        self._context_depth.use(5)
+        self._draw(focus, style, records, halo=True, depth_test=True)
+
+    def _release_context_depth(self) -> None:
+        if self._context_depth is not None:
+            release_framebuffer(self.ctx, self._context_fbo)
+            self._context_depth.release()
+        self._context_depth = self._context_fbo = None
+
+    def _blend(self, ids, style: Style, records: Records, target: CompositeTarget, **how) -> None:
+        """Blend `ids` (back to front) over the target: object by object, or per pixel in the
+        order of their surfaces (style.order 'pixel'; object order when over MAX_NODES)."""
+        if style.order not in ORDERS:
+            raise ValueError(f"order must be one of {', '.join(ORDERS)}, got {style.order!r}")
+        if style.order == "pixel" and len(ids):
+            if self._pixel_order is None:
+                self._pixel_order = PixelOrderPass(self.ctx)
+            ids = np.asarray(ids, np.int64)
+            ids = ids[records.visible[ids]]
+            if self._pixel_order.begin(records.viewport, ids, records):
+                self._draw(ids, style, records, collect=True, **how)
+                self._pixel_order.resolve(target.fbo)
+                self.passes.append("resolve")
+                return
+            self.fallbacks += 1
+        self._draw(ids, style, records, blend=True, **how)
+
+    def _draw(self, ids, style: Style, records: Records, **how) -> None:
+        """Draw `ids` in order: one draw per run of objects captured at one texel per pixel
+        or more, and per run below it (those are upsampled); outlines read texels as they are."""
         ids = np.asarray(ids, np.int32)
         ids = ids[records.visible[ids]] if len(ids) else ids
         if len(ids) == 0:
             return
+        low = records.scale[ids] < UPSAMPLE_BELOW
+        if how.get("outline") or how.get("halo") or not low.any():
+            return self._draw_run(ids, style, records, **how)
+        cuts = np.flatnonzero(np.diff(low.astype(np.int8))) + 1
+        for run in np.split(ids, cuts):
+            self._draw_run(run, style, records, upsample=bool(records.scale[run[0]] < UPSAMPLE_BELOW), **how)
+
+    def _draw_run(self, ids, style: Style, records: Records, *, sprite=False, blend=False, outline=False,
+                  desaturate=0.0, depth_test=False, ao=False, cut=False, upsample=False, collect=False,
+                  halo=False, farthest=False) -> None:
         self._upload(self.order, ids.astype(np.int32).tobytes())
         self.order.bind_to_storage_buffer(3)
-        projection = None if outline else self._projection
+        projection = None if outline or halo else self._projection
         lens = self._lens if cut else None
-        mode = {"MODE_SPRITE": sprite, "MODE_BLEND": blend, "MODE_OUTLINE": outline, "WITH_AO": ao and not outline,
-                "PROJECTOR": projection is not None, "LENS": lens is not None}
+        mode = {"MODE_SPRITE": sprite, "MODE_BLEND": blend, "MODE_OUTLINE": outline, "MODE_COLLECT": collect,
+                "MODE_HALO": halo,
+                "WITH_AO": ao and not outline,
+                "PROJECTOR": projection is not None, "LENS": lens is not None, "UPSAMPLE": upsample}
         on = [k for k, v in mode.items() if v]
         self.passes.append("+".join(k.removeprefix("MODE_").lower() for k in on))
         prog, vao = self._program(**{k: True for k in on})
@@ -223,24 +312,33 @@ class CompositePass:
             lens_pass.bind(prog, lens_, origin)
         edge_color = style.outline_color if outline else style.edge_color
         for name, value in (("u_desaturate", desaturate), ("u_edge_color", edge_color),
-                            ("u_outline_width", style.outline_width)):
+                            ("u_outline_width", style.outline_width), ("u_halo_width", int(style.halo)),
+                            ("u_halo_color", tuple(style.halo_color))):
             if name in prog:       # the compiler drops what a variant does not use
                 prog[name].value = value
         flags = moderngl.NOTHING
         if sprite or depth_test:
             flags |= moderngl.DEPTH_TEST
-        if blend:
+        if blend or halo:
             flags |= moderngl.BLEND
         self.ctx.enable_only(flags)
-        self.ctx.depth_func = "<"
+        self.ctx.depth_func = ">" if farthest else "<"
         self.ctx.blend_func = moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA
         fbo = self.ctx.fbo
         fbo.depth_mask = bool(sprite)
+        if collect:
+            fbo.color_mask = (False,) * 4
         fbo.use()
         vao.render(moderngl.POINTS, vertices=len(ids))
         fbo.depth_mask = True
+        self.ctx.depth_func = "<"
+        if collect:
+            fbo.color_mask = (True,) * 4
 
     def release(self) -> None:
+        self._release_context_depth()
+        if self._pixel_order is not None:
+            self._pixel_order.release()
         for obj in [*self._vaos.values(), *self._programs.values(), self.styles, self.order]:
             obj.release()
         self._vaos.clear()

@@ -58,13 +58,16 @@ class _LayerTarget:
 
 
 class AtlasPostPass:
-    """render(*, atlas, records, gpu, proj, style) -> `texture`, an RGBA8 texture array
-    (ao, edge) shaped like the atlas, valid on the texels of visible objects."""
+    """render(*, atlas, records, gpu, proj, style, full, edges) -> `texture`, an RGBA8
+    texture array (ao, edge) shaped like the atlas, written on the texels of the visible
+    objects listed: `full` get AO and edges, `edges` edges only (AO 1). Other texels keep
+    what they held, so a caller can shade objects a few at a time (a focus change)."""
 
     def __init__(self, ctx: moderngl.Context) -> None:
         self.ctx = ctx
         self._variants: dict[tuple[str, ...], tuple] = {}     # defines -> (program, vao)
         self._out = _LayerTarget(ctx, 4, "f1")    # (ao, edge)
+        self._list = ctx.buffer(reserve=16)       # the ids to shade
 
     @property
     def texture(self):
@@ -81,17 +84,32 @@ class AtlasPostPass:
             self._variants[defines] = (prog, self.ctx.vertex_array(prog, []))
         return self._variants[defines]
 
-    def render(self, *, atlas: LayeredTarget, records: Records, gpu: GpuScene, proj: np.ndarray, style) -> None:
+    def render(self, *, atlas: LayeredTarget, records: Records, gpu: GpuScene, proj: np.ndarray, style,
+               full=None, edges=()) -> None:
         w, h = atlas.size
         self._out.ensure((w, h, atlas.layers), atlas)
         tw, th, td = records.atlas_size
         n = len(records.visible)
+        full = np.arange(n) if full is None else np.asarray(full, np.int64)
         if td == 0 or n == 0:
             return
         gpu.bind_storage()
         glraw.bind_texture_array(0, atlas.depth.glo)
         atlas.normal.use(1)
-        prog, vao = self._variant(*(("EDGE_QUAD",) if int(style.edge_width) == 1 else ()))
+        quad = ("EDGE_QUAD",) if int(style.edge_width) == 1 else ()
+        for ids, defines in ((full, quad), (np.asarray(edges, np.int64), (*quad, "EDGES_ONLY"))):
+            ids = ids[records.visible[ids]] if len(ids) else ids
+            if len(ids):
+                self._draw(ids, defines, records, proj, style)
+
+    def _draw(self, ids: np.ndarray, defines: tuple, records: Records, proj: np.ndarray, style) -> None:
+        tw, th, _ = records.atlas_size
+        data = ids.astype(np.int32).tobytes()
+        if self._list.size < len(data):
+            self._list.orphan(max(len(data), 2 * self._list.size))
+        self._list.write(data)
+        self._list.bind_to_storage_buffer(3)
+        prog, vao = self._variant(*defines)
         uniforms = {"u_proj": (float(proj[0, 0]), float(proj[1, 1]), float(proj[2, 2]), float(proj[2, 3])),
                     "u_viewport": tuple(float(v) for v in records.viewport), "u_target": (float(tw), float(th)),
                     "u_ao_radius": float(style.ao_radius), "u_ao_strength": float(style.ao_strength),
@@ -106,12 +124,13 @@ class AtlasPostPass:
         self._out.fbo.depth_mask = False
         self._out.fbo.viewport = (0, 0, tw, th)
         self._out.fbo.use()
-        vao.render(moderngl.POINTS, vertices=n)
+        vao.render(moderngl.POINTS, vertices=len(ids))
         self.ctx.depth_func = "<"
         self.ctx.enable_only(moderngl.NOTHING)
 
     def release(self) -> None:
         self._out.release()
+        self._list.release()
         for prog, vao in self._variants.values():
             vao.release()
             prog.release()

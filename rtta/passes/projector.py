@@ -66,8 +66,9 @@ class Projector:
     far: float = 100.0
 
     @classmethod
-    def orbit(cls, center, radius: float, az: float, el: float, dist: float, **kw) -> Projector:
-        cam = Camera.orbit(center, radius, az, el, dist)
+    def orbit(cls, center, radius: float, az: float, el: float, dist: float, up_axis: str = "y",
+              **kw) -> Projector:
+        cam = Camera.orbit(center, radius, az, el, dist, up_axis=up_axis)
         return cls(eye=cam.eye, target=cam.target, up=cam.up, **kw).fit_depth(center, radius)
 
     @classmethod
@@ -118,18 +119,22 @@ class ProjectorPass:
         self._image_id: int | None = None
         self._key: tuple | None = None
 
-    def render(self, *, gpu: GpuScene, projector: Projector) -> None:
-        """Upload the image and draw the shadow map when the projector changed."""
+    def render(self, *, gpu: GpuScene, projector: Projector, ranges: list[tuple[int, int]] | None = None) -> None:
+        """Upload the image and draw the shadow map when the projector changed; `ranges`:
+        the (first, count) index runs of the objects shown (None: all; hidden ones cast no shadow)."""
         if id(projector.image) != self._image_id:
             self._upload(projector.image)
             self._image_id = id(projector.image)
-        key = projector.key()
+        key = (projector.key(), None if ranges is None else tuple(ranges))
         if key == self._key:
             return
         vao = self.shadow.setup(gpu, np.identity(4), projector.view_projection(gpu.scene.origin))
         self.fbo.clear(depth=1.0)
         self.fbo.use()
-        vao.render(moderngl.TRIANGLES)
+        if ranges is None:
+            vao.render(moderngl.TRIANGLES)
+        for first, count in ranges or ():
+            vao.render(moderngl.TRIANGLES, vertices=count, first=first)
         self._key = key
 
     def _upload(self, rgba: np.ndarray) -> None:

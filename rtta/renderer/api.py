@@ -42,15 +42,17 @@ from .renderer import Renderer, Settings
 from .snapshot import SNAPSHOT_MODES, make_lens, make_projector, render_modes, resolve_names
 
 SceneLike = Scene | str | os.PathLike | None
-STYLE_KEYS = ("context_opacity", "edge_width", "ao_radius", "ao_strength", "desaturate", "default_opacity",
-              "outline_width", "outline_color", "edge_color")
+CORE_STYLE = ("context_opacity", "edge_width", "ao_radius", "ao_strength", "ao_objects", "edge_objects", "order",
+              "halo")                  # checked by make_style, as the CLI's flags
+STYLE_KEYS = (*CORE_STYLE, "desaturate", "default_opacity", "outline_width", "outline_color", "edge_color")
 SCENE_CACHE = 4        # loaded scenes kept (CPU memory only)
 
 
 # ---- option builders shared with the CLI ------------------------------------------------
 
 def make_settings(border: int = 1, atlas_max: str | tuple[int, int] | None = None, max_layers: int | None = None,
-                  capture_path: str = "auto", region_scale: float = 1.0, bounds: str = "aabb") -> Settings:
+                  capture_path: str = "auto", region_scale: float = 1.0, bounds: str = "aabb",
+                  context_scale: float | None = None) -> Settings:
     """Checked Settings (the messages name the CLI flags, as `rtta snapshot` says them)."""
     if border < 0 or border > 64:
         raise RttaError(f"--border must be between 0 and 64, got {border}")
@@ -58,21 +60,34 @@ def make_settings(border: int = 1, atlas_max: str | tuple[int, int] | None = Non
         raise RttaError(f"--max-layers must be at least 1, got {max_layers}")
     if not (0.25 <= region_scale <= 4):
         raise RttaError(f"--region-scale must be between 0.25 and 4, got {region_scale}")
+    context_scale = Settings.context_scale if context_scale is None else context_scale
+    if not (0.25 <= context_scale <= 1):
+        raise RttaError(f"--context-scale must be between 0.25 and 1, got {context_scale}")
     atlas_max = check_size(atlas_max, "--atlas-max") if atlas_max else None
     _choice("--capture-path", capture_path, ("auto", "vs", "gs"))
     _choice("--bounds", bounds, ("aabb", "obb"))
     return Settings(border=border, atlas_max=atlas_max, max_layers=max_layers,
-                    capture_path=capture_path, region_scale=region_scale, bounds=bounds)
+                    capture_path=capture_path, region_scale=region_scale, bounds=bounds, context_scale=context_scale)
 
 
 def make_style(focus: Iterable[int] = (), opacity: Mapping[int, float] | None = None, *,
                context_opacity: float | None = None, edge_width: int = 1, ao_radius: float = 6.0,
-               ao_strength: float = 1.0) -> Style:
+               ao_strength: float = 1.0, ao_objects: str | None = None, edge_objects: str | None = None,
+               order: str | None = None, halo: int = 0) -> Style:
     """A checked Style from object ids (resolved by the caller) and the compositing flags."""
     style = Style(focus=set(focus), opacity=dict(opacity or {}))
     if not (1 <= edge_width <= 8 and 0 < ao_radius <= 64 and 0 <= ao_strength <= 4):
         raise RttaError("--edge-width must be 1..8, --ao-radius in (0, 64], --ao-strength in [0, 4]")
     style.edge_width, style.ao_radius, style.ao_strength = edge_width, ao_radius, ao_strength
+    roles = (("--ao-objects", ao_objects, ("focus", "all")), ("--edge-objects", edge_objects, ("focus", "all")),
+             ("--order", order, ("object", "pixel")))
+    for what, value, choices in roles:
+        if value is not None:
+            _choice(what, value, choices)
+            setattr(style, what[2:].replace("-", "_"), value)
+    if not 0 <= halo <= 32:
+        raise RttaError(f"--halo must be 0..32 pixels, got {halo}")
+    style.halo = halo
     if context_opacity is not None:
         if not 0.0 <= context_opacity <= 1.0:
             raise RttaError(f"--context-opacity must be in [0, 1], got {context_opacity}")
@@ -90,7 +105,7 @@ def orbit_camera(scene: Scene, camera: Camera | str | Sequence[float] | None, fo
         orbit = DEFAULT_ORBIT
     else:
         orbit = parse_orbit(camera if isinstance(camera, str) else ",".join(str(v) for v in camera))
-    return Camera.orbit(scene.center, scene.radius, *orbit, fov_y=fov)
+    return Camera.orbit(scene.center, scene.radius, *orbit, fov_y=fov, up_axis=scene.up_axis)
 
 
 def check_size(size: str | Sequence[int], what: str = "size") -> tuple[int, int]:
@@ -185,7 +200,8 @@ def snapshot(scene: SceneLike = None, mode: str = "ghosted-ao", *, focus: str | 
              size: Sequence[int] = (1024, 768), fov: float = 45.0, border: int = 1,
              atlas_max: str | tuple[int, int] | None = None,
              max_layers: int | None = None, capture_path: str = "auto",
-             region_scale: float = 1.0, bounds: str = "aabb", projector: str | Projector | None = None,
+             region_scale: float = 1.0, context_scale: float | None = None, bounds: str = "aabb",
+             projector: str | Projector | None = None,
              projector_fov: float = 30.0, projector_shadows: bool = True, lens: str | Lens | None = None,
              lens_at: str | Sequence[float] | None = None, smooth_angle: float = DEFAULT_SMOOTH_ANGLE,
              smooth: bool = False, **style) -> np.ndarray:
@@ -194,7 +210,8 @@ def snapshot(scene: SceneLike = None, mode: str = "ghosted-ao", *, focus: str | 
     ghosted or ghosted-ao. `focus`: object names; `opacity`: name -> alpha; `camera`: (AZ, EL,
     DIST) orbit, 'AZ,EL,DIST' or a Camera; `size`: (W, H). `projector`/`lens` take the CLI's
     strings (or a Projector / Lens). Style keywords: context_opacity, edge_width, ao_radius,
-    ao_strength, desaturate, default_opacity, outline_width, outline_color, edge_color."""
+    ao_strength, ao_objects, edge_objects, order, halo, desaturate, default_opacity, outline_width,
+    outline_color, edge_color."""
     _choice("mode", mode, SNAPSHOT_MODES)
     extra = _style_keywords(style)
     scene = _session.scene(scene, smooth_angle, smooth)
@@ -202,11 +219,10 @@ def snapshot(scene: SceneLike = None, mode: str = "ghosted-ao", *, focus: str | 
     cam = orbit_camera(scene, camera, fov)
     focus_ids = resolve_names(scene, [focus] if isinstance(focus, str) else list(focus), "focus")
     st = make_style(focus_ids, _opacities(scene, opacity or {}),
-                    **{k: style[k] for k in ("context_opacity", "edge_width", "ao_radius", "ao_strength")
-                       if k in style})
+                    **{k: style[k] for k in CORE_STYLE if k in style})
     for key, value in extra.items():
         setattr(st, key, value)
-    settings = make_settings(border, atlas_max, max_layers, capture_path, region_scale, bounds)
+    settings = make_settings(border, atlas_max, max_layers, capture_path, region_scale, bounds, context_scale)
     if isinstance(projector, str):
         projector = make_projector(scene, cam, projector, projector_fov, projector_shadows)
     if isinstance(lens, str):
@@ -264,7 +280,7 @@ def _style_keywords(style: dict) -> dict:
             close = difflib.get_close_matches(key, STYLE_KEYS, n=1, cutoff=0.5)
             hint = f"; did you mean {close[0]}?" if close else f"; style keywords: {', '.join(STYLE_KEYS)}"
             raise TypeError(f"snapshot() got an unexpected keyword argument '{key}'{hint}")
-    extra = {k: v for k, v in style.items() if k in STYLE_KEYS[4:]}
+    extra = {k: v for k, v in style.items() if k not in CORE_STYLE}
     for key in ("desaturate", "default_opacity"):
         if key in extra and not 0.0 <= extra[key] <= 1.0:
             raise RttaError(f"{key} must be in [0, 1], got {extra[key]}")
@@ -284,7 +300,8 @@ def _opacities(scene: Scene, opacity: Mapping[str, float]) -> dict[int, float]:
     for name, alpha in opacity.items():
         if not (isinstance(alpha, (int, float)) and np.isfinite(alpha) and 0.0 <= alpha <= 1.0):
             raise RttaError(f"opacity expects name -> alpha in [0, 1], got {name!r}: {alpha!r}")
-        out[resolve_names(scene, [name], "opacity")[0]] = float(alpha)
+        for oid in resolve_names(scene, [name], "opacity"):       # a group or glob sets each of its objects
+            out[oid] = float(alpha)
     return out
 
 

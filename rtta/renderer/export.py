@@ -17,11 +17,17 @@ from ..scene.camera import Camera
 from .renderer import Renderer
 
 
-def records_json(renderer: Renderer, camera: Camera, records, viewport) -> dict:
+def world_matrices(renderer: Renderer, camera: Camera, viewport) -> tuple[np.ndarray, np.ndarray]:
+    """(view, proj) for world coordinates: clip = proj · view · [x, y, z, 1] (the renderer's
+    own view matrix is relative to the scene origin)."""
     view, proj = renderer.matrices(camera, viewport)
-    # the view matrix the renderer uses is relative to the scene origin; export world-space
     shift = np.identity(4)
     shift[:3, 3] = -renderer.scene.origin
+    return view @ shift, proj
+
+
+def records_json(renderer: Renderer, camera: Camera, records, viewport) -> dict:
+    view, proj = world_matrices(renderer, camera, viewport)
     objects = []
     for oid, name in enumerate(renderer.scene.names):
         vis = bool(records.visible[oid])
@@ -32,7 +38,7 @@ def records_json(renderer: Renderer, camera: Camera, records, viewport) -> dict:
             "layer": int(records.layer[oid]), "scale": float(records.scale[oid]),
         })
     return {
-        "view": (view @ shift).tolist(), "proj": proj.tolist(), "viewport": list(viewport),
+        "view": view.tolist(), "proj": proj.tolist(), "viewport": list(viewport),
         "atlas": list(records.atlas_size), "border": records.border,
         "camera": {"eye": camera.eye.tolist(), "target": camera.target.tolist(), "up": camera.up.tolist(),
                    "fov_y": camera.fov_y, "near": camera.near, "far": camera.far},
@@ -63,7 +69,7 @@ def export(renderer: Renderer, camera: Camera, viewport: tuple[int, int], out_di
     try:
         tmp = staging_dir(out_dir)
         _write(tmp, renderer, camera, records, viewport, atlas, std)
-        replace_dir(tmp, out_dir)
+        replace_dir(tmp, out_dir, final=True)
     except OSError as exc:
         raise os_error(exc, out_dir) from None
     finally:

@@ -35,6 +35,7 @@ class Settings:
     max_layers: int | None = None              # None: GL_MAX_ARRAY_TEXTURE_LAYERS
     capture_path: str = "auto"                 # 'auto', 'vs' or 'gs'
     region_scale: float = 1.0                  # atlas texels per viewport pixel
+    context_scale: float = 1.0                 # of region_scale, for objects outside the focus
     bounds: str = "aabb"                       # B_world: 'aabb' (the paper's) or 'obb' (tighter)
 
 
@@ -53,6 +54,9 @@ class Renderer:
         self._composite: CompositePass | None = None
         self._post: AtlasPostPass | None = None
         self._post_key: tuple | None = None
+        self._post_done = np.zeros(0, np.int8)     # per object: 0 nothing, 1 edges, 2 AO + edges
+        self._view: tuple | None = None            # (camera, viewport, path) of the last capture
+        self.captured_focus: frozenset[int] = frozenset()   # the focus the last capture was scaled for
         self._captures = 0
         self.target = CompositeTarget(ctx)
         self.last: tuple | None = None     # (records, view, proj) of the last capture
@@ -60,6 +64,7 @@ class Renderer:
         self._projector_pass = None
         self.lens = None                   # a Lens cutting the context away in the ghosted modes, or None
         self._lens_pass = None
+        self.hidden: set[int] = set()      # objects the user hid: not packed, captured, composited or drawn
         self.measure = False               # time each stage (waits for the GPU after each)
         self.timings: dict[str, float] = {}  # stage -> ms of its last run, when measuring
         self.warnings: list[str] = []      # what was degraded (each said once)
@@ -83,14 +88,49 @@ class Renderer:
             warnings.warn(message, stacklevel=2)
         return camera.view(self.scene.origin), camera.projection(viewport[0] / viewport[1])
 
-    def parameterize(self, camera: Camera, viewport: tuple[int, int], matrices=None) -> Records:
+    def region_scales(self, focus=()) -> float | np.ndarray:
+        """Atlas texels per pixel: region_scale for the focus, times context_scale for the rest."""
+        s = self.settings
+        if s.context_scale == 1.0:
+            return s.region_scale
+        scale = np.full(self.scene.count, s.region_scale * s.context_scale)
+        scale[[o for o in focus if 0 <= o < self.scene.count]] = s.region_scale
+        return scale
+
+    def parameterize(self, camera: Camera, viewport: tuple[int, int], matrices=None, focus=()) -> Records:
         view, proj = matrices or self.matrices(camera, viewport)
         s = self.settings
-        atlas_max = s.atlas_max or default_atlas_max(viewport, s.border, s.region_scale)
+        largest = max(s.region_scale, s.region_scale * s.context_scale)
+        atlas_max = s.atlas_max or default_atlas_max(viewport, s.border, largest)
         atlas_max = (min(atlas_max[0], self.caps.max_texture), min(atlas_max[1], self.caps.max_texture))
         max_layers = min(s.max_layers or self.caps.max_layers, self.caps.max_layers)
         return parameterize(self.scene.box_corners(s.bounds), proj @ view, viewport, border=s.border,
-                            atlas_max=atlas_max, max_layers=max_layers, region_scale=s.region_scale)
+                            atlas_max=atlas_max, max_layers=max_layers, region_scale=self.region_scales(focus),
+                            hidden=self.hidden_mask())
+
+    def hidden_mask(self) -> np.ndarray | None:
+        """bool [n] of the hidden objects (None when none is hidden)."""
+        if not self.hidden:
+            return None
+        mask = np.zeros(self.scene.count, bool)
+        mask[[i for i in self.hidden if 0 <= i < self.scene.count]] = True
+        return mask
+
+    def shown_ranges(self) -> list[tuple[int, int]] | None:
+        """(first, count) index runs of the objects not hidden (None: all of them, one run).
+        Objects lie contiguously in object order, so hiding k objects makes at most k + 1 runs."""
+        mask = self.hidden_mask()
+        if mask is None:
+            return None
+        shown = ~mask
+        edges = np.flatnonzero(np.diff(np.concatenate([[False], shown, [False]]).astype(np.int8)))
+        ranges = self.scene.index_ranges
+        return [(int(ranges[a, 0]), int(ranges[b - 1].sum() - ranges[a, 0]))
+                for a, b in zip(edges[::2], edges[1::2], strict=True)]
+
+    def scaled_for(self, focus) -> frozenset[int]:
+        """The focus as far as it changes the capture (empty when every object has one scale)."""
+        return frozenset() if self.settings.context_scale == 1.0 else frozenset(focus)
 
     def capture_pass(self, path: str | None = None) -> CapturePass:
         path = self.caps.capture_path(path or self.settings.capture_path)
@@ -98,11 +138,14 @@ class Renderer:
             self._capture[path] = CapturePass(self.ctx, path)
         return self._capture[path]
 
-    def capture(self, camera: Camera, viewport: tuple[int, int], path: str | None = None) -> Records:
-        """Parameterize and capture every visible object into the atlas; returns R."""
+    def capture(self, camera: Camera, viewport: tuple[int, int], path: str | None = None, focus=()) -> Records:
+        """Parameterize and capture every visible object into the atlas; returns R. With a
+        context scale below 1, `focus` objects get full-scale regions and the rest smaller ones."""
         view, proj = self.matrices(camera, viewport)
+        self.captured_focus = self.scaled_for(focus)
+        self._view = (camera, viewport, path)
         with self._timed("parameterize"):
-            records = self.parameterize(camera, viewport, (view, proj))
+            records = self.parameterize(camera, viewport, (view, proj), self.captured_focus)
         with self._timed("capture"):
             self.capture_pass(path).render(gpu=self.gpu, records=records, view=view, proj=proj,
                                            atlas=self.atlas)
@@ -115,8 +158,10 @@ class Renderer:
         """Composite the last capture; re-run it alone when only the style or mode changes."""
         if self.last is None:
             raise RuntimeError("composite() needs a capture() first")
-        records, view, proj = self.last
         style = style or Style()
+        if self.scaled_for(style.focus) != self.captured_focus:
+            self.capture(*self._view, focus=style.focus)    # the focus decides the region scales
+        records, view, proj = self.last
         if self._composite is None:
             self._composite = CompositePass(self.ctx)
         centers = (self.scene.aabb_min + self.scene.aabb_max) / 2 - self.scene.origin
@@ -151,20 +196,29 @@ class Renderer:
 
             self._projector_pass = ProjectorPass(self.ctx)
         with self._timed("projector"):
-            self._projector_pass.render(gpu=self.gpu, projector=self.projector)
+            self._projector_pass.render(gpu=self.gpu, projector=self.projector, ranges=self.shown_ranges())
         return self._projector_pass, self.projector
 
     def post_process(self, style: Style) -> AtlasPostPass:
-        """Ambient occlusion and edges on the atlas (ghosted-ao only). They depend on the
-        capture and the AO/edge parameters, not on focus or opacity: re-run only when those change."""
+        """Ambient occlusion and edges on the atlas (ghosted-ao only), cached per object: they
+        depend on the capture and the AO/edge parameters, not on focus or opacity, so a focus
+        change shades only the objects whose role now asks for more (--ao-objects focus)."""
         records, _, proj = self.last
         if self._post is None:
             self._post = AtlasPostPass(self.ctx)
         key = (self._captures, style.ao_radius, style.ao_strength, style.edge_width)
         if key != self._post_key:
-            with self._timed("post"):
-                self._post.render(atlas=self.atlas, records=records, gpu=self.gpu, proj=proj, style=style)
+            self._post_done = np.zeros(len(records.visible), np.int8)
             self._post_key = key
+        ao, edges = style.shaded(len(records.visible))
+        need = np.where(ao, 2, np.where(edges, 1, 0)).astype(np.int8)
+        full = np.flatnonzero((need == 2) & (self._post_done < 2))
+        edge_only = np.flatnonzero((need == 1) & (self._post_done < 1))
+        if len(full) or len(edge_only) or self._post.texture is None:
+            with self._timed("post"):
+                self._post.render(atlas=self.atlas, records=records, gpu=self.gpu, proj=proj, style=style,
+                                  full=full, edges=edge_only)
+            self._post_done = np.maximum(self._post_done, need)
         return self._post
 
     @property
@@ -180,7 +234,7 @@ class Renderer:
         projection = self._projection()
         with self._timed("std"):
             self._std.render(gpu=self.gpu, view=view, proj=proj, target=self.single_target, viewport=viewport,
-                             projection=projection)
+                             projection=projection, ranges=self.shown_ranges())
             self._throttle.flush()
         return self.single_target
 

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import difflib
 from collections.abc import Iterable, Sequence
 from functools import lru_cache
 from pathlib import Path
@@ -16,22 +15,11 @@ from ..passes.composite import BACKGROUND, MODES, Style
 from ..passes.projector import Projector, default_image, load_image
 from ..scene.camera import Camera, parse_orbit
 from ..scene.model import Scene
+from ..scene.select import resolve_names
 from .renderer import Renderer
 
 SNAPSHOT_MODES = ("std", *MODES)
-
-
-def resolve_names(scene: Scene, names: list[str], flag: str) -> list[int]:
-    """Object ids for names; an unknown name is an error that lists close matches."""
-    ids = []
-    for name in names:
-        if name in scene.names:
-            ids.append(scene.index(name))
-            continue
-        close = difflib.get_close_matches(name, scene.names, n=4, cutoff=0.5)
-        hint = f"; did you mean {', '.join(close)}?" if close else "; `rtta info` lists the objects"
-        raise RttaError(f"{flag}: no object named '{name}' in {Path(scene.source).name}{hint}")
-    return ids
+__all__ = ["SNAPSHOT_MODES", "over_background", "parse_opacities", "render_modes", "resolve_names", "write_pngs"]
 
 
 def parse_opacities(scene: Scene, items: list[str]) -> dict[int, float]:
@@ -44,7 +32,8 @@ def parse_opacities(scene: Scene, items: list[str]) -> dict[int, float]:
             alpha = float("nan")
         if not sep or not np.isfinite(alpha) or not 0.0 <= alpha <= 1.0:
             raise RttaError(f"--opacity expects NAME=A with A in [0, 1], got '{item}'")
-        out[resolve_names(scene, [name], "--opacity")[0]] = alpha
+        for oid in resolve_names(scene, [name], "--opacity"):
+            out[oid] = alpha
     return out
 
 
@@ -70,7 +59,7 @@ def make_lens(scene: Scene, spec: str, at: str | Sequence[float] | None, focus: 
         return Lens.shape(kind, center, radius)
     if size:
         raise RttaError(f"--lens {kind}: an object lens takes no radius")
-    (oid,) = resolve_names(scene, [kind], "--lens")
+    (oid,) = resolve_names(scene, [kind], "--lens", groups=False)
     lens = Lens.of_object(scene, oid)
     if at is not None:
         lens.center = center
@@ -94,7 +83,7 @@ def make_projector(scene: Scene, camera: Camera, spec: str, fov: float = 30.0, s
     kw = {"image": image, "fov_y": fov, "shadows": shadows}
     if orbit is None:
         return Projector.at_camera(camera, scene.center, scene.radius, **kw)
-    return Projector.orbit(scene.center, scene.radius, *orbit, **kw)
+    return Projector.orbit(scene.center, scene.radius, *orbit, up_axis=scene.up_axis, **kw)
 
 
 @lru_cache(maxsize=1)
@@ -117,7 +106,7 @@ def render_modes(renderer: Renderer, camera: Camera, viewport: tuple[int, int], 
     """One capture, then each requested mode composited from it: {mode: rgba [H, W, 4] (row 0 bottom)}."""
     out = {}
     if any(m != "std" for m in modes):
-        renderer.capture(camera, viewport)
+        renderer.capture(camera, viewport, focus=style.focus)
     for mode in modes:
         if mode == "std":
             out[mode] = over_background(renderer.std(camera, viewport).read(viewport, 1)["color"][0])
@@ -128,4 +117,6 @@ def render_modes(renderer: Renderer, camera: Camera, viewport: tuple[int, int], 
 
 
 def write_pngs(images: dict, paths: dict) -> list[Path]:
-    return [save_png(paths[mode], rgba) for mode, rgba in images.items()]
+    """Each image to its path atomically; the last one ends the command (see rtta.imageio)."""
+    modes = list(images)
+    return [save_png(paths[mode], images[mode], final=k == len(modes) - 1) for k, mode in enumerate(modes)]

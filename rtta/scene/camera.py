@@ -25,6 +25,37 @@ def parse_orbit(text: str) -> tuple[float, float, float]:
     return az, el, dist
 
 
+UP_AXES = ("y", "z")
+
+
+def up_basis(up: str = "y") -> np.ndarray:
+    """Rotation from the orbit's Y-up frame to the world: identity for 'y'; for 'z' (CAD,
+    BIM) Y-up (x, y, z) becomes (x, -z, y), so the orbit's up is +Z and azimuth 0 looks
+    from -Y, the CAD front view."""
+    if up not in UP_AXES:
+        raise ValueError(f"up axis must be one of {', '.join(UP_AXES)}, got {up!r}")
+    return np.identity(3) if up == "y" else np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
+
+
+def fit_distance(corners, target, direction, up, fov_y: float, aspect: float, margin: float = 0.05) -> float:
+    """Distance from `target` along `direction` (unit, towards the eye) at which every corner
+    (world points [k, 3]) projects inside the view with `margin` (a fraction of the width and
+    of the height) left free on each side, in BOTH the vertical and the horizontal field of view."""
+    d = np.asarray(direction, np.float64)
+    u = np.asarray(up, np.float64)
+    r = np.cross(u, d)
+    r /= np.linalg.norm(r)
+    u = np.cross(d, r)
+    p = np.asarray(corners, np.float64).reshape(-1, 3) - np.asarray(target, np.float64)
+    x, y, z = p @ r, p @ u, p @ d
+    keep = 1.0 - 2.0 * margin
+    tan_y = np.tan(np.radians(fov_y) / 2.0) * keep
+    tan_x = tan_y * aspect
+    need = z + np.maximum(np.abs(x) / tan_x, np.abs(y) / tan_y)
+    extent = float(np.abs(p).max()) if p.size else 0.0
+    return float(max(need.max() if p.size else 0.0, (z.max() if p.size else 0.0) + extent * 1e-3, 1e-9))
+
+
 @dataclass
 class Camera:
     """eye/target are world-space float64; fov_y in degrees; near/far in world units."""
@@ -38,11 +69,13 @@ class Camera:
 
     @classmethod
     def orbit(cls, center, radius: float, az: float, el: float, dist: float,
-              fov_y: float = 45.0) -> Camera:
-        """Azimuth about +Y starting at +Z, elevation up from the XZ plane; dist in radii."""
+              fov_y: float = 45.0, up_axis: str = "y") -> Camera:
+        """Azimuth about the up axis (+Y, or +Z for up_axis 'z') starting at +Z (-Y),
+        elevation up from the ground plane; dist in radii."""
         a, e = np.radians(az), np.radians(el)
-        direction = np.array([np.sin(a) * np.cos(e), np.sin(e), np.cos(a) * np.cos(e)])
-        up = np.array([-np.sin(a) * np.sin(e), np.cos(e), -np.cos(a) * np.sin(e)])  # d/d(el): never degenerate
+        basis = up_basis(up_axis)
+        direction = basis @ np.array([np.sin(a) * np.cos(e), np.sin(e), np.cos(a) * np.cos(e)])
+        up = basis @ np.array([-np.sin(a) * np.sin(e), np.cos(e), -np.cos(a) * np.sin(e)])  # never degenerate
         center = np.asarray(center, np.float64)
         cam = cls(eye=center + direction * dist * radius, target=center, up=up, fov_y=fov_y)
         return cam.fit_depth(center, radius)

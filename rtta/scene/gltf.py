@@ -39,6 +39,7 @@ class Instance:
     name: str
     geometry: str            # the mesh name trimesh gives the rewritten single-primitive mesh
     matrix: np.ndarray       # float64 [4, 4] world transform
+    path: tuple[str, ...] = ()   # the groups above it in the node tree, root first
 
 
 @dataclass
@@ -60,8 +61,12 @@ def prepare(path: Path) -> Prepared:
     pairs = _primitives(doc, walk, buffers, path, out.warnings)
     images = _images(doc, buffers, path, out)
     _colors(doc, out.warnings)
-    out.instances = [Instance(name, f"rtta.{m}.{p}", matrix)
-                     for name, mesh, matrix in walk for m, p in pairs if m == mesh]
+    per_mesh: dict[int, list[int]] = {}
+    for m, p in pairs:
+        per_mesh.setdefault(m, []).append(p)
+    out.instances = [Instance(name, f"rtta.{mesh}.{p}", matrix,       # a node's primitives: a group of its own
+                              (*tree, name.replace("/", "\u2215")) if len(per_mesh[mesh]) > 1 else tree)
+                     for name, mesh, matrix, tree in walk for p in per_mesh.get(mesh, [])]
     if len(out.instances) > MAX_OBJECTS:
         raise RttaError(f"the node graph makes {len(out.instances):,} objects (at most {MAX_OBJECTS:,})", path)
     _check_size(doc, walk, pairs, path)
@@ -135,7 +140,7 @@ def _check_memory(doc: dict, buffers: list[bytes], path: Path) -> None:
 def _check_size(doc: dict, walk: list, pairs: list, path: Path) -> None:
     """The vertices and triangles the drawn primitives declare, every instance counted."""
     uses: dict[int, int] = {}
-    for _, mesh, _ in walk:
+    for _, mesh, _, _ in walk:
         uses[mesh] = uses.get(mesh, 0) + 1
     accessors, vertices, triangles = doc.get("accessors", []), 0, 0
     for m, p in pairs:
@@ -170,8 +175,9 @@ def _local(node: dict) -> np.ndarray:
     return m
 
 
-def _walk(doc: dict, path: Path, warnings: list[str]) -> list[tuple[str, int, np.ndarray]]:
-    """(name, mesh, world matrix) of every node with a mesh, in depth-first file order, each
+def _walk(doc: dict, path: Path, warnings: list[str]) -> list[tuple[str, int, np.ndarray, tuple]]:
+    """(name, mesh, world matrix, ancestors' names) of every node with a mesh, in depth-first
+    file order, each
     path through the graph once. Cycles, graphs deeper than MAX_DEPTH and graphs whose paths
     make more than MAX_OBJECTS objects are errors (found in one pass over the nodes, before
     any path is followed); a node with several parents is drawn under each, with a warning."""
@@ -186,15 +192,17 @@ def _walk(doc: dict, path: Path, warnings: list[str]) -> list[tuple[str, int, np
     if shared:
         warnings.append(f"{len(shared)} node(s) have more than one parent (glTF allows one); each is drawn "
                         "under every parent: " + ", ".join(_node_name(nodes, i) for i in shared[:5]))
-    found: list[tuple[str, int, np.ndarray]] = []
-    stack: list[tuple[int, np.ndarray]] = [(r, np.identity(4)) for r in reversed(roots)]
+    found: list[tuple[str, int, np.ndarray, tuple]] = []
+    stack: list[tuple[int, np.ndarray, tuple]] = [(r, np.identity(4), ()) for r in reversed(roots)]
     while stack:
-        i, parent = stack.pop()
+        i, parent, tree = stack.pop()
         node = nodes[i]
         world = parent @ _local(node)
+        name = _node_name(nodes, i)
         if "mesh" in node:
-            found.append((_node_name(nodes, i), node["mesh"], world))
-        stack.extend((c, world) for c in reversed(node.get("children", [])))
+            found.append((name, node["mesh"], world, tree))
+        below = (*tree, name.replace("/", "\u2215"))
+        stack.extend((c, world, below) for c in reversed(node.get("children", [])))
     return found
 
 
@@ -241,7 +249,7 @@ def _node_name(nodes: list, i: int) -> str:
 def _primitives(doc: dict, walk: list, buffers: list, path: Path, warnings: list[str]) -> list[tuple[int, int]]:
     """(mesh, primitive) pairs that are drawn, in file order; a triangle fan gets its
     triangle-list indices (prim["_fan"]); points and lines are left out with a warning."""
-    used = sorted({mesh for _, mesh, _ in walk})
+    used = sorted({mesh for _, mesh, _, _ in walk})
     meshes = doc.get("meshes", [])
     pairs, skipped = [], {}
     for m in used:

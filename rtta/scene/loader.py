@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import RttaError
+from . import formats
 from .files import MAX_FILE_BYTES, MAX_OBJECTS, SafeResolver, regular_file
 from .gltf import prepare
 from .model import SUPPORTED, Scene, from_meshes
@@ -32,34 +33,41 @@ def load_scene(path: str | Path, smooth_angle: float = DEFAULT_SMOOTH_ANGLE, smo
     path = Path(path)
     size = regular_file(path, "scene file")
     suffix = path.suffix.lower()
-    if suffix not in SUPPORTED:
+    if suffix not in SUPPORTED + formats.SUFFIXES:
         raise RttaError(f"unsupported file type '{suffix[:16] or '(none)'}'; "
-                        f"supported: {', '.join(SUPPORTED)}", path)
+                        f"supported: {', '.join(SUPPORTED + formats.SUFFIXES)}", path)
     if size == 0:
         raise RttaError("file is empty", path)
     if size > MAX_FILE_BYTES:
         raise RttaError(f"file is larger than the {MAX_FILE_BYTES >> 30} GiB limit", path)
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")
+        if suffix in formats.SUFFIXES:
+            scene = formats.load(path, 180.0 if smooth else smooth_angle)
+            scene.inputs = [str(path.resolve())]
+            return scene
         notes, inputs, items = _read(path, suffix)
         parts, colors, dropped, materials = _parts(items, path, smooth_angle, smooth)
         notes += materials.pop("notes")
+        paths = materials.pop("paths")
     if dropped:
         notes.append(f"{len(dropped)} object(s) with only degenerate (zero-area) triangles left out: "
                      + ", ".join(dropped[:5]) + (" ..." if len(dropped) > 5 else ""))
     scene = from_meshes(parts, colors, source=str(path), **materials)
+    scene.paths = paths if any(paths) else None
     scene.warnings = notes + scene.warnings + _texture_notes(scene)
     scene.inputs = [str(p) for p in dict.fromkeys([path.resolve(), *inputs])]
     return scene
 
 
 def _read(path: Path, suffix: str) -> tuple[list[str], list[Path], list[tuple]]:
-    """(warnings, files read besides `path`, [(name, trimesh geometry, 4x4 world transform)])
-    in file order. glTF's graph is walked by rtta.scene.gltf; the other formats' by trimesh."""
+    """(warnings, files read besides `path`, [(name, trimesh geometry, 4x4 world transform,
+    path in the file's tree)]) in file order. glTF's graph is walked by rtta.scene.gltf; the
+    other formats' by trimesh."""
     if suffix in (".gltf", ".glb"):
         prepared = prepare(path)
         loaded = _trimesh_load(io.BytesIO(prepared.data), "glb", path, None)
-        items = [(i.name, loaded.geometry.get(i.geometry), i.matrix) for i in prepared.instances]
+        items = [(i.name, loaded.geometry.get(i.geometry), i.matrix, i.path) for i in prepared.instances]
         return prepared.warnings, prepared.inputs, items
     notes = precheck(path)
     resolver = SafeResolver(path)
@@ -72,12 +80,14 @@ def _read(path: Path, suffix: str) -> tuple[list[str], list[Path], list[tuple]]:
     loaded = _trimesh_load(source, suffix[1:], path, resolver)
     items = []
     order = {name: i for i, name in enumerate(loaded.geometry)}
-    for node in loaded.graph.nodes_geometry:
+    nodes = list(loaded.graph.nodes_geometry)
+    trees = formats.graph_paths(loaded, nodes) or [()] * len(nodes)
+    for node, tree in zip(nodes, trees, strict=True):
         transform, geom_name = loaded.graph[node]
         name, key = str(node), order.get(geom_name, len(order))
         if names is not None and re.fullmatch(r"rtta\.o\.\d+", name) and int(name[7:]) < len(names):
             name, key = names[int(name[7:])], int(name[7:])
-        items.append((key, name, loaded.geometry.get(geom_name), np.asarray(transform, np.float64)))
+        items.append((key, name, loaded.geometry.get(geom_name), np.asarray(transform, np.float64), tree))
     items.sort(key=lambda item: item[0])                  # file order
     return notes + resolver.warnings, resolver.inputs, [item[1:] for item in items]
 
@@ -135,9 +145,9 @@ def _parts(items: list[tuple], path: Path, smooth_angle: float, smooth: bool) ->
     per geometry, and preprocessing once for all objects (rtta.scene.preprocess)."""
     textures = TextureTable()
     geometry: dict[int, tuple | None] = {}
-    names, raw, colors, texture_ids = [], [], [], []
+    names, raw, colors, texture_ids, trees = [], [], [], [], []
     vertices = triangles = 0
-    for node, mesh, transform in items:
+    for node, mesh, transform, tree in items:
         if id(mesh) not in geometry:
             geometry[id(mesh)] = _geometry(mesh, node, path, textures, smooth)
         geo = geometry[id(mesh)]
@@ -159,6 +169,7 @@ def _parts(items: list[tuple], path: Path, smooth_angle: float, smooth: bool) ->
         raw.append((world, f, None if n is None else _transform_normals(n, m), uv))
         colors.append(color)
         texture_ids.append(texture)
+        trees.append(tuple(tree))
     area = _has_area(raw)
     dropped = [name for name, ok in zip(names, area, strict=True) if not ok]
     keep = np.flatnonzero(area)
@@ -170,7 +181,7 @@ def _parts(items: list[tuple], path: Path, smooth_angle: float, smooth: bool) ->
     parts = [(names[i], *d[:3]) for i, d in zip(keep, done, strict=True)]
     return parts, [colors[i] for i in keep], dropped, {
         "uvs": [d[3] for d in done], "texture_ids": [texture_ids[i] for i in keep], "textures": textures.images,
-        "notes": textures.notes}
+        "notes": textures.notes, "paths": [trees[i] for i in keep]}
 
 
 def _geometry(mesh, node, path: Path, textures: TextureTable, smooth: bool) -> tuple | None:

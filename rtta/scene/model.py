@@ -43,6 +43,9 @@ class Scene:
     uvs: np.ndarray | None = None          # float32 [V, 2] when the scene has textures
     textures: list[np.ndarray] = field(default_factory=list)   # uint8 [h, w, 4], row 0 = v 0, each once
     texture_ids: np.ndarray | None = None  # int32 [N]: index into textures, -1 = material colour only
+    paths: list[tuple[str, ...]] | None = None   # per object: its groups in the file's tree, root first
+    unit: str = ""                         # length unit of the coordinates ('m', 'mm', 'in'...; '' = unstated)
+    up_axis: str = "y"                     # the file's up axis: 'y' (glTF) or 'z' (CAD, BIM)
     _corners: dict = field(default_factory=dict, repr=False)
 
     @property
@@ -92,6 +95,23 @@ class Scene:
 
     def index(self, name: str) -> int:
         return self.names.index(name)
+
+    def path_of(self, oid: int) -> tuple[str, ...]:
+        """The object's groups in the file's tree, root first (empty for a flat file)."""
+        return tuple(self.paths[oid]) if self.paths is not None else ()
+
+    @property
+    def groups(self) -> dict[str, list[int]]:
+        """Every group of the tree as 'a/b/c' -> the ids of all objects below it, in tree order."""
+        key = ("groups", id(self.paths))
+        if key not in self._corners:
+            out: dict[str, list[int]] = {}
+            for oid in range(self.count):
+                path = self.path_of(oid)
+                for k in range(1, len(path) + 1):
+                    out.setdefault("/".join(path[:k]), []).append(oid)
+            self._corners[key] = out
+        return self._corners[key]
 
 
 def unique_names(raw: list[str]) -> list[str]:

@@ -126,61 +126,107 @@ def _print_capture(rows, scaling, renderer, viewport) -> None:
         print(f"{n:>8} {s['ms']:>8.3f} {s['ms'] / (n * np.log2(n)) * 1e3:>20.4f}")
 
 
-def composite_row(ctx, name, scene, viewport, frames: int) -> dict:
-    """Full frame per mode (capture + post + composite) against STD, and a re-composite
-    after a focus change (compositing only) against the full ghosted-ao frame."""
+def composite_row(ctx, name, scene, viewport, frames: int, settings=None) -> dict:
+    """Full frame per mode (capture + post + composite) against STD at the default settings,
+    plus ghosted-ao at full quality (AO and edges on every object, every region at scale 1)
+    and transparent in per-pixel order, all taking turns within each round; the error of the
+    default ghosted-ao against the full-quality one; a re-composite after a focus change
+    against the full ghosted-ao frame."""
     from ..passes.composite import MODES, Style
+    from ..renderer.renderer import Settings
 
-    r = Renderer(ctx, scene)
+    r = Renderer(ctx, scene, settings)
+    full = Renderer(ctx, scene, Settings(border=r.settings.border))
     cam = Camera.orbit(scene.center, scene.radius, 30.0, 20.0, 2.2)
     focus = {0, scene.count // 2}
+    styles = {"full": Style(focus=focus, ao_objects="all", edge_objects="all"),
+              "pixel": Style(focus=focus, order="pixel")}
 
-    def frame(mode):
-        r.capture(cam, viewport)
-        r.composite(mode, Style(focus=focus))
+    def frame(renderer, mode, style):
+        renderer.capture(cam, viewport, focus=style.focus)
+        return renderer.composite(mode, style)
 
     fns = {"std": _gl_timed(ctx, lambda: r.std(cam, viewport))}
-    fns.update({mode: _gl_timed(ctx, lambda mode=mode: frame(mode)) for mode in MODES})
+    fns.update({mode: _gl_timed(ctx, lambda mode=mode: frame(r, mode, Style(focus=focus))) for mode in MODES})
+    fns["ghosted-ao full"] = _gl_timed(ctx, lambda: frame(full, "ghosted-ao", styles["full"]))
+    fns["transparent pixel"] = _gl_timed(ctx, lambda: frame(r, "transparent", styles["pixel"]))
     times = _interleaved_ms(fns, frames)
     std = np.array(times["std"])
+    names = [n for n in fns if n != "std"]
     row = {"name": name, "objects": scene.count, "vertices": scene.vertex_count,
            "std_ms": float(np.median(std)),
-           "modes": {mode: float(np.median(times[mode])) for mode in MODES},
-           "ratios": {mode: float(np.median(np.array(times[mode]) / std)) for mode in MODES}}
-    styles = [Style(focus={k % scene.count}) for k in range(frames + 2)]
-    it = iter(styles)
+           "modes": {n: float(np.median(times[n])) for n in names},
+           "ratios": {n: float(np.median(np.array(times[n]) / std)) for n in names},
+           "pixel_over_object": float(np.median(np.array(times["transparent pixel"]) / np.array(times["transparent"])))}
+    want = frame(full, "ghosted-ao", styles["full"]).read()[0][..., :3].astype(np.int64)
+    got = frame(r, "ghosted-ao", Style(focus=focus)).read()[0][..., :3].astype(np.int64)
+    diff = np.abs(got - want)
+    row["ao_error"] = {"over_8": float((diff.max(-1) > 8).mean()), "mae": float(diff.mean() / 255.0)}
+    it = iter([Style(focus={k % scene.count}) for k in range(frames + 2)])
+    frame(r, "ghosted-ao", Style(focus=focus))
     row["recomposite_ms"] = _median_ms(_gl_timed(ctx, lambda: r.composite("ghosted-ao", next(it))), frames)
     r.release()
+    full.release()
     return row
 
 
-def run_composite(viewport: tuple[int, int], quick: bool = False, json_path: str | None = None,
-                  ctx=None) -> int:
+def composite_scenes(specs: list[str] | None, quick: bool) -> list[tuple[str, object]]:
+    """Scenes by name: 'demo', 'table1-N' (a Table 1 row), 'random-N' (N boxes), or a file;
+    none given: the demo and the Table 1 rows."""
     from ..scene.demo import demo_path
     from ..scene.loader import load_scene
 
+    if not specs:
+        specs = ["demo"] + [f"table1-{objects}" for objects, _ in (TABLE1[:2] if quick else TABLE1)]
+    rows = dict(TABLE1)
+    out = []
+    for spec in specs:
+        kind, _, count = spec.partition("-")
+        if spec == "demo":
+            out.append((spec, load_scene(demo_path())))
+        elif kind == "table1" and count.isdigit() and int(count) in rows:
+            out.append((spec, table1_scene(int(count), rows[int(count)])))
+        elif kind == "random" and count.isdigit():
+            n = int(count)
+            out.append((spec, random_scene(n, seed=7, spread=4.0 * np.cbrt(n))))
+        else:
+            out.append((Path(spec).stem, load_scene(spec)))
+    return out
+
+
+def run_composite(viewport: tuple[int, int], quick: bool = False, json_path: str | None = None,
+                  ctx=None, scenes: list[str] | None = None) -> int:
     ctx = ctx or create_headless_context()
     renderer = str(ctx.info["GL_RENDERER"])
     frames = 3 if quick else 11
-    scenes = [("demo", load_scene(demo_path()))]
-    for objects, vertices in (TABLE1[:2] if quick else TABLE1):
-        scenes.append((f"table1-{objects}", table1_scene(objects, vertices)))
+    scenes = composite_scenes(scenes, quick)
     rows = [composite_row(ctx, name, scene, viewport, frames) for name, scene in scenes]
-    print(f"renderer: {renderer}; viewport {viewport[0]}x{viewport[1]}; median ms per full frame "
-          f"(capture + post + composite) over {frames} rounds (STD and every mode in turn, each turn one "
-          f"untimed and one timed frame); in brackets the median over rounds of the frame's ratio to STD "
-          f"in the same round")
-    modes = list(rows[0]["modes"])
-    print(f"{'scene':>13} {'STD':>8} " + " ".join(f"{m:>18}" for m in modes) + f" {'recomposite':>16}")
-    for r in rows:
-        cells = " ".join(f"{r['modes'][m]:>9.2f} ({r['ratios'][m]:>5.2f}x)" for m in modes)
-        rc = r["recomposite_ms"]
-        print(f"{r['name']:>13} {r['std_ms']:>8.2f} {cells} {rc:>8.2f} ({rc / r['modes']['ghosted-ao']:.2f}x)")
-    print("recomposite: ghosted-ao after a focus change, compositing only; ratio to a full ghosted-ao frame")
+    _print_composite(rows, renderer, viewport, frames)
     if json_path:
         Path(json_path).write_text(json.dumps({"renderer": renderer, "viewport": list(viewport),
                                                "scenes": rows}, indent=1))
     return 0
+
+
+def _print_composite(rows, renderer, viewport, frames) -> None:
+    print(f"renderer: {renderer}; viewport {viewport[0]}x{viewport[1]}; median ms per full frame "
+          f"(capture + post + composite) over {frames} rounds (STD and every column in turn, each turn one "
+          f"untimed and one timed frame); in brackets the median over rounds of the frame's ratio to STD "
+          f"in the same round")
+    names = list(rows[0]["modes"])
+    print(f"{'scene':>13} {'STD':>8} " + " ".join(f"{m:>18}" for m in names)
+          + f" {'pixel/obj':>9} {'ao >8/255':>9} {'ao MAE':>7} {'recomposite':>16}")
+    for r in rows:
+        cells = " ".join(f"{r['modes'][m]:>9.2f} ({r['ratios'][m]:>5.2f}x)" for m in names)
+        rc, err = r["recomposite_ms"], r["ao_error"]
+        print(f"{r['name']:>13} {r['std_ms']:>8.2f} {cells} {r['pixel_over_object']:>8.2f}x "
+              f"{100 * err['over_8']:>8.3f}% {255 * err['mae']:>7.3f} {rc:>8.2f} "
+              f"({rc / r['modes']['ghosted-ao']:.2f}x)")
+    print("columns at the default settings, except 'ghosted-ao full' (AO and edges on every object, every region "
+          "at scale 1) and 'transparent pixel' (--order pixel); pixel/obj: transparent pixel over object order, "
+          "paired per round; ao >8/255, ao MAE (in 1/255): default ghosted-ao against full quality; "
+          "recomposite: ghosted-ao after a focus change (post for the objects whose role changed + "
+          "compositing), ratio to a full default ghosted-ao frame")
 
 
 def _rectpack(w, h, W, H):

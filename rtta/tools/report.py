@@ -17,6 +17,7 @@ from pathlib import Path
 
 from ..errors import RttaError
 from ..imageio import atomic_write
+from . import report_importance as importance
 from . import report_runs as runs
 from .bench_reliability import _progress
 
@@ -24,7 +25,7 @@ BEGIN = "<!-- rtta bench report: begin (generated; edit report.py, not this bloc
 END = "<!-- rtta bench report: end -->"
 SECTIONS = ("1. Reconstruction error against frame time", "2. Packing", "3. Capture cost",
             "4. Numerical stability", "5. Layered depth images: error against resolution and time",
-            "6. Material atlas")
+            "6. Material atlas", "7. Importance: context scale, AO on the focus, transparency order")
 
 
 def cpu_name() -> str:
@@ -86,7 +87,8 @@ def run_report(quick: bool = False, markdown: str | None = None, plots: str | No
     header = {"renderer": str(ctx.info["GL_RENDERER"]), "cpu": cpu_name(), "date": time.strftime("%Y-%m-%d"),
               "command": "rtta bench report" + (" --quick" if quick else ""), "viewport": viewport}
     scenes, meshes = runs.report_scenes(quick), runs.ldi_meshes(quick)
-    tick = _ticker(_steps(quick, len(scenes), len(meshes)))
+    important = importance.importance_scenes(scenes, quick)
+    tick = _ticker(_steps(quick, len(scenes), len(meshes)) + importance.steps(len(important), quick))
     results = {
         "error": runs.error_vs_time(ctx, scenes, viewport, quick, tick),
         "packing": runs.packing(ctx, viewport, quick, tick),
@@ -94,6 +96,7 @@ def run_report(quick: bool = False, markdown: str | None = None, plots: str | No
         "capture": runs.capture_cost(ctx, viewport, quick, tick),
         "stability": runs.stability(ctx, (256, 256) if quick else (512, 512), quick, tick),
         "ldi": runs.ldi_error(ctx, meshes, quick, tick),
+        "importance": importance.importance_rows(ctx, important, viewport, quick, tick),
     }
     plot_dir.mkdir(parents=True, exist_ok=True)
     images = draw_all(results, header, plot_dir)
@@ -140,6 +143,10 @@ def render_markdown(res: dict, h: dict, images: dict, md_dir: Path) -> str:
             parts += [f"![{title}]({Path(rel).as_posix()})", ""]
     parts += [f"### {SECTIONS[5]}", "", "Measured by `rtta bench material`, not by this report: see "
               "\"Material atlas and batching (issue 6)\" above.", ""]
+    parts += [f"### {SECTIONS[6]}", "", _stamp(h), "", _importance_md(res["importance"]), ""]
+    if "importance" in images:
+        rel = os.path.relpath(images["importance"].resolve(), md_dir.resolve())
+        parts += [f"![{SECTIONS[6]}]({Path(rel).as_posix()})", ""]
     return "\n".join(parts)
 
 
@@ -203,3 +210,19 @@ def _ldi_md(rows: list[dict]) -> str:
              _g(r["test_ms"])] for r in rows]
     return ("error = fraction of random points in the bounding box classified unlike trimesh.contains; test ms "
             "= upload, test and read back, best of 3.\n\n" + table(cols, body))
+
+
+def _importance_md(rows: list[dict]) -> str:
+    tol, budget = importance.TOLERANCE, importance.BUDGET
+    cols = ["scene", "mode", "context scale", "AO on", "order", "frame ms", "x STD", f"pixels > {tol}/255",
+            "MAE /255", "default"]
+    body = [[r["scene"], r["mode"], f"{r['scale']:g}", r["ao"], r["order"], f"{r['frame_ms']:.1f}",
+             f"{r['ratio']:.2f}", f"{r['over']:.3%}", f"{255 * r['mae']:.2f}",
+             "**yes**" if r["default"] else ""] for r in rows]
+    note = (f"Focus: objects 0 and n/2; orbit 30°, 20°, 2.2 radii. Frame: capture + post + composite, median "
+            f"over rounds in which STD and every setting take turns; x STD: the median over rounds of the "
+            f"ratio within a round. Error against the full-quality output of the "
+            f"same mode (context scale 1, AO and edges on every object; `transparent`: the exact per-pixel "
+            f"order). A default must keep at most {budget:.0%} of pixels over {tol}/255 in `ghosted` and "
+            f"`ghosted-ao` on every scene; among those it is the cheapest.")
+    return note + "\n\n" + table(cols, body)

@@ -148,4 +148,34 @@ def draw_all(results: dict, header: dict, folder: Path) -> dict[str, Path]:
             "packing": packing_plot(results["packing"], header, folder / "packing.png"),
             "capture": capture_plot(results["capture"], header, folder / "capture.png"),
             "stability": stability_plot(results["stability"], header, folder / "stability.png"),
-            "ldi": ldi_plot(results["ldi"], header, folder / "ldi.png")}
+            "ldi": ldi_plot(results["ldi"], header, folder / "ldi.png"),
+            "importance": importance_plot(results["importance"], header, folder / "importance.png")}
+
+
+def importance_plot(rows: list[dict], header: dict, path: Path) -> Path:
+    from .report_importance import BUDGET, TOLERANCE
+
+    scenes = list(dict.fromkeys(r["scene"] for r in rows))
+    plt, fig, axes = _figure(1, len(scenes), 4.4 * len(scenes), 3.8)
+    marks = {"ghosted": "o", "ghosted-ao": "s", "transparent": "^"}
+    colors = {1.0: "tab:blue", 0.5: "tab:orange", 0.25: "tab:red"}
+    for ax, scene in zip(np.atleast_1d(axes).flat, scenes, strict=False):
+        for r in (r for r in rows if r["scene"] == scene):
+            face = colors.get(r["scale"], "k") if r["ao"] != "focus" and r["order"] != "pixel" else "white"
+            ax.scatter(r["ratio"], 100 * r["over"] + 1e-3, marker=marks[r["mode"]], s=60 if
+                       r["default"] else 30, facecolors=face, edgecolors=colors.get(r["scale"], "k"),
+                       linewidths=2.0 if r["default"] else 0.8)
+        ax.axhline(100 * BUDGET, color="gray", ls=":", lw=0.8)
+        ax.set_title(scene, fontsize=9)
+        ax.set_xlabel("frame time / STD")
+        ax.set_ylabel(f"pixels off by > {TOLERANCE}/255 (%)")
+        ax.set_yscale("symlog", linthresh=0.01)
+        ax.set_ylim(bottom=0)
+        ax.grid(alpha=0.3)
+    handles = [plt.Line2D([], [], ls="", marker=m, color="gray", label=k) for k, m in marks.items()]
+    handles += [plt.Line2D([], [], ls="", marker="o", color=c, label=f"context scale {s:g}") for s, c in colors.items()]
+    handles.append(plt.Line2D([], [], ls="", marker="o", mfc="white", color="gray", label="AO on focus / pixel order"))
+    handles.append(plt.Line2D([], [], ls="", marker="o", mew=2.0, color="k", label="default (large)"))
+    fig.legend(handles=handles, fontsize=7, loc="lower center", ncol=4)
+    fig.tight_layout(rect=(0, 0.12, 1, 0.98))
+    return _save(plt, fig, path, header, layout=False)

@@ -1,0 +1,188 @@
+"""Readers for assembly formats trimesh does not read with their tree: STEP (cascadio),
+IFC (ifcopenshell). Each returns an `Assembly`: the parts in world coordinates, in the
+file's own length unit, with their colours and their path in the file's part tree.
+
+The libraries are extras (`rtta[cad]`, `rtta[bim]`); a file whose extra is missing is
+refused with one line naming it.
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+import re
+import sys
+import tempfile
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ...errors import RttaError
+from ..model import Scene, from_meshes
+from ..precheck import check_size
+from ..preprocess import smooth_normals
+
+# suffix -> (module here, the import it needs, the extra that installs it)
+READERS = {
+    ".step": ("step", "cascadio", "cad"), ".stp": ("step", "cascadio", "cad"),
+    ".ifc": ("ifc", "ifcopenshell", "bim"),
+    ".dae": ("collada", "collada", "all"), ".zae": ("collada", "collada", "all"),
+    ".usd": ("usd", "pxr", "usd"), ".usda": ("usd", "pxr", "usd"), ".usdc": ("usd", "pxr", "usd"),
+    ".usdz": ("usd", "pxr", "usd"),
+    ".3dxml": ("threedxml", "trimesh", "all"),
+}
+SUFFIXES = tuple(READERS)
+MAX_COORDINATE = 1e15    # as the mesh loader's: float64 keeps ~0.1 units of precision there
+
+
+@dataclass
+class Assembly:
+    """What a reader gives the loader: per part (name, world vertices [V,3], faces [F,3])."""
+
+    names: list[str] = field(default_factory=list)
+    vertices: list[np.ndarray] = field(default_factory=list)
+    faces: list[np.ndarray] = field(default_factory=list)
+    colors: list[list[float] | None] = field(default_factory=list)
+    paths: list[tuple[str, ...]] = field(default_factory=list)
+    unit: str = ""
+    up_axis: str = "z"
+    warnings: list[str] = field(default_factory=list)
+
+    def add(self, name: str, vertices, faces, color, path: tuple[str, ...]) -> None:
+        self.names.append(name)
+        self.vertices.append(np.asarray(vertices, np.float64).reshape(-1, 3))
+        self.faces.append(np.asarray(faces, np.int64).reshape(-1, 3))
+        self.colors.append(color)
+        self.paths.append(tuple(p.replace("/", "\u2215") for p in path))
+
+
+def read(path: Path) -> Assembly:
+    """The assembly in `path` (suffix in SUFFIXES); RttaError when it cannot be read."""
+    module, needs, extra = READERS[path.suffix.lower()]
+    try:
+        importlib.import_module(needs)
+    except ImportError:
+        raise RttaError(f"reading {path.suffix.lower()} files needs {needs}: "
+                        f"pip install 'rtta[{extra}]'", path) from None
+    reader = importlib.import_module(f"{__name__}.{module}")
+    return reader.read(path)
+
+
+@contextmanager
+def native_output():
+    """Catch what native libraries print (OpenCASCADE's progress and errors) on the process's
+    stdout and stderr: a command's output stays its own (one error line, a parseable stdout).
+    Yields a list that holds the caught lines, ANSI colours removed, once the block ends."""
+    caught: list[str] = []
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = os.dup(1), os.dup(2)
+    with tempfile.TemporaryFile() as sink:       # anonymous: never next to the user's file
+        try:
+            os.dup2(sink.fileno(), 1)
+            os.dup2(sink.fileno(), 2)
+            yield caught
+        finally:
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os.dup2(saved[0], 1)
+            os.dup2(saved[1], 2)
+            os.close(saved[0])
+            os.close(saved[1])
+            sink.seek(0)
+            text = re.sub(r"\x1b\[[0-9;]*m", "", sink.read(1 << 20).decode("utf-8", "replace"))
+            caught.extend(line.strip() for line in text.splitlines() if line.strip())
+
+
+UNIT_NAMES = {1e-3: "mm", 1e-2: "cm", 1.0: "m", 0.0254: "in", 0.3048: "ft", 1e3: "km"}
+MAX_ARCHIVE_BYTES = 2 * 1024**3
+
+
+def unit_name(meters: float) -> str:
+    """'mm', 'cm', 'm', 'in', 'ft' for a length unit in metres; else e.g. '0.5 m'."""
+    return next((n for s, n in UNIT_NAMES.items() if abs(s - meters) <= 1e-9 * s), f"{meters:g} m")
+
+
+def check_archive(path: Path) -> None:
+    """A zip archive (.zae, .usdz, .3dxml) that is whole and not a zip bomb, with no member
+    outside it (absolute or '..' names), before a library unpacks it."""
+    import zipfile
+
+    try:
+        with zipfile.ZipFile(path) as z:
+            members = z.infolist()
+    except (zipfile.BadZipFile, OSError, ValueError) as exc:
+        raise RttaError(f"not a readable zip archive ({exc})", path) from None
+    total = sum(m.file_size for m in members)
+    if total > MAX_ARCHIVE_BYTES:
+        raise RttaError(f"the archive unpacks to {total:,} bytes, over the {MAX_ARCHIVE_BYTES >> 30} GiB limit", path)
+    for m in members:
+        name = m.filename.replace("\\", "/")
+        if name.startswith("/") or ".." in name.split("/") or ":" in name.split("/")[0]:
+            raise RttaError(f"archive member '{m.filename}' points outside the archive", path)
+
+
+def srgb_from_linear(c) -> list[float]:
+    """Linear RGB(A) in [0, 1] back to sRGB, the colour the CAD program shows; alpha kept."""
+    c = np.clip(np.asarray(c, np.float64).reshape(-1), 0.0, 1.0)
+    rgb = np.where(c[:3] <= 0.0031308, 12.92 * c[:3], 1.055 * c[:3] ** (1 / 2.4) - 0.055)
+    return [*rgb.tolist(), *(c[3:4].tolist() or [1.0])]
+
+
+def load(path: Path, smooth_angle: float) -> Scene:
+    """The Scene of an assembly file: parts checked (finite, in range, within the memory
+    limit), degenerate ones left out with a warning, normals smoothed by `smooth_angle`."""
+    asm = read(path)
+    parts, colors, paths, dropped = [], [], [], []
+    vertices = triangles = 0
+    for name, v, f, color, group in zip(asm.names, asm.vertices, asm.faces, asm.colors, asm.paths, strict=True):
+        if not len(f):
+            continue
+        if not np.isfinite(v).all() or np.abs(v).max() > MAX_COORDINATE:
+            raise RttaError(f"part '{name}' has coordinates that are not finite or beyond ±{MAX_COORDINATE:.0e}", path)
+        if f.min() < 0 or f.max() >= len(v):
+            raise RttaError(f"part '{name}' has face indices out of range", path)
+        vertices, triangles = vertices + len(v), triangles + len(f)
+        check_size(vertices, triangles, path)
+        if not has_area(v, f):
+            dropped.append(name)
+            continue
+        world, faces, normals, _ = smooth_normals(v, f, None, smooth_angle)
+        parts.append((name, world, faces, normals))
+        colors.append(color)
+        paths.append(group)
+    if not parts:
+        raise RttaError("the file has no parts with triangle geometry", path)
+    scene = from_meshes(parts, colors, source=str(path))
+    scene.paths, scene.unit, scene.up_axis = paths, asm.unit, asm.up_axis
+    if dropped:
+        asm.warnings.append(f"{len(dropped)} part(s) with only degenerate (zero-area) triangles left out: "
+                            + ", ".join(dropped[:5]) + (" ..." if len(dropped) > 5 else ""))
+    scene.warnings = asm.warnings + scene.warnings
+    return scene
+
+
+def has_area(v: np.ndarray, f: np.ndarray) -> bool:
+    """Whether any triangle has a non-zero area (relative to the part's size)."""
+    cross = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
+    extent = float(np.ptp(v, axis=0).max()) if len(v) else 0.0
+    return bool(extent > 0 and (np.linalg.norm(cross, axis=1) > (extent * 1e-12) ** 2).any())
+
+
+def graph_paths(loaded, nodes: list[str]) -> list[tuple[str, ...]] | None:
+    """The tree above each node of a trimesh scene graph (glTF, OBJ...): its ancestors' names,
+    root first, the base frame left out; None when every node sits at the top (a flat file)."""
+    parents = loaded.graph.transforms.parents
+    base = loaded.graph.base_frame
+    out = []
+    for node in nodes:
+        chain, current = [], node
+        while current in parents and len(chain) < 256:
+            current = parents[current]
+            if current == base:
+                break
+            chain.append(str(current).replace("/", "\u2215"))
+        out.append(tuple(reversed(chain)))
+    return out if any(out) else None

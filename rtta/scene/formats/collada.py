@@ -1,0 +1,92 @@
+"""COLLADA (.dae, and .zae archives) through pycollada, walking the node tree itself so that
+every geometry instance keeps its node path and names (pycollada's flat `objects()` loses
+them). The file's unit (`<unit meter=...>`) and up axis (`<up_axis>`) are kept."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ...errors import RttaError
+from . import Assembly, check_archive, unit_name
+
+MAX_DEPTH = 256
+
+
+def read(path: Path) -> Assembly:
+    import collada
+
+    if path.suffix.lower() == ".zae":
+        check_archive(path)
+    try:
+        dae = collada.Collada(str(path), ignore=[collada.common.DaeUnsupportedError,
+                                                collada.common.DaeBrokenRefError])
+    except Exception as exc:        # pycollada raises many types for bad files
+        reason = (str(exc).strip().splitlines() or [type(exc).__name__])[0][:160]
+        raise RttaError(f"cannot read COLLADA file ({reason})", path) from None
+    info = dae.assetInfo
+    meters = float(getattr(info, "unitmeter", None) or 1.0)
+    axis = str(getattr(info, "upaxis", "Y_UP") or "Y_UP").upper()
+    out = Assembly(unit=unit_name(meters), up_axis="z" if axis.startswith("Z") else "y")
+    if dae.scene is None:
+        raise RttaError("the COLLADA file has no scene", path)
+    for node in dae.scene.nodes:
+        _visit(node, np.identity(4), (), out, 0)
+    return out
+
+
+def _label(node) -> str:
+    return str(getattr(node, "name", None) or getattr(node, "id", None) or "node")
+
+
+def _visit(node, parent: np.ndarray, groups: tuple[str, ...], out: Assembly, depth: int) -> None:
+    from collada import scene
+
+    if depth > MAX_DEPTH:
+        return
+    if isinstance(node, scene.NodeNode):          # <instance_node>: the referenced node, here
+        node = node.node
+    if not isinstance(node, scene.Node):
+        return
+    m = parent @ np.asarray(node.matrix, np.float64)
+    name = _label(node)
+    geometries = [c for c in node.children if isinstance(c, scene.GeometryNode)]
+    for k, g in enumerate(geometries):
+        v, f, color = _geometry(g)
+        if len(f):
+            world = v @ m[:3, :3].T + m[:3, 3]
+            label = name if len(geometries) == 1 else f"{name} {g.geometry.name or g.geometry.id or k + 1}"
+            out.add(label, world, f, color, groups)
+    for child in node.children:
+        if isinstance(child, scene.Node | scene.NodeNode):
+            _visit(child, m, (*groups, name), out, depth + 1)
+
+
+def _geometry(gnode) -> tuple[np.ndarray, np.ndarray, list[float] | None]:
+    """Triangles of one geometry instance, in its node's frame, and its first material colour."""
+    vs, fs, base, color = [], [], 0, None
+    materials = {m.symbol: m.target for m in (gnode.materials or [])}
+    for prim in gnode.geometry.primitives:
+        tri = prim.triangleset() if hasattr(prim, "triangleset") else prim
+        if not hasattr(tri, "vertex_index") or tri.vertex is None or tri.vertex_index is None:
+            continue
+        v = np.asarray(tri.vertex, np.float64).reshape(-1, 3)
+        f = np.asarray(tri.vertex_index, np.int64).reshape(-1, 3)
+        vs.append(v)
+        fs.append(f + base)
+        base += len(v)
+        if color is None:
+            color = _diffuse(materials.get(getattr(prim, "material", None)))
+    if not vs:
+        return np.zeros((0, 3)), np.zeros((0, 3), np.int64), None
+    return np.concatenate(vs), np.concatenate(fs), color
+
+
+def _diffuse(material) -> list[float] | None:
+    effect = getattr(material, "effect", None)
+    d = getattr(effect, "diffuse", None)
+    if isinstance(d, tuple | list) and len(d) >= 3:
+        c = [float(x) for x in d[:4]] + [1.0] * (4 - min(4, len(d)))
+        return c if np.isfinite(c).all() else None
+    return None

@@ -1,0 +1,62 @@
+"""3DXML (Dassault: CATIA, SolidWorks) through trimesh, with the sub-assembly tree trimesh
+flattens into its node names ('part#id:id:...', the ids of the path from the root product
+to the geometry) recovered from the file's product structure: the groups are the names of
+the products (Reference3D) along that path. 3DXML stores millimetres, Z up."""
+
+from __future__ import annotations
+
+import zipfile
+from pathlib import Path
+
+import numpy as np
+from lxml import etree
+
+from ...errors import RttaError
+from . import Assembly, check_archive
+
+
+def read(path: Path) -> Assembly:
+    import trimesh
+
+    check_archive(path)
+    products = _products(path)
+    try:
+        loaded = trimesh.load(str(path), file_type="3dxml", force="scene", process=False)
+    except Exception as exc:        # trimesh raises many types for corrupt files
+        reason = (str(exc).strip().splitlines() or [type(exc).__name__])[0][:160]
+        raise RttaError(f"cannot read 3DXML file ({reason})", path) from None
+    out = Assembly(unit="mm", up_axis="z")
+    graph = loaded.graph
+    for node in graph.nodes_geometry:
+        transform, geom = graph[node]
+        mesh = loaded.geometry.get(geom)
+        if not isinstance(mesh, trimesh.Trimesh) or not len(mesh.faces):
+            continue
+        name, _, ids = str(node).partition("#")
+        chain = ids.split(":") if ids else []
+        groups = tuple(products[i] for i in chain[:-3] if i in products)
+        m = np.asarray(transform, np.float64)
+        v = np.asarray(mesh.vertices, np.float64) @ m[:3, :3].T + m[:3, 3]
+        out.add(name or str(geom), v, mesh.faces, _color(mesh), groups)
+    return out
+
+
+def _products(path: Path) -> dict[str, str]:
+    """Reference3D id -> name, from the product structure the manifest names."""
+    try:
+        with zipfile.ZipFile(path) as z:
+            root = etree.fromstring(z.read("Manifest.xml"), etree.XMLParser(resolve_entities=False, no_network=True))
+            main = root.find("{*}Root")
+            doc = etree.fromstring(z.read(main.text.strip()), etree.XMLParser(resolve_entities=False,
+                                                                              no_network=True, huge_tree=True))
+    except (KeyError, AttributeError, etree.XMLSyntaxError, zipfile.BadZipFile, OSError) as exc:
+        raise RttaError(f"cannot read 3DXML file (no readable product structure: {str(exc)[:120]})", path) from None
+    return {r.get("id"): r.get("name") or r.get("id") for r in doc.iter("{*}Reference3D")}
+
+
+def _color(mesh) -> list[float] | None:
+    visual = mesh.visual
+    if getattr(visual, "kind", None) != "face":
+        return None
+    c = np.asarray(visual.main_color, np.float64).reshape(-1)[:4] / 255.0
+    return [*c[:3], c[3] if c.size > 3 else 1.0]

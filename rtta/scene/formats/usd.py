@@ -1,0 +1,131 @@
+"""USD (.usd, .usda, .usdc, .usdz) through usd-core: every Mesh prim is an object, its prim
+path the tree; instances are expanded (instance proxies, each named after its instance
+prim); the stage's metersPerUnit and upAxis are kept. Layers the file refers to (sublayers,
+references, payloads) must lie in its folder: no absolute paths, no URLs."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+
+from ...errors import RttaError
+from . import Assembly, check_archive, native_output, unit_name
+
+MAX_LAYERS = 256
+
+
+def read(path: Path) -> Assembly:
+    from pxr import Usd, UsdGeom
+
+    if path.suffix.lower() == ".usdz":
+        check_archive(path)
+    _check_layers(path)
+    with native_output() as said:
+        try:
+            stage = Usd.Stage.Open(str(path))
+        except Exception as exc:              # pxr.Tf.ErrorException and others
+            stage, said = None, [*said, str(exc)]
+    if stage is None:
+        why = next((line for line in said if line.strip()), "not a USD stage")
+        raise RttaError(f"cannot read USD file ({_short(why)})", path)
+    out = Assembly(unit=unit_name(float(UsdGeom.GetStageMetersPerUnit(stage))),
+                   up_axis="z" if UsdGeom.GetStageUpAxis(stage) == UsdGeom.Tokens.z else "y")
+    cache = UsdGeom.XformCache(Usd.TimeCode.Default())
+    for prim in Usd.PrimRange.Stage(stage, Usd.TraverseInstanceProxies(Usd.PrimDefaultPredicate)):
+        if not prim.IsA(UsdGeom.Mesh) or UsdGeom.Imageable(prim).ComputeVisibility() == UsdGeom.Tokens.invisible:
+            continue
+        v, f = _mesh(UsdGeom.Mesh(prim))
+        if not len(f):
+            continue
+        m = np.array(cache.GetLocalToWorldTransform(prim), np.float64)      # row vectors: p @ M
+        name, groups = _name(prim)
+        out.add(name, v @ m[:3, :3] + m[3, :3], f, _color(prim), groups)
+    return out
+
+
+def _short(text: str) -> str:
+    text = re.sub(r"\s+", " ", str(text)).strip()
+    m = re.search(r"(?:Error|error)[^:]*:\s*(.*)", text)
+    return (m.group(1) if m else text)[:160]
+
+
+def _check_layers(path: Path) -> None:
+    """Refuse layer references that leave the file's folder (checked before the stage composes)."""
+    from pxr import Sdf
+
+    folder = path.resolve().parent
+    todo, seen = [path.resolve()], set()
+    while todo and len(seen) < MAX_LAYERS:
+        current = todo.pop()
+        if current in seen or current.suffix.lower() == ".usdz":
+            continue
+        seen.add(current)
+        with native_output() as said:
+            try:
+                layer = Sdf.Layer.FindOrOpen(str(current))
+            except Exception as exc:
+                layer, said = None, [*said, str(exc)]
+        if layer is None:
+            if current == path.resolve():
+                why = next((line for line in said if line.strip()), "not a USD layer")
+                raise RttaError(f"cannot read USD file ({_short(why)})", path)
+            raise RttaError(f"layer '{current.name}' it refers to cannot be read", path)
+        for asset in layer.GetCompositionAssetDependencies():
+            if not asset:                        # an internal reference: this layer itself
+                continue
+            if re.match(r"^[a-zA-Z][a-zA-Z0-9+.-]*:", asset):
+                raise RttaError(f"layer reference '{asset}' is a URL; only files next to the scene are read", path)
+            target = (current.parent / asset).resolve()
+            if Path(asset).is_absolute() or folder not in target.parents:
+                raise RttaError(f"layer reference '{asset}' is outside the scene's folder", path)
+            if not target.is_file():
+                raise RttaError(f"layer reference '{asset}' is missing", path)
+            todo.append(target)
+
+
+def _mesh(mesh) -> tuple[np.ndarray, np.ndarray]:
+    """Points and polygons fan-triangulated (USD faces are convex polygons)."""
+    points = mesh.GetPointsAttr().Get()
+    counts = mesh.GetFaceVertexCountsAttr().Get()
+    index = mesh.GetFaceVertexIndicesAttr().Get()
+    if points is None or counts is None or index is None or not len(points):
+        return np.zeros((0, 3)), np.zeros((0, 3), np.int64)
+    v = np.asarray(points, np.float64).reshape(-1, 3)
+    counts = np.asarray(counts, np.int64)
+    index = np.asarray(index, np.int64)
+    if counts.sum() != len(index) or (counts < 3).any():
+        keep = counts >= 3
+        starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+        if counts.sum() != len(index):
+            return v, np.zeros((0, 3), np.int64)
+        counts, starts = counts[keep], starts[keep]
+    else:
+        starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    tris = counts - 2
+    face = np.repeat(np.arange(len(counts)), tris)
+    k = np.arange(tris.sum()) - np.repeat(np.cumsum(tris) - tris, tris)
+    s = starts[face]
+    f = np.stack([index[s], index[s + k + 1], index[s + k + 2]], axis=1)
+    return v, f
+
+
+def _name(prim) -> tuple[str, tuple[str, ...]]:
+    """An instance's mesh is named after its instance prim (both fingers' meshes are 'geom')."""
+    if prim.IsInstanceProxy():
+        owner = prim
+        while owner.IsInstanceProxy():
+            owner = owner.GetParent()
+        return owner.GetName(), tuple(str(p) for p in owner.GetPath().GetParentPath().pathString.split("/") if p)
+    return prim.GetName(), tuple(p for p in prim.GetPath().GetParentPath().pathString.split("/") if p)
+
+
+def _color(prim) -> list[float] | None:
+    from pxr import UsdGeom
+
+    value = UsdGeom.PrimvarsAPI(prim).GetPrimvar("displayColor").Get() if prim else None
+    if value is None or not len(value):
+        return None
+    c = [float(x) for x in value[0]][:3]
+    return [*c, 1.0] if np.isfinite(c).all() else None

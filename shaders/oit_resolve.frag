@@ -1,0 +1,62 @@
+#version 430
+// defines:
+// `--order pixel`: each pixel's list of object surfaces (oit.glsl) blended front to back in
+// the order of their depths (ties: by node, so the order is stable). The list's first K = 8
+// surfaces are sorted in registers (each through a fixed chain of compare-and-swap selects,
+// in a loop short enough to unroll; no local arrays: on llvmpipe an array indexed per lane
+// is scattered lane by lane, and a sort over one cost 4 s a frame). The list holds the
+// objects in reverse draw order, and they are drawn back to front by bounding-box centre:
+// so with more than K objects over one pixel, the K nearest by centre are sorted exactly
+// and the others are merged into one layer behind them, with their opacity-weighted mean
+// colour and combined opacity 1 - prod(1 - a) (weighted blended, order-independent; up to
+// MAX_LIST surfaces). Walking the whole list in the sorting loop cost 10x more (487 ms
+// against 45 ms on the demo at 1024²): a long loop does not unroll.
+// Output: premultiplied (colour, alpha), blended ONE, ONE_MINUS_SRC_ALPHA over the background.
+#include "oit.glsl"
+
+#define K 8
+// a loop bound of 8192 or more made llvmpipe (LLVM 15) run every later loop once
+#define MAX_LIST 4096
+uniform int u_width;
+layout(location = 0) out vec4 out_color;
+
+// slot j holds (depth, node, colour); an empty slot has depth 2 and node NO_NODE
+#define SLOT(j) float d##j = 2.0; uint i##j = NO_NODE; uint c##j = 0u;
+// keep the nearer of (d, i, c) and slot j in the slot, carry the other on
+#define SWAP(j) { bool s = d < d##j || (d == d##j && i < i##j); \
+    float td = s ? d##j : d; d##j = s ? d : d##j; d = td; \
+    uint ti = s ? i##j : i; i##j = s ? i : i##j; i = ti; \
+    uint tc = s ? c##j : c; c##j = s ? c : c##j; c = tc; }
+#define BLEND(j) { vec4 q = d##j < 1.5 ? unpackUnorm4x8(c##j) : vec4(0.0); acc += t * q.a * q.rgb; t *= 1.0 - q.a; }
+
+void main() {
+    ivec2 p = ivec2(gl_FragCoord.xy);
+    uint next = heads[p.y * u_width + p.x];
+    if (next == NO_NODE) discard;
+    SLOT(0) SLOT(1) SLOT(2) SLOT(3) SLOT(4) SLOT(5) SLOT(6) SLOT(7)
+    vec3 tail_c = vec3(0.0);
+    float tail_w = 0.0, tail_t = 1.0;
+    for (int g = 0; next != NO_NODE && g < K; ++g) {
+        uvec4 node = nodes[next];
+        float d = uintBitsToFloat(node.x);
+        uint i = next, c = node.y;
+        next = node.z;
+        SWAP(0) SWAP(1) SWAP(2) SWAP(3) SWAP(4) SWAP(5) SWAP(6) SWAP(7)
+    }
+    for (int g = 0; next != NO_NODE && g < MAX_LIST; ++g) {     // more than K: merged behind
+        uvec4 node = nodes[next];
+        next = node.z;
+        vec4 q = unpackUnorm4x8(node.y);
+        tail_c += q.a * q.rgb;
+        tail_w += q.a;
+        tail_t *= 1.0 - q.a;
+    }
+    vec3 acc = vec3(0.0);
+    float t = 1.0;                   // light passing so far, front to back
+    BLEND(0) BLEND(1) BLEND(2) BLEND(3) BLEND(4) BLEND(5) BLEND(6) BLEND(7)
+    if (tail_w > 0.0) {
+        acc += t * (1.0 - tail_t) * tail_c / tail_w;
+        t *= tail_t;
+    }
+    out_color = vec4(acc, 1.0 - t);
+}

@@ -6,6 +6,7 @@ they load is what the file says (names numbered in file order, instances, fans, 
 from __future__ import annotations
 
 import hashlib
+import os
 import subprocess
 import sys
 import time
@@ -13,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from bad_inputs import make_corpus, many_nodes_glb, many_objects_obj
+from bad_inputs import Case, make_corpus, many_nodes_glb, many_objects_obj
 
 from rtta.cli.main import main
 from rtta.errors import printable
@@ -48,6 +49,8 @@ def _commands(path: Path, out: Path) -> dict[str, list[str]]:
         "export": ["export", str(path), "--size", "64x48", "--out", str(out / "export")],
         "ldi": ["ldi", str(path), "--points", str(out / "points.npy"), "--out", str(out / "inside.npy"),
                 "--resolution", "64"],
+        "dataset": ["dataset", str(path), "--out", str(out / "dataset"), "--views", "1", "--size", "32x24",
+                    "--no-progress"],
     }
 
 
@@ -75,7 +78,7 @@ def _one_line_error(case, lines: list[str]) -> bool:
             and case.says.lower() in lines[0].lower())
 
 
-@pytest.mark.parametrize("command", ["info", "snapshot", "export", "ldi"])
+@pytest.mark.parametrize("command", ["info", "snapshot", "export", "ldi", "dataset"])
 def test_every_case_through_the_cli(corpus, command, tmp_path, capsys, monkeypatch, gl):
     monkeypatch.setenv("RTTA_MEMORY_LIMIT_MB", "1")      # the too-large cases exceed it
     folder, cases = corpus
@@ -101,10 +104,16 @@ def test_every_case_through_the_cli(corpus, command, tmp_path, capsys, monkeypat
             problems.append(f"{where}: stray stderr {err!r}")
         if any(ord(ch) < 32 and ch != "\n" for ch in err + captured.out):
             problems.append(f"{where}: a control character reached the terminal")
+        if command == "dataset":          # its own new folder may appear; what was there stays
+            after = {k: v for k, v in _tree(out).items() if not k.startswith("dataset/")}
+            if after != before:
+                problems.append(f"{where}: an existing file changed")
+            if case.error and (os.path.isdir(case.path) or "[" in case.path.name):     # a folder, or a glob
+                case = Case(case.name, case.path, True, "", case.category)
         if case.error:
             if code != 2 or not _one_line_error(case, lines):
                 problems.append(f"{where}: exit {code}, stderr {err!r}")
-            if _tree(out) != before:
+            if command != "dataset" and _tree(out) != before:
                 problems.append(f"{where}: an output was written or changed on error")
         elif command == "ldi" and code == 2:      # loads, but is no closed mesh: refused the same way
             if not (len(lines) - sum("warning" in line for line in lines) == 1
@@ -204,7 +213,7 @@ def test_info_prints_hostile_names_escaped(corpus, capsys):
             assert main(["info", str(case.path)]) == 0
             out = capsys.readouterr().out
             assert not any(ord(ch) < 32 and ch != "\n" for ch in out) and "\u202e" not in out
-            assert len(out.splitlines()) == 2, out                       # the summary and one object
+            assert len(out.splitlines()) == 3, out                 # the summary, unit and axes, one object
 
 
 def test_closed_pipe_is_not_a_traceback():

@@ -14,7 +14,7 @@ from pathlib import Path
 import moderngl
 import numpy as np
 from imgui_bundle import imgui, implot
-from moderngl_window.integrations.imgui_bundle import ModernglWindowRenderer
+from .imgui_renderer import GrowingImguiRenderer
 
 from rtta.errors import RttaError
 from rtta.imageio import save_png
@@ -45,7 +45,7 @@ class Viewer:
         imgui.create_context()
         implot.create_context()
         imgui.get_io().set_ini_filename("")          # never write imgui.ini into the user's folder
-        self.imgui = ModernglWindowRenderer(wnd)
+        self.imgui = GrowingImguiRenderer(wnd)
         self.view_pass = ViewPass(self.ctx)
         self.files = FileBrowser(self.open_scene)
         self.controls = Controls(self)

@@ -78,27 +78,41 @@ def _objects(app: PanelsHost) -> None:
     if not imgui.collapsing_header("Objects", imgui.TreeNodeFlags_.default_open):
         return
     _, s.filter = imgui.input_text_with_hint("##filter", "filter by name", s.filter)
-    for how in ("all", "none", "invert"):
+    filter_rect = (*imgui.get_item_rect_min(), *imgui.get_item_rect_max())
+    buttons = {}
+    for k, how in enumerate(("all", "none", "invert")):
         imgui.same_line()
         if imgui.small_button(how):
             s.select(how)
+        buttons[-2 - k] = (*imgui.get_item_rect_min(), *imgui.get_item_rect_max())
     imgui.begin_child("objects", imgui.ImVec2(0, LIST_HEIGHT), imgui.ChildFlags_.borders)
     app.item_rects.clear()
+    app.item_rects.update({-1: filter_rect, **buttons})   # -1: filter box, -2..-4: all/none/invert (tests)
     slider_x = imgui.get_cursor_pos_x() + imgui.get_content_region_avail().x - 90
-    for oid in s.filtered():
-        imgui.push_id(oid)
-        changed, on = imgui.checkbox(app.renderer.scene.names[oid], oid in s.highlighted)
-        app.item_rects[oid] = (*imgui.get_item_rect_min(), *imgui.get_item_rect_max())
-        if changed:
-            s.toggle(oid)
-        if s.mode == "transparent":
-            imgui.same_line(slider_x)
-            imgui.set_next_item_width(90)
-            changed, a = imgui.slider_float("##a", s.opacity(oid), 0.0, 1.0, "%.2f")
-            if changed:
-                s.style.opacity[oid] = a
-        imgui.pop_id()
+    ids = s.filtered()
+    clipper = imgui.ListClipper()            # only the rows in view are emitted (10^5 objects)
+    clipper.begin(len(ids))
+    while clipper.step():
+        for row in range(clipper.display_start, clipper.display_end):
+            _object_row(app, ids[row], slider_x)
+    clipper.end()
     imgui.end_child()
+
+
+def _object_row(app: PanelsHost, oid: int, slider_x: float) -> None:
+    s = app.state
+    imgui.push_id(oid)
+    changed, _ = imgui.checkbox(app.renderer.scene.names[oid], oid in s.highlighted)
+    app.item_rects[oid] = (*imgui.get_item_rect_min(), *imgui.get_item_rect_max())
+    if changed:
+        s.toggle(oid)
+    if s.mode == "transparent":
+        imgui.same_line(slider_x)
+        imgui.set_next_item_width(90)
+        changed, a = imgui.slider_float("##a", s.opacity(oid), 0.0, 1.0, "%.2f")
+        if changed:
+            s.style.opacity[oid] = a
+    imgui.pop_id()
 
 
 def _style(app: PanelsHost) -> None:

@@ -14,7 +14,6 @@ from pathlib import Path
 import moderngl
 import numpy as np
 from imgui_bundle import imgui, implot
-from .imgui_renderer import GrowingImguiRenderer
 
 from rtta.errors import RttaError
 from rtta.imageio import save_png
@@ -28,6 +27,7 @@ from rtta.scene.model import Scene
 from . import overlay, panels
 from .controls import Controls
 from .files import FileBrowser, Stats
+from .imgui_renderer import GrowingImguiRenderer
 from .orbit import Orbit
 from .state import ViewerState
 from .views import ATLAS_BACKGROUND, Layout, ViewPass, layer_tiles

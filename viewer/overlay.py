@@ -73,7 +73,7 @@ def draw(app: OverlayHost) -> None:
     focus_col = _col(app.state.style.outline_color)
     ids, boxes = _outlined(app)
     on = _highlight_mask(app, ids)
-    for oid, (x0, y0, x1, y1), lit in zip(ids.tolist(), boxes.tolist(), on.tolist(), strict=True):
+    for (x0, y0, x1, y1), lit in zip(boxes.tolist(), on.tolist(), strict=True):
         dl.add_rect(imgui.ImVec2(x0, y0), imgui.ImVec2(x1, y1), focus_col if lit else REGION,
                     0.0, 0, 2.0 if lit else 1.0)
     tw, th, td = rec.atlas_size

@@ -62,20 +62,18 @@ class TrackedSet(set):
         super().__init__(items)
         self.version = 0
 
-    def _changed(self, result):
+
+def _counting(method):
+    def changed(self, *args):
+        result = method(self, *args)
         self.version += 1
-        return result
+        return self if result is self else result
+    return changed
 
 
 for _name in ("add", "discard", "remove", "pop", "clear", "update", "difference_update",
               "intersection_update", "symmetric_difference_update", "__ior__", "__isub__", "__ixor__", "__iand__"):
-    def _wrap(method=getattr(set, _name)):
-        def changed(self, *args):
-            result = method(self, *args)
-            self.version += 1
-            return self if result is self else result
-        return changed
-    setattr(TrackedSet, _name, _wrap())
+    setattr(TrackedSet, _name, _counting(getattr(set, _name)))
 
 
 @dataclass

@@ -13,9 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .preprocess import _PAIR_CHUNK
 
-CHUNK_CORNERS = 1_500_000        # corners per pass (bounds the temporary memory)
+CHUNK_CORNERS = 250_000          # corners per pass (bounds the temporary memory)
 
 
 _MIX = np.uint64(0x9E3779B97F4A7C15)
@@ -117,28 +116,27 @@ def grouped_sums(position: np.ndarray, corner_face: np.ndarray, unit: np.ndarray
 
 def _pair_sums(position: np.ndarray, corner_face: np.ndarray, unit: np.ndarray, fn: np.ndarray,
                cos_limit: float) -> np.ndarray:
-    """grouped_sums by comparing every pair of corners at a position (chunked)."""
+    """grouped_sums by comparing every pair of corners at a position. Pass d compares each
+    corner with the d-th corner of its position; corners sorted by their position's size,
+    largest first, make each pass a contiguous prefix (passes = the largest position's
+    corner count; work = the number of pairs, with no index arrays per pair)."""
     order = np.argsort(position, kind="stable")
     sorted_pos = position[order]
     starts = np.flatnonzero(np.r_[True, sorted_pos[1:] != sorted_pos[:-1]])
     sizes = np.diff(np.r_[starts, len(order)])
-    group_start = np.repeat(starts, sizes)
-    group_size = np.repeat(sizes, sizes)
-    out = np.zeros((len(order), 3))
-    cumulative = np.cumsum(group_size)
-    begin = 0
-    while begin < len(order):
-        end = int(np.searchsorted(cumulative, cumulative[begin] - group_size[begin] + _PAIR_CHUNK, side="right"))
-        end = max(end, begin + 1)
-        k = group_size[begin:end]
-        i = np.repeat(np.arange(begin, end), k)
-        j = np.repeat(group_start[begin:end], k) + ramp(k)
-        fi, fj = corner_face[order[i]], corner_face[order[j]]
-        near = np.einsum("ij,ij->i", unit[fi], unit[fj]) >= cos_limit
-        target, source = order[i[near]], fn[fj[near]]
-        for c in range(3):
-            out[:, c] += np.bincount(target, weights=source[:, c], minlength=len(order))
-        begin = end
+    size_of = np.repeat(sizes, sizes)
+    by_size = np.argsort(-size_of, kind="stable")
+    unit_sorted, weight_sorted = unit[corner_face[order]], fn[corner_face[order]]
+    u = unit_sorted[by_size]
+    start = np.repeat(starts, sizes)[by_size]
+    active = np.searchsorted(-size_of[by_size], -np.arange(int(sizes.max())), side="left")  # corners with size > d
+    acc = np.zeros((len(order), 3))
+    for d, c in enumerate(active.tolist()):
+        j = start[:c] + d
+        near = np.einsum("ij,ij->i", u[:c], unit_sorted[j]) >= cos_limit
+        acc[:c] += weight_sorted[j] * near[:, None]
+    out = np.empty_like(acc)
+    out[order[by_size]] = acc
     return out
 
 
@@ -186,7 +184,7 @@ def preprocess(meshes: Meshes, smooth: np.ndarray, angle: float) -> Meshes:
         for smoothed in (True, False):
             sel = ids[smooth[ids] == smoothed]
             if len(sel):
-                out.append((sel, _pass(meshes, sel, vstart, fstart, smoothed, angle)))
+                out.append(_compact(sel, _pass(meshes, sel, vstart, fstart, smoothed, angle)))
     return _gather(out, n)
 
 
@@ -204,25 +202,39 @@ def _pass(meshes: Meshes, sel: np.ndarray, vstart: np.ndarray, fstart: np.ndarra
     return index_grouped(v, f, group, meshes.normals[vi], uv)
 
 
+def _compact(sel: np.ndarray, result: tuple) -> tuple:
+    """A pass's output as (meshes, vcount, fcount, v, faces local to their mesh as int32,
+    normals, uvs): the per-vertex group ids are dropped as soon as they are counted."""
+    v, f, nrm, uv, group = result
+    vcount = np.bincount(group, minlength=len(sel))
+    first = np.concatenate([[0], np.cumsum(vcount)[:-1]])
+    owner = group[f[:, 0]]
+    return sel, vcount, np.bincount(owner, minlength=len(sel)), v, (f - first[owner][:, None]).astype(np.int32), nrm, uv
+
+
 def _gather(passes: list[tuple], n: int) -> Meshes:
-    """Put the passes' outputs back in mesh order, with face indices local to each mesh."""
+    """The passes' outputs copied straight into mesh order (each pass's meshes are
+    ascending, so a pass fills its meshes' slots in one assignment); each pass is freed
+    once copied."""
     vcount = np.zeros(n, np.int64)
     fcount = np.zeros(n, np.int64)
-    mesh_of_v, mesh_of_f = [], []
-    for sel, (_, f, _, _, group) in passes:
-        vcount[sel] = np.bincount(group, minlength=len(sel))
-        mesh_of_v.append(sel[group])
-        mesh_of_f.append(np.repeat(sel, 0) if not len(f) else sel[group[f[:, 0]]])
-    vorder = np.argsort(np.concatenate(mesh_of_v), kind="stable")
-    forder = np.argsort(np.concatenate(mesh_of_f), kind="stable")
-    faces = []
-    for sel, (_, f, _, _, group) in passes:
-        first = np.concatenate([[0], np.cumsum(np.bincount(group, minlength=len(sel)))[:-1]])
-        faces.append(f - first[group[f[:, 0]]][:, None])
-        fcount[sel] = np.bincount(group[f[:, 0]], minlength=len(sel))
-    cat = [np.concatenate([p[1][k] for p in passes]) if passes[0][1][k] is not None else None for k in (0, 2, 3)]
-    v, nrm, uv = ((None if a is None else a[vorder]) for a in cat)
-    return Meshes(v, np.concatenate(faces)[forder], vcount, fcount, nrm, uv)
+    for sel, vc, fc, *_ in passes:
+        vcount[sel], fcount[sel] = vc, fc
+    vstart = np.concatenate([[0], np.cumsum(vcount)[:-1]])
+    fstart = np.concatenate([[0], np.cumsum(fcount)[:-1]])
+    total_v, total_f = int(vcount.sum()), int(fcount.sum())
+    v = np.empty((total_v, 3))
+    faces = np.empty((total_f, 3), np.int32)
+    nrm = np.empty((total_v, 3), np.float32)
+    uv = None if passes[0][6] is None else np.empty((total_v, 2), np.float32)
+    while passes:
+        sel, vc, fc, pv, pf, pn, puv = passes.pop(0)
+        vi = np.repeat(vstart[sel], vc) + ramp(vc)
+        fi = np.repeat(fstart[sel], fc) + ramp(fc)
+        v[vi], nrm[vi], faces[fi] = pv, pn, pf
+        if uv is not None:
+            uv[vi] = puv
+    return Meshes(v, faces, vcount, fcount, nrm, uv)
 
 
 def similar(m: np.ndarray) -> np.ndarray:
@@ -238,11 +250,24 @@ def similar(m: np.ndarray) -> np.ndarray:
 def has_area(meshes: Meshes) -> np.ndarray:
     """Per mesh: whether any triangle has a non-zero area (relative to the mesh's size)."""
     v, vstart, fstart = meshes.vertices, meshes.vstart, meshes.fstart
-    f = meshes.faces + np.repeat(vstart, meshes.fcount)[:, None]
-    cross = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
     extent = (np.maximum.reduceat(v, vstart, axis=0) - np.minimum.reduceat(v, vstart, axis=0)).max(axis=1)
-    area = np.maximum.reduceat(np.einsum("ij,ij->i", cross, cross), fstart)
+    area = np.zeros(len(meshes.fcount))
+    owner = np.repeat(np.arange(len(meshes.fcount)), meshes.fcount)
+    step = 1 << 18
+    for a in range(0, len(meshes.faces), step):
+        o = owner[a:a + step]
+        f = meshes.faces[a:a + step] + vstart[o][:, None]
+        cross = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
+        area = np.maximum(area, _max_by(o, np.einsum("ij,ij->i", cross, cross), len(area)))
     return (extent > 0) & (area > (extent * 1e-12) ** 4)
+
+
+def _max_by(owner: np.ndarray, values: np.ndarray, n: int) -> np.ndarray:
+    """The largest value per owner (owners ascending), 0 where an owner has none."""
+    out = np.zeros(n)
+    starts = np.flatnonzero(np.r_[True, owner[1:] != owner[:-1]])
+    out[owner[starts]] = np.maximum.reduceat(values, starts)
+    return out
 
 
 def instance(meshes: Meshes, mesh_of: np.ndarray, transforms: np.ndarray) -> Meshes:
@@ -257,7 +282,7 @@ def instance(meshes: Meshes, mesh_of: np.ndarray, transforms: np.ndarray) -> Mes
     world = np.empty((len(vi), 3))
     normals = np.empty((len(vi), 3), np.float32)
     owner = np.repeat(np.arange(len(mesh_of)), vcount)
-    step = 1 << 19
+    step = 1 << 16
     for a in range(0, len(vi), step):
         o, local = owner[a:a + step], meshes.vertices[vi[a:a + step]]
         world[a:a + step] = np.einsum("vj,vij->vi", local, r[o]) + transforms[o, :3, 3]

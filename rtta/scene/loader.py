@@ -6,6 +6,7 @@ objects). Expected failures raise RttaError naming the file and the problem.
 
 from __future__ import annotations
 
+import gc
 import logging
 import warnings
 from pathlib import Path
@@ -44,9 +45,8 @@ def load_scene(path: str | Path, smooth_angle: float = DEFAULT_SMOOTH_ANGLE, smo
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")
         notes = precheck(path)
-        loaded = _trimesh_load(path, suffix)
-        placed, names, colors, texture_ids, textures, dropped = _parts(loaded, path, smooth_angle, smooth)
-        del loaded                     # trimesh's objects go before the batch is built
+        placed, names, colors, texture_ids, textures, dropped = _parts(_read(path, suffix, smooth), path,
+                                                                       smooth_angle)
     if dropped:
         notes.append(f"{len(dropped)} object(s) with only degenerate (zero-area) triangles left out: "
                      + ", ".join(dropped[:5]) + (" ..." if len(dropped) > 5 else ""))
@@ -81,18 +81,30 @@ def _trimesh_load(path: Path, suffix: str):
         raise RttaError(f"cannot read {suffix[1:].upper()} file ({reason[:160]})", path) from None
 
 
-def _parts(loaded, path: Path, smooth_angle: float, smooth: bool) -> tuple:
-    """The scene's objects as one batch (batch.Meshes in world coordinates, one mesh per
-    kept node), their names, colours and texture ids, the texture images, and the names of
-    objects left out because every triangle is degenerate. Each distinct mesh is read and
-    preprocessed once for all its instances, in whole-scene passes (batch.py)."""
+def _read(path: Path, suffix: str, smooth: bool) -> tuple:
+    """(gathered meshes, their concatenation, node names, node transforms); trimesh's own
+    objects are freed before this returns (their cycles collected), so they never sit in
+    memory beside the batch."""
+    loaded = _trimesh_load(path, suffix)
     nodes = _nodes(loaded)
     if not nodes:
         raise RttaError("scene has no objects with triangle geometry", path)
     names = [str(node) for node, _ in nodes]
     transforms = np.array([m for _, m in nodes], np.float64).reshape(-1, 4, 4)
     gathered = _Gathered(loaded, nodes, transforms, smooth)
-    meshes, mesh_of = gathered.concatenated(), np.asarray(gathered.mesh_of, np.int64)
+    del loaded, nodes
+    meshes = gathered.concatenated()
+    gc.collect()
+    return gathered, meshes, names, transforms
+
+
+def _parts(read: tuple, path: Path, smooth_angle: float) -> tuple:
+    """The scene's objects as one batch (batch.Meshes in world coordinates, one mesh per
+    kept node), their names, colours and texture ids, the texture images, and the names of
+    objects left out because every triangle is degenerate. Each distinct mesh is read and
+    preprocessed once for all its instances, in whole-scene passes (batch.py)."""
+    gathered, meshes, names, transforms = read
+    mesh_of = np.asarray(gathered.mesh_of, np.int64)
     _check(meshes, mesh_of, transforms, names, path)
     meshes = batch.preprocess(meshes, np.asarray(gathered.smoothed, bool), smooth_angle)
     area = batch.has_area(meshes)[mesh_of]

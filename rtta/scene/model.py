@@ -171,16 +171,20 @@ def from_batch(names: list[str], batch, colors: list | None = None, source: str 
     lo = np.minimum.reduceat(v, vstart, axis=0)
     hi = np.maximum.reduceat(v, vstart, axis=0)
     origin = (lo.min(axis=0) + hi.max(axis=0)) / 2.0
-    indices = (np.asarray(batch.faces, np.int64) + np.repeat(vstart, fcount)[:, None]).reshape(-1)
+    indices = np.asarray(batch.faces).astype(np.uint32).reshape(-1, 3)
+    indices += np.repeat(vstart.astype(np.uint32), fcount)[:, None]
+    positions = np.empty(v.shape, np.float32)
+    for a in range(0, len(v), 1 << 18):                  # no float64 copy of every vertex
+        positions[a:a + (1 << 18)] = v[a:a + (1 << 18)] - origin
     cols = np.empty((n, 4), np.float32)
     cols[:] = np.hstack([PALETTE[np.arange(n) % len(PALETTE)], np.ones((n, 1), np.float32)])
     for i, c in enumerate(colors or []):
         if c is not None:
             cols[i] = c
     names = unique_names(list(names))
-    scene = Scene(names=names, positions=(v - origin).astype(np.float32),
+    scene = Scene(names=names, positions=positions,
                   normals=np.asarray(batch.normals, np.float32),
-                  object_ids=np.repeat(np.arange(n, dtype=np.uint32), vcount), indices=indices.astype(np.uint32),
+                  object_ids=np.repeat(np.arange(n, dtype=np.uint32), vcount), indices=indices.reshape(-1),
                   index_ranges=np.stack([3 * fstart, 3 * fcount], axis=1).astype(np.int64), colors=cols,
                   aabb_min=lo, aabb_max=hi, origin=origin, source=source, warnings=_collapsed(names, lo, hi, origin))
     if textures and batch.uvs is not None and texture_ids is not None and any(t >= 0 for t in texture_ids):

@@ -68,7 +68,8 @@ def _modes(text: str | None) -> tuple[str, ...] | None:
     modes = tuple(m.strip() for m in text.split(",") if m.strip())
     unknown = [m for m in modes if m not in VIEW_MODES]
     if unknown or not modes:
-        raise RttaError(f"--bench-modes: unknown mode(s) {', '.join(unknown) or '(none)'}; modes: {', '.join(VIEW_MODES)}")
+        raise RttaError(f"--bench-modes: unknown mode(s) {', '.join(unknown) or '(none)'}; "
+                        f"modes: {', '.join(VIEW_MODES)}")
     return modes
 
 

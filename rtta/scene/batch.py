@@ -13,7 +13,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-
 CHUNK_CORNERS = 250_000          # corners per pass (bounds the temporary memory)
 
 
@@ -249,7 +248,7 @@ def similar(m: np.ndarray) -> np.ndarray:
 
 def has_area(meshes: Meshes) -> np.ndarray:
     """Per mesh: whether any triangle has a non-zero area (relative to the mesh's size)."""
-    v, vstart, fstart = meshes.vertices, meshes.vstart, meshes.fstart
+    v, vstart = meshes.vertices, meshes.vstart
     extent = (np.maximum.reduceat(v, vstart, axis=0) - np.minimum.reduceat(v, vstart, axis=0)).max(axis=1)
     area = np.zeros(len(meshes.fcount))
     owner = np.repeat(np.arange(len(meshes.fcount)), meshes.fcount)

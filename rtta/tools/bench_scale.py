@@ -122,9 +122,9 @@ def parse_parts(text: str | None) -> tuple[int, ...] | None:
 
 
 def run_scale(viewport: tuple[int, int], quick: bool = False, sizes: str | None = None,
-              json_path: str | None = None, viewer: bool = True) -> int:
+              json_path: str | None = None, viewer: bool = True, ctx=None) -> int:
     counts = parse_parts(sizes)
-    ctx = create_headless_context()
+    ctx = ctx or create_headless_context()
     renderer = str(ctx.info["GL_RENDERER"])
     rounds = 3 if quick else 7
     rows = []

@@ -19,10 +19,11 @@ MATERIALS = ((0.80, 0.36, 0.30), (0.30, 0.56, 0.80), (0.45, 0.72, 0.38), (0.86, 
              (0.62, 0.45, 0.78), (0.60, 0.60, 0.62))
 
 
-def _bases() -> list[tuple[np.ndarray, np.ndarray]]:
+def _bases() -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
     shapes = (trimesh.creation.box(), trimesh.creation.cylinder(radius=0.5, height=1.0, sections=16),
               trimesh.creation.icosphere(subdivisions=1, radius=0.5))
-    return [(np.asarray(m.vertices, np.float32), np.asarray(m.faces, np.uint32)) for m in shapes]
+    return [(np.asarray(m.vertices, np.float32), np.asarray(m.faces, np.uint32),
+             np.asarray(m.vertex_normals, np.float32)) for m in shapes]
 
 
 def _quaternions(rng: np.random.Generator, n: int) -> np.ndarray:
@@ -30,8 +31,9 @@ def _quaternions(rng: np.random.Generator, n: int) -> np.ndarray:
     return q / np.linalg.norm(q, axis=1, keepdims=True)
 
 
-def write_assembly(path: str | Path, n: int, seed: int = 0) -> Path:
-    """Write an `n`-part assembly to `path` (.glb); returns the path."""
+def write_assembly(path: str | Path, n: int, seed: int = 0, normals: bool = False) -> Path:
+    """Write an `n`-part assembly to `path` (.glb); returns the path. `normals`: with a
+    NORMAL attribute per part (as CAD exports usually have; without, the loader smooths)."""
     rng = np.random.default_rng(seed)
     bases = _bases()
     kind = rng.integers(0, len(bases), n)
@@ -39,27 +41,30 @@ def write_assembly(path: str | Path, n: int, seed: int = 0) -> Path:
     sizes = rng.uniform(0.3, 1.2, (n, 3)).astype(np.float32)
     blobs, accessors, meshes, nodes = [], [], [], []
     offset = 0
-    views = {"v": [], "i": []}
+    views: list[tuple[int, int]] = []
+    per = 3 if normals else 2
     for i in range(n):
-        v, f = bases[kind[i]]
+        v, f, vn = bases[kind[i]]
         pv = (v * sizes[i]).astype(np.float32)
-        for key, data, acc in (("v", pv, {"componentType": 5126, "type": "VEC3", "count": len(pv),
-                                           "min": pv.min(0).tolist(), "max": pv.max(0).tolist()}),
-                               ("i", f.reshape(-1), {"componentType": 5125, "type": "SCALAR", "count": f.size})):
-            views[key].append((offset, data.nbytes))
+        arrays = [(pv, {"componentType": 5126, "type": "VEC3", "count": len(pv),
+                        "min": pv.min(0).tolist(), "max": pv.max(0).tolist()}),
+                  (f.reshape(-1), {"componentType": 5125, "type": "SCALAR", "count": f.size})]
+        if normals:
+            nn = vn / sizes[i]
+            nn = (nn / np.linalg.norm(nn, axis=1, keepdims=True)).astype(np.float32)
+            arrays.append((nn, {"componentType": 5126, "type": "VEC3", "count": len(nn)}))
+        for data, acc in arrays:
+            acc["bufferView"] = len(views)
+            views.append((offset, data.nbytes))
             blobs.append(data.tobytes())
             offset += data.nbytes
             accessors.append(acc)
-        meshes.append({"primitives": [{"attributes": {"POSITION": 2 * i}, "indices": 2 * i + 1,
+        attributes = {"POSITION": per * i} | ({"NORMAL": per * i + 2} if normals else {})
+        meshes.append({"primitives": [{"attributes": attributes, "indices": per * i + 1,
                                        "material": int(rng.integers(0, len(MATERIALS)))}]})
     translation = rng.uniform(-side / 2, side / 2, (n, 3))
     rotation = _quaternions(rng, n)
-    buffer_views = []
-    for i in range(n):
-        for j, key in enumerate("vi"):
-            off, length = views[key][i]
-            buffer_views.append({"buffer": 0, "byteOffset": off, "byteLength": length})
-            accessors[2 * i + j]["bufferView"] = 2 * i + j
+    buffer_views = [{"buffer": 0, "byteOffset": off, "byteLength": length} for off, length in views]
     for i in range(n):
         nodes.append({"name": f"part{i:06d}", "mesh": i, "translation": translation[i].tolist(),
                       "rotation": rotation[i].tolist()})

@@ -122,14 +122,15 @@ def parse_parts(text: str | None) -> tuple[int, ...] | None:
 
 
 def run_scale(viewport: tuple[int, int], quick: bool = False, sizes: str | None = None,
-              json_path: str | None = None, viewer: bool = True, ctx=None) -> int:
+              json_path: str | None = None, viewer: bool = True, ctx=None, normals: bool = False) -> int:
     counts = parse_parts(sizes)
     ctx = ctx or create_headless_context()
     renderer = str(ctx.info["GL_RENDERER"])
     rounds = 3 if quick else 7
     rows = []
     with tempfile.TemporaryDirectory(prefix="rtta-scale-") as tmp:
-        scenes = [(f"assembly-{n}", write_assembly(Path(tmp) / f"assembly_{n}.glb", n))
+        tag = "assembly-n" if normals else "assembly"
+        scenes = [(f"{tag}-{n}", write_assembly(Path(tmp) / f"assembly_{n}.glb", n, normals=normals))
                   for n in (counts or (QUICK_SIZES if quick else SIZES))]
         engine = shared_data() / "engine_2cyl.glb"
         if engine.exists() and not quick:

@@ -6,6 +6,7 @@ objects). Expected failures raise RttaError naming the file and the problem.
 
 from __future__ import annotations
 
+import gc
 import logging
 import warnings
 from pathlib import Path
@@ -13,10 +14,10 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import RttaError
-from . import formats
-from .model import SUPPORTED, Scene, from_meshes
-from .precheck import check_size, precheck
-from .preprocess import DEFAULT_SMOOTH_ANGLE, index_vertices, smooth_normals
+from . import batch, formats
+from .model import SUPPORTED, Scene, from_batch
+from .precheck import BYTES_PER_TRIANGLE, BYTES_PER_VERTEX, check_size, memory_limit, precheck
+from .preprocess import DEFAULT_SMOOTH_ANGLE
 from .textures import TextureTable
 
 MAX_FILE_BYTES = 2 * 1024**3
@@ -46,13 +47,13 @@ def load_scene(path: str | Path, smooth_angle: float = DEFAULT_SMOOTH_ANGLE, smo
         if suffix in formats.SUFFIXES:
             return formats.load(path, 180.0 if smooth else smooth_angle)
         notes = precheck(path)
-        loaded = _trimesh_load(path, suffix)
-        parts, colors, dropped, materials = _parts(loaded, path, smooth_angle, smooth)
+        placed, names, colors, texture_ids, textures, dropped, paths = _parts(_read(path, suffix, smooth), path,
+                                                                              smooth_angle)
     if dropped:
         notes.append(f"{len(dropped)} object(s) with only degenerate (zero-area) triangles left out: "
                      + ", ".join(dropped[:5]) + (" ..." if len(dropped) > 5 else ""))
-    scene = from_meshes(parts, colors, source=str(path), **materials)
-    scene.paths = formats.graph_paths(loaded, [p[0] for p in parts])
+    scene = from_batch(names, placed, colors, source=str(path), texture_ids=texture_ids, textures=textures)
+    scene.paths = paths
     scene.warnings = notes + scene.warnings + _texture_notes(scene)
     return scene
 
@@ -83,85 +84,177 @@ def _trimesh_load(path: Path, suffix: str):
         raise RttaError(f"cannot read {suffix[1:].upper()} file ({reason[:160]})", path) from None
 
 
-def _parts(loaded, path: Path, smooth_angle: float, smooth: bool) -> tuple[list, list, list, dict]:
-    """(name, world vertices, faces, normals) per object, their colours, the names of
-    objects left out because every triangle is degenerate, and the from_meshes texture
-    arguments (uvs, texture_ids, textures)."""
+def _read(path: Path, suffix: str, smooth: bool) -> tuple:
+    """(gathered meshes, their concatenation, node names, node transforms); trimesh's own
+    objects are freed before this returns (their cycles collected), so they never sit in
+    memory beside the batch."""
+    loaded = _trimesh_load(path, suffix)
+    nodes = _nodes(loaded)
+    if not nodes:
+        raise RttaError("scene has no objects with triangle geometry", path)
+    names = [str(node) for node, _ in nodes]
+    transforms = np.array([m for _, m in nodes], np.float64).reshape(-1, 4, 4)
+    paths = formats.graph_paths(loaded, names)          # the file's node tree, before trimesh's objects go
+    gathered = _Gathered(loaded, nodes, transforms, smooth)
+    del loaded, nodes
+    meshes = gathered.concatenated()
+    gc.collect()
+    return gathered, meshes, names, transforms, paths
+
+
+def _parts(read: tuple, path: Path, smooth_angle: float) -> tuple:
+    """The scene's objects as one batch (batch.Meshes in world coordinates, one mesh per
+    kept node), their names, colours and texture ids, the texture images, and the names of
+    objects left out because every triangle is degenerate. Each distinct mesh is read and
+    preprocessed once for all its instances, in whole-scene passes (batch.py)."""
+    gathered, meshes, names, transforms, paths = read
+    mesh_of = np.asarray(gathered.mesh_of, np.int64)
+    _check(meshes, mesh_of, transforms, names, path)
+    meshes = batch.preprocess(meshes, np.asarray(gathered.smoothed, bool), smooth_angle)
+    area = batch.has_area(meshes)[mesh_of]
+    if not area.any():
+        raise RttaError("every triangle of the scene is degenerate (zero area)", path)
+    keep = np.flatnonzero(area)
+    placed = batch.instance(meshes, mesh_of[keep], np.where(gathered.baked[keep, None, None], np.eye(4),
+                                                             transforms[keep]))
+    kept = [names[i] for i in keep]
+    _check_world(placed, kept, path)
+    colors = [gathered.colors[mesh_of[i]] for i in keep]
+    texture_ids = [gathered.texture_ids[mesh_of[i]] for i in keep]
+    kept_paths = None if paths is None else [paths[i] for i in keep]
+    return (placed, kept, colors, texture_ids, gathered.textures.images, [names[i] for i in np.flatnonzero(~area)],
+            kept_paths)
+
+
+def _nodes(loaded) -> list[tuple]:
+    """(node, 4x4 transform) of every scene-graph node with triangles, in graph order."""
     import trimesh
 
-    parts, colors, dropped = [], [], []
-    textures = TextureTable()
-    uvs, texture_ids = [], []
-    vertices = triangles = 0
-    graph = loaded.graph
+    out = []
+    graph, geometry = loaded.graph, loaded.geometry
     for node in graph.nodes_geometry:
         transform, geom_name = graph[node]
-        mesh = loaded.geometry.get(geom_name)
-        if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
-            continue
+        mesh = geometry.get(geom_name)
+        if isinstance(mesh, trimesh.Trimesh) and len(mesh.faces):
+            out.append((node, transform))
+    return out
+
+
+class _Gathered:
+    """The distinct meshes of the nodes, read once each: vertices, faces, file normals
+    (or smoothing), uvs, texture, colour. A node whose mesh must be smoothed in world space
+    (a shear, a mirror or a non-uniform scale, and no file normals) or whose transform is
+    singular gets a copy of the mesh in world coordinates of its own (`baked`)."""
+
+    def __init__(self, loaded, nodes: list[tuple], transforms: np.ndarray, smooth: bool) -> None:
+        self.textures = TextureTable()
+        self.colors: list = []
+        self.texture_ids: list[int] = []
+        self.smoothed: list[bool] = []
+        self.mesh_of: list[int] = []
+        self._arrays: list[tuple] = []
+        with np.errstate(all="ignore"):
+            det = np.linalg.det(transforms[:, :3, :3])
+        usable = np.isfinite(transforms[:, :3, :]).all(axis=(1, 2)) & np.isfinite(det) & (det != 0)
+        similar = batch.similar(transforms) & usable
+        self.baked = np.zeros(len(nodes), bool)
+        graph, geometry = loaded.graph, loaded.geometry
+        seen: dict = {}
+        color_of: dict = {}
+        for i, (node, _) in enumerate(nodes):
+            geom_name = graph[node][1]
+            mesh = geometry[geom_name]
+            normals = None if smooth or not _file_has_normals(mesh) else _file_normals(mesh)
+            bake = usable[i] and normals is None and not similar[i]
+            key = (geom_name, i) if bake else geom_name
+            if key not in seen:
+                seen[key] = len(self._arrays)
+                self._add(mesh, normals, transforms[i] if bake else None, color_of)
+            self.baked[i] = bake
+            self.mesh_of.append(seen[key])
+
+    def _add(self, mesh, normals, transform, color_of: dict) -> None:
         v = np.asarray(mesh.vertices, np.float64)
-        if not np.isfinite(v).all():
-            raise RttaError(f"object '{node}' has NaN or infinite vertex coordinates", path)
-        f = np.asarray(mesh.faces, np.int64)
-        if f.min() < 0 or f.max() >= len(v):
-            raise RttaError(f"object '{node}' has face indices out of range", path)
-        m = np.asarray(transform, np.float64)
-        world = v @ m[:3, :3].T + m[:3, 3]
-        normals = None if smooth or not _file_has_normals(mesh) else _world_normals(mesh, m)
-        if not np.isfinite(world).all():
-            raise RttaError(f"object '{node}' has a transform that makes coordinates non-finite", path)
-        if np.abs(world).max() > MAX_COORDINATE:
-            raise RttaError(f"object '{node}' has coordinates up to {np.abs(world).max():.3g}, beyond "
-                            f"the ±{MAX_COORDINATE:.0e} this program handles", path)
-        vertices, triangles = vertices + len(v), triangles + len(f)
-        check_size(vertices, triangles, path)
-        if not _has_area(world, f):
-            dropped.append(str(node))
-            continue
-        uv, texture = textures.of(mesh)
-        if normals is None:
-            world, f, normals, uv = smooth_normals(world, f, uv, smooth_angle)
-        else:
-            world, f, normals, uv = index_vertices(world, f, normals, uv)
-        parts.append((str(node), world, f, normals))
-        colors.append(_color(mesh))
-        uvs.append(uv)
-        texture_ids.append(texture)
-    if not parts and dropped:
-        raise RttaError("every triangle of the scene is degenerate (zero area)", path)
-    if not parts:
-        raise RttaError("scene has no objects with triangle geometry", path)
-    return parts, colors, dropped, {"uvs": uvs, "texture_ids": texture_ids, "textures": textures.images}
+        if transform is not None:
+            v = v @ transform[:3, :3].T + transform[:3, 3]
+        uv, texture = self.textures.of(mesh)
+        self._arrays.append((v, np.asarray(mesh.faces, np.int64), normals, uv))
+        self.smoothed.append(normals is None)
+        self.texture_ids.append(texture)
+        material = getattr(mesh.visual, "material", None)
+        key = id(material) if material is not None and getattr(mesh.visual, "kind", None) not in ("face", "vertex") \
+            else None
+        if key is None or key not in color_of:
+            color_of[key] = _color(mesh)
+        self.colors.append(color_of[key])
+        if key is None:
+            del color_of[key]
+
+    def concatenated(self) -> batch.Meshes:
+        """The meshes as one batch.Meshes (zero normals where smoothed, zero uvs where none)."""
+        arrays, self._arrays = self._arrays, []
+        vcount = np.array([len(a[0]) for a in arrays], np.int64)
+        normals = [np.zeros((len(a[0]), 3), np.float32) if a[2] is None else a[2] for a in arrays]
+        textured = any(a[3] is not None for a in arrays)
+        uvs = [np.zeros((len(a[0]), 2), np.float32) if a[3] is None else a[3] for a in arrays] if textured else None
+        return batch.Meshes(np.concatenate([a[0] for a in arrays]), np.concatenate([a[1] for a in arrays]),
+                            vcount, np.array([len(a[1]) for a in arrays], np.int64), np.concatenate(normals),
+                            None if uvs is None else np.concatenate(uvs))
 
 
-def _file_has_normals(mesh) -> bool:
-    """Whether the file gave vertex normals (trimesh computes them lazily otherwise)."""
-    cache = getattr(getattr(mesh, "_cache", None), "cache", None)
-    return cache is None or "vertex_normals" in cache
+def _check(meshes: batch.Meshes, mesh_of: np.ndarray, transforms: np.ndarray, names: list[str], path: Path) -> None:
+    """The first node (in graph order) with non-finite vertices, face indices out of range
+    or a non-finite transform raises; then the memory limit, counted as the nodes add up."""
+    finite = np.logical_and.reduceat(np.isfinite(meshes.vertices).all(axis=1), meshes.vstart)
+    low = np.minimum.reduceat(meshes.faces.min(axis=1), meshes.fstart)
+    high = np.maximum.reduceat(meshes.faces.max(axis=1), meshes.fstart)
+    in_range = (low >= 0) & (high < meshes.vcount)
+    transform_ok = np.isfinite(transforms[:, :3, :]).all(axis=(1, 2))
+    bad = ~finite[mesh_of] | ~in_range[mesh_of] | ~transform_ok
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        if not finite[mesh_of[i]]:
+            raise RttaError(f"object '{names[i]}' has NaN or infinite vertex coordinates", path)
+        if not in_range[mesh_of[i]]:
+            raise RttaError(f"object '{names[i]}' has face indices out of range", path)
+        raise RttaError(f"object '{names[i]}' has a transform that makes coordinates non-finite", path)
+    vertices = np.cumsum(meshes.vcount[mesh_of])
+    triangles = np.cumsum(meshes.fcount[mesh_of])
+    need = vertices * BYTES_PER_VERTEX + triangles * BYTES_PER_TRIANGLE
+    over = np.flatnonzero(need > memory_limit())
+    i = int(over[0]) if len(over) else len(names) - 1
+    check_size(int(vertices[i]), int(triangles[i]), path)
 
 
-def _has_area(v: np.ndarray, f: np.ndarray) -> bool:
-    """Whether any triangle has a non-zero area (relative to the object's size)."""
-    cross = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
-    extent = float(np.ptp(v, axis=0).max()) if len(v) else 0.0
-    return bool(extent > 0 and (np.linalg.norm(cross, axis=1) > (extent * 1e-12) ** 2).any())
+def _check_world(placed: batch.Meshes, names: list[str], path: Path) -> None:
+    """World coordinates are finite and within ±MAX_COORDINATE (first offending object)."""
+    size = np.abs(placed.vertices).max(axis=1)
+    bad = ~(size <= MAX_COORDINATE)             # NaN too
+    if not bad.any():
+        return
+    i = int(np.searchsorted(placed.vstart, np.flatnonzero(bad)[0], side="right") - 1)
+    peak = np.abs(placed.vertices[placed.vstart[i]:placed.vstart[i] + placed.vcount[i]]).max()
+    if not np.isfinite(peak):
+        raise RttaError(f"object '{names[i]}' has a transform that makes coordinates non-finite", path)
+    raise RttaError(f"object '{names[i]}' has coordinates up to {peak:.3g}, beyond "
+                    f"the ±{MAX_COORDINATE:.0e} this program handles", path)
 
 
-def _world_normals(mesh, m: np.ndarray) -> np.ndarray | None:
-    """File normals (or trimesh's computed ones) by the inverse transpose; None if unusable."""
+def _file_normals(mesh) -> np.ndarray | None:
+    """The file's vertex normals (float32), or None when unusable."""
     try:
         n = np.asarray(mesh.vertex_normals, np.float64)
     except Exception:
         return None
     if n.shape != mesh.vertices.shape or not np.isfinite(n).all():
         return None
-    try:
-        normal_matrix = np.linalg.inv(m[:3, :3]).T
-    except np.linalg.LinAlgError:
-        return None
-    n = n @ normal_matrix.T
-    length = np.linalg.norm(n, axis=1, keepdims=True)
-    return (n / np.where(length > 0, length, 1.0)).astype(np.float32)
+    return n.astype(np.float32)
+
+
+def _file_has_normals(mesh) -> bool:
+    """Whether the file gave vertex normals (trimesh computes them lazily otherwise)."""
+    cache = getattr(getattr(mesh, "_cache", None), "cache", None)
+    return cache is None or "vertex_normals" in cache
 
 
 def _color(mesh) -> list[float] | None:

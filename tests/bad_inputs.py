@@ -27,6 +27,8 @@ import bad_gltf
 import numpy as np
 import trimesh
 
+from rtta.scene.files import MAX_OBJECTS
+
 TRI = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"
 
 
@@ -220,8 +222,9 @@ def make_corpus(folder: str | Path) -> list[Case]:
     add("3mf_component_cycle.3mf", bf.threemf_cycle(), True, "cycle")
     add("3mf_2_pow_30_components.3mf", bf.threemf_explosion(30), True, "objects")
     add("3mf_entity_expansion.3mf", bf.threemf_entities(), True, "DTD")
-    add("obj_10001_objects.obj", many_objects_obj(10_001), True, "10,001 objects")
-    add("gltf_10001_nodes.glb", many_nodes_glb(10_001), True, "10,001")
+    over = MAX_OBJECTS + 1
+    add("obj_too_many_objects.obj", many_objects_obj(over), True, f"{over:,} objects")
+    add("gltf_too_many_nodes.glb", many_nodes_glb(over), True, f"{over:,}")
     if bf.make_fifo(d / "fifo_scene.glb"):
         add("fifo_scene.glb", None, True, "not a regular file")
     if bf.make_link(d / "dev_zero.stl", "/dev/zero"):

@@ -153,7 +153,7 @@ def test_hostile_sizes_stay_fast_and_small(corpus, tmp_path):
     _, cases = corpus
     hostile = [c for c in cases if (c.category == "limits" and c.name != "too_large_for_limit.glb")  # 1 MiB's
                or c.name.startswith(("gltf_chain", "gltf_dag", "gltf_bufferless"))]
-    (tmp_path / "at_limit.obj").write_text(many_objects_obj(10_000))          # the most objects allowed: loads
+    (tmp_path / "at_limit.obj").write_text(many_objects_obj(10_000))          # many objects: loads in seconds
     (tmp_path / "at_limit.glb").write_bytes(many_nodes_glb(10_000))
     names = [str(c.path) for c in hostile] + [str(tmp_path / "at_limit.obj"), str(tmp_path / "at_limit.glb")]
     script = ("import resource, sys, time\nfrom rtta.cli.main import main\nfor p in sys.argv[1:]:\n"

@@ -114,3 +114,17 @@ def test_dataset_bench_quick(gl, tmp_path, capsys):
         assert s["rtta"]["masks_per_view"] == s["rtt"]["masks_per_view"] > 0
         assert math.isfinite(s["ratio_masks"]) and s["ratio_masks"] > 0
     assert "RTTA v/s" in capsys.readouterr().out
+
+
+def test_scale_bench_quick(gl, tmp_path, capsys):
+    from rtta.tools.bench_scale import run_scale
+
+    out = tmp_path / "scale.json"
+    assert run_scale((256, 144), quick=True, sizes="300", json_path=str(out), viewer=False, ctx=gl) == 0
+    (row,) = json.loads(out.read_text())["scenes"]
+    assert row["scene"] == "assembly-300" and row["objects"] == 300 and row["triangles"] > 300 * 12
+    for key in ("param_ms", "std_ms", "capture_ms", "ghosted_ms", "capture_ratio", "ghosted_ratio"):
+        assert math.isfinite(row[key]) and row[key] > 0
+    for which in ("rtta", "trimesh"):
+        assert row["load"][which]["s"] > 0 and row["load"][which]["peak_rss"] > 10 * 2**20
+    assert "| assembly-300 | 300 |" in capsys.readouterr().out

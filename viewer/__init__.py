@@ -24,6 +24,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--screenshot-dir", default=".", help="folder for screenshots (F12)")
     p.add_argument("--bench", type=int, default=0, metavar="FRAMES",
                    help="orbit for FRAMES frames per mode and print frame times, then exit")
+    p.add_argument("--bench-modes", default=None, metavar="MODE,...",
+                   help="with --bench: only these modes (default: every mode)")
     add_load_options(p)
     return p
 
@@ -52,11 +54,28 @@ def main(argv: list[str] | None = None) -> int:
 
     try:
         size = parse_size(args.size)
+        bench_modes = _modes(args.bench_modes)
         return run(args.scene_opt or args.scene, size=size, mode=args.mode,
-                   screenshot_dir=Path(args.screenshot_dir), bench=args.bench, load=load_options(args))
+                   screenshot_dir=Path(args.screenshot_dir), bench=args.bench, load=load_options(args),
+                   bench_modes=bench_modes)
     except RttaError as exc:
         print(f"rtta-view: error: {printable(exc)}", file=sys.stderr)
         return 2
+
+
+def _modes(text: str | None) -> tuple[str, ...] | None:
+    from rtta.errors import RttaError
+
+    from .state import VIEW_MODES
+
+    if not text:
+        return None
+    modes = tuple(m.strip() for m in text.split(",") if m.strip())
+    unknown = [m for m in modes if m not in VIEW_MODES]
+    if unknown or not modes:
+        raise RttaError(f"--bench-modes: unknown mode(s) {', '.join(unknown) or '(none)'}; "
+                        f"modes: {', '.join(VIEW_MODES)}")
+    return modes
 
 
 def cli() -> None:

@@ -15,7 +15,6 @@ from pathlib import Path
 import moderngl
 import numpy as np
 from imgui_bundle import imgui, implot
-from moderngl_window.integrations.imgui_bundle import ModernglWindowRenderer
 
 from rtta.errors import RttaError, printable
 from rtta.imageio import check_file, save_png
@@ -29,6 +28,7 @@ from rtta.scene.model import Scene
 from . import overlay, panels
 from .controls import Controls
 from .files import FileBrowser, Stats
+from .imgui_renderer import GrowingImguiRenderer
 from .orbit import Orbit
 from .state import ViewerState
 from .views import ATLAS_BACKGROUND, Layout, ViewPass, layer_tiles
@@ -46,7 +46,7 @@ class Viewer:
         imgui.create_context()
         implot.create_context()
         imgui.get_io().set_ini_filename("")          # never write imgui.ini into the user's folder
-        self.imgui = ModernglWindowRenderer(wnd)
+        self.imgui = GrowingImguiRenderer(wnd)
         self.view_pass = ViewPass(self.ctx)
         self.files = FileBrowser(self.open_scene)
         self.controls = Controls(self)

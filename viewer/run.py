@@ -31,7 +31,7 @@ def create_window(size: tuple[int, int], visible: bool = True):
 
 
 def run(scene_path: str | None, *, size: tuple[int, int], mode: str, screenshot_dir: Path, bench: int = 0,
-        load: dict | None = None) -> int:
+        load: dict | None = None, bench_modes: tuple[str, ...] | None = None) -> int:
     """`load`: the loader's options (smoothing), for this scene and those opened later."""
     from .app import Viewer
 
@@ -40,7 +40,7 @@ def run(scene_path: str | None, *, size: tuple[int, int], mode: str, screenshot_
     app = Viewer(wnd, scene, screenshot_dir=screenshot_dir, mode=mode, load=load)
     try:
         if bench:
-            print_bench(app, bench)
+            print_bench(app, bench, bench_modes)
             return 0
         while not wnd.is_closing:
             app.frame()
@@ -83,7 +83,7 @@ def bench_mode(app, mode: str, frames: int, warmup: int = 5) -> dict:
     return {"mode": mode, "ms": ms, "fps": 1e3 / ms, **{k: float(np.mean(v)) for k, v in stages.items()}}
 
 
-def print_bench(app, frames: int) -> list[dict]:
+def print_bench(app, frames: int, modes: tuple[str, ...] | None = None) -> list[dict]:
     w, h = app.wnd.buffer_size
     vp = app.viewport
     print(f"renderer: {app.ctx.info['GL_RENDERER']}")
@@ -94,7 +94,7 @@ def print_bench(app, frames: int) -> list[dict]:
     print("| mode | fps | frame ms | " + " | ".join(STAGE_COLUMNS) + " |")
     print("|---" * (3 + len(STAGE_COLUMNS)) + "|")
     rows = []
-    for mode in VIEW_MODES:
+    for mode in modes or VIEW_MODES:
         r = bench_mode(app, mode, frames)
         rows.append(r)
         print(f"| {mode} | {r['fps']:.1f} | {r['ms']:.1f} | " + " | ".join(f"{r[k]:.1f}" for k in STAGE_COLUMNS) + " |")

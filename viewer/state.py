@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from rtta.passes.composite import MODES, Style
 from rtta.renderer.renderer import Settings
 
@@ -54,6 +56,28 @@ class LensState:
         return (self.on, self.shape, self.radius, self.center)
 
 
+class TrackedSet(set):
+    """A set of object ids that counts its changes, so a frame can tell whether the focus
+    changed without sorting 10^5 ids (`ViewerState.style_key`)."""
+
+    def __init__(self, items=()) -> None:
+        super().__init__(items)
+        self.version = 0
+
+
+def _counting(method):
+    def changed(self, *args):
+        result = method(self, *args)
+        self.version += 1
+        return self if result is self else result
+    return changed
+
+
+for _name in ("add", "discard", "remove", "pop", "clear", "update", "difference_update",
+              "intersection_update", "symmetric_difference_update", "__ior__", "__isub__", "__ixor__", "__iand__"):
+    setattr(TrackedSet, _name, _counting(getattr(set, _name)))
+
+
 @dataclass
 class ViewerState:
     names: list[str]
@@ -77,6 +101,10 @@ class ViewerState:
     def __post_init__(self) -> None:
         if self.mode not in VIEW_MODES:
             raise ValueError(f"unknown mode {self.mode!r}; modes: {', '.join(VIEW_MODES)}")
+        self.style.focus = TrackedSet(self.style.focus)
+        self._lower = [n.lower() for n in self.names]
+        self._filtered: tuple[str, list[int], np.ndarray] | None = None
+        self._mask: tuple[tuple, np.ndarray] | None = None
         self.tree = PartTree(self.names, self.paths)
 
     def hide(self, ids, on: bool = True) -> None:
@@ -113,9 +141,31 @@ class ViewerState:
         return self.style.focus
 
     def filtered(self) -> list[int]:
-        """Object ids whose name contains the filter text (case-insensitive)."""
+        """Object ids whose name contains the filter text (case-insensitive); computed
+        once per filter text (the panel asks every frame). Do not modify the list."""
+        return self._filter()[1]
+
+    def filtered_ids(self) -> np.ndarray:
+        """`filtered()` as an int64 array."""
+        return self._filter()[2]
+
+    def _filter(self) -> tuple[str, list[int], np.ndarray]:
         f = self.filter.strip().lower()
-        return [i for i, n in enumerate(self.names) if f in n.lower()]
+        if self._filtered is None or self._filtered[0] != f:
+            ids = list(range(len(self._lower))) if not f else [i for i, n in enumerate(self._lower) if f in n]
+            self._filtered = (f, ids, np.asarray(ids, np.int64))
+        return self._filtered
+
+    def focus_mask(self) -> np.ndarray:
+        """The highlighted objects as a bool mask over all objects (rebuilt only after a change)."""
+        f = self.style.focus
+        key = (id(f), getattr(f, "version", None), len(f))
+        if self._mask is None or self._mask[0] != key or key[1] is None:
+            mask = np.zeros(len(self.names), bool)
+            ids = np.fromiter(f, np.int64, len(f))
+            mask[ids[(ids >= 0) & (ids < len(mask))]] = True
+            self._mask = (key, mask)
+        return self._mask[1]
 
     def toggle(self, oid: int) -> None:
         self.style.focus ^= {oid}
@@ -123,6 +173,8 @@ class ViewerState:
     def select(self, how: str) -> None:
         """'all', 'none' or 'invert', applied to the filtered objects only."""
         ids = set(self.filtered())
+        if not isinstance(self.style.focus, TrackedSet):
+            self.style.focus = TrackedSet(self.style.focus)
         if how == "all":
             self.style.focus |= ids
         elif how == "none":
@@ -142,7 +194,8 @@ class ViewerState:
     def style_key(self) -> tuple:
         """Changes whenever compositing must re-run (the capture need not)."""
         s = self.style
-        return (self.mode, tuple(sorted(s.focus)), tuple(sorted(s.opacity.items())), s.default_opacity,
+        focus = (id(s.focus), s.focus.version) if isinstance(s.focus, TrackedSet) else tuple(sorted(s.focus))
+        return (self.mode, focus, len(s.focus), tuple(sorted(s.opacity.items())), s.default_opacity,
                 s.context_opacity, s.desaturate, tuple(s.edge_color), tuple(s.outline_color),
                 s.outline_width, s.edge_width, s.ao_radius, s.ao_strength, s.ao_objects, s.edge_objects,
                 s.order, s.halo)

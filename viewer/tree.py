@@ -30,15 +30,18 @@ def draw(app: PanelsHost) -> None:
     if not imgui.collapsing_header("Objects", imgui.TreeNodeFlags_.default_open):
         return
     _, s.filter = imgui.input_text_with_hint("##filter", "filter by name", s.filter)
-    for how in ("all", "none", "invert"):
+    controls = {-1: (*imgui.get_item_rect_min(), *imgui.get_item_rect_max())}
+    for k, how in enumerate(("all", "none", "invert")):
         imgui.same_line()
         if imgui.small_button(how):
             s.select(how)
+        controls[-2 - k] = (*imgui.get_item_rect_min(), *imgui.get_item_rect_max())
     _toolbar(app)
     tree = s.tree
     rows = tree.rows(s.filter)
     imgui.begin_child("objects", imgui.ImVec2(0, LIST_HEIGHT), imgui.ChildFlags_.borders)
     app.item_rects.clear()
+    app.item_rects.update(controls)         # -1: filter box, -2..-4: all/none/invert (tests click them)
     tree.rects = {}                       # rows on screen: node -> checkbox rect (tests click them)
     tree.sliders = {}
     focus, hidden = tree.counts(s.highlighted), tree.counts(s.hidden)

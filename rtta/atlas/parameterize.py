@@ -60,7 +60,7 @@ class Records:
 def project_bounds(corners: np.ndarray, vpm: np.ndarray):
     """Projected, near-clipped NDC bounds of boxes: (visible [n], ndc_min [n,2], ndc_max [n,2])."""
     n = corners.shape[0]
-    clip = (corners.reshape(-1, 3) @ vpm[:, :3].T + vpm[:, 3]).reshape(n, 8, 4)
+    clip = _transform_points(corners.reshape(n, 8, 3), vpm)
     d = clip[..., 2] + clip[..., 3]                       # >= 0: in front of the near plane
     front = d >= 0
     lo = np.zeros((n, 3))
@@ -78,6 +78,18 @@ def project_bounds(corners: np.ndarray, vpm: np.ndarray):
     in_frustum = (some_front & (lo[:, 0] <= 1) & (hi[:, 0] >= -1) & (lo[:, 1] <= 1)
                   & (hi[:, 1] >= -1) & (lo[:, 2] <= 1))
     return in_frustum, lo[:, :2], hi[:, :2]
+
+
+def _transform_points(points: np.ndarray, m: np.ndarray) -> np.ndarray:
+    """m @ (p, 1) for points [..., 3] as [..., 4], one multiply-add per matrix column: numpy's
+    matmul of [N, 3] by [3, 4] goes through BLAS with a 3-long inner dimension and took
+    180-330 ms for 800,000 points on the 2-core CI machine; this takes about 15 ms."""
+    m = np.asarray(m, np.float64)
+    out = points[..., 0, None] * m[:, 0]
+    out += points[..., 1, None] * m[:, 1]
+    out += points[..., 2, None] * m[:, 2]
+    out += m[:, 3]
+    return out
 
 
 def _intersected(boxes: np.ndarray, vpm: np.ndarray):

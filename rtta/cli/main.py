@@ -113,6 +113,14 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--scenes", default=None, metavar="NAME,...",
                    help="only these of demo, random-2000, textured-64 (default: all)")
     b.add_argument("--json", default=None)
+    b = bsub.add_parser("scale", help="generated 1k/10k/100k-part assemblies (and the engine): load vs "
+                                      "trimesh.load, peak RSS, param+pack, STD, capture, ghosted, viewer fps")
+    b.add_argument("--size", default="1280x720")
+    b.add_argument("--quick", action="store_true", help="the 1k assembly only, fewer rounds")
+    b.add_argument("--parts", default=None, metavar="N,...", help="assembly sizes (default 1000,10000,100000)")
+    b.add_argument("--no-viewer", action="store_true", help="skip the viewer's frames per second")
+    b.add_argument("--normals", action="store_true", help="assemblies with a NORMAL attribute (no smoothing)")
+    b.add_argument("--json", default=None)
     b = bsub.add_parser("packing", help="our packer against rectpack and rectangle-packer")
     b.add_argument("--quick", action="store_true")
     b.add_argument("--json", default=None)
@@ -312,6 +320,11 @@ def cmd_bench(args) -> int:
         from .dataset import cmd_bench_dataset
 
         return cmd_bench_dataset(args)
+    if args.bench == "scale":
+        from ..tools.bench_scale import run_scale
+
+        return run_scale(parse_size(args.size), quick=args.quick, sizes=args.parts,
+                         json_path=args.json, viewer=not args.no_viewer, normals=args.normals)
     if args.bench == "report":
         from ..tools.report import run_report
 

@@ -6,6 +6,7 @@ objects). Expected failures raise RttaError naming the file and the problem.
 
 from __future__ import annotations
 
+import gc
 import io
 import logging
 import re
@@ -15,12 +16,12 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import RttaError
-from . import formats
+from . import batch, formats
 from .files import MAX_FILE_BYTES, MAX_OBJECTS, SafeResolver, regular_file
 from .gltf import prepare
-from .model import SUPPORTED, Scene, from_meshes
-from .precheck import check_size, precheck
-from .preprocess import DEFAULT_SMOOTH_ANGLE, preprocess_objects
+from .model import SUPPORTED, Scene, from_batch
+from .precheck import BYTES_PER_TRIANGLE, BYTES_PER_VERTEX, check_size, memory_limit, precheck
+from .preprocess import DEFAULT_SMOOTH_ANGLE
 from .textures import TextureTable
 
 MAX_COORDINATE = 1e15    # float64 keeps ~0.1 units of precision there; float32 offsets stay finite
@@ -46,21 +47,44 @@ def load_scene(path: str | Path, smooth_angle: float = DEFAULT_SMOOTH_ANGLE, smo
             scene = formats.load(path, 180.0 if smooth else smooth_angle)
             scene.inputs = [str(path.resolve())]
             return scene
-        notes, inputs, items = _read(path, suffix)
-        parts, colors, dropped, materials = _parts(items, path, smooth_angle, smooth)
-        notes += materials.pop("notes")
-        paths = materials.pop("paths")
+        notes, inputs, read = _read(path, suffix, smooth)
+        placed, names, colors, texture_ids, textures, dropped, paths = _parts(read, path, smooth_angle)
+        notes += read[0].textures.notes
     if dropped:
         notes.append(f"{len(dropped)} object(s) with only degenerate (zero-area) triangles left out: "
                      + ", ".join(dropped[:5]) + (" ..." if len(dropped) > 5 else ""))
-    scene = from_meshes(parts, colors, source=str(path), **materials)
-    scene.paths = paths if any(paths) else None
+    scene = from_batch(names, placed, colors, source=str(path), texture_ids=texture_ids, textures=textures)
+    scene.paths = paths
     scene.warnings = notes + scene.warnings + _texture_notes(scene)
     scene.inputs = [str(p) for p in dict.fromkeys([path.resolve(), *inputs])]
     return scene
 
 
-def _read(path: Path, suffix: str) -> tuple[list[str], list[Path], list[tuple]]:
+def _read(path: Path, suffix: str, smooth: bool) -> tuple[list[str], list[Path], tuple]:
+    """(warnings, files read besides `path`, (gathered meshes, their concatenation, node
+    names, node transforms, node paths or None)); trimesh's own objects are freed before
+    this returns (their cycles collected), so they never sit in memory beside the batch."""
+    notes, inputs, items = _items(path, suffix)
+    items = [item for item in items if _triangles(item[1])]
+    if not items:
+        raise RttaError("scene has no objects with triangle geometry", path)
+    names = [str(item[0]) for item in items]
+    transforms = np.array([np.asarray(item[2], np.float64) for item in items]).reshape(-1, 4, 4)
+    paths = [tuple(item[3]) for item in items]
+    gathered = _Gathered(items, transforms, smooth)
+    del items
+    meshes = gathered.concatenated()
+    gc.collect()
+    return notes, inputs, (gathered, meshes, names, transforms, paths if any(paths) else None)
+
+
+def _triangles(mesh) -> bool:
+    import trimesh
+
+    return isinstance(mesh, trimesh.Trimesh) and len(mesh.faces) > 0
+
+
+def _items(path: Path, suffix: str) -> tuple[list[str], list[Path], list[tuple]]:
     """(warnings, files read besides `path`, [(name, trimesh geometry, 4x4 world transform,
     path in the file's tree)]) in file order. glTF's graph is walked by rtta.scene.gltf; the
     other formats' by trimesh."""
@@ -138,109 +162,150 @@ def _trimesh_load(source, file_type: str, path: Path, resolver):
         raise RttaError(f"cannot read {path.suffix[1:].upper()} file ({reason[:160]})", path) from None
 
 
-def _parts(items: list[tuple], path: Path, smooth_angle: float, smooth: bool) -> tuple[list, list, list, dict]:
-    """(name, world vertices, faces, normals) per object, their colours, the names of
-    objects left out because every triangle is degenerate, and the from_meshes texture
-    arguments (uvs, texture_ids, textures). What depends on the geometry alone is done once
-    per geometry, and preprocessing once for all objects (rtta.scene.preprocess)."""
-    textures = TextureTable()
-    geometry: dict[int, tuple | None] = {}
-    names, raw, colors, texture_ids, trees = [], [], [], [], []
-    vertices = triangles = 0
-    for node, mesh, transform, tree in items:
-        if id(mesh) not in geometry:
-            geometry[id(mesh)] = _geometry(mesh, node, path, textures, smooth)
-        geo = geometry[id(mesh)]
-        if geo is None:
-            continue
-        v, f, n, uv, texture, color = geo
-        m = np.asarray(transform, np.float64)
-        world = v @ m[:3, :3].T + m[:3, 3] if np.isfinite(m).all() else np.full(1, np.nan)
-        if not np.isfinite(world).all():
-            raise RttaError(f"object '{node}' has a transform that makes coordinates non-finite", path)
-        if np.abs(world).max() > MAX_COORDINATE:
-            raise RttaError(f"object '{node}' has coordinates up to {np.abs(world).max():.3g}, beyond "
-                            f"the ±{MAX_COORDINATE:.0e} this program handles", path)
-        if np.linalg.det(m[:3, :3]) < 0:
-            f = f[:, ::-1]                   # a mirroring transform turns the winding: keep faces front-facing
-        vertices, triangles = vertices + len(v), triangles + len(f)
-        check_size(vertices, triangles, path)
-        names.append(str(node))
-        raw.append((world, f, None if n is None else _transform_normals(n, m), uv))
-        colors.append(color)
-        texture_ids.append(texture)
-        trees.append(tuple(tree))
-    area = _has_area(raw)
-    dropped = [name for name, ok in zip(names, area, strict=True) if not ok]
-    keep = np.flatnonzero(area)
-    if not keep.size and dropped:
+def _parts(read: tuple, path: Path, smooth_angle: float) -> tuple:
+    """The scene's objects as one batch (batch.Meshes in world coordinates, one mesh per
+    kept node), their names, colours and texture ids, the texture images, and the names of
+    objects left out because every triangle is degenerate. Each distinct mesh is read and
+    preprocessed once for all its instances, in whole-scene passes (batch.py)."""
+    gathered, meshes, names, transforms, paths = read
+    mesh_of = np.asarray(gathered.mesh_of, np.int64)
+    _check(meshes, mesh_of, transforms, names, path)
+    meshes = batch.preprocess(meshes, np.asarray(gathered.smoothed, bool), smooth_angle)
+    area = batch.has_area(meshes)[mesh_of]
+    if not area.any():
         raise RttaError("every triangle of the scene is degenerate (zero area)", path)
-    if not keep.size:
-        raise RttaError("scene has no objects with triangle geometry", path)
-    done = preprocess_objects([raw[i] for i in keep], smooth_angle, smooth)
-    parts = [(names[i], *d[:3]) for i, d in zip(keep, done, strict=True)]
-    return parts, [colors[i] for i in keep], dropped, {
-        "uvs": [d[3] for d in done], "texture_ids": [texture_ids[i] for i in keep], "textures": textures.images,
-        "notes": textures.notes, "paths": [trees[i] for i in keep]}
+    keep = np.flatnonzero(area)
+    placed = batch.instance(meshes, mesh_of[keep], np.where(gathered.baked[keep, None, None], np.eye(4),
+                                                             transforms[keep]))
+    with np.errstate(all="ignore"):
+        mirrored = ~gathered.baked[keep] & (np.linalg.det(transforms[keep, :3, :3]) < 0)
+    if mirrored.any():                    # instances under a mirror: turn the winding back (see _Gathered)
+        rows = np.repeat(mirrored, placed.fcount)
+        placed.faces[rows] = placed.faces[rows][:, ::-1]
+    kept = [names[i] for i in keep]
+    _check_world(placed, kept, path)
+    colors = [gathered.colors[mesh_of[i]] for i in keep]
+    texture_ids = [gathered.texture_ids[mesh_of[i]] for i in keep]
+    kept_paths = None if paths is None else [paths[i] for i in keep]
+    return (placed, kept, colors, texture_ids, gathered.textures.images, [names[i] for i in np.flatnonzero(~area)],
+            kept_paths)
 
 
-def _geometry(mesh, node, path: Path, textures: TextureTable, smooth: bool) -> tuple | None:
-    """(vertices, faces, file normals or None, uv, texture, colour) of a trimesh geometry,
-    checked; None for what is not a triangle mesh."""
-    import trimesh
+class _Gathered:
+    """The distinct meshes of the nodes, read once each: vertices, faces, file normals
+    (or smoothing), uvs, texture, colour. A node whose mesh must be smoothed in world space
+    (a shear, a mirror or a non-uniform scale, and no file normals) or whose transform is
+    singular gets a copy of the mesh in world coordinates of its own (`baked`)."""
 
-    if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
-        return None
-    v = np.asarray(mesh.vertices, np.float64)
-    if not np.isfinite(v).all():
-        raise RttaError(f"object '{node}' has NaN or infinite vertex coordinates", path)
-    f = np.asarray(mesh.faces, np.int64)
-    if f.min() < 0 or f.max() >= len(v):
-        raise RttaError(f"object '{node}' has face indices out of range", path)
-    n = None if smooth or not _file_has_normals(mesh) else _file_normals(mesh)
-    uv, texture = textures.of(mesh)
-    return v, f, n, uv, texture, _color(mesh)
+    def __init__(self, items: list[tuple], transforms: np.ndarray, smooth: bool) -> None:
+        self.textures = TextureTable()
+        self.colors: list = []
+        self.texture_ids: list[int] = []
+        self.smoothed: list[bool] = []
+        self.mesh_of: list[int] = []
+        self._arrays: list[tuple] = []
+        with np.errstate(all="ignore"):
+            det = np.linalg.det(transforms[:, :3, :3])
+        usable = np.isfinite(transforms[:, :3, :]).all(axis=(1, 2)) & np.isfinite(det) & (det != 0)
+        similar = batch.similar(transforms) & usable
+        self.baked = np.zeros(len(items), bool)
+        seen: dict = {}
+        color_of: dict = {}
+        for i, (_, mesh, _, _) in enumerate(items):     # the items hold every mesh, so ids stay unique
+            normals = None if smooth or not _file_has_normals(mesh) else _file_normals(mesh)
+            bake = usable[i] and normals is None and not similar[i]
+            key = (id(mesh), i) if bake else id(mesh)
+            if key not in seen:
+                seen[key] = len(self._arrays)
+                self._add(mesh, normals, transforms[i] if bake else None, color_of)
+            self.baked[i] = bake
+            self.mesh_of.append(seen[key])
+
+    def _add(self, mesh, normals, transform, color_of: dict) -> None:
+        v = np.asarray(mesh.vertices, np.float64)
+        f = np.asarray(mesh.faces, np.int64)
+        if transform is not None:
+            v = v @ transform[:3, :3].T + transform[:3, 3]
+            if np.linalg.det(transform[:3, :3]) < 0:
+                f = f[:, ::-1]             # a mirroring transform turns the winding: keep faces front-facing
+        uv, texture = self.textures.of(mesh)
+        self._arrays.append((v, f, normals, uv))
+        self.smoothed.append(normals is None)
+        self.texture_ids.append(texture)
+        material = getattr(mesh.visual, "material", None)
+        key = id(material) if material is not None and getattr(mesh.visual, "kind", None) not in ("face", "vertex") \
+            else None
+        if key is None or key not in color_of:
+            color_of[key] = _color(mesh)
+        self.colors.append(color_of[key])
+        if key is None:
+            del color_of[key]
+
+    def concatenated(self) -> batch.Meshes:
+        """The meshes as one batch.Meshes (zero normals where smoothed, zero uvs where none)."""
+        arrays, self._arrays = self._arrays, []
+        vcount = np.array([len(a[0]) for a in arrays], np.int64)
+        normals = [np.zeros((len(a[0]), 3), np.float32) if a[2] is None else a[2] for a in arrays]
+        textured = any(a[3] is not None for a in arrays)
+        uvs = [np.zeros((len(a[0]), 2), np.float32) if a[3] is None else a[3] for a in arrays] if textured else None
+        return batch.Meshes(np.concatenate([a[0] for a in arrays]), np.concatenate([a[1] for a in arrays]),
+                            vcount, np.array([len(a[1]) for a in arrays], np.int64), np.concatenate(normals),
+                            None if uvs is None else np.concatenate(uvs))
 
 
-def _transform_normals(n: np.ndarray, m: np.ndarray) -> np.ndarray | None:
-    """Normals by the inverse transpose of the transform, unit length; None if it is singular."""
+def _check(meshes: batch.Meshes, mesh_of: np.ndarray, transforms: np.ndarray, names: list[str], path: Path) -> None:
+    """The first node (in graph order) with non-finite vertices, face indices out of range
+    or a non-finite transform raises; then the memory limit, counted as the nodes add up."""
+    finite = np.logical_and.reduceat(np.isfinite(meshes.vertices).all(axis=1), meshes.vstart)
+    low = np.minimum.reduceat(meshes.faces.min(axis=1), meshes.fstart)
+    high = np.maximum.reduceat(meshes.faces.max(axis=1), meshes.fstart)
+    in_range = (low >= 0) & (high < meshes.vcount)
+    transform_ok = np.isfinite(transforms[:, :3, :]).all(axis=(1, 2))
+    bad = ~finite[mesh_of] | ~in_range[mesh_of] | ~transform_ok
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        if not finite[mesh_of[i]]:
+            raise RttaError(f"object '{names[i]}' has NaN or infinite vertex coordinates", path)
+        if not in_range[mesh_of[i]]:
+            raise RttaError(f"object '{names[i]}' has face indices out of range", path)
+        raise RttaError(f"object '{names[i]}' has a transform that makes coordinates non-finite", path)
+    vertices = np.cumsum(meshes.vcount[mesh_of])
+    triangles = np.cumsum(meshes.fcount[mesh_of])
+    need = vertices * BYTES_PER_VERTEX + triangles * BYTES_PER_TRIANGLE
+    over = np.flatnonzero(need > memory_limit())
+    i = int(over[0]) if len(over) else len(names) - 1
+    check_size(int(vertices[i]), int(triangles[i]), path)
+
+
+def _check_world(placed: batch.Meshes, names: list[str], path: Path) -> None:
+    """World coordinates are finite and within ±MAX_COORDINATE (first offending object)."""
+    size = np.abs(placed.vertices).max(axis=1)
+    bad = ~(size <= MAX_COORDINATE)             # NaN too
+    if not bad.any():
+        return
+    i = int(np.searchsorted(placed.vstart, np.flatnonzero(bad)[0], side="right") - 1)
+    peak = np.abs(placed.vertices[placed.vstart[i]:placed.vstart[i] + placed.vcount[i]]).max()
+    if not np.isfinite(peak):
+        raise RttaError(f"object '{names[i]}' has a transform that makes coordinates non-finite", path)
+    raise RttaError(f"object '{names[i]}' has coordinates up to {peak:.3g}, beyond "
+                    f"the ±{MAX_COORDINATE:.0e} this program handles", path)
+
+
+def _file_normals(mesh) -> np.ndarray | None:
+    """The file's vertex normals (float32), or None when unusable."""
     try:
-        normal_matrix = np.linalg.inv(m[:3, :3]).T
-    except np.linalg.LinAlgError:
+        n = np.asarray(mesh.vertex_normals, np.float64)
+    except Exception:
         return None
-    out = n @ normal_matrix.T
-    length = np.linalg.norm(out, axis=1, keepdims=True)
-    return (out / np.where(length > 0, length, 1.0)).astype(np.float32)
-
-
-def _has_area(parts: list[tuple]) -> np.ndarray:
-    """Per object: whether any triangle has a non-zero area (relative to its size); all
-    objects at once."""
-    if not parts:
-        return np.zeros(0, bool)
-    v = np.concatenate([p[0] for p in parts])
-    starts = np.cumsum([0] + [len(p[0]) for p in parts[:-1]])
-    f = np.concatenate([p[1] + s for p, s in zip(parts, starts, strict=True)])
-    fstarts = np.cumsum([0] + [len(p[1]) for p in parts[:-1]])
-    cross = np.linalg.norm(np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]), axis=1)
-    largest = np.maximum.reduceat(cross, fstarts)
-    extent = (np.maximum.reduceat(v, starts) - np.minimum.reduceat(v, starts)).max(axis=1)
-    return (extent > 0) & (largest > (extent * 1e-12) ** 2)
+    if n.shape != mesh.vertices.shape or not np.isfinite(n).all():
+        return None
+    return n.astype(np.float32)
 
 
 def _file_has_normals(mesh) -> bool:
     """Whether the file gave vertex normals (trimesh computes them lazily otherwise)."""
     cache = getattr(getattr(mesh, "_cache", None), "cache", None)
     return cache is None or "vertex_normals" in cache
-
-
-def _file_normals(mesh) -> np.ndarray | None:
-    """The file's vertex normals (float64), or None if unusable."""
-    try:
-        n = np.asarray(mesh.vertex_normals, np.float64)
-    except Exception:
-        return None
-    return n if n.shape == mesh.vertices.shape and np.isfinite(n).all() else None
 
 
 def _color(mesh) -> list[float] | None:

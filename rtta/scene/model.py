@@ -151,39 +151,73 @@ def from_meshes(parts: list[tuple[str, np.ndarray, np.ndarray, np.ndarray | None
     optionally with texture coordinates per part and an index into `textures` per part."""
     if not parts:
         raise RttaError("scene has no objects with geometry", source)
-    raw = [p[0] for p in parts]
+    textured = bool(textures) and uvs is not None and texture_ids is not None
+    batch = Batch(
+        vertices=np.concatenate([np.asarray(p[1], np.float64).reshape(-1, 3) for p in parts]),
+        faces=np.concatenate([np.asarray(p[2], np.int64).reshape(-1, 3) for p in parts]),
+        vcount=np.array([len(p[1]) for p in parts], np.int64), fcount=np.array([len(p[2]) for p in parts], np.int64),
+        normals=np.concatenate([_vertex_normals(v, f) if n is None else np.asarray(n, np.float32)
+                                for _, v, f, n in parts]),
+        uvs=np.concatenate([np.zeros((len(p[1]), 2), np.float32) if uv is None else np.asarray(uv, np.float32)
+                            for p, uv in zip(parts, uvs, strict=True)]) if textured else None)
+    return from_batch([p[0] for p in parts], batch, colors, source, texture_ids=texture_ids if textured else None,
+                      textures=textures if textured else None)
+
+
+@dataclass
+class Batch:
+    """Objects concatenated: world vertices float64 [V, 3], faces [F, 3] indexing into
+    their own object's vertices, per object vertex and face counts, normals float32 [V, 3],
+    uvs float32 [V, 2] or None (rtta.scene.batch.Meshes has these fields too)."""
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    vcount: np.ndarray
+    fcount: np.ndarray
+    normals: np.ndarray
+    uvs: np.ndarray | None = None
+
+
+def from_batch(names: list[str], batch, colors: list | None = None, source: str = "<memory>", *,
+               texture_ids: list[int] | None = None, textures: list[np.ndarray] | None = None) -> Scene:
+    """The Scene of objects given as one batch (a Batch, or anything with its fields), in
+    whole-array passes: no loop per object."""
+    n = len(names)
+    if n == 0:
+        raise RttaError("scene has no objects with geometry", source)
+    vcount = np.asarray(batch.vcount, np.int64)
+    fcount = np.asarray(batch.fcount, np.int64)
+    vstart = np.concatenate([[0], np.cumsum(vcount)[:-1]])
+    fstart = np.concatenate([[0], np.cumsum(fcount)[:-1]])
+    v = np.asarray(batch.vertices, np.float64)
+    lo = np.minimum.reduceat(v, vstart, axis=0)
+    hi = np.maximum.reduceat(v, vstart, axis=0)
+    origin = (lo.min(axis=0) + hi.max(axis=0)) / 2.0
+    indices = np.asarray(batch.faces).astype(np.uint32).reshape(-1, 3)
+    indices += np.repeat(vstart.astype(np.uint32), fcount)[:, None]
+    positions = np.empty(v.shape, np.float32)
+    for a in range(0, len(v), 1 << 18):                  # no float64 copy of every vertex
+        positions[a:a + (1 << 18)] = v[a:a + (1 << 18)] - origin
+    cols = np.empty((n, 4), np.float32)
+    cols[:] = np.hstack([PALETTE[np.arange(n) % len(PALETTE)], np.ones((n, 1), np.float32)])
+    for i, c in enumerate(colors or []):
+        if c is not None:
+            cols[i] = c
+    raw = list(names)
     names = unique_names(raw)
     renamed = [f"{printable(a)} -> {printable(b)}" for a, b in zip(raw, names, strict=True) if a and a != b]
-    lo = np.array([p[1].min(axis=0) for p in parts], dtype=np.float64)
-    hi = np.array([p[1].max(axis=0) for p in parts], dtype=np.float64)
-    origin = (lo.min(axis=0) + hi.max(axis=0)) / 2.0
-    pos, nrm, ids, idx, ranges = [], [], [], [], []
-    base = 0
-    first = 0
-    for i, (_, v, f, n) in enumerate(parts):
-        pos.append((np.asarray(v, np.float64) - origin).astype(np.float32))
-        nrm.append(_vertex_normals(v, f) if n is None else np.asarray(n, np.float32))
-        ids.append(np.full(len(v), i, np.uint32))
-        idx.append(np.asarray(f, np.int64).reshape(-1) + base)
-        ranges.append((first, f.size))
-        base += len(v)
-        first += f.size
-    cols = np.empty((len(parts), 4), np.float32)
-    for i in range(len(parts)):
-        c = None if colors is None else colors[i]
-        cols[i] = (*PALETTE[i % len(PALETTE)], 1.0) if c is None else c
-    scene = Scene(names=names, positions=np.concatenate(pos), normals=np.concatenate(nrm),
-                  object_ids=np.concatenate(ids), indices=np.concatenate(idx).astype(np.uint32),
-                  index_ranges=np.array(ranges, np.int64), colors=cols, aabb_min=lo,
-                  aabb_max=hi, origin=origin, source=source, warnings=_collapsed(names, lo, hi, origin))
+    scene = Scene(names=names, positions=positions,
+                  normals=np.asarray(batch.normals, np.float32),
+                  object_ids=np.repeat(np.arange(n, dtype=np.uint32), vcount), indices=indices.reshape(-1),
+                  index_ranges=np.stack([3 * fstart, 3 * fcount], axis=1).astype(np.int64), colors=cols,
+                  aabb_min=lo, aabb_max=hi, origin=origin, source=source, warnings=_collapsed(names, lo, hi, origin))
     if renamed:
         scene.warnings.insert(0, f"{len(renamed)} object name(s) repeated, numbered in file order to keep names "
                                  "unique: " + ", ".join(renamed[:5]) + (" ..." if len(renamed) > 5 else ""))
-    if textures and uvs is not None and texture_ids is not None:
+    if textures and batch.uvs is not None and texture_ids is not None and any(t >= 0 for t in texture_ids):
         scene.textures = list(textures)
         scene.texture_ids = np.asarray(texture_ids, np.int32)
-        scene.uvs = np.concatenate([np.zeros((len(p[1]), 2), np.float32) if uv is None
-                                    else np.asarray(uv, np.float32) for p, uv in zip(parts, uvs, strict=True)])
+        scene.uvs = np.asarray(batch.uvs, np.float32)
     return scene
 
 

@@ -223,8 +223,8 @@ def make_corpus(folder: str | Path) -> list[Case]:
     add("3mf_2_pow_30_components.3mf", bf.threemf_explosion(30), True, "objects")
     add("3mf_entity_expansion.3mf", bf.threemf_entities(), True, "DTD")
     over = MAX_OBJECTS + 1
-    add("obj_too_many_objects.obj", many_objects_obj(over), True, f"{over:,} objects")
-    add("gltf_too_many_nodes.glb", many_nodes_glb(over), True, f"{over:,}")
+    add("obj_10001_objects.obj", many_objects_obj(over), True, f"{over:,} objects")     # small files: 10,000
+    add("gltf_10001_nodes.glb", many_nodes_glb(over), True, f"{over:,}")
     if bf.make_fifo(d / "fifo_scene.glb"):
         add("fifo_scene.glb", None, True, "not a regular file")
     if bf.make_link(d / "dev_zero.stl", "/dev/zero"):

@@ -223,3 +223,39 @@ def test_closed_pipe_is_not_a_traceback():
     proc.stdout.close()                 # gone before the first line is written
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == 1 and b"Traceback" not in err and err == b"", err.decode()
+
+
+def test_object_limit_grows_with_the_file(tmp_path):
+    """Small files may make 10,000 objects (instancing cannot make minutes of work); larger
+    ones one per 256 bytes, so real 100,000-part assemblies load; never over 1,000,000."""
+    from rtta.scene.files import max_objects
+
+    small, large, huge = tmp_path / "small.glb", tmp_path / "large.glb", tmp_path / "huge.glb"
+    small.write_bytes(b"x" * 1000)
+    with open(large, "wb") as f:
+        f.truncate(30 * 1024 * 1024)
+    with open(huge, "wb") as f:
+        f.truncate(2 * 1024**3)
+    assert max_objects(small) == 10_000
+    assert max_objects(large) == 30 * 1024 * 1024 // 256 == 122_880
+    assert max_objects(small, extra_bytes=30 * 1024 * 1024) == (30 * 1024 * 1024 + 1000) // 256
+    assert max_objects(huge) == 1_000_000
+
+
+def test_reference_warnings_name_the_file_once(corpus):
+    """A refused texture or material file is named once, with a reason that reads as a
+    sentence (no empty 'the  must be', no 'file X file X')."""
+    from rtta.scene.loader import load_scene
+
+    _, cases = corpus
+    by_name = {c.name: c for c in cases}
+    notes = {name: load_scene(by_name[name].path).warnings
+             for name in ("fifo_texture.gltf", "fifo_mtllib.obj", "obj_mtllib_absolute.obj", "obj_mtllib_outside.obj")}
+    for name, warnings in notes.items():
+        assert warnings, name
+        for note in warnings:
+            assert "  " not in note, note
+            quoted = note.split("'")[1] if "'" in note else None
+            assert quoted is None or note.count(f"'{quoted}'") == 1, note
+    assert any("'/etc/passwd' is outside the scene's folder" in n for n in notes["obj_mtllib_absolute.obj"])
+    assert any("'fifo.mtl' is not a regular file" in n for n in notes["fifo_mtllib.obj"])

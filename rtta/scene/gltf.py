@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import RttaError
-from .files import MAX_OBJECTS, TextureBudget, image_problem, local_file, memory_limit, read_limited
+from .files import MAX_OBJECTS_LARGE, TextureBudget, image_problem, local_file, max_objects, memory_limit, read_limited
 from .gltf_check import COMPONENT_BYTES, TYPE_WIDTH, check, read_document
 from .gltf_rewrite import fan_indices, rewrite
 from .precheck import check_size
@@ -57,7 +57,8 @@ def prepare(path: Path) -> Prepared:
     _check_extensions(doc, path, out.warnings)
     buffers = _buffers(doc, binary, path, out)
     _check_memory(doc, buffers, path)
-    walk = _walk(doc, path, out.warnings)
+    limit = max_objects(path, sum(target.stat().st_size for target in out.inputs))   # buffer files so far
+    walk = _walk(doc, path, out.warnings, limit)
     pairs = _primitives(doc, walk, buffers, path, out.warnings)
     images = _images(doc, buffers, path, out)
     _colors(doc, out.warnings)
@@ -67,8 +68,9 @@ def prepare(path: Path) -> Prepared:
     out.instances = [Instance(name, f"rtta.{mesh}.{p}", matrix,       # a node's primitives: a group of its own
                               (*tree, name.replace("/", "\u2215")) if len(per_mesh[mesh]) > 1 else tree)
                      for name, mesh, matrix, tree in walk for p in per_mesh.get(mesh, [])]
-    if len(out.instances) > MAX_OBJECTS:
-        raise RttaError(f"the node graph makes {len(out.instances):,} objects (at most {MAX_OBJECTS:,})", path)
+    if len(out.instances) > limit:
+        raise RttaError(f"the node graph makes {len(out.instances):,} objects (at most {limit:,} for a file of its "
+                        "size)", path)
     _check_size(doc, walk, pairs, path)
     new, blob = rewrite(doc, pairs, buffers, images)
     text = json.dumps(new, allow_nan=False).encode()
@@ -175,11 +177,11 @@ def _local(node: dict) -> np.ndarray:
     return m
 
 
-def _walk(doc: dict, path: Path, warnings: list[str]) -> list[tuple[str, int, np.ndarray, tuple]]:
+def _walk(doc: dict, path: Path, warnings: list[str], limit: int) -> list[tuple[str, int, np.ndarray, tuple]]:
     """(name, mesh, world matrix, ancestors' names) of every node with a mesh, in depth-first
     file order, each
     path through the graph once. Cycles, graphs deeper than MAX_DEPTH and graphs whose paths
-    make more than MAX_OBJECTS objects are errors (found in one pass over the nodes, before
+    make more objects than files.max_objects allows are errors (found in one pass over the nodes, before
     any path is followed); a node with several parents is drawn under each, with a warning."""
     nodes, scenes = doc.get("nodes", []), doc.get("scenes", [])
     parents = [0] * len(nodes)
@@ -187,7 +189,7 @@ def _walk(doc: dict, path: Path, warnings: list[str]) -> list[tuple[str, int, np
         for child in node.get("children", []):
             parents[child] += 1
     roots = scenes[doc.get("scene", 0)].get("nodes", []) if scenes else [i for i, p in enumerate(parents) if p == 0]
-    _measure(nodes, roots, path)
+    _measure(nodes, roots, path, limit)
     shared = [i for i, p in enumerate(parents) if p > 1]
     if shared:
         warnings.append(f"{len(shared)} node(s) have more than one parent (glTF allows one); each is drawn "
@@ -206,7 +208,7 @@ def _walk(doc: dict, path: Path, warnings: list[str]) -> list[tuple[str, int, np
     return found
 
 
-def _measure(nodes: list, roots: list[int], path: Path) -> None:
+def _measure(nodes: list, roots: list[int], path: Path, limit: int) -> None:
     """Cycle, depth and path-count checks over the nodes reachable from `roots`, iteratively
     (each node once: a graph of shared children is not unfolded to count its paths)."""
     state = [0] * len(nodes)           # 0 new, 1 on the current path, 2 done
@@ -222,7 +224,7 @@ def _measure(nodes: list, roots: list[int], path: Path) -> None:
             children = nodes[i].get("children", [])
             if state[i] == 1:
                 depth[i] = 1 + max((depth[c] for c in children), default=0)
-                meshes[i] = min(int("mesh" in nodes[i]) + sum(meshes[c] for c in children), 10 * MAX_OBJECTS)
+                meshes[i] = min(int("mesh" in nodes[i]) + sum(meshes[c] for c in children), 10 * MAX_OBJECTS_LARGE)
                 state[i] = 2
                 stack.pop()
                 continue
@@ -236,9 +238,9 @@ def _measure(nodes: list, roots: list[int], path: Path) -> None:
     if max((depth[r] for r in roots), default=0) > MAX_DEPTH:
         raise RttaError(f"glTF node graph is deeper than {MAX_DEPTH} levels", path)
     total = sum(meshes[r] for r in roots)
-    if total > MAX_OBJECTS:
-        raise RttaError(f"glTF node graph has {total:,} or more node paths to meshes (at most {MAX_OBJECTS:,} "
-                        "objects)", path)
+    if total > limit:
+        raise RttaError(f"glTF node graph has {total:,} or more node paths to meshes (at most {limit:,} objects "
+                        "for a file of its size)", path)
 
 
 def _node_name(nodes: list, i: int) -> str:

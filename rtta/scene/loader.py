@@ -17,7 +17,7 @@ import numpy as np
 
 from ..errors import RttaError
 from . import batch, formats
-from .files import MAX_FILE_BYTES, MAX_OBJECTS, SafeResolver, regular_file
+from .files import MAX_FILE_BYTES, SafeResolver, max_objects, regular_file
 from .gltf import prepare
 from .model import SUPPORTED, Scene, from_batch
 from .precheck import BYTES_PER_TRIANGLE, BYTES_PER_VERTEX, check_size, memory_limit, precheck
@@ -98,8 +98,9 @@ def _items(path: Path, suffix: str) -> tuple[list[str], list[Path], list[tuple]]
     source, names = path, None
     if suffix == ".obj":
         data, names = obj_objects(path)
-        if len(names) > MAX_OBJECTS:
-            raise RttaError(f"OBJ file has {len(names):,} objects ('o' statements; at most {MAX_OBJECTS:,})", path)
+        if len(names) > max_objects(path):
+            raise RttaError(f"OBJ file has {len(names):,} objects ('o' statements; at most {max_objects(path):,} "
+                            "for a file of its size)", path)
         source = io.BytesIO(data)
     loaded = _trimesh_load(source, suffix[1:], path, resolver)
     items = []

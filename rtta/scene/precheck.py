@@ -14,7 +14,7 @@ import zipfile
 from pathlib import Path
 
 from ..errors import RttaError
-from .files import MAX_OBJECTS, memory_limit
+from .files import MAX_OBJECTS_LARGE, max_objects, memory_limit
 
 # Peak memory of loading, measured (RELIABILITY.md): with normals smoothed at load (a file
 # without normals) about 170 bytes per vertex and 1,300 per triangle (163,842 vertices and
@@ -140,7 +140,7 @@ def _threemf_graph(stream, head: bytes, path: Path) -> None:
                 continue
             if state.get(node) == 1:
                 kids = children.get(node, [])
-                paths[node] = min(sum(paths.get(k, 0) for k in kids) if kids else 1, 10 * MAX_OBJECTS)
+                paths[node] = min(sum(paths.get(k, 0) for k in kids) if kids else 1, 10 * MAX_OBJECTS_LARGE)
                 state[node] = 2
                 stack.pop()
                 continue
@@ -151,5 +151,6 @@ def _threemf_graph(stream, head: bytes, path: Path) -> None:
                 if k not in paths:
                     stack.append(k)
     total = sum(paths.get(r, 0) for r in items)
-    if total > MAX_OBJECTS:
-        raise RttaError(f"3MF build makes {total:,} objects through its components (at most {MAX_OBJECTS:,})", path)
+    if total > max_objects(path):
+        raise RttaError(f"3MF build makes {total:,} objects through its components (at most {max_objects(path):,} "
+                        "for a file of its size)", path)

@@ -1,8 +1,11 @@
-"""User-facing errors: one line, naming the file and the problem."""
+"""User-facing errors: one line, naming the file and the problem; and text made safe to print."""
 
 from __future__ import annotations
 
+import unicodedata
 from pathlib import Path
+
+_ESCAPED = {"\n": "\\n", "\r": "\\r", "\t": "\\t"}
 
 
 class RttaError(Exception):
@@ -12,3 +15,24 @@ class RttaError(Exception):
         self.path = None if path is None else str(path)
         self.message = message
         super().__init__(f"{self.path}: {message}" if self.path else message)
+
+
+def printable(text: object) -> str:
+    """`text` as one line that cannot act on a terminal: control and format characters,
+    line and paragraph separators (and bytes that were not UTF-8 in a file name) are
+    written as escapes (ESC -> \\x1b, newline -> \\n); everything else is kept."""
+    text = str(text)
+    if text.isprintable():
+        return text
+    out = []
+    for ch in text:
+        o = ord(ch)
+        if ch in _ESCAPED:
+            out.append(_ESCAPED[ch])
+        elif 0xDC80 <= o <= 0xDCFF:                    # os.fsdecode's stand-in for a non-UTF-8 byte
+            out.append(f"\\x{o - 0xDC00:02x}")
+        elif unicodedata.category(ch) in ("Cc", "Cf", "Cs", "Co", "Zl", "Zp"):
+            out.append(f"\\x{o:02x}" if o < 0x100 else f"\\u{o:04x}" if o < 0x10000 else f"\\U{o:08x}")
+        else:
+            out.append(ch)
+    return "".join(out)

@@ -95,12 +95,23 @@ def test_std_is_the_front_most_of_the_exported_atlas(exported):
 
 
 def test_existing_output_is_replaced_whole(tmp_path):
+    """An earlier export (recognised by its records.json) is replaced whole; a folder rtta did
+    not write, or one holding files an export does not write, is refused and left as it was."""
     out = tmp_path / "out"
-    out.mkdir()
-    (out / "old.txt").write_text("old")
+    assert main(["export", "--out", str(out), "--size", "32x24"]) == 0
+    (out / "atlas_color_7.png").write_bytes(b"stale layer of an earlier export")
     assert main(["export", "--out", str(out), "--size", "64x48"]) == 0
-    assert not (out / "old.txt").exists() and (out / "records.json").exists()
+    assert not (out / "atlas_color_7.png").exists()
+    assert json.loads((out / "records.json").read_text())["viewport"] == [64, 48]
     assert [p.name for p in tmp_path.iterdir()] == ["out"]          # no temporary folders left
+    (out / "notes.txt").write_text("mine")
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "old.txt").write_text("old")
+    for folder in (out, mine):
+        assert main(["export", "--out", str(folder), "--size", "64x48"]) == 2
+    assert (out / "notes.txt").read_text() == "mine" and (mine / "old.txt").read_text() == "old"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["mine", "out"]
 
 
 def _run(args, cwd):
@@ -117,13 +128,14 @@ def _run(args, cwd):
 ])
 def test_bad_input_exits_2_with_one_line(tmp_path, args, needle):
     (tmp_path / "bad.glb").write_bytes(b"glTF garbage")
-    (tmp_path / "o").mkdir()
-    (tmp_path / "o" / "keep.txt").write_text("mine")
+    (tmp_path / "o").mkdir()                                  # an earlier export: may be replaced, not on error
+    (tmp_path / "o" / "records.json").write_text("{}")
+    (tmp_path / "o" / "std_color.png").write_text("mine")
     res = _run(args, tmp_path)
     assert res.returncode == 2, res.stderr
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1 and needle in lines[0] and "Traceback" not in res.stderr
-    assert (tmp_path / "o" / "keep.txt").read_text() == "mine"
+    assert (tmp_path / "o" / "std_color.png").read_text() == "mine"
 
 
 def test_runs_from_another_directory(tmp_path):

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from rtta.errors import printable
 from rtta.gl.readback import front_most
 from rtta.passes.picking import objects_at, pick
 from rtta.scene.camera import DEFAULT_ORBIT, Camera
@@ -235,13 +236,21 @@ def test_bad_input_corpus_in_the_viewer(driven):
     """Each corpus file opened in the running viewer: errors shown, the scene kept."""
     result, _ = driven
     cases = result["corpus"]
-    assert len(cases) >= 30
+    assert len(cases) >= 150
     for name, c in cases.items():
+        assert "\n" not in c["message"] and "\x1b" not in c["message"], (name, c["message"])
         if c["expect_error"]:
             assert not c["opened"] and c["error"] and c["kept"], name
-            assert c["path"] in c["message"] and c["says"].lower() in c["message"].lower(), (name, c["message"])
+            assert printable(c["path"]) in c["message"] and c["says"].lower() in c["message"].lower(), \
+                (name, c["message"])
         else:
             assert c["opened"] and not c["error"] and c["says"] in c["message"], (name, c["message"])
+
+
+def test_screenshot_that_cannot_be_written_says_so(driven):
+    result, _ = driven
+    bad = result["screenshot_bad_dir"]
+    assert bad["written"] == [] and bad["error"] and "parent directory does not exist" in bad["message"]
 
 
 def test_no_display_says_so_in_one_line():

@@ -173,6 +173,11 @@ for case in make_corpus(corpus):
         app.set_scene(before)
     frames(1)
 
+app.screenshot_dir = OUT / "no" / "such" / "folder"     # a screenshot that cannot be written: one line
+result["screenshot_bad_dir"] = {"written": [str(p) for p in app.screenshot()], "message": app.message,
+                                "error": app.message_is_error}
+app.screenshot_dir = OUT
+
 for size in ((640, 400), (0, 0), (1, 1), (2600, 1500), (1280, 720)):
     if 0 in size:
         send("on_resize", *size)                      # minimized: what the window system reports

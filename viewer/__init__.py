@@ -12,10 +12,11 @@ NO_DISPLAY = ("rtta-view: no display found (DISPLAY and WAYLAND_DISPLAY are not 
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from rtta.cli.guard import OneLineParser
     from rtta.cli.main import add_load_options
     from rtta.renderer.snapshot import SNAPSHOT_MODES
 
-    p = argparse.ArgumentParser(prog="rtta-view", description="Interactive ghosted views of multi-part models.")
+    p = OneLineParser(prog="rtta-view", description="Interactive ghosted views of multi-part models.")
     p.add_argument("scene", nargs="?", help="scene file (default: the built-in demo)")
     p.add_argument("--scene", dest="scene_opt", metavar="FILE", help="scene file (same as the positional)")
     p.add_argument("--size", default="1280x720", help="window size WxH")
@@ -31,10 +32,14 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     from rtta.cli.main import load_options, parse_size
-    from rtta.errors import RttaError
+    from rtta.errors import RttaError, printable
     from rtta.tools.memory import steady_heap
 
-    args = build_parser().parse_args(argv)
+    try:
+        args = build_parser().parse_args(argv)
+    except RttaError as exc:
+        print(f"rtta-view: error: {printable(exc)}", file=sys.stderr)
+        return 2
     steady_heap()          # long sessions resize targets often: keep the heap from creeping
     if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
         print(NO_DISPLAY, file=sys.stderr)
@@ -54,7 +59,7 @@ def main(argv: list[str] | None = None) -> int:
                    screenshot_dir=Path(args.screenshot_dir), bench=args.bench, load=load_options(args),
                    bench_modes=bench_modes)
     except RttaError as exc:
-        print(f"rtta-view: {exc}", file=sys.stderr)
+        print(f"rtta-view: error: {printable(exc)}", file=sys.stderr)
         return 2
 
 

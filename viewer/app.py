@@ -8,6 +8,7 @@ the composite and the atlas layer side by side with the panel on the left.
 from __future__ import annotations
 
 import itertools
+import re
 import time
 from pathlib import Path
 
@@ -15,8 +16,8 @@ import moderngl
 import numpy as np
 from imgui_bundle import imgui, implot
 
-from rtta.errors import RttaError
-from rtta.imageio import save_png
+from rtta.errors import RttaError, printable
+from rtta.imageio import check_file, save_png
 from rtta.ldi.lens import Lens, default_placement
 from rtta.passes.projector import Projector, default_image
 from rtta.renderer.renderer import Renderer
@@ -99,13 +100,14 @@ class Viewer:
         except RttaError as exc:
             return self.say(str(exc), error=True)
         except Exception as exc:      # a broken file must never take the session down
-            return self.say(f"{Path(path).name}: cannot open ({type(exc).__name__}: {exc})", error=True)
+            reason = str(exc).strip().splitlines()[0][:200] if str(exc).strip() else ""
+            return self.say(f"{path}: cannot open ({type(exc).__name__}: {reason})", error=True)
         self.set_scene(scene)
         self.say("; ".join([f"opened {Path(path).name}", *(f"warning: {w}" for w in scene.warnings)]))
         return True
 
     def say(self, text: str, error: bool = False) -> bool:
-        self.message, self.message_is_error = text, error
+        self.message, self.message_is_error = printable(text), error
         return not error
 
     @property
@@ -130,8 +132,11 @@ class Viewer:
         self.ctx.clear(*WINDOW_CLEAR, 1.0)
         if size[0] > 0 and size[1] > 0:
             self.renderer.timings.clear()
-            self._draw_composite()
-            self._draw_atlas()
+            try:
+                self._draw_composite()
+                self._draw_atlas()
+            except RttaError as exc:             # e.g. targets too large for a huge window: say so, keep going
+                self.say(str(exc), error=True)
             self.stats.stage_ms = dict(self.renderer.timings)     # what ran this frame
             self.stats.last_ms.update(self.renderer.timings)      # for the panel: the last run of each
         overlay.draw(self)
@@ -269,16 +274,18 @@ class Viewer:
         """PNGs of the composite and the atlas (layers side by side); never overwrites."""
         images = {"composite": self.composite_image(), "atlas": self.atlas_image()}
         images = {k: v for k, v in images.items() if v is not None}
-        stem = Path(self.scene_label).stem
+        stem = re.sub(r"[^\w.-]", "_", Path(self.scene_label).stem)[:80] or "scene"
         for n in itertools.count(1):
             paths = {k: self.screenshot_dir / f"rtta-{stem}-{n:03d}-{k}.png" for k in images}
-            if any(p.exists() for p in paths.values()):
+            if any(p.exists() or p.is_symlink() for p in paths.values()):
                 continue
             try:
+                for p in paths.values():
+                    check_file(p, self.renderer.scene.inputs, suffix=".png", what="screenshot")
                 written = [save_png(paths[k], img, overwrite=False) for k, img in images.items()]
             except FileExistsError:
                 continue
-            except OSError as exc:
+            except (RttaError, OSError) as exc:
                 self.say(f"screenshot not written: {exc}", error=True)
                 return []
             self.say("saved " + ", ".join(p.name for p in written))

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from ..errors import printable
 from ..scene.model import Scene
 
 AXES = {"y": "Y-up", "z": "Z-up"}
@@ -18,7 +19,7 @@ def summary(scene: Scene) -> list[str]:
     """The header lines: counts and bounds, then the unit and the up axis."""
     lo, hi = scene.bounds
     unit = scene.unit or "unstated"
-    return [f"{scene.source}: {scene.count} objects, {scene.vertex_count} vertices, "
+    return [f"{printable(scene.source)}: {scene.count} objects, {scene.vertex_count} vertices, "
             f"{len(scene.indices) // 3} triangles, bounds {lo.round(4).tolist()} .. {hi.round(4).tolist()}",
             f"unit: {unit}, up axis: {AXES.get(scene.up_axis, scene.up_axis)}"]
 
@@ -28,7 +29,7 @@ def run(scene: Scene, tree: bool) -> int:
     triangles = scene.index_ranges[:, 1] // 3
     if not tree:
         for oid, name in enumerate(scene.names):
-            print(f"{oid:5d}  {name}  ({triangles[oid]} triangles)")
+            print(f"{oid:5d}  {printable(name)}  ({triangles[oid]} triangles)")
         return 0
     for line in tree_lines(scene):
         print(line)
@@ -49,7 +50,8 @@ def tree_lines(scene: Scene) -> list[str]:
             common += 1
         for depth in range(common, len(path)):
             ids = groups["/".join(path[:depth + 1])]
-            out.append(f"{'  ' * depth}{path[depth]}/  ({len(ids)} objects, {int(triangles[ids].sum())} triangles)")
+            out.append(f"{'  ' * depth}{printable(path[depth])}/  ({len(ids)} objects, "
+                       f"{int(triangles[ids].sum())} triangles)")
         shown = path
-        out.append(f"{'  ' * len(path)}{oid:d}  {name}  ({triangles[oid]} triangles)")
+        out.append(f"{'  ' * len(path)}{oid:d}  {printable(name)}  ({triangles[oid]} triangles)")
     return out

@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 from pathlib import Path
 
-from ..errors import RttaError
+from ..errors import RttaError, printable
+from ..imageio import check_file, check_folder, check_into_folder, os_error
 from ..scene.preprocess import DEFAULT_SMOOTH_ANGLE
+from .guard import OneLineParser, run_command, say
 
 
 def parse_size(text: str, what: str = "--size") -> tuple[int, int]:
@@ -50,7 +51,7 @@ def _view_args(p: argparse.ArgumentParser) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="rtta", description="Render-to-texture-atlas for ghosted views.")
+    parser = OneLineParser(prog="rtta", description="Render-to-texture-atlas for ghosted views.")
     sub = parser.add_subparsers(dest="command", required=True)
     p = sub.add_parser("export", help="write per-object amodal images (atlas) and the direct render")
     _scene_arg(p)
@@ -165,7 +166,7 @@ def _load(args):
 
     scene = load_scene_or_demo(args.scene, **load_options(args))
     for note in scene.warnings:
-        print(f"rtta: warning: {scene.source}: {note}", file=sys.stderr)
+        say("warning", note, scene.source)
     return scene
 
 
@@ -184,7 +185,7 @@ def _renderer(ctx, scene, settings):
     caps = Capabilities.of(ctx)
     caps.capture_path(settings.capture_path)     # a path the driver lacks is an error, before any work
     for note in caps.notes if settings.capture_path == "auto" else []:
-        print(f"rtta: note: {note}", file=sys.stderr)
+        say("note", note)
     return Renderer(ctx, scene, settings)
 
 
@@ -193,10 +194,11 @@ def cmd_export(args) -> int:
     from ..renderer.api import orbit_camera
     from ..renderer.export import export
 
-    scene = _load(args)
     viewport = parse_size(args.size)
-    camera = orbit_camera(scene, args.camera or None, args.fov)
     settings = _settings(args)
+    check_folder(args.out, [args.scene])                  # before the work: a refused --out fails fast
+    scene = _load(args)
+    camera = orbit_camera(scene, args.camera, args.fov)
     ctx = shared_context()
     renderer = _renderer(ctx, scene, settings)
     try:
@@ -205,7 +207,7 @@ def cmd_export(args) -> int:
         raise RttaError(str(exc), args.out) from None
     finally:
         renderer.release()
-    print(f"wrote {out} ({scene.count} objects, renderer: {renderer.caps.renderer})")
+    print(f"wrote {printable(out)} ({scene.count} objects, renderer: {renderer.caps.renderer})")
     return 0
 
 
@@ -216,30 +218,19 @@ def cmd_snapshot(args) -> int:
 
     if args.mode not in SNAPSHOT_MODES:
         raise RttaError(f"--mode must be one of {', '.join(SNAPSHOT_MODES)}, got '{args.mode}'")
-    scene = _load(args)
     viewport = parse_size(args.size)
-    camera = orbit_camera(scene, args.camera or None, args.fov)
+    _snapshot_targets(args, [args.scene, *_projector_files(args)])     # refused outputs fail before the work
+    scene = _load(args)
+    camera = orbit_camera(scene, args.camera, args.fov)
     style = make_style(resolve_names(scene, args.focus, "--focus"), parse_opacities(scene, args.opacity),
                        context_opacity=args.context_opacity, edge_width=args.edge_width,
                        ao_radius=args.ao_radius, ao_strength=args.ao_strength, ao_objects=args.ao_objects,
                        edge_objects=args.edge_objects, order=args.order, halo=args.halo)
-    if args.out:
-        out = Path(args.out)
-        if out.suffix.lower() != ".png":
-            raise RttaError("--out must name a .png file", out)
-        targets = {args.mode: out}
-    else:
-        folder = Path(args.all_modes)
-        if folder.exists() and not folder.is_dir():
-            raise RttaError("exists and is not a directory", folder)
-        targets = {m: folder / f"{m}.png" for m in SNAPSHOT_MODES}
-    parent = out.parent if args.out else folder.parent
-    if not parent.is_dir():
-        raise RttaError("parent directory does not exist", parent)
+    targets = _snapshot_targets(args, [*scene.inputs, *_projector_files(args)])
     renderer = _renderer(shared_context(), scene, _settings(args))
-    if args.projector:
+    if args.projector is not None:
         renderer.projector = _projector(args, scene, camera)
-    if args.lens:
+    if args.lens is not None:
         renderer.lens = _lens(args, scene, style.focus)
     try:
         images = render_modes(renderer, camera, viewport, list(targets), style)
@@ -248,17 +239,37 @@ def cmd_snapshot(args) -> int:
     finally:
         renderer.release()
     if args.all_modes:
-        folder.mkdir(exist_ok=True)
+        try:
+            Path(args.all_modes).mkdir(exist_ok=True)
+        except OSError as exc:
+            raise os_error(exc, args.all_modes) from None
     for path in write_pngs(images, targets):
-        print(f"wrote {path}")
+        print(f"wrote {printable(path)}")
     return 0
+
+
+def _snapshot_targets(args, inputs: list) -> dict:
+    """{mode: PNG path} for --out or --all-modes, each allowed by rtta.outputs."""
+    from ..renderer.snapshot import SNAPSHOT_MODES
+
+    if args.out is not None:
+        return {args.mode: check_file(args.out, inputs, suffix=".png")}
+    paths = check_into_folder(args.all_modes, [f"{m}.png" for m in SNAPSHOT_MODES], inputs, suffix=".png")
+    return dict(zip(SNAPSHOT_MODES, paths, strict=True))
+
+
+def _projector_files(args) -> list[str]:
+    """The image file --projector may read (its text, or the text before AZ,EL,DIST)."""
+    if not args.projector:
+        return []
+    return [n for n in {args.projector, args.projector.rsplit(",", 3)[0]} if n != "default"]
 
 
 def _lens(args, scene, focus):
     """--lens SHAPE[,RADIUS] or --lens NAME, placed by --lens-at X,Y,Z (default: on the focus)."""
     from ..renderer.snapshot import make_lens
 
-    return make_lens(scene, args.lens, args.lens_at or None, focus)
+    return make_lens(scene, args.lens, args.lens_at, focus)
 
 
 def _projector(args, scene, camera):
@@ -323,25 +334,18 @@ def cmd_bench(args) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     from ..tools.memory import steady_heap
-
-    args = build_parser().parse_args(argv)
-    steady_heap()
     from .dataset import cmd_dataset
     from .ldi import cmd_ldi
 
+    try:
+        args = build_parser().parse_args(argv)
+    except RttaError as exc:
+        say("error", str(exc))
+        return 2
+    steady_heap()
     handler = {"export": cmd_export, "snapshot": cmd_snapshot, "info": cmd_info, "bench": cmd_bench,
                "ldi": cmd_ldi, "dataset": cmd_dataset}[args.command]
-    try:
-        return handler(args)
-    except RttaError as exc:
-        print(f"rtta: error: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("rtta: interrupted", file=sys.stderr)
-        return 130
-    except BrokenPipeError:          # `rtta info | head`: the reader left; say nothing more
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        return 1
+    return run_command(handler, args, process=argv is None)
 
 
 if __name__ == "__main__":

@@ -10,9 +10,12 @@ from __future__ import annotations
 import moderngl
 import numpy as np
 
+from ..errors import RttaError
+from ..scene.files import memory_limit
 from . import glraw
 
 SHRINK_AFTER_FRAMES = 60
+MIN_TARGET_BYTES = 512 * 2**20     # render targets may always take this much, whatever the scene limit
 
 
 def release_framebuffer(ctx: moderngl.Context, fbo) -> None:
@@ -72,6 +75,18 @@ class LayeredTarget:
         self._free()
         w, h = max(1, int(size[0])), max(1, int(size[1]))
         n = max(1, int(layers))
+        need = w * h * n * (4 + 4 * self.normals + 4 + 4)
+        if need > max(memory_limit() // 2, MIN_TARGET_BYTES):
+            raise RttaError(f"the render targets would need {w}x{h}x{n} texels ({need / 2**20:,.0f} MiB), over half "
+                            "the memory limit (RTTA_MEMORY_LIMIT_MB); use a smaller --size or --region-scale")
+        try:
+            self._make(w, h, n)
+        except moderngl.Error as exc:       # the driver could not allocate what it allows in principle
+            self._free()
+            raise RttaError(f"the driver cannot allocate {w}x{h}x{n} render targets ({need / 2**20:,.0f} MiB: "
+                            f"{str(exc).splitlines()[0][:80]}); use a smaller --size or --region-scale") from None
+
+    def _make(self, w: int, h: int, n: int) -> None:
         ctx = self.ctx
         self.color = ctx.texture_array((w, h, n), 4, dtype="f1")
         self.normal = ctx.texture_array((w, h, n), 4, dtype="f1") if self.normals else None

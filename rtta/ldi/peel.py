@@ -35,15 +35,22 @@ def closed_mesh(vertices, faces, name: str = "mesh") -> tuple[np.ndarray, np.nda
     parity test has no defined answer where a ray can leave through a hole."""
     import trimesh
 
-    mesh = trimesh.Trimesh(np.asarray(vertices, np.float64), np.asarray(faces, np.int64), process=True)
-    mesh.merge_vertices()
+    v = np.asarray(vertices, np.float64)
+    center = (v.min(axis=0) + v.max(axis=0)) / 2 if len(v) else np.zeros(3)
+    extent = float(np.ptp(v, axis=0).max()) if len(v) else 0.0
+    extent = extent if extent > 0 and np.isfinite(extent) else 1.0
+    # trimesh merges vertices to a fixed number of decimals: judge the topology at unit size,
+    # so a closed mesh at 1e-30 or 1e12 units is as closed as at 1
+    with np.errstate(all="ignore"):
+        mesh = trimesh.Trimesh((v - center) / extent, np.asarray(faces, np.int64), process=True)
+        mesh.merge_vertices()
     if len(mesh.faces) == 0:
         raise RttaError("has no triangles", name)
     if not mesh.is_watertight:
         _, uses = np.unique(mesh.edges_sorted, axis=0, return_counts=True)
         raise RttaError(f"is not a closed mesh ({int((uses == 1).sum())} open edges, {int((uses > 2).sum())} "
                         "shared by more than two triangles); the parity test needs a closed surface", name)
-    return np.asarray(mesh.vertices), np.asarray(mesh.faces)
+    return np.asarray(mesh.vertices) * extent + center, np.asarray(mesh.faces)
 
 
 def look_rotation(direction) -> np.ndarray:
@@ -61,7 +68,7 @@ def to_texture(rotation: np.ndarray, vertices: np.ndarray, resolution: int) -> n
     texel in s and t (silhouettes are sampled) and 1% in r (no fragment clipped)."""
     local = vertices @ rotation.T
     lo, hi = local.min(axis=0), local.max(axis=0)
-    extent = np.maximum(hi - lo, 1e-12 * max(1.0, float(np.abs(local).max())))
+    extent = np.maximum(hi - lo, 1e-9 * max(float((hi - lo).max()), 1e-300))     # flat sides: scale-free floor
     pad = np.array([extent[0] / max(resolution - 2, 1), extent[1] / max(resolution - 2, 1), extent[2] * 0.01])
     lo, hi = lo - pad, hi + pad
     m = np.eye(4)

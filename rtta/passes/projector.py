@@ -16,7 +16,6 @@ from pathlib import Path
 import moderngl
 import numpy as np
 
-from ..errors import RttaError
 from ..gl.gpu import GpuScene
 from ..scene.camera import Camera
 from .capture import ScenePass, mat_bytes
@@ -43,20 +42,12 @@ def default_image(size: int = 256) -> np.ndarray:
 
 
 def load_image(path: str | Path) -> np.ndarray:
-    """An image file as RGBA uint8 (top row first); RttaError naming the file otherwise."""
-    from PIL import Image, UnidentifiedImageError
+    """An image file as RGBA uint8 (top row first); RttaError naming the file otherwise (not a
+    regular file, damaged, or too many pixels: checked from the header before decoding)."""
+    from ..scene.files import open_image
 
-    path = Path(path)
-    if not path.is_file():
-        raise RttaError("no such image file", path)
-    try:
-        with Image.open(path) as im:
-            rgba = np.asarray(im.convert("RGBA"))
-    except (UnidentifiedImageError, OSError) as exc:
-        raise RttaError(f"cannot read the image ({type(exc).__name__})", path) from None
-    if rgba.shape[0] < 1 or rgba.shape[1] < 1:
-        raise RttaError("the image is empty", path)
-    return rgba
+    with open_image(Path(path), "image") as im:
+        return np.asarray(im.convert("RGBA"))
 
 
 @dataclass

@@ -99,6 +99,8 @@ def orbit_camera(scene: Scene, camera: Camera | str | Sequence[float] | None, fo
     """A Camera as given, or the orbit AZ,EL,DIST (degrees, degrees, scene radii) about the scene."""
     if isinstance(camera, Camera):
         return camera
+    if not 1.0 <= fov <= 170.0:          # NaN fails too
+        raise RttaError(f"--fov must be between 1 and 170 degrees, got {fov}")
     if camera is None:
         orbit = DEFAULT_ORBIT
     else:

@@ -7,16 +7,12 @@ folder is replaced whole or not at all.
 from __future__ import annotations
 
 import json
-import os
-import shutil
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
 from ..atlas.parameterize import Records
-from ..errors import RttaError
-from ..imageio import save_png
+from ..imageio import check_folder, os_error, remove_tree, replace_dir, staging_dir, to_image
 from ..scene.camera import Camera
 from .renderer import Renderer
 
@@ -61,48 +57,38 @@ def read_frame(renderer: Renderer, camera: Camera, viewport: tuple[int, int]) ->
     return records, atlas, std
 
 
-def export(renderer: Renderer, camera: Camera, viewport: tuple[int, int], out_dir: str | Path) -> Path:
-    """Capture once and write the export format (see README) to out_dir atomically."""
-    out_dir = Path(out_dir).resolve()
-    if out_dir.exists() and not out_dir.is_dir():
-        raise RttaError("exists and is not a directory", out_dir)
-    parent = out_dir.parent
-    if not parent.is_dir():
-        raise RttaError("parent directory does not exist", parent)
+def export(renderer: Renderer, camera: Camera, viewport: tuple[int, int], out_dir: str | Path,
+           inputs: list[str | Path] | None = None) -> Path:
+    """Capture once and write the export format (see README) to out_dir atomically. An
+    existing out_dir is replaced only when rtta export wrote it (see rtta.outputs), never
+    when it holds an input (the scene's files, and `inputs`)."""
+    out_dir = check_folder(out_dir, [*renderer.scene.inputs, *(inputs or [])])
+    out_dir = out_dir.parent.resolve() / out_dir.name
     records, atlas, std = read_frame(renderer, camera, viewport)
-    td = records.atlas_size[2]
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.", dir=parent))
+    tmp = None
     try:
-        (tmp / "records.json").write_text(json.dumps(records_json(renderer, camera, records, viewport), indent=1))
-        if atlas is not None:
-            for layer in range(td):
-                save_png(tmp / f"atlas_color_{layer}.png", atlas["color"][layer])
-            np.save(tmp / "atlas_depth.npy", atlas["depth"].astype(np.float32))
-            np.save(tmp / "atlas_id.npy", atlas["id"].astype(np.int32))
-        else:
-            np.save(tmp / "atlas_depth.npy", np.ones((0, 0, 0), np.float32))
-            np.save(tmp / "atlas_id.npy", np.full((0, 0, 0), -1, np.int32))
-        save_png(tmp / "std_color.png", std["color"][0])
-        np.save(tmp / "std_depth.npy", std["depth"][0].astype(np.float32))
-        np.save(tmp / "std_id.npy", std["id"][0].astype(np.int32))
-        replace_dir(tmp, out_dir)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
+        tmp = staging_dir(out_dir)
+        _write(tmp, renderer, camera, records, viewport, atlas, std)
+        replace_dir(tmp, out_dir, final=True)
+    except OSError as exc:
+        raise os_error(exc, out_dir) from None
+    finally:
+        if tmp is not None and tmp.exists():
+            remove_tree(tmp)
     return out_dir
 
 
-def replace_dir(new: Path, target: Path) -> None:
-    """Swap `new` into `target`: the old folder is moved aside first and removed last."""
-    if not target.exists():
-        os.replace(new, target)
-        return
-    old = Path(tempfile.mkdtemp(prefix=f".{target.name}.old.", dir=target.parent))
-    os.rmdir(old)
-    os.replace(target, old)
-    try:
-        os.replace(new, target)
-    except BaseException:
-        os.replace(old, target)
-        raise
-    shutil.rmtree(old, ignore_errors=True)
+def _write(tmp: Path, renderer: Renderer, camera: Camera, records, viewport, atlas, std) -> None:
+    """The export's files into the staging folder (not yet visible under the output's name)."""
+    (tmp / "records.json").write_text(json.dumps(records_json(renderer, camera, records, viewport), indent=1))
+    if atlas is not None:
+        for layer in range(records.atlas_size[2]):
+            to_image(atlas["color"][layer]).save(tmp / f"atlas_color_{layer}.png", format="PNG")
+        np.save(tmp / "atlas_depth.npy", atlas["depth"].astype(np.float32))
+        np.save(tmp / "atlas_id.npy", atlas["id"].astype(np.int32))
+    else:
+        np.save(tmp / "atlas_depth.npy", np.ones((0, 0, 0), np.float32))
+        np.save(tmp / "atlas_id.npy", np.full((0, 0, 0), -1, np.int32))
+    to_image(std["color"][0]).save(tmp / "std_color.png", format="PNG")
+    np.save(tmp / "std_depth.npy", std["depth"][0].astype(np.float32))
+    np.save(tmp / "std_id.npy", std["id"][0].astype(np.int32))

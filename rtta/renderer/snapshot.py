@@ -46,14 +46,16 @@ def make_lens(scene: Scene, spec: str, at: str | Sequence[float] | None, focus: 
             center = np.array([float(v) for v in text.split(",")], float)
         except ValueError:
             center = np.zeros(0)
-        if center.shape != (3,) or not np.isfinite(center).all():
-            raise RttaError(f"--lens-at must be X,Y,Z, got '{text}'")
+        if center.shape != (3,) or not (np.abs(center) <= 1e15).all():       # NaN fails too
+            raise RttaError(f"--lens-at must be X,Y,Z with |values| up to 1e15, got '{text}'")
     kind, _, size = spec.partition(",")
     if kind in SHAPES:
         try:
             radius = float(size) if size else radius
         except ValueError:
-            raise RttaError(f"--lens radius must be a number, got '{size}'") from None
+            radius = float("nan")
+        if not 0 < radius <= 1e15:
+            raise RttaError(f"--lens radius must be a number in (0, 1e15], got '{size}'")
         return Lens.shape(kind, center, radius)
     if size:
         raise RttaError(f"--lens {kind}: an object lens takes no radius")
@@ -115,4 +117,6 @@ def render_modes(renderer: Renderer, camera: Camera, viewport: tuple[int, int], 
 
 
 def write_pngs(images: dict, paths: dict) -> list[Path]:
-    return [save_png(paths[mode], rgba) for mode, rgba in images.items()]
+    """Each image to its path atomically; the last one ends the command (see rtta.imageio)."""
+    modes = list(images)
+    return [save_png(paths[mode], images[mode], final=k == len(modes) - 1) for k, mode in enumerate(modes)]

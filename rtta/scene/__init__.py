@@ -1,10 +1,12 @@
 """Scene layer: what is drawn, before any GL.
 
-Loading files (prechecks against hostile or oversized input, trimesh, preprocessing of
-vertices and normals, textures and the material atlas they are packed into; assemblies with
-their part tree in `formats/`: STEP, IFC, COLLADA, USD, 3DXML), the batched `Scene` (one
-vertex/index buffer, a per-vertex object id; each object's path in the tree, the unit and
-up axis), names, groups and globs resolved to objects (`select`), the orbit `Camera`, generated
+Loading files (what may be read: `files`; declared sizes: `precheck`; glTF checked, its
+node graph walked and rewritten for trimesh: `gltf_check`, `gltf`, `gltf_rewrite`; trimesh;
+preprocessing of vertices and normals, textures and the material atlas they are packed
+into; assemblies with their part tree in `formats/`: STEP, IFC, COLLADA, USD, 3DXML), the
+batched `Scene` (one vertex/index buffer, a per-vertex object id; each object's path in the
+tree, the unit and up axis), names, groups and globs resolved to objects (`select`), the
+orbit `Camera`, generated
 scenes and the demo. The bottom layer: it imports only `rtta.errors` and `rtta.imageio`.
 """
 

@@ -19,8 +19,9 @@ def parse_orbit(text: str) -> tuple[float, float, float]:
         az, el, dist = (float(x) for x in text.split(","))
     except ValueError:
         raise RttaError(f"--camera expects AZ,EL,DIST (three numbers), got '{text}'") from None
-    if not all(np.isfinite([az, el, dist])) or dist <= 0:
-        raise RttaError(f"--camera '{text}': values must be finite and DIST > 0")
+    if not all(np.isfinite([az, el, dist])) or not 1e-6 <= dist <= 1e6 or max(abs(az), abs(el)) > 1e6:
+        raise RttaError(f"--camera '{text}': AZ and EL must be finite degrees (|value| up to 1e6) and DIST "
+                        "between 1e-6 and 1e6 scene radii")
     return az, el, dist
 
 

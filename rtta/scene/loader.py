@@ -7,7 +7,9 @@ objects). Expected failures raise RttaError naming the file and the problem.
 from __future__ import annotations
 
 import gc
+import io
 import logging
+import re
 import warnings
 from pathlib import Path
 
@@ -15,12 +17,13 @@ import numpy as np
 
 from ..errors import RttaError
 from . import batch, formats
+from .files import MAX_FILE_BYTES, SafeResolver, max_objects, regular_file
+from .gltf import prepare
 from .model import SUPPORTED, Scene, from_batch
 from .precheck import BYTES_PER_TRIANGLE, BYTES_PER_VERTEX, check_size, memory_limit, precheck
 from .preprocess import DEFAULT_SMOOTH_ANGLE
 from .textures import TextureTable
 
-MAX_FILE_BYTES = 2 * 1024**3
 MAX_COORDINATE = 1e15    # float64 keeps ~0.1 units of precision there; float32 offsets stay finite
 
 
@@ -29,15 +32,11 @@ def load_scene(path: str | Path, smooth_angle: float = DEFAULT_SMOOTH_ANGLE, smo
     normals are smoothed by `smooth_angle` degrees where the file has none, or everywhere
     with `smooth`."""
     path = Path(path)
-    if not path.exists():
-        raise RttaError("no such file", path)
-    if path.is_dir():
-        raise RttaError("is a directory, expected a scene file", path)
+    size = regular_file(path, "scene file")
     suffix = path.suffix.lower()
     if suffix not in SUPPORTED + formats.SUFFIXES:
-        raise RttaError(f"unsupported file type '{suffix or '(none)'}'; "
+        raise RttaError(f"unsupported file type '{suffix[:16] or '(none)'}'; "
                         f"supported: {', '.join(SUPPORTED + formats.SUFFIXES)}", path)
-    size = path.stat().st_size
     if size == 0:
         raise RttaError("file is empty", path)
     if size > MAX_FILE_BYTES:
@@ -45,17 +44,95 @@ def load_scene(path: str | Path, smooth_angle: float = DEFAULT_SMOOTH_ANGLE, smo
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")
         if suffix in formats.SUFFIXES:
-            return formats.load(path, 180.0 if smooth else smooth_angle)
-        notes = precheck(path)
-        placed, names, colors, texture_ids, textures, dropped, paths = _parts(_read(path, suffix, smooth), path,
-                                                                              smooth_angle)
+            scene = formats.load(path, 180.0 if smooth else smooth_angle)
+            scene.inputs = [str(path.resolve())]
+            return scene
+        notes, inputs, read = _read(path, suffix, smooth)
+        placed, names, colors, texture_ids, textures, dropped, paths = _parts(read, path, smooth_angle)
+        notes += read[0].textures.notes
     if dropped:
         notes.append(f"{len(dropped)} object(s) with only degenerate (zero-area) triangles left out: "
                      + ", ".join(dropped[:5]) + (" ..." if len(dropped) > 5 else ""))
     scene = from_batch(names, placed, colors, source=str(path), texture_ids=texture_ids, textures=textures)
     scene.paths = paths
     scene.warnings = notes + scene.warnings + _texture_notes(scene)
+    scene.inputs = [str(p) for p in dict.fromkeys([path.resolve(), *inputs])]
     return scene
+
+
+def _read(path: Path, suffix: str, smooth: bool) -> tuple[list[str], list[Path], tuple]:
+    """(warnings, files read besides `path`, (gathered meshes, their concatenation, node
+    names, node transforms, node paths or None)); trimesh's own objects are freed before
+    this returns (their cycles collected), so they never sit in memory beside the batch."""
+    notes, inputs, items = _items(path, suffix)
+    items = [item for item in items if _triangles(item[1])]
+    if not items:
+        raise RttaError("scene has no objects with triangle geometry", path)
+    names = [str(item[0]) for item in items]
+    transforms = np.array([np.asarray(item[2], np.float64) for item in items]).reshape(-1, 4, 4)
+    paths = [tuple(item[3]) for item in items]
+    gathered = _Gathered(items, transforms, smooth)
+    del items
+    meshes = gathered.concatenated()
+    gc.collect()
+    return notes, inputs, (gathered, meshes, names, transforms, paths if any(paths) else None)
+
+
+def _triangles(mesh) -> bool:
+    import trimesh
+
+    return isinstance(mesh, trimesh.Trimesh) and len(mesh.faces) > 0
+
+
+def _items(path: Path, suffix: str) -> tuple[list[str], list[Path], list[tuple]]:
+    """(warnings, files read besides `path`, [(name, trimesh geometry, 4x4 world transform,
+    path in the file's tree)]) in file order. glTF's graph is walked by rtta.scene.gltf; the
+    other formats' by trimesh."""
+    if suffix in (".gltf", ".glb"):
+        prepared = prepare(path)
+        loaded = _trimesh_load(io.BytesIO(prepared.data), "glb", path, None)
+        items = [(i.name, loaded.geometry.get(i.geometry), i.matrix, i.path) for i in prepared.instances]
+        return prepared.warnings, prepared.inputs, items
+    notes = precheck(path)
+    resolver = SafeResolver(path)
+    source, names = path, None
+    if suffix == ".obj":
+        data, names = obj_objects(path)
+        if len(names) > max_objects(path):
+            raise RttaError(f"OBJ file has {len(names):,} objects ('o' statements; at most {max_objects(path):,} "
+                            "for a file of its size)", path)
+        source = io.BytesIO(data)
+    loaded = _trimesh_load(source, suffix[1:], path, resolver)
+    items = []
+    order = {name: i for i, name in enumerate(loaded.geometry)}
+    nodes = list(loaded.graph.nodes_geometry)
+    trees = formats.graph_paths(loaded, nodes) or [()] * len(nodes)
+    for node, tree in zip(nodes, trees, strict=True):
+        transform, geom_name = loaded.graph[node]
+        name, key = str(node), order.get(geom_name, len(order))
+        if names is not None and re.fullmatch(r"rtta\.o\.\d+", name) and int(name[7:]) < len(names):
+            name, key = names[int(name[7:])], int(name[7:])
+        items.append((key, name, loaded.geometry.get(geom_name), np.asarray(transform, np.float64), tree))
+    items.sort(key=lambda item: item[0])                  # file order
+    return notes + resolver.warnings, resolver.inputs, [item[1:] for item in items]
+
+
+def obj_objects(path: Path) -> tuple[bytes, list[str]]:
+    """The OBJ's bytes with each `o NAME` line made `o rtta.o.K` (trimesh merges objects of the
+    same name, and an unnamed one into its neighbour), and the names in file order, decoded
+    as UTF-8 or else Windows-1252."""
+    data = path.read_bytes()
+    names: list[str] = []
+
+    def rename(match: re.Match) -> bytes:
+        raw = (match.group(2) or b"").strip()
+        try:
+            names.append(raw.decode("utf-8"))
+        except UnicodeDecodeError:
+            names.append(raw.decode("cp1252", errors="replace"))
+        return match.group(1) + f"o rtta.o.{len(names) - 1}".encode()
+
+    return re.sub(rb"(^|\n)[ \t]*o(?:[ \t]+([^\r\n]*)|(?=[\r\n]|$))", rename, data), names
 
 
 def _texture_notes(scene: Scene) -> list[str]:
@@ -72,34 +149,18 @@ def _texture_notes(scene: Scene) -> list[str]:
     return [note] if note else []
 
 
-def _trimesh_load(path: Path, suffix: str):
+def _trimesh_load(source, file_type: str, path: Path, resolver):
     import trimesh
 
     logging.getLogger("trimesh").setLevel(logging.ERROR)
     try:
-        options = {"split_objects": True, "group_material": False} if suffix == ".obj" else {}
-        return trimesh.load(str(path), file_type=suffix[1:], force="scene", process=False, **options)
+        options = {"split_objects": True, "group_material": False} if file_type == "obj" else {}
+        return trimesh.load(source, file_type=file_type, force="scene", process=False, resolver=resolver, **options)
+    except (MemoryError, RecursionError) as exc:
+        raise RttaError(f"cannot read {path.suffix[1:].upper()} file ({type(exc).__name__})", path) from None
     except Exception as exc:  # trimesh raises many types for corrupt files
         reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        raise RttaError(f"cannot read {suffix[1:].upper()} file ({reason[:160]})", path) from None
-
-
-def _read(path: Path, suffix: str, smooth: bool) -> tuple:
-    """(gathered meshes, their concatenation, node names, node transforms); trimesh's own
-    objects are freed before this returns (their cycles collected), so they never sit in
-    memory beside the batch."""
-    loaded = _trimesh_load(path, suffix)
-    nodes = _nodes(loaded)
-    if not nodes:
-        raise RttaError("scene has no objects with triangle geometry", path)
-    names = [str(node) for node, _ in nodes]
-    transforms = np.array([m for _, m in nodes], np.float64).reshape(-1, 4, 4)
-    paths = formats.graph_paths(loaded, names)          # the file's node tree, before trimesh's objects go
-    gathered = _Gathered(loaded, nodes, transforms, smooth)
-    del loaded, nodes
-    meshes = gathered.concatenated()
-    gc.collect()
-    return gathered, meshes, names, transforms, paths
+        raise RttaError(f"cannot read {path.suffix[1:].upper()} file ({reason[:160]})", path) from None
 
 
 def _parts(read: tuple, path: Path, smooth_angle: float) -> tuple:
@@ -117,6 +178,11 @@ def _parts(read: tuple, path: Path, smooth_angle: float) -> tuple:
     keep = np.flatnonzero(area)
     placed = batch.instance(meshes, mesh_of[keep], np.where(gathered.baked[keep, None, None], np.eye(4),
                                                              transforms[keep]))
+    with np.errstate(all="ignore"):
+        mirrored = ~gathered.baked[keep] & (np.linalg.det(transforms[keep, :3, :3]) < 0)
+    if mirrored.any():                    # instances under a mirror: turn the winding back (see _Gathered)
+        rows = np.repeat(mirrored, placed.fcount)
+        placed.faces[rows] = placed.faces[rows][:, ::-1]
     kept = [names[i] for i in keep]
     _check_world(placed, kept, path)
     colors = [gathered.colors[mesh_of[i]] for i in keep]
@@ -126,27 +192,13 @@ def _parts(read: tuple, path: Path, smooth_angle: float) -> tuple:
             kept_paths)
 
 
-def _nodes(loaded) -> list[tuple]:
-    """(node, 4x4 transform) of every scene-graph node with triangles, in graph order."""
-    import trimesh
-
-    out = []
-    graph, geometry = loaded.graph, loaded.geometry
-    for node in graph.nodes_geometry:
-        transform, geom_name = graph[node]
-        mesh = geometry.get(geom_name)
-        if isinstance(mesh, trimesh.Trimesh) and len(mesh.faces):
-            out.append((node, transform))
-    return out
-
-
 class _Gathered:
     """The distinct meshes of the nodes, read once each: vertices, faces, file normals
     (or smoothing), uvs, texture, colour. A node whose mesh must be smoothed in world space
     (a shear, a mirror or a non-uniform scale, and no file normals) or whose transform is
     singular gets a copy of the mesh in world coordinates of its own (`baked`)."""
 
-    def __init__(self, loaded, nodes: list[tuple], transforms: np.ndarray, smooth: bool) -> None:
+    def __init__(self, items: list[tuple], transforms: np.ndarray, smooth: bool) -> None:
         self.textures = TextureTable()
         self.colors: list = []
         self.texture_ids: list[int] = []
@@ -157,16 +209,13 @@ class _Gathered:
             det = np.linalg.det(transforms[:, :3, :3])
         usable = np.isfinite(transforms[:, :3, :]).all(axis=(1, 2)) & np.isfinite(det) & (det != 0)
         similar = batch.similar(transforms) & usable
-        self.baked = np.zeros(len(nodes), bool)
-        graph, geometry = loaded.graph, loaded.geometry
+        self.baked = np.zeros(len(items), bool)
         seen: dict = {}
         color_of: dict = {}
-        for i, (node, _) in enumerate(nodes):
-            geom_name = graph[node][1]
-            mesh = geometry[geom_name]
+        for i, (_, mesh, _, _) in enumerate(items):     # the items hold every mesh, so ids stay unique
             normals = None if smooth or not _file_has_normals(mesh) else _file_normals(mesh)
             bake = usable[i] and normals is None and not similar[i]
-            key = (geom_name, i) if bake else geom_name
+            key = (id(mesh), i) if bake else id(mesh)
             if key not in seen:
                 seen[key] = len(self._arrays)
                 self._add(mesh, normals, transforms[i] if bake else None, color_of)
@@ -175,10 +224,13 @@ class _Gathered:
 
     def _add(self, mesh, normals, transform, color_of: dict) -> None:
         v = np.asarray(mesh.vertices, np.float64)
+        f = np.asarray(mesh.faces, np.int64)
         if transform is not None:
             v = v @ transform[:3, :3].T + transform[:3, 3]
+            if np.linalg.det(transform[:3, :3]) < 0:
+                f = f[:, ::-1]             # a mirroring transform turns the winding: keep faces front-facing
         uv, texture = self.textures.of(mesh)
-        self._arrays.append((v, np.asarray(mesh.faces, np.int64), normals, uv))
+        self._arrays.append((v, f, normals, uv))
         self.smoothed.append(normals is None)
         self.texture_ids.append(texture)
         material = getattr(mesh.visual, "material", None)

@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import RttaError
+from ..errors import RttaError, printable
 
 SUPPORTED = (".glb", ".gltf", ".obj", ".stl", ".ply", ".3mf", ".off")
 
@@ -20,6 +20,7 @@ BOX_EDGES = np.array([(0, 1), (2, 3), (4, 5), (6, 7), (0, 2), (1, 3), (4, 6), (5
                       (0, 4), (1, 5), (2, 6), (3, 7)], dtype=np.intp)
 _BITS = np.array([[(i >> k) & 1 for k in range(3)] for i in range(8)], dtype=bool)
 BOUNDS = ("aabb", "obb")
+TINY_SCENE = 1e-30          # scene extent below which float32 products underflow (measured: 1e-38 is blank)
 
 
 @dataclass
@@ -38,6 +39,7 @@ class Scene:
     origin: np.ndarray         # float64 [3]
     source: str = "<memory>"
     warnings: list[str] = field(default_factory=list)   # problems loading worked around
+    inputs: list[str] = field(default_factory=list)     # the files it was read from (outputs never replace them)
     uvs: np.ndarray | None = None          # float32 [V, 2] when the scene has textures
     textures: list[np.ndarray] = field(default_factory=list)   # uint8 [h, w, 4], row 0 = v 0, each once
     texture_ids: np.ndarray | None = None  # int32 [N]: index into textures, -1 = material colour only
@@ -201,12 +203,17 @@ def from_batch(names: list[str], batch, colors: list | None = None, source: str 
     for i, c in enumerate(colors or []):
         if c is not None:
             cols[i] = c
-    names = unique_names(list(names))
+    raw = list(names)
+    names = unique_names(raw)
+    renamed = [f"{printable(a)} -> {printable(b)}" for a, b in zip(raw, names, strict=True) if a and a != b]
     scene = Scene(names=names, positions=positions,
                   normals=np.asarray(batch.normals, np.float32),
                   object_ids=np.repeat(np.arange(n, dtype=np.uint32), vcount), indices=indices.reshape(-1),
                   index_ranges=np.stack([3 * fstart, 3 * fcount], axis=1).astype(np.int64), colors=cols,
                   aabb_min=lo, aabb_max=hi, origin=origin, source=source, warnings=_collapsed(names, lo, hi, origin))
+    if renamed:
+        scene.warnings.insert(0, f"{len(renamed)} object name(s) repeated, numbered in file order to keep names "
+                                 "unique: " + ", ".join(renamed[:5]) + (" ..." if len(renamed) > 5 else ""))
     if textures and batch.uvs is not None and texture_ids is not None and any(t >= 0 for t in texture_ids):
         scene.textures = list(textures)
         scene.texture_ids = np.asarray(texture_ids, np.int32)
@@ -220,11 +227,20 @@ def _collapsed(names: list[str], lo: np.ndarray, hi: np.ndarray, origin: np.ndar
     far = np.maximum(np.abs(lo - origin), np.abs(hi - origin)).max(axis=1)
     step = np.spacing(far.astype(np.float32)).astype(np.float64)
     small = np.flatnonzero((hi - lo).max(axis=1) < 16 * step)
-    if not small.size:
-        return []
-    listed = ", ".join(names[i] for i in small[:5]) + (" ..." if small.size > 5 else "")
-    return [f"{small.size} object(s) smaller than 16 float32 steps at their distance from the scene centre "
-            f"draw collapsed: {listed}"]
+    notes = []
+    if small.size:
+        listed = ", ".join(printable(names[i]) for i in small[:5]) + (" ..." if small.size > 5 else "")
+        notes.append(f"{small.size} object(s) smaller than 16 float32 steps at their distance from the scene "
+                     f"centre draw collapsed: {listed}")
+    extent = float(np.linalg.norm(hi.max(axis=0) - lo.min(axis=0)))
+    if extent < TINY_SCENE:
+        notes.append(f"the scene is only {extent:.3g} units across: below {TINY_SCENE:g} units the GPU's float32 "
+                     "arithmetic underflows, so views may be blank; scale the model up")
+    elif extent < 100 * float(np.spacing(np.abs(origin).max())):
+        notes.append(f"the scene is only {extent:.3g} units across at {np.abs(origin).max():.3g} units from the "
+                     "world origin: cameras cannot be placed that finely there, so views may be blank or "
+                     "off-centre; move the model nearer the origin")
+    return notes
 
 
 def _vertex_normals(v: np.ndarray, f: np.ndarray) -> np.ndarray:

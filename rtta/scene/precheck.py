@@ -1,35 +1,29 @@
-"""Checks made on a scene file before trimesh reads it: what it refers to (glTF buffers and
-images stay inside the file's folder; no URLs) and how much memory its declared sizes need
-(binary STL, PLY and glTF headers), so a bad or huge file fails fast with a clear message.
+"""Checks made on a scene file before trimesh reads it: how much memory its declared sizes
+need (binary STL, PLY and OFF headers; the uncompressed size of every member of a 3MF,
+which is a zip archive) and, for 3MF, that its component graph has no cycle and does not
+multiply into more objects than can be drawn. glTF is checked in rtta.scene.gltf.
 
-`precheck(path)` raises RttaError for what cannot be loaded and returns warnings for what
-can (a missing or unreadable texture: the object keeps its material colour).
+`precheck(path)` raises RttaError for what cannot be loaded and returns warnings for what can.
 """
 
 from __future__ import annotations
 
-import json
-import os
 import re
 import struct
+import zipfile
 from pathlib import Path
-from urllib.parse import unquote
 
 from ..errors import RttaError
+from .files import MAX_OBJECTS_LARGE, max_objects, memory_limit
 
-BYTES_PER_VERTEX = 112     # trimesh float64 positions/normals + our float32 copies + GPU buffer
-BYTES_PER_TRIANGLE = 80    # trimesh int64 faces + face normals + our uint32 indices + GPU buffer
-DEFAULT_LIMIT_MB = 4096
-
-
-def memory_limit() -> int:
-    """Bytes a scene may need: RTTA_MEMORY_LIMIT_MB (default 4096 MiB)."""
-    raw = os.environ.get("RTTA_MEMORY_LIMIT_MB", "")
-    try:
-        mb = float(raw) if raw else DEFAULT_LIMIT_MB
-    except ValueError:
-        raise RttaError(f"RTTA_MEMORY_LIMIT_MB must be a number of MiB, got '{raw}'") from None
-    return int(mb * 2**20)
+# Peak memory of loading, measured (RELIABILITY.md): with normals smoothed at load (a file
+# without normals) about 170 bytes per vertex and 1,300 per triangle (163,842 vertices and
+# 327,680 triangles: 435 MiB); a file with normals needs about a tenth of that. Half the
+# worst case is charged, so a scene the limit admits peaks below twice the limit.
+BYTES_PER_VERTEX = 120
+BYTES_PER_TRIANGLE = 720
+XML_BYTES_FACTOR = 24      # trimesh's 3MF reader: 559 MiB peak for a 27 MiB model (21 per byte)
+MAX_ZIP_MEMBERS = 10_000
 
 
 def check_size(vertices: int, triangles: int, path: Path, what: str = "") -> None:
@@ -44,126 +38,15 @@ def check_size(vertices: int, triangles: int, path: Path, what: str = "") -> Non
 
 def precheck(path: Path) -> list[str]:
     suffix = path.suffix.lower()
-    if suffix in (".gltf", ".glb"):
-        doc = _gltf_json(path) if suffix == ".gltf" else _glb_json(path)
-        return _gltf_references(doc, path)
     if suffix == ".stl":
         _stl(path)
     elif suffix == ".ply":
         _ply(path)
+    elif suffix == ".off":
+        _off(path)
+    elif suffix == ".3mf":
+        _threemf(path)
     return []
-
-
-def _decode(raw: bytes, path: Path, what: str) -> dict:
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise RttaError(f"{what} is not valid UTF-8 (byte {exc.start})", path) from None
-    try:
-        doc = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise RttaError(f"{what} is not valid JSON ({exc.msg} at line {exc.lineno}, column {exc.colno})",
-                        path) from None
-    if not isinstance(doc, dict):
-        raise RttaError(f"{what} is not a JSON object", path)
-    return doc
-
-
-def _gltf_json(path: Path) -> dict:
-    return _decode(path.read_bytes(), path, "glTF JSON")
-
-
-def _glb_json(path: Path) -> dict:
-    with open(path, "rb") as f:
-        head = f.read(20)
-        if head[:4] != b"glTF":
-            raise RttaError("not a GLB file (no 'glTF' header)", path)
-        if len(head) < 20:
-            raise RttaError(f"GLB file is truncated ({len(head)} bytes; the header alone is 20)", path)
-        _, version, total, length, kind = struct.unpack("<4sIIII", head)
-        size = path.stat().st_size
-        if version != 2:
-            raise RttaError(f"GLB version {version} is not supported (only 2)", path)
-        if total > size or 20 + length > size:
-            raise RttaError(f"GLB file is truncated (header says {total:,} bytes, file has {size:,})", path)
-        if kind != 0x4E4F534A:
-            raise RttaError("GLB file's first chunk is not JSON", path)
-        return _decode(f.read(length), path, "GLB JSON chunk")
-
-
-def _local_file(uri: str, path: Path, what: str) -> Path | None:
-    """The file a glTF URI names, inside the scene's folder; None for data: URIs."""
-    if uri.startswith("data:"):
-        return None
-    if re.match(r"^[a-zA-Z][a-zA-Z0-9+.-]*:", uri):
-        raise RttaError(f"{what} '{uri}' is a URL; only files next to the scene are read", path)
-    name = unquote(uri)
-    folder = path.resolve().parent
-    target = (folder / name).resolve()
-    if Path(name).is_absolute() or folder not in target.parents:
-        raise RttaError(f"{what} '{uri}' is outside the scene's folder", path)
-    return target
-
-
-def _gltf_references(doc: dict, path: Path) -> list[str]:
-    """Errors for buffers that are URLs, outside the folder or missing; warnings for images
-    that are missing or unreadable. Also the memory estimate from the accessor counts."""
-    warnings = []
-    for buf in doc.get("buffers", []) or []:
-        uri = buf.get("uri") if isinstance(buf, dict) else None
-        if not isinstance(uri, str):
-            continue
-        target = _local_file(uri, path, "buffer")
-        if target is not None and not target.is_file():
-            raise RttaError(f"buffer file '{uri}' is missing", path)
-    for image in doc.get("images", []) or []:
-        uri = image.get("uri") if isinstance(image, dict) else None
-        if not isinstance(uri, str):
-            continue
-        target = _local_file(uri, path, "image")
-        if target is not None:
-            problem = _image_problem(target)
-            if problem:
-                warnings.append(f"texture '{uri}' {problem}; objects using it keep their material colour")
-    _gltf_size(doc, path)
-    return warnings
-
-
-def _image_problem(target: Path) -> str | None:
-    if not target.is_file():
-        return "is missing"
-    from PIL import Image
-
-    try:
-        with Image.open(target) as im:
-            im.verify()
-    except Exception:
-        return "cannot be read as an image"
-    return None
-
-
-def _gltf_size(doc: dict, path: Path) -> None:
-    accessors = doc.get("accessors", []) or []
-
-    def count(i) -> int:
-        try:
-            return int(accessors[i].get("count", 0))
-        except (IndexError, TypeError, AttributeError, ValueError):
-            return 0
-    uses: dict[int, int] = {}
-    for node in doc.get("nodes", []) or []:
-        if isinstance(node, dict) and isinstance(node.get("mesh"), int):
-            uses[node["mesh"]] = uses.get(node["mesh"], 0) + 1
-    vertices = triangles = 0
-    for mi, mesh in enumerate(doc.get("meshes", []) or []):
-        for prim in (mesh.get("primitives", []) if isinstance(mesh, dict) else []) or []:
-            if not isinstance(prim, dict):
-                continue
-            v = count((prim.get("attributes") or {}).get("POSITION", -1))
-            idx = prim.get("indices")
-            vertices += v * uses.get(mi, 1)
-            triangles += (count(idx) if isinstance(idx, int) else v) // 3 * uses.get(mi, 1)
-    check_size(vertices, triangles, path, "the file declares")
 
 
 def _stl(path: Path) -> None:
@@ -190,3 +73,84 @@ def _ply(path: Path) -> None:
         raise RttaError("not a PLY file (no 'ply' ... 'end_header' header)", path)
     counts = dict(re.findall(rb"element\s+(\w+)\s+(\d+)", head[:end]))
     check_size(int(counts.get(b"vertex", 0)), int(counts.get(b"face", 0)), path, "the PLY header declares")
+
+
+def _off(path: Path) -> None:
+    with open(path, "rb") as f:
+        head = f.read(4096)
+    words = re.sub(rb"#[^\n]*", b"", head).split()
+    if not words or not words[0].endswith(b"OFF"):
+        raise RttaError("not an OFF file (no 'OFF' header)", path)
+    try:
+        vertices, faces = int(words[1]), int(words[2])
+    except (IndexError, ValueError):
+        raise RttaError("OFF header has no vertex and face counts", path) from None
+    check_size(vertices, faces, path, "the OFF header declares")
+
+
+def _threemf(path: Path) -> None:
+    """The archive's declared uncompressed sizes against the memory limit (trimesh unpacks
+    every member into memory, then parses the XML), and the component graph."""
+    try:
+        with zipfile.ZipFile(path) as archive:
+            infos = archive.infolist()
+            if len(infos) > MAX_ZIP_MEMBERS:
+                raise RttaError(f"3MF archive has {len(infos):,} members (at most {MAX_ZIP_MEMBERS:,})", path)
+            total = sum(i.file_size for i in infos)
+            if total * XML_BYTES_FACTOR > memory_limit():
+                raise RttaError(f"3MF archive unpacks to {total:,} bytes, which needs about "
+                                f"{total * XML_BYTES_FACTOR / 2**20:,.0f} MiB to read, over the memory limit of "
+                                f"{memory_limit() / 2**20:,.0f} MiB (RTTA_MEMORY_LIMIT_MB)", path)
+            model = next((i for i in infos if "3d/3dmodel.model" in i.filename.lower()), None)
+            if model is None:
+                raise RttaError("3MF archive has no 3D/3dmodel.model", path)
+            with archive.open(model) as stream:
+                head = stream.read(4096)
+            with archive.open(model) as stream:
+                _threemf_graph(stream, head, path)
+    except (zipfile.BadZipFile, zipfile.LargeZipFile, EOFError, NotImplementedError) as exc:
+        raise RttaError(f"not a readable 3MF archive ({str(exc)[:100] or type(exc).__name__})", path) from None
+
+
+def _threemf_graph(stream, head: bytes, path: Path) -> None:
+    """No DTD (no entity expansion), no component cycle, not too many drawn paths."""
+    from lxml import etree
+
+    if b"<!DOCTYPE" in head or b"<!ENTITY" in head:
+        raise RttaError("3MF model declares a DTD; rtta does not expand XML entities", path)
+    children: dict[str, list[str]] = {}
+    items: list[str] = []
+    try:
+        for _, el in etree.iterparse(stream, events=("end",), tag=("{*}object", "{*}item"),
+                                     resolve_entities=False, no_network=True, load_dtd=False, huge_tree=False):
+            if el.tag.endswith("object"):
+                children[el.get("id", "")] = [c.get("objectid", "") for c in el.iter("{*}component")]
+                el.clear(keep_tail=False)
+            else:
+                items.append(el.get("objectid", ""))
+    except etree.XMLSyntaxError as exc:
+        raise RttaError(f"3MF model is not valid XML ({str(exc)[:100]})", path) from None
+    paths: dict[str, int] = {}
+    for root in items:
+        stack, state = [root], {}
+        while stack:                     # iterative post-order: paths(o) = 1 or the sum over components
+            node = stack[-1]
+            if node in paths:
+                stack.pop()
+                continue
+            if state.get(node) == 1:
+                kids = children.get(node, [])
+                paths[node] = min(sum(paths.get(k, 0) for k in kids) if kids else 1, 10 * MAX_OBJECTS_LARGE)
+                state[node] = 2
+                stack.pop()
+                continue
+            state[node] = 1
+            for k in children.get(node, []):
+                if state.get(k) == 1:
+                    raise RttaError(f"3MF component graph has a cycle (object {k} contains itself)", path)
+                if k not in paths:
+                    stack.append(k)
+    total = sum(paths.get(r, 0) for r in items)
+    if total > max_objects(path):
+        raise RttaError(f"3MF build makes {total:,} objects through its components (at most {max_objects(path):,} "
+                        "for a file of its size)", path)

@@ -16,6 +16,8 @@ class TextureTable:
         self._by_object: dict[int, int] = {}
         self._by_digest: dict[bytes, int] = {}
         self._keep: list = []          # the images keyed by id() stay alive while loading
+        self._failed: set[int] = set()
+        self.notes: list[str] = []     # textures that could not be decoded (their objects keep their colour)
 
     def of(self, mesh) -> tuple[np.ndarray | None, int]:
         visual = getattr(mesh, "visual", None)
@@ -26,12 +28,23 @@ class TextureTable:
         uv = np.asarray(uv, np.float64)
         if uv.shape != (len(mesh.vertices), 2) or not np.isfinite(uv).all():
             return None, -1
-        return uv.astype(np.float32), self._index(image)
+        index = self._index(image)
+        return (uv.astype(np.float32), index) if index >= 0 else (None, -1)
 
     def _index(self, image) -> int:
         if id(image) in self._by_object:
             return self._by_object[id(image)]
-        rgba = to_rgba(image)
+        if id(image) in self._failed:
+            return -1
+        try:
+            rgba = to_rgba(image)
+        except Exception as exc:      # truncated or damaged data found while decoding
+            self._failed.add(id(image))
+            self._keep.append(image)
+            name = image.info.get("file_path") or getattr(image, "filename", "") or "an embedded image"
+            self.notes.append(f"texture '{name}' cannot be decoded ({type(exc).__name__}); objects using it keep "
+                              "their material colour")
+            return -1
         digest = hashlib.sha1(rgba.tobytes() + str(rgba.shape).encode()).digest()
         if digest not in self._by_digest:
             self._by_digest[digest] = len(self.images)

@@ -119,8 +119,11 @@ def encode_crops(crops: list[np.ndarray], rects: np.ndarray, height: int,
 
 
 def dumps(doc: dict) -> str:
-    """The one serialisation of every JSON file the dataset writes (byte-stable for a given doc)."""
-    return json.dumps(doc, separators=(",", ":"), ensure_ascii=False, allow_nan=False)
+    """The one serialisation of every JSON file the dataset writes (byte-stable for a given doc).
+    A file name that is not UTF-8 (its bytes stand in as lone surrogates) is written as JSON
+    escapes (\\udcXX), so the text stays valid UTF-8 and reads back to the same name."""
+    text = json.dumps(doc, separators=(",", ":"), ensure_ascii=False, allow_nan=False)
+    return text.encode("utf-8", "backslashreplace").decode("utf-8")
 
 
 def assemble(info: dict, scenes: list[dict], views: list[dict]) -> dict:

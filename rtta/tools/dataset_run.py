@@ -11,7 +11,7 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
-from ..errors import RttaError
+from ..errors import RttaError, printable
 from ..imageio import atomic_write
 from . import coco
 from . import dataset as ds
@@ -45,7 +45,7 @@ class Worker:
         scene = self.given.get(sc["file"]) or load_scene(sc["file"], smooth_angle=self.s["smooth_angle"],
                                                          smooth=self.s["smooth"])
         for note in scene.warnings:
-            print(f"rtta: warning: {scene.source}: {note}", file=sys.stderr)
+            print(f"rtta: warning: {printable(scene.source)}: {printable(note)}", file=sys.stderr)
         self.meta = object_meta(scene, self.s["category_by"])
         part = {"key": sc["key"], "file": sc["file"], "objects": [{"id": i, **m} for i, m in enumerate(self.meta)]}
         path = part_path(self.out, sc["key"])
@@ -248,7 +248,7 @@ def _collect(results: list[tuple], failed: set[int], how: Run, bar) -> bool:
         elif r[1] not in failed:
             failed.add(r[1])
             bar.clear()
-            print(f"rtta: error: {r[2]}" + ("" if how.keep_going else " (stopped; --keep-going skips it)"),
+            print(f"rtta: error: {printable(r[2])}" + ("" if how.keep_going else " (stopped; --keep-going skips it)"),
                   file=sys.stderr)
             if not how.keep_going:
                 return False

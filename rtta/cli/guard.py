@@ -1,0 +1,135 @@
+"""How every `rtta` command fails: one line on stderr, never a traceback or a usage block.
+
+`OneLineParser` turns argparse's errors into an RttaError; `run_command` runs a handler with
+the signal handlers of rtta.outputs installed and maps every failure to one line and an
+exit status (2: bad input or a failure to write; 130: interrupted by SIGINT, SIGTERM or
+SIGHUP before the command's output was in place; 1: a reader closed the pipe early). `RTTA_DEBUG=1` lets an unexpected
+exception through with its traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from collections.abc import Callable
+
+from .. import imageio as outputs
+from ..errors import RttaError, printable
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """argparse, whose errors are one RttaError (`rtta: error: argument --fov: ...`) rather than
+    a usage block and exit."""
+
+    def error(self, message: str):
+        raise RttaError(f"{message} (`{self.prog} --help` lists the options)")
+
+
+class StdoutError(Exception):
+    """Standard output cannot be written (a full disk, /dev/full, an I/O error)."""
+
+
+class _GuardedStdout:
+    """sys.stdout whose write errors (other than a closed pipe) are a StdoutError."""
+
+    def __init__(self, stream) -> None:
+        self._stream = stream
+
+    def write(self, text: str) -> int:
+        try:
+            return self._stream.write(text)
+        except BrokenPipeError:
+            raise
+        except OSError as exc:
+            raise StdoutError(exc.strerror or str(exc)) from None
+
+    def flush(self) -> None:
+        try:
+            self._stream.flush()
+        except BrokenPipeError:
+            raise
+        except OSError as exc:
+            raise StdoutError(exc.strerror or str(exc)) from None
+
+    def __getattr__(self, name):
+        return getattr(self._stream, name)
+
+
+def say(kind: str, text: str, path: str | None = None) -> None:
+    """`rtta: <kind>: [path: ]text` on stderr, escaped to one line."""
+    where = f"{printable(path)}: " if path else ""
+    print(f"rtta: {kind}: {where}{printable(text)}", file=sys.stderr)
+
+
+def _silence_stdout() -> None:
+    """Point fd 1 at /dev/null so the interpreter's last flush cannot fail again."""
+    try:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):
+        pass
+
+
+def _subject(args: argparse.Namespace | None) -> str | None:
+    for name in ("scene", "mesh"):
+        value = getattr(args, name, None)
+        if isinstance(value, str) and value:
+            return value
+    return None
+
+
+def run_command(handler: Callable[[argparse.Namespace], int], args: argparse.Namespace, *,
+                process: bool = False) -> int:
+    """Run `handler(args)` under the one-line failure contract (see the module docstring).
+    `process`: this is the whole process (the `rtta` command), so once an output has been
+    committed the signal handlers stay, and a late signal cannot kill the finished run."""
+    old_handlers = outputs.install_signal_handlers()
+    real_stdout = sys.stdout
+    sys.stdout = _GuardedStdout(real_stdout)
+    try:
+        code = handler(args)
+        sys.stdout.flush()
+        if outputs.interrupt_requested():           # a library swallowed it before the output was in place
+            raise outputs.Interrupted(outputs.interrupt_requested())
+        return code
+    except KeyboardInterrupt:                       # Interrupted too: the run stops, its temporaries gone
+        print("rtta: interrupted", file=sys.stderr)
+        return 130
+    except Exception as exc:
+        if outputs.interrupt_requested() is None:
+            return _failed(exc, args)
+        print("rtta: interrupted", file=sys.stderr)   # what failed was the work the signal cut short
+        return 130
+    finally:
+        sys.stdout = real_stdout
+        if not (process and outputs.finished()):
+            outputs.restore_signal_handlers(old_handlers)
+
+
+def _failed(exc: Exception, args) -> int:
+    """One line for an exception a command raised; its exit status."""
+    try:
+        raise exc
+    except RttaError as exc:
+        say("error", str(exc))
+        return 2
+    except BrokenPipeError:          # `rtta info | head`: the reader left; say nothing more
+        _silence_stdout()
+        return 1
+    except StdoutError as exc:
+        _silence_stdout()
+        say("error", f"cannot write to standard output ({exc})")
+        return 2
+    except MemoryError:
+        say("error", "out of memory (RTTA_MEMORY_LIMIT_MB sets how much a scene may need)", _subject(args))
+        return 2
+    except OSError as exc:
+        say("error", f"{exc.strerror or type(exc).__name__}", exc.filename or _subject(args))
+        return 2
+    except Exception as exc:
+        if os.environ.get("RTTA_DEBUG"):
+            raise
+        reason = str(exc).strip().splitlines()[0][:200] if str(exc).strip() else ""
+        say("error", f"cannot process ({type(exc).__name__}{': ' + reason if reason else ''}); "
+                     "RTTA_DEBUG=1 shows where", _subject(args))
+        return 2

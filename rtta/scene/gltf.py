@@ -1,0 +1,333 @@
+"""glTF/GLB scenes: the node graph is walked here, not by trimesh, so objects are named in
+file order (never with trimesh's random suffixes), cycles and absurd depths are errors
+rather than hangs, and nothing is dropped without a word.
+
+`prepare(path)` checks the document (rtta.scene.gltf_check), its buffers and base-colour
+images, walks the graph of the chosen scene (iteratively: no recursion, however deep),
+and rewrites the document for trimesh as one single-primitive mesh per (mesh, primitive)
+that is drawn, with one node each and no hierarchy, so trimesh only decodes geometry and
+textures. The world transform and the name of every object come from the walk.
+"""
+
+from __future__ import annotations
+
+import base64
+import binascii
+import io
+import json
+import math
+import struct
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import RttaError
+from .files import MAX_OBJECTS_LARGE, TextureBudget, image_problem, local_file, max_objects, memory_limit, read_limited
+from .gltf_check import COMPONENT_BYTES, TYPE_WIDTH, check, read_document
+from .gltf_rewrite import fan_indices, rewrite
+from .precheck import check_size
+
+MAX_DEPTH = 1000            # levels of the node graph
+BUFFER_COPIES = 4           # the file, the rewritten blob, trimesh's slices of it, the GLB it reads
+
+
+@dataclass
+class Instance:
+    """One object: a primitive of a mesh at the end of one path through the node graph."""
+
+    name: str
+    geometry: str            # the mesh name trimesh gives the rewritten single-primitive mesh
+    matrix: np.ndarray       # float64 [4, 4] world transform
+    path: tuple[str, ...] = ()   # the groups above it in the node tree, root first
+
+
+@dataclass
+class Prepared:
+    data: bytes                                   # the rewritten, self-contained GLB for trimesh
+    instances: list[Instance]
+    warnings: list[str] = field(default_factory=list)
+    inputs: list[Path] = field(default_factory=list)       # files it refers to
+
+
+def prepare(path: Path) -> Prepared:
+    doc, binary = read_document(path)
+    check(doc, path, None if binary is None else len(binary))
+    out = Prepared(b"", [])
+    _check_extensions(doc, path, out.warnings)
+    buffers = _buffers(doc, binary, path, out)
+    _check_memory(doc, buffers, path)
+    limit = max_objects(path, sum(target.stat().st_size for target in out.inputs))   # buffer files so far
+    walk = _walk(doc, path, out.warnings, limit)
+    pairs = _primitives(doc, walk, buffers, path, out.warnings)
+    images = _images(doc, buffers, path, out)
+    _colors(doc, out.warnings)
+    per_mesh: dict[int, list[int]] = {}
+    for m, p in pairs:
+        per_mesh.setdefault(m, []).append(p)
+    out.instances = [Instance(name, f"rtta.{mesh}.{p}", matrix,       # a node's primitives: a group of its own
+                              (*tree, name.replace("/", "\u2215")) if len(per_mesh[mesh]) > 1 else tree)
+                     for name, mesh, matrix, tree in walk for p in per_mesh.get(mesh, [])]
+    if len(out.instances) > limit:
+        raise RttaError(f"the node graph makes {len(out.instances):,} objects (at most {limit:,} for a file of its "
+                        "size)", path)
+    _check_size(doc, walk, pairs, path)
+    new, blob = rewrite(doc, pairs, buffers, images)
+    text = json.dumps(new, allow_nan=False).encode()
+    text += b" " * (-len(text) % 4)
+    out.data = (struct.pack("<4sIII", b"glTF", 2, 28 + len(text) + len(blob), len(text)) + b"JSON" + text
+                + struct.pack("<I", len(blob)) + b"BIN\0" + blob)
+    return out
+
+
+def _check_extensions(doc: dict, path: Path, warnings: list[str]) -> None:
+    required = set(doc.get("extensionsRequired", []))
+    for name in sorted(required & {"KHR_draco_mesh_compression", "EXT_meshopt_compression"}):
+        if name == "KHR_draco_mesh_compression":
+            try:
+                import DracoPy  # noqa: F401
+                continue
+            except ImportError:
+                pass
+        raise RttaError(f"needs the glTF extension {name}, which rtta cannot decode here", path)
+    for i, acc in enumerate(doc.get("accessors", [])):
+        if "sparse" in acc:
+            warnings.append(f"accessor {i} is sparse; its sparse values are not applied")
+            break
+
+
+def _buffers(doc: dict, binary: bytes | None, path: Path, out: Prepared) -> list[bytes]:
+    """The bytes of every buffer; an error for a buffer that is a URL, outside the folder,
+    missing, not a regular file or shorter than it says."""
+    data: list[bytes] = []
+    for i, buf in enumerate(doc.get("buffers", [])):
+        uri = buf.get("uri")
+        if uri is None:
+            raw = binary or b""
+        elif uri.startswith("data:"):
+            raw = _data_uri(uri, path, f"buffers[{i}]")
+        else:
+            target = local_file(uri, path, "buffer")
+            raw = read_limited(target, path, f"buffer file '{uri}'")
+            out.inputs.append(target)
+        if len(raw) < buf["byteLength"]:
+            raise RttaError(f"buffer {i} has {len(raw):,} bytes, but its byteLength says {buf['byteLength']:,}", path)
+        data.append(raw)
+    return data
+
+
+def _data_uri(uri: str, path: Path, where: str) -> bytes:
+    head, _, body = uri.partition(",")
+    if not head.endswith(";base64"):
+        raise RttaError(f"glTF {where} is a data: URI that is not base64", path)
+    if len(body) * 3 // 4 > memory_limit():
+        raise RttaError(f"glTF {where} is a data: URI larger than the memory limit", path)
+    try:
+        return base64.b64decode(body, validate=False)
+    except (binascii.Error, ValueError):
+        raise RttaError(f"glTF {where} is a data: URI that is not valid base64", path) from None
+
+
+def _check_memory(doc: dict, buffers: list[bytes], path: Path) -> None:
+    """Accessors without a bufferView become arrays of zeros: their sizes count too; and the
+    buffers are held about BUFFER_COPIES times while trimesh reads them."""
+    zeros = sum(a["count"] * COMPONENT_BYTES[a["componentType"]] * TYPE_WIDTH[a["type"]]
+                for a in doc.get("accessors", []) if "bufferView" not in a)
+    need = zeros + BUFFER_COPIES * sum(len(b) for b in buffers)
+    if need > memory_limit():
+        raise RttaError(f"reading the file's buffers and accessors needs about {need / 2**20:,.0f} MiB, over "
+                        f"the memory limit of {memory_limit() / 2**20:,.0f} MiB (RTTA_MEMORY_LIMIT_MB)", path)
+
+
+def _check_size(doc: dict, walk: list, pairs: list, path: Path) -> None:
+    """The vertices and triangles the drawn primitives declare, every instance counted."""
+    uses: dict[int, int] = {}
+    for _, mesh, _, _ in walk:
+        uses[mesh] = uses.get(mesh, 0) + 1
+    accessors, vertices, triangles = doc.get("accessors", []), 0, 0
+    for m, p in pairs:
+        prim = doc["meshes"][m]["primitives"][p]
+        v = accessors[prim["attributes"]["POSITION"]]["count"]
+        n = accessors[prim["indices"]]["count"] if "indices" in prim else v
+        vertices += v * uses[m]
+        triangles += (n // 3 if prim.get("mode", 4) == 4 else max(n - 2, 0)) * uses[m]
+    check_size(vertices, triangles, path, "the file declares")
+
+
+def _local(node: dict) -> np.ndarray:
+    if "matrix" in node:
+        return np.array(node["matrix"], np.float64).reshape(4, 4).T
+    m = np.identity(4)
+    if "scale" in node:
+        m = np.diag([*node["scale"], 1.0])
+    if "rotation" in node:
+        x, y, z, w = node["rotation"]
+        n = math.sqrt(x * x + y * y + z * z + w * w)
+        x, y, z, w = (x / n, y / n, z / n, w / n) if n > 0 else (0.0, 0.0, 0.0, 1.0)
+        r = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                      [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                      [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+        rot = np.identity(4)
+        rot[:3, :3] = r
+        m = rot @ m
+    if "translation" in node:
+        t = np.identity(4)
+        t[:3, 3] = node["translation"]
+        m = t @ m
+    return m
+
+
+def _walk(doc: dict, path: Path, warnings: list[str], limit: int) -> list[tuple[str, int, np.ndarray, tuple]]:
+    """(name, mesh, world matrix, ancestors' names) of every node with a mesh, in depth-first
+    file order, each
+    path through the graph once. Cycles, graphs deeper than MAX_DEPTH and graphs whose paths
+    make more objects than files.max_objects allows are errors (found in one pass over the nodes, before
+    any path is followed); a node with several parents is drawn under each, with a warning."""
+    nodes, scenes = doc.get("nodes", []), doc.get("scenes", [])
+    parents = [0] * len(nodes)
+    for node in nodes:
+        for child in node.get("children", []):
+            parents[child] += 1
+    roots = scenes[doc.get("scene", 0)].get("nodes", []) if scenes else [i for i, p in enumerate(parents) if p == 0]
+    _measure(nodes, roots, path, limit)
+    shared = [i for i, p in enumerate(parents) if p > 1]
+    if shared:
+        warnings.append(f"{len(shared)} node(s) have more than one parent (glTF allows one); each is drawn "
+                        "under every parent: " + ", ".join(_node_name(nodes, i) for i in shared[:5]))
+    found: list[tuple[str, int, np.ndarray, tuple]] = []
+    stack: list[tuple[int, np.ndarray, tuple]] = [(r, np.identity(4), ()) for r in reversed(roots)]
+    while stack:
+        i, parent, tree = stack.pop()
+        node = nodes[i]
+        world = parent @ _local(node)
+        name = _node_name(nodes, i)
+        if "mesh" in node:
+            found.append((name, node["mesh"], world, tree))
+        below = (*tree, name.replace("/", "\u2215"))
+        stack.extend((c, world, below) for c in reversed(node.get("children", [])))
+    return found
+
+
+def _measure(nodes: list, roots: list[int], path: Path, limit: int) -> None:
+    """Cycle, depth and path-count checks over the nodes reachable from `roots`, iteratively
+    (each node once: a graph of shared children is not unfolded to count its paths)."""
+    state = [0] * len(nodes)           # 0 new, 1 on the current path, 2 done
+    depth = [0] * len(nodes)           # levels below and including the node
+    meshes = [0] * len(nodes)          # mesh nodes on all paths below and including it
+    for root in roots:
+        stack = [root]
+        while stack:
+            i = stack[-1]
+            if state[i] == 2:
+                stack.pop()
+                continue
+            children = nodes[i].get("children", [])
+            if state[i] == 1:
+                depth[i] = 1 + max((depth[c] for c in children), default=0)
+                meshes[i] = min(int("mesh" in nodes[i]) + sum(meshes[c] for c in children), 10 * MAX_OBJECTS_LARGE)
+                state[i] = 2
+                stack.pop()
+                continue
+            state[i] = 1
+            for c in children:
+                if state[c] == 1:
+                    raise RttaError(f"glTF node graph has a cycle: node {c} ('{_node_name(nodes, c)}') is its "
+                                    "own ancestor", path)
+                if state[c] == 0:
+                    stack.append(c)
+    if max((depth[r] for r in roots), default=0) > MAX_DEPTH:
+        raise RttaError(f"glTF node graph is deeper than {MAX_DEPTH} levels", path)
+    total = sum(meshes[r] for r in roots)
+    if total > limit:
+        raise RttaError(f"glTF node graph has {total:,} or more node paths to meshes (at most {limit:,} objects "
+                        "for a file of its size)", path)
+
+
+def _node_name(nodes: list, i: int) -> str:
+    name = nodes[i].get("name")
+    return name if isinstance(name, str) and name else str(i)
+
+
+def _primitives(doc: dict, walk: list, buffers: list, path: Path, warnings: list[str]) -> list[tuple[int, int]]:
+    """(mesh, primitive) pairs that are drawn, in file order; a triangle fan gets its
+    triangle-list indices (prim["_fan"]); points and lines are left out with a warning."""
+    used = sorted({mesh for _, mesh, _, _ in walk})
+    meshes = doc.get("meshes", [])
+    pairs, skipped = [], {}
+    for m in used:
+        for p, prim in enumerate(meshes[m]["primitives"]):
+            mode = prim.get("mode", 4)
+            if mode == 6:
+                prim["_fan"] = fan_indices(doc, prim, buffers)
+            if mode in (4, 5, 6):
+                pairs.append((m, p))
+            else:
+                kind = "points" if mode == 0 else "lines"
+                skipped[kind] = skipped.get(kind, 0) + 1
+    for kind, n in skipped.items():
+        warnings.append(f"{n} primitive(s) of {kind} left out (only surfaces are drawn)")
+    return pairs
+
+
+def _images(doc: dict, buffers: list, path: Path, out: Prepared) -> dict[int, bytes]:
+    """The bytes of every base-colour image that can be used. A missing, unreadable, corrupt
+    or oversized one (file, data: URI or embedded) is a warning and is left out, so its
+    objects keep their material colour; trimesh never opens a file itself."""
+    images, textures = doc.get("images", []), doc.get("textures", [])
+    used = sorted({textures[t]["source"] for t in _base_textures(doc) if "source" in textures[t]})
+    good, budget = {}, TextureBudget()
+    for i in used:
+        image = images[i]
+        uri = image.get("uri")
+        label = uri if uri is not None and not uri.startswith("data:") else f"images[{i}] (embedded)"
+        try:
+            if uri is None and "bufferView" in image:
+                view = doc["bufferViews"][image["bufferView"]]
+                start = view.get("byteOffset", 0)
+                blob = buffers[view["buffer"]][start:start + view["byteLength"]]
+            elif uri is not None and uri.startswith("data:"):
+                blob = _data_uri(uri, path, f"images[{i}]")
+            elif uri is not None:
+                try:
+                    target = local_file(uri, path, "texture")
+                except RttaError as exc:
+                    out.warnings.append(f"{exc.message}; objects using it keep their material colour")
+                    continue
+                out.inputs.append(target)
+                blob = read_limited(target, path, "")
+            else:
+                raise RttaError("has neither a uri nor a bufferView")
+            problem = image_problem(io.BytesIO(blob), budget)
+            if problem:
+                raise RttaError(problem)
+            good[i] = blob
+        except RttaError as exc:
+            out.warnings.append(f"texture '{label}' {exc.message.strip()}; objects using it keep their material colour")
+    return good
+
+
+def _base_textures(doc: dict) -> list[int]:
+    out = []
+    for mat in doc.get("materials", []):
+        tex = mat.get("pbrMetallicRoughness", {}).get("baseColorTexture")
+        if tex is not None:
+            out.append(tex["index"])
+    return out
+
+
+def _colors(doc: dict, warnings: list[str]) -> None:
+    """Base colour factors made drawable: NaN or infinite components become 1 (glTF's
+    default), others are clamped to [0, 1]; each change is said once."""
+    fixed = []
+    for i, mat in enumerate(doc.get("materials", [])):
+        pbr = mat.get("pbrMetallicRoughness", {})
+        factor = pbr.get("baseColorFactor")
+        if factor is None:
+            continue
+        clean = [min(max(v, 0.0), 1.0) if math.isfinite(v) else 1.0 for v in factor]
+        if clean != factor:
+            fixed.append(mat.get("name") or f"materials[{i}]")
+            pbr["baseColorFactor"] = clean
+    if fixed:
+        warnings.append(f"{len(fixed)} material(s) with a baseColorFactor that is NaN, infinite or outside [0, 1] "
+                        "(NaN and infinite components drawn as 1, the rest clamped): " + ", ".join(fixed[:5]))

@@ -1,0 +1,315 @@
+"""glTF JSON checked before trimesh sees it: the type and range of every field the loader
+reads (or trimesh reads on its behalf), every index into another array, every byte range
+against its buffer, so a malformed file is one RttaError naming the field, never a
+traceback from deep inside trimesh.
+
+`read_document(path)` returns the JSON object and the GLB's binary chunk; `check(doc, path,
+bin_size)` validates it in place (and fills defaults); both raise RttaError.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import struct
+from pathlib import Path
+
+from ..errors import RttaError
+
+COMPONENT_BYTES = {5120: 1, 5121: 1, 5122: 2, 5123: 2, 5125: 4, 5126: 4}
+TYPE_WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
+INDEX_TYPES = (5121, 5123, 5125)
+FLOAT = 5126
+MAX_COUNT = 2**31 - 1          # counts, lengths and offsets: anything larger is no real file
+MAX_ARRAY = 10_000_000         # entries of one top-level array
+GLB_JSON, GLB_BIN = 0x4E4F534A, 0x004E4942
+
+
+def read_document(path: Path) -> tuple[dict, bytes | None]:
+    """(JSON object, binary chunk or None) of a .gltf or .glb file."""
+    if path.suffix.lower() == ".gltf":
+        return decode(path.read_bytes(), path, "glTF JSON"), None
+    data = path.read_bytes()
+    if data[:4] != b"glTF":
+        raise RttaError("not a GLB file (no 'glTF' header)", path)
+    if len(data) < 20:
+        raise RttaError(f"GLB file is truncated ({len(data)} bytes; the header alone is 20)", path)
+    _, version, total, length, kind = struct.unpack_from("<4sIIII", data)
+    if version != 2:
+        raise RttaError(f"GLB version {version} is not supported (only 2)", path)
+    if total > len(data) or 20 + length > len(data):
+        raise RttaError(f"GLB file is truncated (header says {total:,} bytes, file has {len(data):,})", path)
+    if kind != GLB_JSON:
+        raise RttaError("GLB file's first chunk is not JSON", path)
+    doc = decode(data[20:20 + length], path, "GLB JSON chunk")
+    start = 20 + length
+    if start + 8 > min(total, len(data)):
+        return doc, None
+    blen, bkind = struct.unpack_from("<II", data, start)
+    if bkind != GLB_BIN:
+        return doc, None
+    if start + 8 + blen > len(data):
+        raise RttaError(f"GLB binary chunk is truncated (says {blen:,} bytes, {len(data) - start - 8:,} remain)", path)
+    return doc, data[start + 8:start + 8 + blen]
+
+
+def decode(raw: bytes, path: Path, what: str) -> dict:
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise RttaError(f"{what} is not valid UTF-8 (byte {exc.start})", path) from None
+    try:
+        doc = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise RttaError(f"{what} is not valid JSON ({exc.msg} at line {exc.lineno}, column {exc.colno})",
+                        path) from None
+    except RecursionError:
+        raise RttaError(f"{what} is nested too deeply", path) from None
+    except ValueError as exc:           # e.g. an integer of more than 4,300 digits
+        raise RttaError(f"{what} is not valid JSON ({str(exc)[:100]})", path) from None
+    if not isinstance(doc, dict):
+        raise RttaError(f"{what} is not a JSON object", path)
+    return doc
+
+
+class Checker:
+    """Type checks that raise RttaError('glTF <where> ...', path)."""
+
+    def __init__(self, doc: dict, path: Path) -> None:
+        self.doc, self.path = doc, path
+
+    def fail(self, where: str, problem: str):
+        raise RttaError(f"glTF {where} {problem}", self.path)
+
+    def array(self, key: str) -> list[dict]:
+        """A top-level array of objects (missing: empty)."""
+        value = self.doc.get(key, [])
+        if not isinstance(value, list):
+            self.fail(f"'{key}'", f"must be an array, not {_kind(value)}")
+        if len(value) > MAX_ARRAY:
+            self.fail(f"'{key}'", f"has {len(value):,} entries (at most {MAX_ARRAY:,})")
+        for i, item in enumerate(value):
+            if not isinstance(item, dict):
+                self.fail(f"{key}[{i}]", f"must be an object, not {_kind(item)}")
+        return value
+
+    def integer(self, obj: dict, key: str, where: str, *, below: int | None = None, least: int = 0,
+                required: bool = False, default: int | None = None) -> int | None:
+        if key not in obj:
+            if required:
+                self.fail(where, f"has no '{key}'")
+            return default
+        value = obj[key]
+        if isinstance(value, float) and value.is_integer() and abs(value) <= MAX_COUNT:
+            value = obj[key] = int(value)           # 3.0 is 3 in JSON
+        if not isinstance(value, int) or isinstance(value, bool):
+            self.fail(f"{where}.{key}", f"must be an integer, not {_kind(value)}")
+        if value < least or value > MAX_COUNT:
+            self.fail(f"{where}.{key}", f"is {value}, out of range")
+        if below is not None and value >= below:
+            self.fail(f"{where}.{key}", f"is {value}, but there are only {below}")
+        return value
+
+    def index(self, obj: dict, key: str, where: str, target: str, *, required: bool = False) -> int | None:
+        """An index into top-level array `target`."""
+        return self.integer(obj, key, where, below=len(self.doc.get(target, [])), required=required)
+
+    def numbers(self, obj: dict, key: str, where: str, n: int, *, finite: bool = True) -> list[float] | None:
+        if key not in obj:
+            return None
+        value = obj[key]
+        if (not isinstance(value, list) or len(value) != n
+                or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)):
+            self.fail(f"{where}.{key}", f"must be an array of {n} numbers")
+        if finite and not all(math.isfinite(v) for v in value):
+            self.fail(f"{where}.{key}", "holds NaN or infinite numbers")
+        return [float(v) for v in value]
+
+    def obj(self, parent: dict, key: str, where: str) -> dict:
+        value = parent.get(key, {})
+        if not isinstance(value, dict):
+            self.fail(f"{where}.{key}", f"must be an object, not {_kind(value)}")
+        return value
+
+    def text(self, obj: dict, key: str, where: str, *, uri: bool = False) -> str | None:
+        """A string; a URI must not hold a NUL byte (no file name can)."""
+        value = obj.get(key)
+        if value is None:
+            return None
+        if not isinstance(value, str):
+            self.fail(f"{where}.{key}", f"must be a string, not {_kind(value)}")
+        if uri and "\0" in value:
+            self.fail(f"{where}.{key}", "contains a NUL byte")
+        return value
+
+    def index_list(self, obj: dict, key: str, where: str, target: str) -> list[int]:
+        value = obj.get(key, [])
+        if not isinstance(value, list):
+            self.fail(f"{where}.{key}", f"must be an array, not {_kind(value)}")
+        holder = {}
+        for i in range(len(value)):
+            holder["i"] = value[i]
+            value[i] = self.index(holder, "i", f"{where}.{key}[{i}]", target)
+        return value
+
+
+def _kind(value) -> str:
+    return {dict: "an object", list: "an array", str: "a string", bool: "a boolean", int: "an integer",
+            float: "a number", type(None): "null"}.get(type(value), type(value).__name__)
+
+
+def check(doc: dict, path: Path, bin_size: int | None) -> None:
+    """Validate every field the loader reads; RttaError for the first that is wrong."""
+    c = Checker(doc, path)
+    for key in ("buffers", "bufferViews", "accessors", "meshes", "nodes", "scenes", "materials", "textures",
+                "images", "samplers", "cameras", "skins", "animations"):
+        c.array(key)
+    if "scene" in doc:
+        c.index(doc, "scene", "document", "scenes")
+    for key in ("extensionsUsed", "extensionsRequired"):
+        value = doc.get(key, [])
+        if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+            c.fail(f"'{key}'", "must be an array of strings")
+    _buffers(c, bin_size)
+    _accessors(c)
+    _meshes(c)
+    _nodes(c)
+    _materials(c)
+
+
+def _buffers(c: Checker, bin_size: int | None) -> None:
+    for i, buf in enumerate(c.array("buffers")):
+        where = f"buffers[{i}]"
+        length = c.integer(buf, "byteLength", where, required=True)
+        uri = c.text(buf, "uri", where, uri=True)
+        if uri is None and i == 0 and bin_size is not None and length > bin_size:
+            c.fail(f"{where}.byteLength", f"is {length:,}, but the GLB binary chunk has {bin_size:,} bytes")
+        if uri is None and not (i == 0 and bin_size is not None):
+            c.fail(where, "has no 'uri' (only a GLB's first buffer may have none)")
+    buffers = c.array("buffers")
+    for i, view in enumerate(c.array("bufferViews")):
+        where = f"bufferViews[{i}]"
+        b = c.index(view, "buffer", where, "buffers", required=True)
+        offset = c.integer(view, "byteOffset", where, default=0)
+        length = c.integer(view, "byteLength", where, least=1, required=True)
+        stride = c.integer(view, "byteStride", where, least=4)
+        if stride is not None and (stride > 252 or stride % 4):
+            c.fail(f"{where}.byteStride", f"is {stride}; it must be a multiple of 4 from 4 to 252")
+        if offset + length > buffers[b]["byteLength"]:
+            c.fail(where, f"reaches byte {offset + length:,} of buffer {b}, which has {buffers[b]['byteLength']:,}")
+
+
+def _accessors(c: Checker) -> None:
+    views = c.array("bufferViews")
+    for i, acc in enumerate(c.array("accessors")):
+        where = f"accessors[{i}]"
+        count = c.integer(acc, "count", where, least=1, required=True)
+        ctype = c.integer(acc, "componentType", where, required=True)
+        if ctype not in COMPONENT_BYTES:
+            c.fail(f"{where}.componentType", f"is {ctype}, not a glTF component type")
+        kind = c.text(acc, "type", where)
+        if kind not in TYPE_WIDTH:
+            c.fail(f"{where}.type", f"is {kind!r}, not one of {', '.join(TYPE_WIDTH)}")
+        if "sparse" in acc and not isinstance(acc["sparse"], dict):
+            c.fail(f"{where}.sparse", "must be an object")
+        v = c.index(acc, "bufferView", where, "bufferViews")
+        offset = c.integer(acc, "byteOffset", where, default=0)
+        element = COMPONENT_BYTES[ctype] * TYPE_WIDTH[kind]
+        if v is None:
+            if offset:
+                c.fail(f"{where}.byteOffset", "is set, but the accessor has no bufferView")
+            continue
+        view = views[v]
+        stride = view.get("byteStride") or element
+        end = offset + (count - 1) * stride + element
+        if end > view["byteLength"]:
+            c.fail(where, f"needs {end:,} bytes of bufferView {v}, which has {view['byteLength']:,} "
+                          f"({count:,} x {kind} of {COMPONENT_BYTES[ctype]}-byte components)")
+        if offset % COMPONENT_BYTES[ctype]:
+            c.fail(f"{where}.byteOffset", f"is {offset}, not a multiple of the component size")
+
+
+def _meshes(c: Checker) -> None:
+    accessors = c.array("accessors")
+    quantized = "KHR_mesh_quantization" in c.doc.get("extensionsUsed", [])
+    for i, mesh in enumerate(c.array("meshes")):
+        where = f"meshes[{i}]"
+        c.text(mesh, "name", where)
+        prims = mesh.get("primitives")
+        if not isinstance(prims, list) or not prims:
+            c.fail(f"{where}.primitives", "must be a non-empty array")
+        for j, prim in enumerate(prims):
+            pw = f"{where}.primitives[{j}]"
+            if not isinstance(prim, dict):
+                c.fail(pw, f"must be an object, not {_kind(prim)}")
+            mode = c.integer(prim, "mode", pw, default=4)
+            if mode > 6:
+                c.fail(f"{pw}.mode", f"is {mode}; glTF modes are 0 to 6")
+            c.index(prim, "material", pw, "materials")
+            attrs = c.obj(prim, "attributes", pw)
+            for name in list(attrs):
+                c.index(attrs, name, f"{pw}.attributes", "accessors")
+            if mode < 4:
+                continue                      # points and lines: left out, only their indices matter
+            pos = c.index(attrs, "POSITION", f"{pw}.attributes", "accessors", required=True)
+            _accessor_is(c, accessors, pos, f"{pw}.attributes.POSITION", ("VEC3",),
+                         (FLOAT, 5120, 5121, 5122, 5123) if quantized else (FLOAT,))
+            n = accessors[pos]["count"]
+            for name, kinds, types in (("NORMAL", ("VEC3",), (FLOAT, 5120, 5122) if quantized else (FLOAT,)),
+                                       ("TEXCOORD_0", ("VEC2",), (FLOAT, 5121, 5123, 5120, 5122)),
+                                       ("COLOR_0", ("VEC3", "VEC4"), (FLOAT, 5121, 5123))):
+                if name in attrs:
+                    _accessor_is(c, accessors, attrs[name], f"{pw}.attributes.{name}", kinds, types)
+                    if accessors[attrs[name]]["count"] != n:
+                        c.fail(f"{pw}.attributes.{name}", f"has {accessors[attrs[name]]['count']:,} values "
+                                                          f"for {n:,} positions")
+            idx = c.index(prim, "indices", pw, "accessors")
+            if idx is not None:
+                _accessor_is(c, accessors, idx, f"{pw}.indices", ("SCALAR",), INDEX_TYPES)
+            count = n if idx is None else accessors[idx]["count"]
+            if mode == 4 and count % 3:
+                c.fail(pw, f"is a triangle list of {count:,} {'indices' if idx is not None else 'vertices'}, "
+                           "not a multiple of 3")
+
+
+def _accessor_is(c: Checker, accessors: list, i: int, where: str, kinds: tuple, types: tuple) -> None:
+    acc = accessors[i]
+    if acc["type"] not in kinds or acc["componentType"] not in types:
+        c.fail(where, f"is accessor {i} of {acc['type']} / componentType {acc['componentType']}; "
+                      f"expected {' or '.join(kinds)} of {' or '.join(map(str, types))}")
+
+
+def _nodes(c: Checker) -> None:
+    for i, node in enumerate(c.array("nodes")):
+        where = f"nodes[{i}]"
+        c.text(node, "name", where)
+        c.index(node, "mesh", where, "meshes")
+        c.index(node, "camera", where, "cameras")
+        c.index_list(node, "children", where, "nodes")
+        if "matrix" in node and any(k in node for k in ("translation", "rotation", "scale")):
+            c.fail(where, "has both 'matrix' and translation/rotation/scale")
+        c.numbers(node, "matrix", where, 16)
+        c.numbers(node, "translation", where, 3)
+        c.numbers(node, "rotation", where, 4)
+        c.numbers(node, "scale", where, 3)
+    for i, scene in enumerate(c.array("scenes")):
+        c.text(scene, "name", f"scenes[{i}]")
+        c.index_list(scene, "nodes", f"scenes[{i}]", "nodes")
+
+
+def _materials(c: Checker) -> None:
+    for i, mat in enumerate(c.array("materials")):
+        where = f"materials[{i}]"
+        c.text(mat, "name", where)
+        pbr = c.obj(mat, "pbrMetallicRoughness", where)
+        c.numbers(pbr, "baseColorFactor", f"{where}.pbrMetallicRoughness", 4, finite=False)
+        tex = c.obj(pbr, "baseColorTexture", f"{where}.pbrMetallicRoughness")
+        if "baseColorTexture" in pbr:
+            c.index(tex, "index", f"{where}.pbrMetallicRoughness.baseColorTexture", "textures", required=True)
+    for i, tex in enumerate(c.array("textures")):
+        c.index(tex, "source", f"textures[{i}]", "images")
+    for i, image in enumerate(c.array("images")):
+        where = f"images[{i}]"
+        c.text(image, "uri", where, uri=True)
+        c.text(image, "mimeType", where)
+        c.index(image, "bufferView", where, "bufferViews")

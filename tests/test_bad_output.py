@@ -256,3 +256,25 @@ def test_an_interrupted_export_leaves_the_old_or_the_new_whole(tmp_path):
         if proc.returncode == 0:
             old = _snapshot(out)
     assert outcomes                       # (both kinds happen on a typical run; either is correct)
+
+
+def test_a_signal_waits_while_native_libraries_import():
+    """A signal during signals_held() (the import of trimesh and OpenCASCADE) raises nothing
+    inside the block, where it would kill the process from inside a native module's start,
+    and stops the run as soon as the block ends."""
+    from rtta import imageio as outputs
+
+    old = outputs.install_signal_handlers()
+    reached = []
+    try:
+        with pytest.raises(outputs.Interrupted):
+            with outputs.signals_held():
+                os.kill(os.getpid(), signal.SIGINT)
+                for _ in range(1000):                  # bytecodes, where Python runs the handler
+                    pass
+                reached.append("end of block")
+        assert reached == ["end of block"]
+    finally:
+        outputs.restore_signal_handlers(old)
+        outputs.install_signal_handlers()              # resets the state for the tests after
+        outputs.restore_signal_handlers(old)

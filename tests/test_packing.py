@@ -113,3 +113,46 @@ def test_transform_maps_viewport_rect_onto_atlas_rect():
             ndc = np.array([x0, y0]) / vp * 2 - 1
             atlas_px = ((np.array([sx, sy]) * ndc + [tx, ty]) + 1) / 2 * [tw, th]
             np.testing.assert_allclose(atlas_px, rec.atlas_rect[i, :2] + 2, atol=1e-6)
+
+
+@given(st.integers(1, 200), st.floats(0, 359), st.floats(-89, 89), st.floats(0.05, 3.0))
+@settings(max_examples=60, deadline=None)
+def test_viewport_rects_hold_each_objects_projection(n, az, el, dist):
+    """Every visible box's B_viewport, from the whole-array projection, holds that box's own
+    projected corners (computed one object at a time) and is at most a pixel larger on each
+    side; boxes wholly behind the camera or outside the view are culled. The same records
+    come from corners stored planar (as Scene keeps them) or object by object."""
+    scene = random_scene(n, seed=n)
+    vp = (160, 120)
+    cam = Camera.orbit(scene.center, scene.radius, az, el, dist)
+    vpm = cam.projection(vp[0] / vp[1]) @ cam.view(scene.origin)
+    corners = scene.box_corners()
+    rec = parameterize(corners, vpm, vp)
+    size = np.array(vp, np.float64)
+    for i in range(n):
+        clip = np.c_[corners[i], np.ones(8)] @ vpm.T
+        front = clip[:, 2] + clip[:, 3] >= 0
+        if not front.any():
+            assert not rec.visible[i]
+            continue
+        if not front.all():
+            continue                                   # near-plane clipping: test_bounds
+        ndc = clip[:, :3] / clip[:, 3:]
+        lo, hi = ndc.min(axis=0), ndc.max(axis=0)
+        outside = (lo[:2] > 1).any() or (hi[:2] < -1).any() or lo[2] > 1
+        if outside:
+            assert not rec.visible[i]
+            continue
+        px_lo = (np.clip(lo[:2], -1, 1) + 1) / 2 * size
+        px_hi = (np.clip(hi[:2], -1, 1) + 1) / 2 * size
+        if not rec.visible[i]:                         # only a zero-area sliver on the border may drop
+            assert (np.minimum(px_hi, size) - np.maximum(px_lo, 0) <= 1e-3).any()
+            continue
+        x0, y0, x1, y1 = rec.viewport_rect[i]
+        assert x0 <= px_lo[0] + 1e-6 and y0 <= px_lo[1] + 1e-6, i
+        assert x1 >= px_hi[0] - 1e-6 and y1 >= px_hi[1] - 1e-6, i
+        assert x0 >= px_lo[0] - 1.01 and y0 >= px_lo[1] - 1.01 and x1 <= max(px_hi[0] + 1.01, x0 + 1), i
+        assert y1 <= max(px_hi[1] + 1.01, y0 + 1), i
+    objectwise = parameterize(np.ascontiguousarray(corners), vpm, vp)
+    for key in ("visible", "viewport_rect", "atlas_rect", "layer", "scale", "transform", "clip_ndc"):
+        assert np.array_equal(getattr(rec, key), getattr(objectwise, key)), key

@@ -28,16 +28,27 @@ class Packing:
 
 
 def _breaks(cum: np.ndarray, sizes: np.ndarray, limit: int) -> np.ndarray:
-    """Start indices of greedy runs of `sizes` (cumsum `cum`) whose sum stays <= limit."""
+    """Start indices of greedy runs of `sizes` (cumsum `cum`) whose sum stays <= limit: the
+    end of a run from every index in one vectorised search, then one hop per run."""
+    nxt = cum.searchsorted(cum - sizes + limit, side="right")   # where a run from each index ends
     starts = []
     n = len(sizes)
     i = 0
     while i < n:
         starts.append(i)
-        before = cum[i] - sizes[i]
-        j = int(np.searchsorted(cum, before + limit, side="right"))
-        i = max(j, i + 1)
+        j = int(nxt[i])
+        i = j if j > i else i + 1
     return np.asarray(starts, np.int64)
+
+
+def _decreasing_order(w: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """np.lexsort((-w, -h)) (tallest first, then widest, then by index), as two stable
+    16-bit sorts when the sizes allow (numpy sorts those by radix: about 10x faster at 10^5)."""
+    top = max(int(w.max()), int(h.max()))
+    if top >= 1 << 16:
+        return np.lexsort((-w, -h))
+    by_w = np.argsort((top - w).astype(np.uint16), kind="stable")
+    return by_w[np.argsort((top - h[by_w]).astype(np.uint16), kind="stable")]
 
 
 def pack_shelves(w: np.ndarray, h: np.ndarray, max_w: int, max_h: int) -> Packing:
@@ -50,7 +61,7 @@ def pack_shelves(w: np.ndarray, h: np.ndarray, max_w: int, max_h: int) -> Packin
         return Packing(z, z, z, 0, 0, 0)
     if (w > max_w).any() or (h > max_h).any() or (w < 1).any() or (h < 1).any():
         raise ValueError("rectangles must be between 1x1 and the atlas size")
-    order = np.lexsort((-w, -h))          # tallest first, then widest
+    order = _decreasing_order(w, h)       # tallest first, then widest
     ws, hs = w[order], h[order]
     cum = np.cumsum(ws)
     shelf_start = _breaks(cum, ws, max_w)

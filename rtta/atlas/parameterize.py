@@ -58,38 +58,84 @@ class Records:
 
 
 def project_bounds(corners: np.ndarray, vpm: np.ndarray):
-    """Projected, near-clipped NDC bounds of boxes: (visible [n], ndc_min [n,2], ndc_max [n,2])."""
+    """Projected, near-clipped NDC bounds of boxes: (visible [n], ndc_min [n,2], ndc_max [n,2]).
+    One corner at a time over all boxes, into planar [3, n] bounds (numpy runs fastest on
+    long contiguous rows, and nothing [8, n]-sized leaves the cache)."""
     n = corners.shape[0]
-    clip = _transform_points(corners.reshape(n, 8, 3), vpm)
-    d = clip[..., 2] + clip[..., 3]                       # >= 0: in front of the near plane
-    front = d >= 0
-    lo = np.zeros((n, 3))
-    hi = np.zeros((n, 3))
-    all_front = front.all(axis=1)
-    some_front = front.any(axis=1)
-    rows = np.flatnonzero(all_front)                       # the common case: no clipping needed
-    if rows.size:
-        c = clip if rows.size == n else clip[rows]
-        xyz = c[..., :3] / c[..., 3:4]
-        lo[rows], hi[rows] = _min_max_over_corners(xyz)
-    rows = np.flatnonzero(some_front & ~all_front)         # crossing the near plane
-    if rows.size:
-        lo[rows], hi[rows] = _clipped_bounds(clip[rows], d[rows])
-    in_frustum = (some_front & (lo[:, 0] <= 1) & (hi[:, 0] >= -1) & (lo[:, 1] <= 1)
-                  & (hi[:, 1] >= -1) & (lo[:, 2] <= 1))
-    return in_frustum, lo[:, :2], hi[:, :2]
+    m = np.asarray(vpm, np.float64)
+    corner_clip = _corner_clip(corners.transpose(2, 1, 0), m)
+    lo = np.full((3, n), np.inf)
+    hi = np.full((3, n), -np.inf)
+    all_front = np.ones(n, bool)
+    some_front = np.zeros(n, bool)
+    q = np.empty(n)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for k in range(8):
+            x, y, z, w = corner_clip(k)
+            front = np.add(z, w, out=q) >= 0               # in front of the near plane
+            all_front &= front
+            some_front |= front
+            for j, v in enumerate((x, y, z)):
+                np.divide(v, w, out=q)
+                np.minimum(lo[j], q, out=lo[j])
+                np.maximum(hi[j], q, out=hi[j])
+    if not all_front.all():
+        lo[:, ~all_front] = 0
+        hi[:, ~all_front] = 0
+        rows = np.flatnonzero(some_front & ~all_front)     # crossing the near plane: clipped
+        if rows.size:
+            clip = _points_clip(np.asarray(corners[rows], np.float64), m)
+            a, b = _clipped_bounds(clip, clip[..., 2] + clip[..., 3])
+            lo[:, rows], hi[:, rows] = a.T, b.T
+    in_frustum = (some_front & (lo[0] <= 1) & (hi[0] >= -1) & (lo[1] <= 1)
+                  & (hi[1] >= -1) & (lo[2] <= 1))
+    return in_frustum, lo[:2].T, hi[:2].T
 
 
-def _transform_points(points: np.ndarray, m: np.ndarray) -> np.ndarray:
-    """m @ (p, 1) for points [..., 3] as [..., 4], one multiply-add per matrix column: numpy's
-    matmul of [N, 3] by [3, 4] goes through BLAS with a 3-long inner dimension and took
-    180-330 ms for 800,000 points on the 2-core CI machine; this takes about 15 ms."""
-    m = np.asarray(m, np.float64)
-    out = points[..., 0, None] * m[:, 0]
-    out += points[..., 1, None] * m[:, 1]
-    out += points[..., 2, None] * m[:, 2]
-    out += m[:, 3]
-    return out
+def _points_clip(points: np.ndarray, m: np.ndarray) -> np.ndarray:
+    """m @ (p, 1) for points [..., 3] as [..., 4] (few: the boxes crossing the near plane)."""
+    return points[..., 0, None] * m[:, 0] + points[..., 1, None] * m[:, 1] + points[..., 2, None] * m[:, 2] + m[:, 3]
+
+
+def _corner_clip(planar: np.ndarray, m: np.ndarray):
+    """A function k -> clip rows (x, y, z, w), each [n], of corner k of every box (planar
+    [3, 8, n]; the rows are overwritten by the next call). Axis-aligned boxes (corner k
+    built from corners 0 and 7 by its bits, as Scene's are) reuse per-axis products: two
+    adds per row and corner instead of three multiply-adds."""
+    n = planar.shape[2]
+    out = np.empty((4, n))
+    if not _axis_aligned(planar):
+        def rows(k: int) -> np.ndarray:
+            p = planar[:, k]
+            for r in range(4):
+                row = np.multiply(p[0], m[r, 0], out=out[r])
+                row += p[1] * m[r, 1]
+                row += p[2] * m[r, 2]
+                row += m[r, 3]
+            return out
+        return rows
+    ends = (planar[:, 0], planar[:, 7])                   # min and max corner, [3, n] each
+    prod = np.empty((3, 2, 4, n))                          # axis, end, clip row
+    for j in range(3):
+        for e in range(2):
+            np.multiply(m[:, j, None], ends[e][j], out=prod[j, e])
+    prod[0] += m[:, 3, None]
+
+    def rows_aabb(k: int) -> np.ndarray:
+        np.add(prod[0, k & 1], prod[1, (k >> 1) & 1], out=out)
+        np.add(out, prod[2, k >> 2], out=out)
+        return out
+    return rows_aabb
+
+
+def _axis_aligned(planar: np.ndarray) -> bool:
+    """True if every corner k of planar [3, 8, n] takes coordinate j from corner 7 where
+    bit j of k is set and from corner 0 where not (the AABB corner order of Scene)."""
+    for k in range(1, 7):
+        for j in range(3):
+            if not np.array_equal(planar[j, k], planar[j, 7 if (k >> j) & 1 else 0]):
+                return False
+    return True
 
 
 def _intersected(boxes: np.ndarray, vpm: np.ndarray):
@@ -99,15 +145,6 @@ def _intersected(boxes: np.ndarray, vpm: np.ndarray):
         v, a, b = project_bounds(corners, vpm)
         vis, lo, hi = vis & v, np.maximum(lo, a), np.minimum(hi, b)
     return vis & (lo <= hi).all(axis=1), lo, hi
-
-
-def _min_max_over_corners(xyz: np.ndarray):
-    """min/max over axis 1 of [n, 8, 3]; pairwise ufuncs beat a reduction over a short axis."""
-    lo, hi = xyz[:, 0].copy(), xyz[:, 0].copy()
-    for k in range(1, xyz.shape[1]):
-        np.minimum(lo, xyz[:, k], out=lo)
-        np.maximum(hi, xyz[:, k], out=hi)
-    return lo, hi
 
 
 def _clipped_bounds(clip: np.ndarray, d: np.ndarray):
@@ -127,18 +164,25 @@ def _clipped_bounds(clip: np.ndarray, d: np.ndarray):
 
 
 def viewport_rects(vis: np.ndarray, lo: np.ndarray, hi: np.ndarray, size: tuple[int, int]):
-    """Clip NDC bounds to the viewport and snap outward to whole pixels: [n,4] x0,y0,x1,y1."""
-    wh = np.asarray(size, np.float64)
-    lo_px = (np.clip(lo, -1, 1) + 1) * 0.5 * wh
-    hi_px = (np.clip(hi, -1, 1) + 1) * 0.5 * wh
-    x0y0 = np.clip(np.floor(lo_px - EPS_PX), 0, wh)
-    x1y1 = np.clip(np.ceil(hi_px + EPS_PX), 0, wh)
-    x1y1 = np.maximum(x1y1, np.minimum(x0y0 + 1, wh))
-    x0y0 = np.minimum(x0y0, x1y1 - 1)
-    rect = np.concatenate([x0y0, x1y1], axis=1).astype(np.int64)
-    vis = vis & (rect[:, 2] > rect[:, 0]) & (rect[:, 3] > rect[:, 1])
-    rect[~vis] = 0
-    return vis, rect
+    """Clip NDC bounds to the viewport and snap outward to whole pixels: [n,4] x0,y0,x1,y1
+    (a transposed view of planar [4, n] rows, as numpy is fastest on long contiguous rows)."""
+    wh = np.asarray(size, np.float64)[:, None]
+    px = np.concatenate([lo.T, hi.T])                      # [4, n], worked on in place
+    np.minimum(np.maximum(px, -1, out=px), 1, out=px)
+    px += 1
+    px *= np.tile(0.5 * wh, (2, 1))                        # == (c + 1) * 0.5 * wh: halving is exact
+    x0y0, x1y1 = px[:2], px[2:]
+    x0y0 -= EPS_PX
+    np.floor(x0y0, out=x0y0)
+    x1y1 += EPS_PX
+    np.ceil(x1y1, out=x1y1)
+    np.minimum(np.maximum(px, 0, out=px), np.tile(wh, (2, 1)), out=px)
+    np.maximum(x1y1, np.minimum(x0y0 + 1, wh), out=x1y1)
+    np.minimum(x0y0, x1y1 - 1, out=x0y0)
+    rect = px.astype(np.int64)
+    vis = vis & (rect[2] > rect[0]) & (rect[3] > rect[1])
+    rect *= vis
+    return vis, rect.T
 
 
 def parameterize(corners: np.ndarray, vpm: np.ndarray, viewport: tuple[int, int], *,
@@ -164,23 +208,31 @@ def parameterize(corners: np.ndarray, vpm: np.ndarray, viewport: tuple[int, int]
     if hidden is not None:
         vis = vis & ~np.asarray(hidden, bool)
     vis, rect = viewport_rects(vis, lo, hi, (W, H))
-    inner = (rect[:, 2:] - rect[:, :2]).astype(np.float64)
-    fit = np.minimum((max_w - 2 * border) / np.maximum(inner[:, 0], 1),
-                     (max_h - 2 * border) / np.maximum(inner[:, 1], 1))
-    scale = np.where(vis, np.minimum(region_scale, fit), 0.0)
-    packing, scale = _pack_with_scaling(inner, scale, vis, border, max_w, max_h, max_layers)
-    size_atlas = _region_sizes(inner, scale, border)
-    atlas_rect = np.zeros((n, 4), np.int64)
-    layer = np.zeros(n, np.int64)
     idx = np.flatnonzero(vis)
-    atlas_rect[idx, 0], atlas_rect[idx, 1] = packing.x, packing.y
-    atlas_rect[idx, 2:] = size_atlas[idx]
-    layer[idx] = packing.layer
+    every = len(idx) == n                                  # all visible: views, no gathers
+    rt = rect.T                                            # planar [4, n]
+    inner = (rt[2:] - rt[:2]).astype(np.float64)           # [2, n]; row-wise 1-D gathers below
+    inner_v = inner if every else np.stack([inner[0][idx], inner[1][idx]])
+    fit = np.minimum((max_w - 2 * border) / inner_v[0], (max_h - 2 * border) / inner_v[1])
+    packing, scale_v, sizes = _pack_with_scaling(inner_v, np.minimum(region_scale if every else region_scale[idx],
+                                                                     fit), border, max_w, max_h, max_layers)
+    scale = scale_v if every else np.zeros(n)
+    atlas_rect = np.zeros((4, n), np.int64)
+    layer = packing.layer if every else np.zeros(n, np.int64)
+    if every:
+        atlas_rect[0], atlas_rect[1], atlas_rect[2:] = packing.x, packing.y, sizes
+    else:
+        scale[idx] = scale_v
+        layer[idx] = packing.layer
+        for row, values in enumerate((packing.x, packing.y, sizes[0], sizes[1])):
+            atlas_rect[row][idx] = values
     tw, th = max(packing.width, 1), max(packing.height, 1)
-    transform = _transforms(rect, atlas_rect, scale, border, (W, H), (tw, th))
-    clip_ndc = rect / np.array([W, H, W, H], np.float64) * 2.0 - 1.0
-    transform[~vis] = 0.0
-    clip_ndc[~vis] = 0.0
+    transform = _transforms(rt[:2], atlas_rect[:2], scale, border, (W, H), (tw, th))
+    clip_ndc = rt / np.array([[W], [H], [W], [H]], np.float64) * 2.0 - 1.0
+    if not every:                                          # culled: zero T and clip rectangle
+        transform *= vis
+        clip_ndc *= vis
+    atlas_rect, transform, clip_ndc = atlas_rect.T, transform.T, clip_ndc.T   # [n, 4] views
     return Records(visible=vis, viewport_rect=rect, atlas_rect=atlas_rect, layer=layer,
                    scale=scale, transform=transform, clip_ndc=clip_ndc, viewport=(W, H),
                    atlas_size=(packing.width, packing.height, packing.layers), border=border)
@@ -206,32 +258,33 @@ def default_atlas_max(viewport: tuple[int, int], border: int, region_scale: floa
 
 
 def _region_sizes(inner: np.ndarray, scale: np.ndarray, border: int) -> np.ndarray:
-    return (np.maximum(np.ceil(inner * scale[:, None] - 1e-9), 1) + 2 * border).astype(np.int64)
+    """Atlas region sizes [2, m] (w, h rows, border included) of inner sizes [2, m] at `scale` [m]."""
+    return (np.maximum(np.ceil(inner * scale - 1e-9), 1) + 2 * border).astype(np.int64)
 
 
-def _pack_with_scaling(inner, scale, vis, border, max_w, max_h, max_layers) -> tuple[Packing, np.ndarray]:
-    """Pack; while more layers than allowed are needed, scale all regions down (none dropped)."""
-    idx = np.flatnonzero(vis)
+def _pack_with_scaling(inner, scale, border, max_w, max_h, max_layers) -> tuple[Packing, np.ndarray, np.ndarray]:
+    """Pack the visible regions (inner sizes [2, m] at `scale` [m]); while more layers than
+    allowed are needed, scale all regions down (none dropped). Returns (packing, scale, sizes)."""
     capacity = float(max_w) * max_h * max_layers
     for _ in range(64):
-        sizes = _region_sizes(inner[idx], scale[idx], border)
-        packing = pack_shelves(sizes[:, 0], sizes[:, 1], max_w, max_h)
+        sizes = _region_sizes(inner, scale, border)
+        packing = pack_shelves(sizes[0], sizes[1], max_w, max_h)
         if packing.layers <= max_layers:
-            return packing, scale
+            return packing, scale, sizes
         if (sizes == 1 + 2 * border).all():
             break
-        area = float((sizes[:, 0] * sizes[:, 1]).sum())
+        area = float((sizes[0] * sizes[1]).sum())
         shrink = min(0.9, np.sqrt(capacity / area) * 0.95)
         scale = scale * shrink
-    raise ValueError(f"{len(idx)} regions with border {border} do not fit into {max_layers} "
+    raise ValueError(f"{inner.shape[1]} regions with border {border} do not fit into {max_layers} "
                      f"layer(s) of {max_w}x{max_h} even at the smallest scale")
 
 
-def _transforms(rect, atlas_rect, scale, border, viewport, atlas) -> np.ndarray:
-    """T per object: atlas_px = atlas_xy + border + scale * (viewport_px - rect_x0y0), in NDC."""
-    vp = np.asarray(viewport, np.float64)
-    at = np.asarray(atlas, np.float64)
-    s = scale[:, None]
-    sxy = s * vp / at
-    txy = (2.0 * (atlas_rect[:, :2] + border) + s * (vp - 2.0 * rect[:, :2])) / at - 1.0
-    return np.concatenate([sxy, txy], axis=1)
+def _transforms(x0y0, atlas_xy, scale, border, viewport, atlas) -> np.ndarray:
+    """T per object as rows [4, m]: atlas_px = atlas_xy + border + scale * (viewport_px - x0y0),
+    in NDC (x0y0, atlas_xy: [2, m] rows)."""
+    vp = np.asarray(viewport, np.float64)[:, None]
+    at = np.asarray(atlas, np.float64)[:, None]
+    sxy = scale * vp / at
+    txy = (2.0 * (atlas_xy + border) + scale * (vp - 2.0 * x0y0)) / at - 1.0
+    return np.concatenate([sxy, txy])

@@ -87,6 +87,8 @@ def run_command(handler: Callable[[argparse.Namespace], int], args: argparse.Nam
     real_stdout = sys.stdout
     sys.stdout = _GuardedStdout(real_stdout)
     try:
+        with outputs.signals_held():    # the scene readers' native libraries: a signal must not cut their start
+            _import_readers()
         code = handler(args)
         sys.stdout.flush()
         if outputs.interrupt_requested():           # a library swallowed it before the output was in place
@@ -104,6 +106,14 @@ def run_command(handler: Callable[[argparse.Namespace], int], args: argparse.Nam
         sys.stdout = real_stdout
         if not (process and outputs.finished()):
             outputs.restore_signal_handlers(old_handlers)
+
+
+def _import_readers() -> None:
+    """Import trimesh (and with it cascadio's OpenCASCADE) while signals are held."""
+    try:
+        import trimesh  # noqa: F401
+    except ImportError:
+        pass
 
 
 def _failed(exc: Exception, args) -> int:

@@ -84,13 +84,14 @@ class Scene:
         the object, so the intersection does too, and it is never larger than the AABB's)."""
         if kind not in BOUNDS:
             raise ValueError(f"unknown bounds '{kind}' (choose from {', '.join(BOUNDS)})")
-        if "aabb" not in self._corners:
-            lo = (self.aabb_min - self.origin)[:, None, :]
-            hi = (self.aabb_max - self.origin)[:, None, :]
-            self._corners["aabb"] = np.where(_BITS[None], hi, lo)
+        if "aabb" not in self._corners:      # stored planar [3, 8, N]: parameterize projects rows
+            lo = (self.aabb_min - self.origin).T[:, None, :]
+            hi = (self.aabb_max - self.origin).T[:, None, :]
+            self._corners["aabb"] = np.where(_BITS.T[:, :, None], hi, lo).transpose(2, 1, 0)
         if kind == "obb" and "obb" not in self._corners:
             obb = oriented_corners(self.positions, self.object_ids, self.count)
-            self._corners["obb"] = np.stack([self._corners["aabb"], obb])
+            planar = np.stack([self._corners["aabb"].transpose(2, 1, 0), obb.transpose(2, 1, 0)])
+            self._corners["obb"] = planar.transpose(0, 3, 2, 1)
         return self._corners[kind]
 
     def index(self, name: str) -> int:

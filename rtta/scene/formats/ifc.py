@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import RttaError
+from ...imageio import signals_held
 from . import Assembly, unit_name
 
 LEFT_OUT = ("IfcOpeningElement", "IfcSpace")
@@ -21,9 +22,10 @@ LEFT_OUT = ("IfcOpeningElement", "IfcSpace")
 
 def read(path: Path, left_out: tuple[str, ...] = LEFT_OUT) -> Assembly:
     _check_text(path)
-    import ifcopenshell
-    import ifcopenshell.geom
-    import ifcopenshell.util.unit
+    with signals_held():                 # a signal during a native module's initialisation crashes it
+        import ifcopenshell
+        import ifcopenshell.geom
+        import ifcopenshell.util.unit
 
     try:
         model = ifcopenshell.open(str(path))

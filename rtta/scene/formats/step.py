@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import RttaError
+from ...imageio import signals_held
 from . import Assembly, native_output, srgb_from_linear
 
 UNITS_M = {"mm": 1e-3, "cm": 1e-2, "m": 1.0, "km": 1e3, "in": 0.0254, "ft": 0.3048, "um": 1e-6}
@@ -33,7 +34,8 @@ def read(path: Path) -> Assembly:
     data = path.read_bytes()
     text = data.decode("latin-1")
     _check_text(text, path)
-    import cascadio
+    with signals_held():                 # a signal during a native module's initialisation crashes it
+        import cascadio
 
     with native_output() as said:
         glb = cascadio.to_glb_bytes(data, tol_linear=TOLERANCE, tol_relative=True)

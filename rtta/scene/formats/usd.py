@@ -11,13 +11,15 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import RttaError
+from ...imageio import signals_held
 from . import Assembly, check_archive, native_output, unit_name
 
 MAX_LAYERS = 256
 
 
 def read(path: Path) -> Assembly:
-    from pxr import Usd, UsdGeom
+    with signals_held():                 # a signal during a native module's initialisation crashes it
+        from pxr import Usd, UsdGeom
 
     if path.suffix.lower() == ".usdz":
         check_archive(path)

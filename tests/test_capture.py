@@ -90,3 +90,22 @@ def test_twenty_thousand_part_assembly(make_renderer, tmp_path):
     sample = np.random.default_rng(0).choice(scene.count, 40, replace=False)
     out = check_frame(r, cam, (400, 300), "vs", rtt_objects=sample)
     assert out["visible"] > 15_000
+
+
+@pytest.mark.parametrize("path", PATHS)
+def test_culled_and_hidden_objects_are_not_drawn(make_renderer, gl, path):
+    """The capture's one draw covers only the objects with a region: the GPU generates
+    exactly their triangles (culled and hidden ones are never fetched), and the atlas still
+    equals RTT per object."""
+    scene = random_scene(60, seed=4, spread=20.0)
+    r = make_renderer(scene)
+    cam = Camera.orbit(scene.center, scene.radius, 0, 0, 0.05)        # inside the scene: many culled
+    r.hidden = {3, 17, 18, 19, 40}
+    query = gl.query(primitives=True)
+    with query:
+        rec = r.capture(cam, (200, 150), path=path)
+    runs = np.r_[False, rec.visible, False].astype(int)
+    assert 1 < np.count_nonzero(np.diff(runs) == 1) and not rec.visible[[3, 17, 18, 19, 40]].any()
+    triangles = scene.index_ranges[rec.visible, 1].sum() // 3    # (gs: counted after the geometry shader)
+    assert query.primitives == triangles, (query.primitives, triangles, scene.indices.size // 3)
+    check_frame(r, cam, (200, 150), path)

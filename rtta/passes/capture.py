@@ -18,6 +18,8 @@ from ..gl import glraw, glsl
 from ..gl.gpu import GpuScene
 from ..gl.targets import LayeredTarget
 
+DIRECT_RUNS = 1          # more runs of visible objects than this: one indirect multi-draw
+
 
 def mat_bytes(m: np.ndarray) -> bytes:
     """Row-major float64 4x4 -> column-major float32 bytes for a GLSL mat4."""
@@ -75,6 +77,7 @@ class CapturePass(ScenePass):
             raise ValueError(f"capture path must be 'vs' or 'gs', got {path!r}")
         self.path = path
         self.frames = 0
+        self._indirect: moderngl.Buffer | None = None
         if path == "vs":
             super().__init__(ctx, CAPTURE_VS=True)
         else:
@@ -82,7 +85,8 @@ class CapturePass(ScenePass):
 
     def render(self, *, gpu: GpuScene, records: Records, view: np.ndarray, proj: np.ndarray,
                atlas: LayeredTarget) -> None:
-        """Upload R, then draw the whole batch once into `atlas` (sized to records.atlas_size)."""
+        """Upload R, then draw the whole batch once into `atlas` (sized to records.atlas_size);
+        objects without a region (culled, hidden) are left out of that one draw."""
         tw, th, td = records.atlas_size
         self.frames += 1
         atlas.ensure((tw, th), td)
@@ -94,9 +98,48 @@ class CapturePass(ScenePass):
         atlas.bind((0, 0, tw, th))
         glraw.set_clip_distances(4, True)
         try:
-            vao.render(moderngl.TRIANGLES)
+            if records.visible.all():
+                vao.render(moderngl.TRIANGLES)
+            else:                                # culled and hidden objects: not drawn at all
+                self._draw_runs(vao, visible_runs(records.visible, gpu.scene.index_ranges))
         finally:
             glraw.set_clip_distances(4, False)
+
+    def _draw_runs(self, vao: moderngl.VertexArray, runs: np.ndarray) -> None:
+        """Draw index runs [(first, count)] in one call: one run directly, several as one
+        indirect multi-draw, its command buffer grown as needed and reused across frames."""
+        if len(runs) <= DIRECT_RUNS:
+            for first, count in runs:
+                vao.render(moderngl.TRIANGLES, vertices=int(count), first=int(first))
+            return
+        commands = np.zeros((len(runs), 5), np.uint32)      # count, instances, first index, base vertex, base instance
+        commands[:, 0], commands[:, 1], commands[:, 2] = runs[:, 1], 1, runs[:, 0]
+        data = commands.tobytes()
+        if self._indirect is None or self._indirect.size < len(data):
+            if self._indirect is not None:
+                self._indirect.release()
+            self._indirect = self.ctx.buffer(reserve=max(len(data), 4096) * 2)
+        self._indirect.write(data)
+        vao.render_indirect(self._indirect, moderngl.TRIANGLES, count=len(runs))
+
+    def release(self) -> None:
+        if self._indirect is not None:
+            self._indirect.release()
+            self._indirect = None
+        super().release()
+
+
+def visible_runs(visible: np.ndarray, index_ranges: np.ndarray) -> np.ndarray:
+    """[(first index, index count)] of the runs of consecutive visible objects (objects lie
+    in the index buffer in id order); empty objects add nothing."""
+    keep = np.flatnonzero(np.asarray(visible, bool) & (index_ranges[:, 1] > 0))
+    if not len(keep):
+        return np.zeros((0, 2), np.int64)
+    first, count = index_ranges[keep, 0], index_ranges[keep, 1]
+    starts = np.r_[True, first[1:] != first[:-1] + count[:-1]]        # not continuing the previous run
+    begin = np.flatnonzero(starts)
+    end = np.r_[begin[1:], len(keep)] - 1
+    return np.stack([first[begin], first[end] + count[end] - first[begin]], axis=1)
 
 
 class StdPass(ScenePass):

@@ -5,29 +5,16 @@ a margin on all four sides at composite aspects 0.5, 1 and 2."""
 
 from __future__ import annotations
 
-import json
-import subprocess
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
-from PIL import Image
-from test_viewer import _env, _region, display  # noqa: F401  (the Xvfb fixture)
+from test_viewer import _region, display, run_driver  # noqa: F401  (the Xvfb fixture)
 
-HERE = Path(__file__).parent
 BACKGROUND = np.array([0.93, 0.93, 0.95]) * 255
 
 
 @pytest.fixture(scope="module")
 def tree_driven(display, tmp_path_factory):  # noqa: F811
-    out = tmp_path_factory.mktemp("tree_viewer")
-    proc = subprocess.run([sys.executable, str(HERE / "viewer_tree_driver.py"), str(out)], env=_env(display),
-                          capture_output=True, text=True, timeout=300)
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    result = json.loads((out / "result.json").read_text())
-    shots = {p.stem: np.asarray(Image.open(p).convert("RGB")) for p in out.glob("*.png")}
-    return result, shots
+    return run_driver(display, tmp_path_factory.mktemp("tree_viewer"), "viewer_tree_driver.py")
 
 
 def test_group_checkbox_highlights_its_subtree(tree_driven):

@@ -159,6 +159,17 @@ def _env(display: str | None) -> dict:
     return env
 
 
+def run_driver(display: str | None, out: Path, script: str, *args: str, timeout: int = 300) -> tuple[dict, dict]:
+    """Run a viewer driver script (tests/viewer_*driver.py) into `out` under the Xvfb display;
+    its result.json and its screenshots (name -> RGB array)."""
+    proc = subprocess.run([sys.executable, str(HERE / script), str(out), *args], env=_env(display),
+                          capture_output=True, text=True, timeout=timeout)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    result = json.loads((out / "result.json").read_text())
+    shots = {p.stem: np.asarray(Image.open(p).convert("RGB")) for p in out.glob("*.png")}
+    return result, shots
+
+
 def _region(img: np.ndarray, rect) -> np.ndarray:
     x, y, w, h = rect
     return img[y:y + h, x:x + w, :3].astype(int)
@@ -166,13 +177,7 @@ def _region(img: np.ndarray, rect) -> np.ndarray:
 
 @pytest.fixture(scope="module")
 def driven(display, tmp_path_factory):
-    out = tmp_path_factory.mktemp("viewer")
-    proc = subprocess.run([sys.executable, str(HERE / "viewer_driver.py"), str(out)], env=_env(display),
-                          capture_output=True, text=True, timeout=300)
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    result = json.loads((out / "result.json").read_text())
-    shots = {p.stem: np.asarray(Image.open(p).convert("RGB")) for p in out.glob("*.png")}
-    return result, shots
+    return run_driver(display, tmp_path_factory.mktemp("viewer"), "viewer_driver.py")
 
 
 def test_window_draws_panel_and_both_views(driven):
@@ -283,11 +288,9 @@ SCALE_PARTS = 20_000
 
 @pytest.fixture(scope="module")
 def driven_large(display, tmp_path_factory):
-    out = tmp_path_factory.mktemp("viewer_large")
-    proc = subprocess.run([sys.executable, str(HERE / "viewer_scale_driver.py"), str(out), str(SCALE_PARTS)],
-                          env=_env(display), capture_output=True, text=True, timeout=600)
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    return json.loads((out / "result.json").read_text())
+    result, _ = run_driver(display, tmp_path_factory.mktemp("viewer_large"), "viewer_scale_driver.py",
+                           str(SCALE_PARTS), timeout=600)
+    return result
 
 
 def test_large_assembly_survives_every_interaction(driven_large):

@@ -101,7 +101,7 @@ class CapturePass(ScenePass):
             if records.visible.all():
                 vao.render(moderngl.TRIANGLES)
             else:                                # culled and hidden objects: not drawn at all
-                self._draw_runs(vao, visible_runs(records.visible, gpu.scene.index_ranges))
+                self._draw_runs(vao, gpu.scene.index_runs(records.visible))
         finally:
             glraw.set_clip_distances(4, False)
 
@@ -127,19 +127,6 @@ class CapturePass(ScenePass):
             self._indirect.release()
             self._indirect = None
         super().release()
-
-
-def visible_runs(visible: np.ndarray, index_ranges: np.ndarray) -> np.ndarray:
-    """[(first index, index count)] of the runs of consecutive visible objects (objects lie
-    in the index buffer in id order); empty objects add nothing."""
-    keep = np.flatnonzero(np.asarray(visible, bool) & (index_ranges[:, 1] > 0))
-    if not len(keep):
-        return np.zeros((0, 2), np.int64)
-    first, count = index_ranges[keep, 0], index_ranges[keep, 1]
-    starts = np.r_[True, first[1:] != first[:-1] + count[:-1]]        # not continuing the previous run
-    begin = np.flatnonzero(starts)
-    end = np.r_[begin[1:], len(keep)] - 1
-    return np.stack([first[begin], first[end] + count[end] - first[begin]], axis=1)
 
 
 class StdPass(ScenePass):

@@ -122,11 +122,7 @@ class Renderer:
         mask = self.hidden_mask()
         if mask is None:
             return None
-        shown = ~mask
-        edges = np.flatnonzero(np.diff(np.concatenate([[False], shown, [False]]).astype(np.int8)))
-        ranges = self.scene.index_ranges
-        return [(int(ranges[a, 0]), int(ranges[b - 1].sum() - ranges[a, 0]))
-                for a, b in zip(edges[::2], edges[1::2], strict=True)]
+        return [(int(first), int(count)) for first, count in self.scene.index_runs(~mask)]
 
     def scaled_for(self, focus) -> frozenset[int]:
         """The focus as far as it changes the capture (empty when every object has one scale)."""

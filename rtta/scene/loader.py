@@ -98,9 +98,10 @@ def _items(path: Path, suffix: str) -> tuple[list[str], list[Path], list[tuple]]
     source, names = path, None
     if suffix == ".obj":
         data, names = obj_objects(path)
-        if len(names) > max_objects(path):
-            raise RttaError(f"OBJ file has {len(names):,} objects ('o' statements; at most {max_objects(path):,} "
-                            "for a file of its size)", path)
+        limit = max_objects(path)
+        if len(names) > limit:
+            raise RttaError(f"OBJ file has {len(names):,} objects ('o' statements; at most {limit:,} for a file "
+                            "of its size)", path)
         source = io.BytesIO(data)
     loaded = _trimesh_load(source, suffix[1:], path, resolver)
     items = []

@@ -94,6 +94,17 @@ class Scene:
             self._corners["obb"] = planar.transpose(0, 3, 2, 1)
         return self._corners[kind]
 
+    def index_runs(self, mask: np.ndarray) -> np.ndarray:
+        """[(first index, index count)] of the runs of consecutive objects in `mask` (bool [N]):
+        objects lie in the index buffer in id order, so k left out make at most k + 1 runs."""
+        keep = np.flatnonzero(np.asarray(mask, bool) & (self.index_ranges[:, 1] > 0))
+        if not len(keep):
+            return np.zeros((0, 2), np.int64)
+        first, count = self.index_ranges[keep, 0], self.index_ranges[keep, 1]
+        begin = np.flatnonzero(np.r_[True, first[1:] != first[:-1] + count[:-1]])   # not continuing a run
+        end = np.r_[begin[1:], len(keep)] - 1
+        return np.stack([first[begin], first[end] + count[end] - first[begin]], axis=1)
+
     def index(self, name: str) -> int:
         return self.names.index(name)
 

@@ -151,6 +151,7 @@ def _threemf_graph(stream, head: bytes, path: Path) -> None:
                 if k not in paths:
                     stack.append(k)
     total = sum(paths.get(r, 0) for r in items)
-    if total > max_objects(path):
-        raise RttaError(f"3MF build makes {total:,} objects through its components (at most {max_objects(path):,} "
+    limit = max_objects(path)
+    if total > limit:
+        raise RttaError(f"3MF build makes {total:,} objects through its components (at most {limit:,} "
                         "for a file of its size)", path)

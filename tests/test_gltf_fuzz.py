@@ -47,7 +47,7 @@ OPTIONAL = [("scene",), ("nodes", 0, "matrix"), ("nodes", 0, "rotation"), ("node
 PATHS = _paths(BASE) + OPTIONAL
 
 NUMBERS = st.one_of(st.integers(-(2**70), 2**70), st.sampled_from([-1, 0, 1, 2, 3, 7, 24, 36, 255, 2**31, 2**32 + 1,
-                                                                   10**15, 1e400, -1e400]),
+                                                                   10**15, 1e400, -1e400, 10**400, -(10**400)]),
                     st.floats(allow_nan=True, allow_infinity=True))
 LEAVES = st.one_of(st.none(), st.booleans(), NUMBERS, st.text(max_size=6), st.sampled_from(["VEC3", "SCALAR", "MAT4",
                                                                                              "data:,", "../x.bin"]))

@@ -4,8 +4,9 @@ rather than hangs, and nothing is dropped without a word.
 
 `prepare(path)` checks the document (rtta.scene.gltf_check), its buffers and base-colour
 images, walks the graph of the chosen scene (iteratively: no recursion, however deep),
-and rewrites the document for trimesh as one single-primitive mesh per (mesh, primitive)
-that is drawn, with one node each and no hierarchy, so trimesh only decodes geometry and
+and keeps the drawn (mesh, primitive) pairs. A plain file's primitives are then read
+directly (rtta.scene.gltf_read); any other is rewritten for trimesh as one single-primitive
+mesh per pair, one node each and no hierarchy, so trimesh only decodes geometry and
 textures. The world transform and the name of every object come from the walk.
 """
 
@@ -25,6 +26,7 @@ import numpy as np
 from ..errors import RttaError
 from .files import MAX_OBJECTS_LARGE, TextureBudget, image_problem, local_file, max_objects, memory_limit, read_limited
 from .gltf_check import COMPONENT_BYTES, TYPE_WIDTH, check, read_document
+from .gltf_read import Decoded, decode
 from .gltf_rewrite import fan_indices, rewrite
 from .precheck import check_size
 
@@ -44,26 +46,43 @@ class Instance:
 
 @dataclass
 class Prepared:
-    data: bytes                                   # the rewritten, self-contained GLB for trimesh
     instances: list[Instance]
     warnings: list[str] = field(default_factory=list)
     inputs: list[Path] = field(default_factory=list)       # files it refers to
+    doc: dict = field(default_factory=dict)               # the checked document
+    pairs: list[tuple[int, int]] = field(default_factory=list)   # drawn (mesh, primitive), file order
+    buffers: list[bytes] = field(default_factory=list)
+    images: dict[int, bytes] = field(default_factory=dict)      # usable base-colour images
+
+    def decoded(self) -> dict[str, Decoded] | None:
+        """Every drawn primitive read directly (rtta.scene.gltf_read), keyed like
+        Instance.geometry; None when the file needs trimesh."""
+        found = decode(self.doc, self.pairs, self.buffers)
+        return None if found is None else {f"rtta.{m}.{p}": d for (m, p), d in found.items()}
+
+    def for_trimesh(self) -> bytes:
+        """The rewritten, self-contained GLB trimesh reads (rtta.scene.gltf_rewrite)."""
+        new, blob = rewrite(self.doc, self.pairs, self.buffers, self.images)
+        text = json.dumps(new, allow_nan=False).encode()
+        text += b" " * (-len(text) % 4)
+        return (struct.pack("<4sIII", b"glTF", 2, 28 + len(text) + len(blob), len(text)) + b"JSON" + text
+                + struct.pack("<I", len(blob)) + b"BIN\0" + blob)
 
 
 def prepare(path: Path) -> Prepared:
     doc, binary = read_document(path)
     check(doc, path, None if binary is None else len(binary))
-    out = Prepared(b"", [])
+    out = Prepared([], doc=doc)
     _check_extensions(doc, path, out.warnings)
-    buffers = _buffers(doc, binary, path, out)
-    _check_memory(doc, buffers, path)
+    out.buffers = _buffers(doc, binary, path, out)
+    _check_memory(doc, out.buffers, path)
     limit = max_objects(path, sum(target.stat().st_size for target in out.inputs))   # buffer files so far
     walk = _walk(doc, path, out.warnings, limit)
-    pairs = _primitives(doc, walk, buffers, path, out.warnings)
-    images = _images(doc, buffers, path, out)
+    out.pairs = _primitives(doc, walk, out.buffers, path, out.warnings)
+    out.images = _images(doc, out.buffers, path, out)
     _colors(doc, out.warnings)
     per_mesh: dict[int, list[int]] = {}
-    for m, p in pairs:
+    for m, p in out.pairs:
         per_mesh.setdefault(m, []).append(p)
     out.instances = [Instance(name, f"rtta.{mesh}.{p}", matrix,       # a node's primitives: a group of its own
                               (*tree, name.replace("/", "\u2215")) if len(per_mesh[mesh]) > 1 else tree)
@@ -71,12 +90,7 @@ def prepare(path: Path) -> Prepared:
     if len(out.instances) > limit:
         raise RttaError(f"the node graph makes {len(out.instances):,} objects (at most {limit:,} for a file of its "
                         "size)", path)
-    _check_size(doc, walk, pairs, path)
-    new, blob = rewrite(doc, pairs, buffers, images)
-    text = json.dumps(new, allow_nan=False).encode()
-    text += b" " * (-len(text) % 4)
-    out.data = (struct.pack("<4sIII", b"glTF", 2, 28 + len(text) + len(blob), len(text)) + b"JSON" + text
-                + struct.pack("<I", len(blob)) + b"BIN\0" + blob)
+    _check_size(doc, walk, out.pairs, path)
     return out
 
 
@@ -154,27 +168,39 @@ def _check_size(doc: dict, walk: list, pairs: list, path: Path) -> None:
     check_size(vertices, triangles, path, "the file declares")
 
 
-def _local(node: dict) -> np.ndarray:
-    if "matrix" in node:
-        return np.array(node["matrix"], np.float64).reshape(4, 4).T
-    m = np.identity(4)
-    if "scale" in node:
-        m = np.diag([*node["scale"], 1.0])
-    if "rotation" in node:
-        x, y, z, w = node["rotation"]
-        n = math.sqrt(x * x + y * y + z * z + w * w)
-        x, y, z, w = (x / n, y / n, z / n, w / n) if n > 0 else (0.0, 0.0, 0.0, 1.0)
-        r = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                      [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                      [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
-        rot = np.identity(4)
-        rot[:3, :3] = r
-        m = rot @ m
-    if "translation" in node:
-        t = np.identity(4)
-        t[:3, 3] = node["translation"]
-        m = t @ m
+def _locals(nodes: list) -> np.ndarray:
+    """Every node's local transform [N, 4, 4] (matrix, or T @ R @ S), in whole-array passes."""
+    m = np.zeros((len(nodes), 4, 4))
+    m[:, [0, 1, 2, 3], [0, 1, 2, 3]] = 1.0
+    given = [(i, node["matrix"]) for i, node in enumerate(nodes) if "matrix" in node]
+    scaled = [(i, node["scale"]) for i, node in enumerate(nodes) if "scale" in node]
+    turned = [(i, node["rotation"]) for i, node in enumerate(nodes) if "rotation" in node]
+    moved = [(i, node["translation"]) for i, node in enumerate(nodes) if "translation" in node]
+    if scaled:
+        rows, values = zip(*scaled, strict=True)
+        m[np.array(rows), :3, :3] *= np.array(values, np.float64)[:, None, :]
+    if turned:
+        rows, values = zip(*turned, strict=True)
+        rows = np.array(rows)
+        m[rows, :3, :3] = _rotations(np.array(values, np.float64)) @ m[rows, :3, :3]
+    if moved:
+        rows, values = zip(*moved, strict=True)
+        m[np.array(rows), :3, 3] = np.array(values, np.float64)
+    if given:
+        rows, values = zip(*given, strict=True)
+        m[np.array(rows)] = np.array(values, np.float64).reshape(-1, 4, 4).transpose(0, 2, 1)
     return m
+
+
+def _rotations(q: np.ndarray) -> np.ndarray:
+    """Rotation matrices [N, 3, 3] of quaternions (x, y, z, w), normalised; zero ones are identity."""
+    n = np.sqrt((q * q).sum(axis=1, keepdims=True))
+    with np.errstate(all="ignore"):
+        q = np.where(n > 0, q / np.where(n > 0, n, 1.0), [0.0, 0.0, 0.0, 1.0])
+    x, y, z, w = q.T
+    return np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w),
+                     2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w),
+                     2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], axis=1).reshape(-1, 3, 3)
 
 
 def _walk(doc: dict, path: Path, warnings: list[str], limit: int) -> list[tuple[str, int, np.ndarray, tuple]]:
@@ -195,11 +221,12 @@ def _walk(doc: dict, path: Path, warnings: list[str], limit: int) -> list[tuple[
         warnings.append(f"{len(shared)} node(s) have more than one parent (glTF allows one); each is drawn "
                         "under every parent: " + ", ".join(_node_name(nodes, i) for i in shared[:5]))
     found: list[tuple[str, int, np.ndarray, tuple]] = []
-    stack: list[tuple[int, np.ndarray, tuple]] = [(r, np.identity(4), ()) for r in reversed(roots)]
+    local = _locals(nodes)
+    stack: list[tuple[int, np.ndarray | None, tuple]] = [(r, None, ()) for r in reversed(roots)]
     while stack:
         i, parent, tree = stack.pop()
         node = nodes[i]
-        world = parent @ _local(node)
+        world = local[i] if parent is None else parent @ local[i]
         name = _node_name(nodes, i)
         if "mesh" in node:
             found.append((name, node["mesh"], world, tree))

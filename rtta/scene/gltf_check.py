@@ -23,6 +23,8 @@ FLOAT = 5126
 MAX_COUNT = 2**31 - 1          # counts, lengths and offsets: anything larger is no real file
 MAX_ARRAY = 10_000_000         # entries of one top-level array
 GLB_JSON, GLB_BIN = 0x4E4F534A, 0x004E4942
+_MISSING = object()
+_REAL = {int, float}
 
 
 def read_document(path: Path) -> tuple[dict, bytes | None]:
@@ -95,11 +97,13 @@ class Checker:
 
     def integer(self, obj: dict, key: str, where: str, *, below: int | None = None, least: int = 0,
                 required: bool = False, default: int | None = None) -> int | None:
-        if key not in obj:
+        value = obj.get(key, _MISSING)
+        if type(value) is int and least <= value <= MAX_COUNT and (below is None or value < below):
+            return value                            # the common case, first
+        if value is _MISSING:
             if required:
                 self.fail(where, f"has no '{key}'")
             return default
-        value = obj[key]
         if isinstance(value, float) and value.is_integer() and abs(value) <= MAX_COUNT:
             value = obj[key] = int(value)           # 3.0 is 3 in JSON
         if not isinstance(value, int) or isinstance(value, bool):
@@ -118,12 +122,16 @@ class Checker:
         if key not in obj:
             return None
         value = obj[key]
+        if type(value) is list and len(value) == n and {type(v) for v in value} <= _REAL and _finite(sum(value)):
+            obj[key] = value = [float(v) for v in value]   # the common case: a finite sum, so all are finite
+            return value
         if (not isinstance(value, list) or len(value) != n
                 or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)):
             self.fail(f"{where}.{key}", f"must be an array of {n} numbers")
-        if finite and not all(math.isfinite(v) for v in value):
+        if finite and not all(_finite(v) for v in value):
             self.fail(f"{where}.{key}", "holds NaN or infinite numbers")
-        return [float(v) for v in value]
+        obj[key] = value = [_float(v) for v in value]        # the loader reads floats only
+        return value
 
     def obj(self, parent: dict, key: str, where: str) -> dict:
         value = parent.get(key, {})
@@ -151,6 +159,22 @@ class Checker:
             holder["i"] = value[i]
             value[i] = self.index(holder, "i", f"{where}.{key}[{i}]", target)
         return value
+
+
+def _finite(v: float) -> bool:
+    """math.isfinite, also for an integer too large for a float (JSON allows 1 followed by
+    400 zeros), which is not finite here."""
+    try:
+        return math.isfinite(v)
+    except OverflowError:
+        return False
+
+
+def _float(v: float) -> float:
+    try:
+        return float(v)
+    except OverflowError:
+        return math.inf if v > 0 else -math.inf
 
 
 def _kind(value) -> str:

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .gltf_read import accessor_array
+
 
 def fan_indices(doc: dict, prim: dict, buffers: list) -> np.ndarray:
     """A triangle fan's indices as a triangle list (uint32)."""
@@ -23,17 +25,7 @@ def fan_indices(doc: dict, prim: dict, buffers: list) -> np.ndarray:
 
 
 def read_indices(doc: dict, index: int, buffers: list) -> np.ndarray:
-    acc = doc["accessors"][index]
-    dtype = np.dtype({5121: np.uint8, 5123: np.uint16, 5125: np.uint32}[acc["componentType"]])
-    if "bufferView" not in acc:
-        return np.zeros(acc["count"], np.uint32)
-    view = doc["bufferViews"][acc["bufferView"]]
-    start = view.get("byteOffset", 0) + acc.get("byteOffset", 0)
-    stride = view.get("byteStride") or dtype.itemsize
-    raw = np.frombuffer(buffers[view["buffer"]], np.uint8, count=(acc["count"] - 1) * stride + dtype.itemsize,
-                        offset=start)
-    rows = np.lib.stride_tricks.as_strided(raw, (acc["count"], dtype.itemsize), (stride, 1))
-    return np.ascontiguousarray(rows).view(dtype).reshape(-1).astype(np.uint32)
+    return accessor_array(doc, index, buffers).reshape(-1).astype(np.uint32)
 
 
 def rewrite(doc: dict, pairs: list, buffers: list[bytes], images: dict[int, bytes]) -> tuple[dict, bytes]:

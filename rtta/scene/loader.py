@@ -19,6 +19,7 @@ from ..errors import RttaError
 from . import batch, formats
 from .files import MAX_FILE_BYTES, SafeResolver, max_objects, regular_file
 from .gltf import prepare
+from .gltf_read import Decoded
 from .model import SUPPORTED, Scene, from_batch
 from .precheck import BYTES_PER_TRIANGLE, BYTES_PER_VERTEX, check_size, memory_limit, precheck
 from .preprocess import DEFAULT_SMOOTH_ANGLE
@@ -72,16 +73,18 @@ def _read(path: Path, suffix: str, smooth: bool) -> tuple[list[str], list[Path],
     transforms = np.array([np.asarray(item[2], np.float64) for item in items]).reshape(-1, 4, 4)
     paths = [tuple(item[3]) for item in items]
     gathered = _Gathered(items, transforms, smooth)
+    trimeshes = not all(isinstance(item[1], Decoded) for item in items)
     del items
     meshes = gathered.concatenated()
-    gc.collect()
+    if trimeshes:
+        gc.collect()
     return notes, inputs, (gathered, meshes, names, transforms, paths if any(paths) else None)
 
 
 def _triangles(mesh) -> bool:
     import trimesh
 
-    return isinstance(mesh, trimesh.Trimesh) and len(mesh.faces) > 0
+    return isinstance(mesh, (trimesh.Trimesh, Decoded)) and len(mesh.faces) > 0
 
 
 def _items(path: Path, suffix: str) -> tuple[list[str], list[Path], list[tuple]]:
@@ -90,8 +93,10 @@ def _items(path: Path, suffix: str) -> tuple[list[str], list[Path], list[tuple]]
     other formats' by trimesh."""
     if suffix in (".gltf", ".glb"):
         prepared = prepare(path)
-        loaded = _trimesh_load(io.BytesIO(prepared.data), "glb", path, None)
-        items = [(i.name, loaded.geometry.get(i.geometry), i.matrix, i.path) for i in prepared.instances]
+        geometry = prepared.decoded()
+        if geometry is None:
+            geometry = _trimesh_load(io.BytesIO(prepared.for_trimesh()), "glb", path, None).geometry
+        items = [(i.name, geometry.get(i.geometry), i.matrix, i.path) for i in prepared.instances]
         return prepared.warnings, prepared.inputs, items
     notes = precheck(path)
     resolver = SafeResolver(path)
@@ -214,7 +219,7 @@ class _Gathered:
         seen: dict = {}
         color_of: dict = {}
         for i, (_, mesh, _, _) in enumerate(items):     # the items hold every mesh, so ids stay unique
-            normals = None if smooth or not _file_has_normals(mesh) else _file_normals(mesh)
+            normals = None if smooth else mesh.normals if isinstance(mesh, Decoded) else _file_normals(mesh)
             bake = usable[i] and normals is None and not similar[i]
             key = (id(mesh), i) if bake else id(mesh)
             if key not in seen:
@@ -230,9 +235,14 @@ class _Gathered:
             v = v @ transform[:3, :3].T + transform[:3, 3]
             if np.linalg.det(transform[:3, :3]) < 0:
                 f = f[:, ::-1]             # a mirroring transform turns the winding: keep faces front-facing
+        self.smoothed.append(normals is None)
+        if isinstance(mesh, Decoded):
+            self._arrays.append((v, f, normals, None))
+            self.texture_ids.append(-1)
+            self.colors.append(mesh.color)
+            return
         uv, texture = self.textures.of(mesh)
         self._arrays.append((v, f, normals, uv))
-        self.smoothed.append(normals is None)
         self.texture_ids.append(texture)
         material = getattr(mesh.visual, "material", None)
         key = id(material) if material is not None and getattr(mesh.visual, "kind", None) not in ("face", "vertex") \
@@ -294,7 +304,9 @@ def _check_world(placed: batch.Meshes, names: list[str], path: Path) -> None:
 
 
 def _file_normals(mesh) -> np.ndarray | None:
-    """The file's vertex normals (float32), or None when unusable."""
+    """The file's vertex normals (float32), or None when it has none or they are unusable."""
+    if not _file_has_normals(mesh):
+        return None
     try:
         n = np.asarray(mesh.vertex_normals, np.float64)
     except Exception:

@@ -1,0 +1,114 @@
+"""Plain glTF primitives read straight from their accessors, without trimesh (issue 22).
+
+CAD and BIM exports are plain: triangle lists of float positions (and normals), a base
+colour per material, no textures. For such a file trimesh's per-primitive objects (a
+Trimesh, a visual, a material each) cost more than the geometry itself: at 10^4 parts they
+are most of the load time and a large share of the peak memory. `decode` reads every
+drawn (mesh, primitive) of a plain file into arrays; any other file (textures, vertex
+colours, strips, sparse or quantized accessors, compression) returns None and goes through
+trimesh as before. The arrays equal what trimesh gives (tests/test_gltf_read.py); the
+document has been checked (rtta.scene.gltf_check), so every byte range lies in its buffer.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .gltf_check import FLOAT, TYPE_WIDTH
+
+DTYPES = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32, 5126: np.float32}
+NO_FACTOR = [102 / 255, 102 / 255, 102 / 255, 1.0]   # trimesh's colour for a material without baseColorFactor
+
+
+@dataclass
+class Decoded:
+    """One primitive's geometry: vertices float64 [V, 3], faces int64 [F, 3], the file's
+    normals (float32 [V, 3]; None when it has none or they are not finite), base colour
+    (RGBA in [0, 1], None for the palette; one list per material, shared)."""
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    normals: np.ndarray | None
+    color: list[float] | None
+
+
+def accessor_array(doc: dict, index: int, buffers: list[bytes]) -> np.ndarray:
+    """Accessor `index` as an array [count, width] of its component type (zeros when it has
+    no bufferView, as the glTF specification says); strided views are gathered."""
+    acc = doc["accessors"][index]
+    dtype = np.dtype(DTYPES[acc["componentType"]])
+    width, count = TYPE_WIDTH[acc["type"]], acc["count"]
+    if "bufferView" not in acc:
+        return np.zeros((count, width), dtype)
+    view = doc["bufferViews"][acc["bufferView"]]
+    start = view.get("byteOffset", 0) + acc.get("byteOffset", 0)
+    element = dtype.itemsize * width
+    stride = view.get("byteStride") or element
+    data = buffers[view["buffer"]]
+    if stride == element and start % dtype.itemsize == 0:
+        return np.frombuffer(data, dtype, count=count * width, offset=start).reshape(count, width)
+    raw = np.frombuffer(data, np.uint8, count=(count - 1) * stride + element, offset=start)
+    rows = np.lib.stride_tricks.as_strided(raw, (count, element), (stride, 1))
+    return np.ascontiguousarray(rows).view(dtype).reshape(count, width)
+
+
+def plain(doc: dict, pairs: list[tuple[int, int]]) -> bool:
+    """Whether every drawn primitive can be decoded here: a triangle list or fan, float
+    POSITION (and NORMAL), no COLOR_0, no extension, no sparse accessor, and a material
+    (if any) without a base-colour texture."""
+    accessors, materials = doc.get("accessors", []), doc.get("materials", [])
+    for m, p in pairs:
+        prim = doc["meshes"][m]["primitives"][p]
+        attrs = prim["attributes"]
+        if prim.get("mode", 4) not in (4, 6) or "extensions" in prim or "COLOR_0" in attrs:
+            return False
+        used = [attrs["POSITION"], *[attrs[k] for k in ("NORMAL",) if k in attrs],
+                *([prim["indices"]] if "indices" in prim else [])]
+        if any("sparse" in accessors[a] for a in used):
+            return False
+        if any(accessors[attrs[k]]["componentType"] != FLOAT for k in ("POSITION", "NORMAL") if k in attrs):
+            return False
+        if "material" in prim and "baseColorTexture" in materials[prim["material"]].get("pbrMetallicRoughness", {}):
+            return False
+    return True
+
+
+def decode(doc: dict, pairs: list[tuple[int, int]], buffers: list[bytes]) -> dict[tuple[int, int], Decoded] | None:
+    """Every drawn (mesh, primitive) of a plain document decoded; None when it is not plain."""
+    if not plain(doc, pairs):
+        return None
+    colors = [_color(mat) for mat in doc.get("materials", [])]
+    out = {}
+    for m, p in pairs:
+        prim = doc["meshes"][m]["primitives"][p]
+        attrs = prim["attributes"]
+        v = accessor_array(doc, attrs["POSITION"], buffers).astype(np.float64)
+        normals = None
+        if "NORMAL" in attrs:
+            normals = np.array(accessor_array(doc, attrs["NORMAL"], buffers), np.float32)
+            normals = normals if np.isfinite(normals).all() else None
+        out[(m, p)] = Decoded(v, _faces(doc, prim, buffers, len(v)), normals,
+                              colors[prim["material"]] if "material" in prim else None)
+    return out
+
+
+def _faces(doc: dict, prim: dict, buffers: list[bytes], vertices: int) -> np.ndarray:
+    if "_fan" in prim:                              # a fan, made a triangle list by gltf._primitives
+        fan = prim["_fan"]
+        return fan.astype(np.int64).reshape(-1, 3) if len(fan) else np.zeros((1, 3), np.int64)
+    if "indices" in prim:
+        return accessor_array(doc, prim["indices"], buffers).astype(np.int64).reshape(-1, 3)
+    return np.arange(vertices, dtype=np.int64).reshape(-1, 3)
+
+
+def _color(material: dict) -> list[float]:
+    """Base colour factor quantised to 8 bits, as trimesh stores it (NaN and out-of-range
+    components were made drawable by gltf._colors)."""
+    factor = material.get("pbrMetallicRoughness", {}).get("baseColorFactor")
+    if factor is None:
+        return list(NO_FACTOR)
+    c = np.round(np.clip(np.asarray(factor, np.float64), 0.0, 1.0) * 255.0) / 255.0
+    return [float(x) for x in c]
+

@@ -113,7 +113,8 @@ def test_layout_and_atlas_tiles():
 
 def test_picking_finds_hidden_objects_and_front_most(make_renderer, demo_scene):
     """objects_at's nearest hit equals the front-most id mapped back from the whole atlas;
-    a preferred (highlighted) object behind it is found too."""
+    a preferred (highlighted) object behind it is found too; reading only the candidates'
+    texels from the target gives the same hits."""
     r = make_renderer(demo_scene)
     cam = Camera.orbit(demo_scene.center, demo_scene.radius, *DEFAULT_ORBIT)
     rec = r.capture(cam, (160, 120))
@@ -124,6 +125,7 @@ def test_picking_finds_hidden_objects_and_front_most(make_renderer, demo_scene):
     for x, y in zip(rng.integers(0, 160, 300), rng.integers(0, 120, 300), strict=True):
         hits = objects_at(atlas, rec, int(x), int(y))
         assert (hits[0][0] if hits else -1) == front[y, x]
+        assert objects_at(r.atlas, rec, int(x), int(y)) == hits        # the candidates' texels read alone
         assert [h[1] for h in hits] == sorted(h[1] for h in hits)
         if len(hits) > 1:
             occluded += 1

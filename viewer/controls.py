@@ -112,9 +112,8 @@ class Controls:
             return None
         cx, cy, _, ch = app.layout.composite
         px, py = int(x - cx), int(cy + ch - 1 - y)          # viewport pixel, bottom-left origin
-        atlas = app.renderer.atlas.read(rec.atlas_size[:2], rec.atlas_size[2], parts=("id", "depth"))
         prefer = None if front_most or not app.state.mode.startswith("ghosted") else app.state.highlighted
-        return pick(objects_at(atlas, rec, px, py), prefer)
+        return pick(objects_at(app.renderer.atlas, rec, px, py), prefer)     # reads the candidates' texels alone
 
     def on_scroll(self, x_offset, y_offset) -> None:
         self.app.imgui.mouse_scroll_event(x_offset, y_offset)

@@ -81,6 +81,24 @@ class DepthArray:
             self.glo = 0
 
 
+GL_RED_INTEGER = 0x8D94
+GL_INT = 0x1404
+
+
+def read_texels(glo: int, points: np.ndarray, depth: bool) -> np.ndarray:
+    """The texels of a 2D texture array at `points` [k, 3] (x, y, layer), one
+    glGetTextureSubImage (GL 4.5) each: float32 depths, or int32 values of a one-channel
+    integer texture. Picking reads a few texels instead of every layer of the atlas."""
+    gl = _lib()
+    out = np.empty(len(points), np.float32 if depth else np.int32)
+    fmt, kind = (GL_DEPTH_COMPONENT, GL_FLOAT) if depth else (GL_RED_INTEGER, GL_INT)
+    base = out.ctypes.data
+    gl.glPixelStorei(GL_PACK_ALIGNMENT, 4)
+    for k, (x, y, layer) in enumerate(np.asarray(points, np.int64).tolist()):
+        gl.glGetTextureSubImage(glo, 0, x, y, layer, 1, 1, 1, fmt, kind, 4, ctypes.c_void_p(base + 4 * k))
+    return out
+
+
 def clear_depth(value: float = 1.0) -> None:
     """Clear the depth attachment of the bound framebuffer (all layers)."""
     _lib().glClearBufferfv(GL_DEPTH, 0, (ctypes.c_float * 1)(value))

@@ -179,6 +179,15 @@ class LayeredTarget:
                 out[k][empty] = -1 if k == "id" else 0
         return out
 
+    def texels(self, points: np.ndarray) -> dict[str, np.ndarray]:
+        """'id' (int32) and 'depth' (float32) at `points` [k, 3] (x, y, layer; row 0 at the
+        bottom), each inside the target; an empty texel (depth 1) reads id -1, as in `read`."""
+        points = np.asarray(points, np.int64).reshape(-1, 3)
+        depth = glraw.read_texels(self.depth.glo, points, depth=True)
+        ids = glraw.read_texels(self.ids.glo, points, depth=False)
+        ids[depth >= 1.0] = -1
+        return {"id": ids, "depth": depth}
+
     def _free(self) -> None:
         if self._fbo is not None:
             release_framebuffer(self.ctx, self._fbo)

@@ -156,3 +156,27 @@ def test_viewport_rects_hold_each_objects_projection(n, az, el, dist):
     objectwise = parameterize(np.ascontiguousarray(corners), vpm, vp)
     for key in ("visible", "viewport_rect", "atlas_rect", "layer", "scale", "transform", "clip_ndc"):
         assert np.array_equal(getattr(rec, key), getattr(objectwise, key)), key
+
+
+def test_alignment_is_remembered_only_for_read_only_corners():
+    """Scene's corners are read-only, so their axis alignment is checked once; a writable
+    array is checked on every call, so changing it in place (boxes no longer axis-aligned)
+    gives the records of a fresh copy, never those of the remembered answer."""
+    scene = random_scene(40, seed=2)
+    cam = Camera.orbit(scene.center, scene.radius, 30.0, 20.0, 2.5)
+    vpm = cam.projection(4 / 3) @ cam.view(scene.origin)
+    corners = scene.box_corners()
+    assert not corners.flags.writeable
+    with pytest.raises(ValueError):
+        corners[0, 0, 0] = 1.0
+    writable = np.array(corners)
+    first = parameterize(writable, vpm, (320, 240))
+    again = parameterize(corners, vpm, (320, 240))
+    assert np.array_equal(first.viewport_rect, again.viewport_rect)
+    rot = np.array([[0.8, -0.6, 0.0], [0.6, 0.8, 0.0], [0.0, 0.0, 1.0]])
+    centre = writable.mean(axis=1, keepdims=True)
+    writable[:] = (writable - centre) @ rot.T + centre          # turned boxes: not axis-aligned
+    turned = parameterize(writable, vpm, (320, 240))
+    fresh = parameterize(np.array(writable), vpm, (320, 240))
+    assert np.array_equal(turned.viewport_rect, fresh.viewport_rect)
+    assert not np.array_equal(turned.viewport_rect, first.viewport_rect)

@@ -8,6 +8,7 @@ that cross the near plane or surround the camera get a conservative, finite B_vi
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -128,9 +129,31 @@ def _corner_clip(planar: np.ndarray, m: np.ndarray):
     return rows_aabb
 
 
+_ALIGNED: dict[int, tuple[weakref.ref, dict]] = {}   # id of a read-only corner array: (its ref, answers per view)
+
+
 def _axis_aligned(planar: np.ndarray) -> bool:
     """True if every corner k of planar [3, 8, n] takes coordinate j from corner 7 where
-    bit j of k is set and from corner 0 where not (the AABB corner order of Scene)."""
+    bit j of k is set and from corner 0 where not (the AABB corner order of Scene). Read-only
+    arrays (Scene's corners) are checked once: 18 comparisons of n values each, ~2 ms at
+    10^5 objects, were a tenth of every frame's parameterization."""
+    owner = planar
+    while isinstance(owner.base, np.ndarray):
+        owner = owner.base
+    if owner.flags.writeable:
+        return _check_aligned(planar)
+    view = (planar.__array_interface__["data"][0], planar.shape, planar.strides)
+    entry = _ALIGNED.get(id(owner))
+    if entry is None or entry[0]() is not owner:
+        key = id(owner)
+        entry = _ALIGNED[key] = (weakref.ref(owner, lambda _, key=key: _ALIGNED.pop(key, None)), {})
+    known = entry[1]
+    if view not in known:
+        known[view] = _check_aligned(planar)
+    return known[view]
+
+
+def _check_aligned(planar: np.ndarray) -> bool:
     for k in range(1, 7):
         for j in range(3):
             if not np.array_equal(planar[j, k], planar[j, 7 if (k >> j) & 1 else 0]):

@@ -87,7 +87,9 @@ class Scene:
         if "aabb" not in self._corners:      # stored planar [3, 8, N]: parameterize projects rows
             lo = (self.aabb_min - self.origin).T[:, None, :]
             hi = (self.aabb_max - self.origin).T[:, None, :]
-            self._corners["aabb"] = np.where(_BITS.T[:, :, None], hi, lo).transpose(2, 1, 0)
+            planar = np.where(_BITS.T[:, :, None], hi, lo)
+            planar.flags.writeable = False   # fixed, so parameterize checks their alignment once
+            self._corners["aabb"] = planar.transpose(2, 1, 0)
         if kind == "obb" and "obb" not in self._corners:
             obb = oriented_corners(self.positions, self.object_ids, self.count)
             planar = np.stack([self._corners["aabb"].transpose(2, 1, 0), obb.transpose(2, 1, 0)])

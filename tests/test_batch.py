@@ -24,7 +24,7 @@ def _canon(v, f, n, uv) -> np.ndarray:
 def _parts(count: int, seed: int = 1):
     rng = np.random.default_rng(seed)
     shapes = [trimesh.creation.icosphere(1), trimesh.creation.box(), trimesh.creation.cylinder(0.5, 1, sections=16),
-              trimesh.creation.torus(1, 0.3)]
+              trimesh.creation.torus(1, 0.3), trimesh.creation.cone(0.5, 1, sections=40)]   # its apex: 40 corners
     parts = []
     for i in range(count):
         m = shapes[i % len(shapes)]
@@ -34,10 +34,11 @@ def _parts(count: int, seed: int = 1):
     return parts
 
 
-@pytest.mark.parametrize("chunk", [10**7, 300])
-def test_batched_preprocessing_matches_each_mesh_alone(monkeypatch, chunk):
+@pytest.mark.parametrize(("chunk", "pairs"), [(10**7, batch.PAIR_BLOCK), (300, 1)])
+def test_batched_preprocessing_matches_each_mesh_alone(monkeypatch, chunk, pairs):
     monkeypatch.setattr(batch, "CHUNK_CORNERS", chunk)      # one pass, or many small ones
-    parts = _parts(24)
+    monkeypatch.setattr(batch, "PAIR_BLOCK", pairs)         # corner pairs: big blocks, or one position each
+    parts = _parts(25)
     smooth = np.arange(len(parts)) % 2 == 0
     meshes = batch.Meshes(*(np.concatenate([p[k] for p in parts]) for k in (0, 1)),
                           np.array([len(p[0]) for p in parts]), np.array([len(p[1]) for p in parts]),

@@ -113,29 +113,33 @@ def grouped_sums(position: np.ndarray, corner_face: np.ndarray, unit: np.ndarray
     return out
 
 
+PAIR_BLOCK = 1 << 21            # corner pairs per block of _pair_sums (bounds its temporary memory)
+
+
 def _pair_sums(position: np.ndarray, corner_face: np.ndarray, unit: np.ndarray, fn: np.ndarray,
                cos_limit: float) -> np.ndarray:
-    """grouped_sums by comparing every pair of corners at a position. Pass d compares each
-    corner with the d-th corner of its position; corners sorted by their position's size,
-    largest first, make each pass a contiguous prefix (passes = the largest position's
-    corner count; work = the number of pairs, with no index arrays per pair)."""
+    """grouped_sums by comparing every pair of corners at a position. Positions are taken
+    by their corner count s, all positions of one count as dense [P, s] blocks: the s x s
+    dot products, the within-angle mask and the masked sums are whole-block products, so
+    each corner's normal and weight are gathered once, not once per partner."""
     order = np.argsort(position, kind="stable")
     sorted_pos = position[order]
     starts = np.flatnonzero(np.r_[True, sorted_pos[1:] != sorted_pos[:-1]])
     sizes = np.diff(np.r_[starts, len(order)])
-    size_of = np.repeat(sizes, sizes)
-    by_size = np.argsort(-size_of, kind="stable")
-    unit_sorted, weight_sorted = unit[corner_face[order]], fn[corner_face[order]]
-    u = unit_sorted[by_size]
-    start = np.repeat(starts, sizes)[by_size]
-    active = np.searchsorted(-size_of[by_size], -np.arange(int(sizes.max())), side="left")  # corners with size > d
-    acc = np.zeros((len(order), 3))
-    for d, c in enumerate(active.tolist()):
-        j = start[:c] + d
-        near = np.einsum("ij,ij->i", u[:c], unit_sorted[j]) >= cos_limit
-        acc[:c] += weight_sorted[j] * near[:, None]
-    out = np.empty_like(acc)
-    out[order[by_size]] = acc
+    faces = corner_face[order]
+    out = np.empty((len(order), 3))
+    for s in np.unique(sizes).tolist():
+        first = starts[sizes == s]
+        step = max(1, PAIR_BLOCK // (s * s))
+        for b in range(0, len(first), step):
+            corners = first[b:b + step, None] + np.arange(s)                  # [P, s] sorted corners
+            u = unit[faces[corners]]                                          # [P, s, 3]
+            w = fn[faces[corners]]
+            dots = u[:, :, None, 0] * u[:, None, :, 0]
+            dots += u[:, :, None, 1] * u[:, None, :, 1]
+            dots += u[:, :, None, 2] * u[:, None, :, 2]                       # [P, s, s]
+            near = (dots >= cos_limit).astype(np.float64)
+            out[order[corners.reshape(-1)]] = np.matmul(near, w).reshape(-1, 3)
     return out
 
 

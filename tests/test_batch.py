@@ -95,3 +95,30 @@ def test_from_meshes_keeps_its_contract():
     np.testing.assert_allclose(s.colors[1], (1, 0, 0, 1))
     np.testing.assert_allclose(s.aabb_min[2], parts[2][1].min(axis=0))
     np.testing.assert_allclose(np.linalg.norm(s.normals, axis=1), 1.0, atol=1e-3)
+
+
+def test_instancing_in_place_equals_the_copy():
+    """instance(consume=True) transforms meshes placed once each in place; the result equals
+    the copying path's, and a mesh placed twice (or out of order) still gets copies."""
+    parts = _parts(6)
+    meshes = batch.Meshes(*(np.concatenate([p[k] for p in parts]) for k in (0, 1)),
+                          np.array([len(p[0]) for p in parts]), np.array([len(p[1]) for p in parts]),
+                          *(np.concatenate([p[k] for p in parts]) for k in (2, 3)))
+    meshes.faces = meshes.faces.astype(np.int32)
+    rng = np.random.default_rng(4)
+    transforms = np.tile(np.eye(4), (6, 1, 1))
+    transforms[:, :3, :3] = rng.normal(size=(6, 3, 3))
+    transforms[:, :3, 3] = rng.normal(size=(6, 3))
+
+    def copy():
+        return batch.Meshes(*(None if a is None else a.copy() for a in (meshes.vertices, meshes.faces)),
+                            meshes.vcount, meshes.fcount, meshes.normals.copy(), meshes.uvs.copy())
+
+    for mesh_of, shared in ((np.arange(6), True), (np.array([0, 1, 1, 3, 4, 5]), False)):
+        want = batch.instance(copy(), mesh_of, transforms)
+        source = copy()
+        got = batch.instance(source, mesh_of, transforms, consume=True)
+        assert (got.vertices is source.vertices) == shared
+        for a, b in ((got.vertices, want.vertices), (got.normals, want.normals), (got.faces, want.faces),
+                     (got.uvs, want.uvs)):
+            np.testing.assert_array_equal(a, b)

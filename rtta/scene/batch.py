@@ -273,24 +273,31 @@ def _max_by(owner: np.ndarray, values: np.ndarray, n: int) -> np.ndarray:
     return out
 
 
-def instance(meshes: Meshes, mesh_of: np.ndarray, transforms: np.ndarray) -> Meshes:
+def instance(meshes: Meshes, mesh_of: np.ndarray, transforms: np.ndarray, consume: bool = False) -> Meshes:
     """The meshes placed once per instance (mesh index, 4x4 transform), in instance order:
-    world vertices (float64) and normals by the inverse transpose, renormalised."""
+    world vertices (float64) and normals by the inverse transpose, renormalised. `consume`:
+    `meshes` is not used afterwards, so where each mesh is placed once, in order (CAD
+    assemblies: one mesh per part), its arrays are transformed in place, not copied."""
     vcount, fcount = meshes.vcount[mesh_of], meshes.fcount[mesh_of]
-    vi = np.repeat(meshes.vstart[mesh_of], vcount) + ramp(vcount)
-    fi = np.repeat(meshes.fstart[mesh_of], fcount) + ramp(fcount)
+    once = consume and len(mesh_of) == len(meshes.vcount) and bool((mesh_of == np.arange(len(mesh_of))).all())
+    vi = None if once else np.repeat(meshes.vstart[mesh_of], vcount) + ramp(vcount)
     r = transforms[:, :3, :3]
     with np.errstate(all="ignore"):
         normal_matrix = np.linalg.inv(r)            # n' = n @ inv(R) is (inv(R)^T n)^T
-    world = np.empty((len(vi), 3))
-    normals = np.empty((len(vi), 3), np.float32)
+    total = int(vcount.sum())
+    world = meshes.vertices if once else np.empty((total, 3))
+    normals = meshes.normals if once else np.empty((total, 3), np.float32)
     owner = np.repeat(np.arange(len(mesh_of)), vcount)
     step = 1 << 16
-    for a in range(0, len(vi), step):
-        o, local = owner[a:a + step], meshes.vertices[vi[a:a + step]]
+    for a in range(0, total, step):
+        rows = slice(a, a + step) if once else vi[a:a + step]
+        o, local = owner[a:a + step], meshes.vertices[rows]
+        n = np.einsum("vj,vji->vi", meshes.normals[rows].astype(np.float64), normal_matrix[o])
         world[a:a + step] = np.einsum("vj,vij->vi", local, r[o]) + transforms[o, :3, 3]
-        n = np.einsum("vj,vji->vi", meshes.normals[vi[a:a + step]].astype(np.float64), normal_matrix[o])
         length = np.linalg.norm(n, axis=1, keepdims=True)
         normals[a:a + step] = n / np.where(length > 0, length, 1.0)
+    if once:
+        return Meshes(world, meshes.faces, vcount, fcount, normals, meshes.uvs)
+    fi = np.repeat(meshes.fstart[mesh_of], fcount) + ramp(fcount)
     uvs = None if meshes.uvs is None else meshes.uvs[vi]
     return Meshes(world, meshes.faces[fi], vcount, fcount, normals, uvs)

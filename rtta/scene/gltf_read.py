@@ -24,7 +24,7 @@ NO_FACTOR = [102 / 255, 102 / 255, 102 / 255, 1.0]   # trimesh's colour for a ma
 
 @dataclass
 class Decoded:
-    """One primitive's geometry: vertices float64 [V, 3], faces int64 [F, 3], the file's
+    """One primitive's geometry: vertices float64 [V, 3], faces int32 [F, 3], the file's
     normals (float32 [V, 3]; None when it has none or they are not finite), base colour
     (RGBA in [0, 1], None for the palette; one list per material, shared)."""
 
@@ -97,10 +97,10 @@ def decode(doc: dict, pairs: list[tuple[int, int]], buffers: list[bytes]) -> dic
 def _faces(doc: dict, prim: dict, buffers: list[bytes], vertices: int) -> np.ndarray:
     if "_fan" in prim:                              # a fan, made a triangle list by gltf._primitives
         fan = prim["_fan"]
-        return fan.astype(np.int64).reshape(-1, 3) if len(fan) else np.zeros((1, 3), np.int64)
+        return fan.astype(np.int32).reshape(-1, 3) if len(fan) else np.zeros((1, 3), np.int32)
     if "indices" in prim:
-        return accessor_array(doc, prim["indices"], buffers).astype(np.int64).reshape(-1, 3)
-    return np.arange(vertices, dtype=np.int64).reshape(-1, 3)
+        return accessor_array(doc, prim["indices"], buffers).astype(np.int32).reshape(-1, 3)
+    return np.arange(vertices, dtype=np.int32).reshape(-1, 3)
 
 
 def _color(material: dict) -> list[float]:

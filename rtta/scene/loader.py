@@ -54,7 +54,9 @@ def load_scene(path: str | Path, smooth_angle: float = DEFAULT_SMOOTH_ANGLE, smo
     if dropped:
         notes.append(f"{len(dropped)} object(s) with only degenerate (zero-area) triangles left out: "
                      + ", ".join(dropped[:5]) + (" ..." if len(dropped) > 5 else ""))
-    scene = from_batch(names, placed, colors, source=str(path), texture_ids=texture_ids, textures=textures)
+    scene = from_batch(names, placed, colors, source=str(path), texture_ids=texture_ids, textures=textures,
+                       consume=True)
+    del placed
     scene.paths = paths
     scene.warnings = notes + scene.warnings + _texture_notes(scene)
     scene.inputs = [str(p) for p in dict.fromkeys([path.resolve(), *inputs])]
@@ -183,7 +185,8 @@ def _parts(read: tuple, path: Path, smooth_angle: float) -> tuple:
         raise RttaError("every triangle of the scene is degenerate (zero area)", path)
     keep = np.flatnonzero(area)
     placed = batch.instance(meshes, mesh_of[keep], np.where(gathered.baked[keep, None, None], np.eye(4),
-                                                             transforms[keep]))
+                                                             transforms[keep]), consume=True)
+    del meshes
     with np.errstate(all="ignore"):
         mirrored = ~gathered.baked[keep] & (np.linalg.det(transforms[keep, :3, :3]) < 0)
     if mirrored.any():                    # instances under a mirror: turn the winding back (see _Gathered)
@@ -230,7 +233,7 @@ class _Gathered:
 
     def _add(self, mesh, normals, transform, color_of: dict) -> None:
         v = np.asarray(mesh.vertices, np.float64)
-        f = np.asarray(mesh.faces, np.int64)
+        f = np.asarray(mesh.faces).astype(np.int32, copy=False)   # an index past 2^31 wraps negative: out of range
         if transform is not None:
             v = v @ transform[:3, :3].T + transform[:3, 3]
             if np.linalg.det(transform[:3, :3]) < 0:
@@ -291,8 +294,9 @@ def _check(meshes: batch.Meshes, mesh_of: np.ndarray, transforms: np.ndarray, na
 
 def _check_world(placed: batch.Meshes, names: list[str], path: Path) -> None:
     """World coordinates are finite and within ±MAX_COORDINATE (first offending object)."""
-    size = np.abs(placed.vertices).max(axis=1)
-    bad = ~(size <= MAX_COORDINATE)             # NaN too
+    v, step = placed.vertices, 1 << 18
+    bad = np.concatenate([~(np.abs(v[a:a + step]).max(axis=1) <= MAX_COORDINATE)     # NaN too; in chunks,
+                          for a in range(0, len(v), step)]) if len(v) else np.zeros(0, bool)   # no copy of all
     if not bad.any():
         return
     i = int(np.searchsorted(placed.vstart, np.flatnonzero(bad)[0], side="right") - 1)

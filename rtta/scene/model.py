@@ -193,9 +193,11 @@ class Batch:
 
 
 def from_batch(names: list[str], batch, colors: list | None = None, source: str = "<memory>", *,
-               texture_ids: list[int] | None = None, textures: list[np.ndarray] | None = None) -> Scene:
+               texture_ids: list[int] | None = None, textures: list[np.ndarray] | None = None,
+               consume: bool = False) -> Scene:
     """The Scene of objects given as one batch (a Batch, or anything with its fields), in
-    whole-array passes: no loop per object."""
+    whole-array passes: no loop per object. `consume`: the batch is not used afterwards, so
+    int32 faces become the indices in place (a copy fewer at the load's peak)."""
     n = len(names)
     if n == 0:
         raise RttaError("scene has no objects with geometry", source)
@@ -207,7 +209,9 @@ def from_batch(names: list[str], batch, colors: list | None = None, source: str 
     lo = np.minimum.reduceat(v, vstart, axis=0)
     hi = np.maximum.reduceat(v, vstart, axis=0)
     origin = (lo.min(axis=0) + hi.max(axis=0)) / 2.0
-    indices = np.asarray(batch.faces).astype(np.uint32).reshape(-1, 3)
+    faces = np.asarray(batch.faces)
+    reuse = consume and faces.dtype == np.int32 and faces.flags.c_contiguous and (len(faces) == 0 or faces.min() >= 0)
+    indices = (faces.view(np.uint32) if reuse else faces.astype(np.uint32)).reshape(-1, 3)
     indices += np.repeat(vstart.astype(np.uint32), fcount)[:, None]
     positions = np.empty(v.shape, np.float32)
     for a in range(0, len(v), 1 << 18):                  # no float64 copy of every vertex

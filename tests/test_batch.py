@@ -34,10 +34,11 @@ def _parts(count: int, seed: int = 1):
     return parts
 
 
-@pytest.mark.parametrize(("chunk", "pairs"), [(10**7, batch.PAIR_BLOCK), (300, 1)])
-def test_batched_preprocessing_matches_each_mesh_alone(monkeypatch, chunk, pairs):
+@pytest.mark.parametrize(("chunk", "pairs", "threads"), [(10**7, batch.PAIR_BLOCK, 1), (300, 1, 3)])
+def test_batched_preprocessing_matches_each_mesh_alone(monkeypatch, chunk, pairs, threads):
     monkeypatch.setattr(batch, "CHUNK_CORNERS", chunk)      # one pass, or many small ones
     monkeypatch.setattr(batch, "PAIR_BLOCK", pairs)         # corner pairs: big blocks, or one position each
+    monkeypatch.setattr(batch, "THREADS", threads)          # passes one after another, or three at once
     parts = _parts(25)
     smooth = np.arange(len(parts)) % 2 == 0
     meshes = batch.Meshes(*(np.concatenate([p[k] for p in parts]) for k in (0, 1)),

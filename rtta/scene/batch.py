@@ -9,11 +9,14 @@ included (rows sort by group first, then as those functions sort them).
 
 from __future__ import annotations
 
+import os
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
 
 CHUNK_CORNERS = 250_000          # corners per pass (bounds the temporary memory)
+THREADS = min(4, os.cpu_count() or 1)   # passes run at once
 
 
 _MIX = np.uint64(0x9E3779B97F4A7C15)
@@ -175,20 +178,24 @@ def preprocess(meshes: Meshes, smooth: np.ndarray, angle: float) -> Meshes:
     """Index every mesh, smoothing the normals of those where `smooth` is set (the others
     keep meshes.normals), in passes of whole meshes of at most CHUNK_CORNERS corners."""
     n = len(meshes.vcount)
-    out: list[tuple] = []
     order = np.concatenate([np.flatnonzero(smooth), np.flatnonzero(~smooth)])
     cumulative = np.cumsum(3 * meshes.fcount[order])
     vstart, fstart = meshes.vstart, meshes.fstart
-    begin = 0
+    jobs, begin = [], 0
     while begin < len(order):
         base = int(cumulative[begin - 1]) if begin else 0
         end = max(begin + 1, int(np.searchsorted(cumulative, base + CHUNK_CORNERS, side="right")))
         ids, begin = order[begin:end], end
-        for smoothed in (True, False):
-            sel = ids[smooth[ids] == smoothed]
-            if len(sel):
-                out.append(_compact(sel, _pass(meshes, sel, vstart, fstart, smoothed, angle)))
-    return _gather(out, n)
+        jobs += [(sel, flag) for flag in (True, False) if len(sel := ids[smooth[ids] == flag])]
+
+    def run(job: tuple) -> tuple:
+        return _compact(job[0], _pass(meshes, job[0], vstart, fstart, job[1], angle))
+
+    workers = min(len(jobs), THREADS)
+    if workers <= 1:
+        return _gather([run(job) for job in jobs], n)
+    with ThreadPoolExecutor(workers) as pool:            # numpy releases the GIL in the passes' sorts and sums
+        return _gather(list(pool.map(run, jobs)), n)
 
 
 def _pass(meshes: Meshes, sel: np.ndarray, vstart: np.ndarray, fstart: np.ndarray, smoothed: bool,

@@ -296,13 +296,17 @@ def instance(meshes: Meshes, mesh_of: np.ndarray, transforms: np.ndarray, consum
     normals = meshes.normals if once else np.empty((total, 3), np.float32)
     owner = np.repeat(np.arange(len(mesh_of)), vcount)
     step = 1 << 16
-    for a in range(0, total, step):
+
+    def place(a: int) -> None:                      # rows a..a+step: each chunk reads and writes its own
         rows = slice(a, a + step) if once else vi[a:a + step]
         o, local = owner[a:a + step], meshes.vertices[rows]
         n = np.einsum("vj,vji->vi", meshes.normals[rows].astype(np.float64), normal_matrix[o])
         world[a:a + step] = np.einsum("vj,vij->vi", local, r[o]) + transforms[o, :3, 3]
         length = np.linalg.norm(n, axis=1, keepdims=True)
         normals[a:a + step] = n / np.where(length > 0, length, 1.0)
+
+    with ThreadPoolExecutor(THREADS) as pool:
+        list(pool.map(place, range(0, total, step)))
     if once:
         return Meshes(world, meshes.faces, vcount, fcount, normals, meshes.uvs)
     fi = np.repeat(meshes.fstart[mesh_of], fcount) + ramp(fcount)

@@ -186,3 +186,26 @@ def test_node_transforms_equal_trimesh_transformations():
         nodes.append(node)
         expect.append(m)
     np.testing.assert_allclose(gltf._locals(nodes), np.array(expect), rtol=0, atol=1e-12)
+
+
+def test_automatic_collection_is_paused_only_during_a_load(folder):
+    """load_scene pauses the cyclic collector (the document's objects would be traversed
+    again and again) and turns it back on, also when the file is refused."""
+    import gc
+
+    path = write_assembly(folder / "gc.glb", 20)
+    bad = folder / "gc_bad.glb"
+    bad.write_bytes(b"glTF" + b"\0" * 30)
+    seen = []
+    original = gltf.prepare
+
+    def spy(p):
+        seen.append(gc.isenabled())
+        return original(p)
+
+    with pytest.MonkeyPatch.context() as m:
+        m.setattr("rtta.scene.loader.prepare", spy)
+        load_scene(path)
+        with pytest.raises(RttaError):
+            load_scene(bad)
+    assert seen == [False, False] and gc.isenabled()

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-CHUNK_CORNERS = 250_000          # corners per pass (bounds the temporary memory)
+CHUNK_CORNERS = 100_000          # corners per pass (bounds the temporary memory: one pass per thread)
 THREADS = min(4, os.cpu_count() or 1)   # passes run at once
 
 

@@ -32,7 +32,16 @@ def load_scene(path: str | Path, smooth_angle: float = DEFAULT_SMOOTH_ANGLE, smo
     """Read a scene file; see the module docstring for the rules. Vertices are indexed;
     normals are smoothed by `smooth_angle` degrees where the file has none, or everywhere
     with `smooth`."""
-    path = Path(path)
+    enabled = gc.isenabled()
+    gc.disable()            # the document's 10^5-10^6 objects would be traversed again and again by
+    try:                    # automatic collections while the load allocates; trimesh's cycles are
+        return _load(Path(path), smooth_angle, smooth)      # collected explicitly (_read)
+    finally:
+        if enabled:
+            gc.enable()
+
+
+def _load(path: Path, smooth_angle: float, smooth: bool) -> Scene:
     size = regular_file(path, "scene file")
     suffix = path.suffix.lower()
     if suffix not in SUPPORTED + formats.SUFFIXES:

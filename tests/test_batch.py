@@ -123,3 +123,23 @@ def test_instancing_in_place_equals_the_copy():
         for a, b in ((got.vertices, want.vertices), (got.normals, want.normals), (got.faces, want.faces),
                      (got.uvs, want.uvs)):
             np.testing.assert_array_equal(a, b)
+
+
+def test_parallel_passes_stop_at_an_error(monkeypatch):
+    """An error (or an interrupt's exception) in the passes cancels those not yet started."""
+    import time
+
+    monkeypatch.setattr(batch, "THREADS", 2)
+    ran = []
+
+    def job(k):
+        ran.append(k)
+        if k == 0:
+            raise KeyboardInterrupt
+        time.sleep(0.01)
+        return k
+
+    assert batch.parallel(lambda k: k * 2, list(range(50))) == [2 * k for k in range(50)]
+    with pytest.raises(KeyboardInterrupt):
+        batch.parallel(job, list(range(200)))
+    assert len(ran) < 20

@@ -191,11 +191,22 @@ def preprocess(meshes: Meshes, smooth: np.ndarray, angle: float) -> Meshes:
     def run(job: tuple) -> tuple:
         return _compact(job[0], _pass(meshes, job[0], vstart, fstart, job[1], angle))
 
+    return _gather(parallel(run, jobs), n)
+
+
+def parallel(fn, jobs: list) -> list:
+    """[fn(job) for job in jobs] on up to THREADS threads (numpy releases the GIL in the
+    passes' sorts, sums and products). On an error or an interrupt (a signal's exception
+    in the waiting main thread) the jobs not yet started are cancelled, so a stopped load
+    stops within one pass, not after all of them."""
     workers = min(len(jobs), THREADS)
     if workers <= 1:
-        return _gather([run(job) for job in jobs], n)
-    with ThreadPoolExecutor(workers) as pool:            # numpy releases the GIL in the passes' sorts and sums
-        return _gather(list(pool.map(run, jobs)), n)
+        return [fn(job) for job in jobs]
+    pool = ThreadPoolExecutor(workers)
+    try:
+        return list(pool.map(fn, jobs))
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
 
 
 def _pass(meshes: Meshes, sel: np.ndarray, vstart: np.ndarray, fstart: np.ndarray, smoothed: bool,
@@ -305,8 +316,7 @@ def instance(meshes: Meshes, mesh_of: np.ndarray, transforms: np.ndarray, consum
         length = np.linalg.norm(n, axis=1, keepdims=True)
         normals[a:a + step] = n / np.where(length > 0, length, 1.0)
 
-    with ThreadPoolExecutor(THREADS) as pool:
-        list(pool.map(place, range(0, total, step)))
+    parallel(place, list(range(0, total, step)))
     if once:
         return Meshes(world, meshes.faces, vcount, fcount, normals, meshes.uvs)
     fi = np.repeat(meshes.fstart[mesh_of], fcount) + ramp(fcount)

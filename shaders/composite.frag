@@ -1,5 +1,5 @@
 #version 430
-// defines: MODE_SPRITE MODE_BLEND MODE_OUTLINE MODE_COLLECT MODE_HALO WITH_AO PROJECTOR LENS UPSAMPLE
+// defines: MODE_SPRITE MODE_BLEND MODE_OUTLINE MODE_COLLECT MODE_HALO FOCUS_CLIP WITH_AO PROJECTOR LENS UPSAMPLE
 // Per-object compositing from the atlas:
 //   MODE_SPRITE  depth sprite: atlas colour, gl_FragDepth = atlas depth (focus objects, `sprites`)
 //   MODE_BLEND   premultiplied blend with the object's opacity (`transparent`, ghosted context)
@@ -8,6 +8,7 @@
 //                u_halo_width pixels from its silhouette (depth from its own atlas image)
 //   MODE_COLLECT as MODE_BLEND, but appended to the pixel's list (oit.glsl) for a per-pixel
 //                sorted blend (`--order pixel`); writes no colour
+//   FOCUS_CLIP   with MODE_COLLECT: surfaces behind the nearest focus surface are left out (ghosted)
 //   WITH_AO      shade with the atlas post-process (ambient occlusion, edges) of `ghosted-ao`
 //   PROJECTOR    paint with the projector at the world position reconstructed from the atlas depth
 //   LENS         cut away (discard) texels whose world position is inside the lens (parity test)
@@ -39,6 +40,9 @@ uniform int u_outline_width;    // pixels (MODE_OUTLINE)
 uniform int u_halo_width;       // pixels (MODE_HALO)
 uniform vec4 u_halo_color;      // (rgb, strength)
 layout(binding = 5) uniform sampler2D u_context_depth;   // farthest context depth per pixel, 0: none (MODE_HALO)
+#ifdef FOCUS_CLIP
+layout(binding = 7) uniform sampler2D u_focus_depth;     // nearest focus depth per pixel, 1: none (MODE_COLLECT)
+#endif
 
 flat in int g_object;
 flat in vec4 g_map;
@@ -187,6 +191,9 @@ void main() {
 #ifdef MODE_COLLECT
     // the node's place is fixed by the pixel's place in B_viewport: no shared counter
     ivec2 p = ivec2(gl_FragCoord.xy);
+#ifdef FOCUS_CLIP
+    if (depth >= texelFetch(u_focus_depth, p, 0).r) discard;   // behind a focus object (ghosted): hidden
+#endif
     ivec2 origin = ivec2(g_map.zw);                 // B_viewport's first pixel
     uint i = g_node_base + uint((p.y - origin.y) * g_vp_width + (p.x - origin.x));
     uint next = atomicExchange(heads[p.y * int(u_viewport.x) + p.x], i);

@@ -123,3 +123,67 @@ def test_more_surfaces_than_kept_merge_behind(make_renderer):
         exact = color[o, y, x] * alpha[o] + exact * (1 - alpha[o])
     assert np.abs(got[y, x] - out).max() <= 3, (got[y, x], out, exact)
     assert np.abs(exact - out).max() > 3, "the fallback equals the exact blend here: the test proves nothing"
+
+
+def _numpy_ghosted(r, focus: list[int], style: Style, clip: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """`ghosted` from the atlas in numpy: the focus objects opaque (nearest surface), then
+    per pixel the context surfaces in front of them (all, where no focus covers), sorted by
+    depth, desaturated, blended back to front with the context opacity. Also the mask of
+    pixels within 3 of a focus silhouette (the outline drawn there is left out)."""
+    records = r.last[0]
+    tw, th, td = records.atlas_size
+    atlas = r.atlas.read((tw, th), td)
+    atlas = {"color": atlas["color"], "depth": atlas["depth"]}
+    visible = np.flatnonzero(records.visible)
+    maps = {o: map_back(atlas, records, o) for o in visible}
+    out = np.broadcast_to(np.array(BACKGROUND[:3]) * 255, (VP[1], VP[0], 3)).copy()
+    front = np.ones((VP[1], VP[0]))
+    for o in focus:
+        d = maps[o]["depth"]
+        near = d < front
+        out[near] = maps[o]["color"][..., :3][near]
+        front = np.where(near, d, front)
+    context = [o for o in visible if o not in focus]
+    limit = front if clip else 1.0
+    depth = np.stack([np.where(maps[o]["depth"] < limit, maps[o]["depth"], 1.0) for o in context])
+    color = np.stack([maps[o]["color"][..., :3] for o in context]).astype(np.float64)
+    grey = (color * [0.299, 0.587, 0.114]).sum(-1, keepdims=True)
+    color = color + (grey - color) * style.desaturate
+    for k in np.argsort(-depth, axis=0, kind="stable"):          # farthest first
+        d = np.take_along_axis(depth, k[None], 0)[0]
+        c = np.take_along_axis(color, k[None, ..., None], 0)[0]
+        a = np.where(d < 1.0, style.context_opacity, 0.0)[..., None]
+        out = c * a + out * (1 - a)
+    covered = front < 1.0
+    edge = np.zeros_like(covered)
+    for dy in range(-3, 4):
+        for dx in range(-3, 4):
+            edge |= np.roll(covered, (dy, dx), (0, 1)) != covered
+    return out, edge
+
+
+@pytest.mark.parametrize("orbit", [(10, 15, 2.0), (-25, -10, 1.8)])
+@pytest.mark.parametrize("focus", [1, 3])
+def test_ghosted_context_in_pixel_order_equals_numpy(make_renderer, orbit, focus):
+    """The ghosted context blended per pixel. Focus on the inner sphere: inside its context
+    shell, with the shaft and housing (context) through each other, where object order is
+    shown to differ. Focus on the shaft: the housing's face behind it is hidden (the numpy
+    blend without that differs, so a missing clip fails)."""
+    scene = _nested_scene()
+    r = make_renderer(scene)
+    cam = Camera.orbit(scene.center, scene.radius, *orbit)
+    r.capture(cam, VP)
+    style = Style(focus={focus}, order="pixel", context_opacity=0.7, desaturate=0.2)   # strong enough to tell
+    want, edge = _numpy_ghosted(r, [focus], style)
+    got = r.composite("ghosted", style).read()[0][..., :3].astype(np.float64)
+    assert "resolve" in r._composite.passes
+    diff = np.abs(got - want).max(-1)
+    diff[edge] = 0
+    assert diff.max() <= 3, f"ghosted pixel order differs from numpy by {diff.max()} at {int((diff > 3).sum())} px"
+    if focus == 3:
+        unclipped, _ = _numpy_ghosted(r, [focus], style, clip=False)
+        assert ((np.abs(unclipped - want).max(-1) > 8) & ~edge).sum() > 30, "nothing lies behind the focus"
+        return
+    objects = r.composite("ghosted", Style(focus={1}, context_opacity=0.7, desaturate=0.2)).read()[0][..., :3]
+    wrong = (np.abs(objects.astype(np.float64) - want).max(-1) > 8) & ~edge
+    assert wrong.sum() > 30, "object order agrees with the per-pixel blend: the scene proves nothing"

@@ -73,8 +73,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--halo", type=int, default=0, metavar="WIDTH",
                    help="ghosted modes: a dark halo WIDTH pixels wide around focus objects where context lies behind")
     p.add_argument("--order", choices=("object", "pixel"), default=None,
-                   help="transparency order: by object (bounds centres) or per pixel (each object's surface "
-                        "depth; nested parts blend right); default: see README")
+                   help="transparency order (transparent, ghosted context): by object (bounds centres) or per "
+                        "pixel (each object's surface depth; nested parts blend right); default: see README")
     p.add_argument("--edge-objects", choices=("focus", "all"), default=None,
                    help="edges on the focus objects only or on all (ghosted-ao; default: see README)")
     p.add_argument("--projector", default=None, metavar="IMAGE[,AZ,EL,DIST]",

@@ -51,7 +51,7 @@ class Style:
     # defaults from `rtta bench composite` on the demo at 1024² (README, BENCHMARKS.md)
     ao_objects: str = "focus"          # ghosted-ao: AO on 'focus' objects only (the paper) or on 'all'
     edge_objects: str = "all"          # ghosted-ao: edges on 'focus' objects only or on 'all'
-    order: str = "object"              # transparency: 'object' (bounds centres) or 'pixel' (surfaces)
+    order: str = "object"              # transparent and ghosted context: 'object' (bounds centres) or 'pixel'
     halo: int = 0                      # ghosted modes: halo width (pixels) around focus objects, 0: none
     halo_color: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.6)   # (rgb, strength)
 
@@ -223,8 +223,8 @@ class CompositePass:
             self._draw(focus, style, records, sprite=True, ao=with_ao)
             params[context, 0] = style.context_opacity * params[context, 0]
             self._upload(self.styles, params.tobytes())
-            self._draw(back_to_front(records, view_depth, context), style, records, blend=True,
-                       desaturate=style.desaturate, depth_test=True, ao=with_ao, cut=True)
+            self._blend(back_to_front(records, view_depth, context), style, records, target, behind=focus,
+                        desaturate=style.desaturate, depth_test=True, ao=with_ao, cut=True)
             if style.halo > 0 and len(focus):
                 self._halo(focus, context, style, records, target)
             self._draw(focus, style, records, outline=True)
@@ -236,6 +236,13 @@ class CompositePass:
         quad per focus object reaching `style.halo` pixels beyond its B_viewport."""
         if not 1 <= int(style.halo) <= 32:
             raise ValueError(f"halo width must be 0..32 pixels, got {style.halo}")
+        self._sprite_depth(context, style, records, target, farthest=True, cut=True).use(5)
+        self._draw(focus, style, records, halo=True, depth_test=True)
+
+    def _sprite_depth(self, ids, style: Style, records: Records, target: CompositeTarget, *, farthest: bool,
+                      cut: bool) -> moderngl.Texture:
+        """The nearest (or farthest) sprite depth of `ids` per pixel, in a depth texture of
+        the target's size (1, or 0 for farthest, where none); the target is bound again after."""
         if self._context_depth is None or self._context_depth.size != target.size:
             self._release_context_depth()
             self._context_depth = self.ctx.depth_texture(target.size)
@@ -243,11 +250,10 @@ class CompositePass:
             self._context_fbo = self.ctx.framebuffer(depth_attachment=self._context_depth)
         self._context_fbo.viewport = (0, 0, *target.viewport)
         self._context_fbo.use()
-        self._context_fbo.clear(depth=0.0)
-        self._draw(context, style, records, sprite=True, cut=True, farthest=True)
+        self._context_fbo.clear(depth=0.0 if farthest else 1.0)
+        self._draw(ids, style, records, sprite=True, cut=cut, farthest=farthest)
         target.fbo.use()
-        self._context_depth.use(5)
-        self._draw(focus, style, records, halo=True, depth_test=True)
+        return self._context_depth
 
     def _release_context_depth(self) -> None:
         if self._context_depth is not None:
@@ -255,9 +261,11 @@ class CompositePass:
             self._context_depth.release()
         self._context_depth = self._context_fbo = None
 
-    def _blend(self, ids, style: Style, records: Records, target: CompositeTarget, **how) -> None:
+    def _blend(self, ids, style: Style, records: Records, target: CompositeTarget, behind=None, **how) -> None:
         """Blend `ids` (back to front) over the target: object by object, or per pixel in the
-        order of their surfaces (style.order 'pixel'; object order when over MAX_NODES)."""
+        order of their surfaces (style.order 'pixel'; object order when over MAX_NODES).
+        `behind`: opaque objects already drawn (the ghosted focus); surfaces behind them are
+        hidden, by the depth test in object order and by their depth per pixel in pixel order."""
         if style.order not in ORDERS:
             raise ValueError(f"order must be one of {', '.join(ORDERS)}, got {style.order!r}")
         if style.order == "pixel" and len(ids):
@@ -266,7 +274,11 @@ class CompositePass:
             ids = np.asarray(ids, np.int64)
             ids = ids[records.visible[ids]]
             if self._pixel_order.begin(records.viewport, ids, records):
-                self._draw(ids, style, records, collect=True, **how)
+                clip = behind is not None and len(behind) > 0
+                if clip:
+                    self._sprite_depth(behind, style, records, target, farthest=False, cut=False).use(7)
+                collect = {**how, "depth_test": False}     # collected surfaces write no depth: clipped instead
+                self._draw(ids, style, records, collect=True, focus_clip=clip, **collect)
                 self._pixel_order.resolve(target.fbo)
                 self.passes.append("resolve")
                 return
@@ -289,13 +301,13 @@ class CompositePass:
 
     def _draw_run(self, ids, style: Style, records: Records, *, sprite=False, blend=False, outline=False,
                   desaturate=0.0, depth_test=False, ao=False, cut=False, upsample=False, collect=False,
-                  halo=False, farthest=False) -> None:
+                  halo=False, farthest=False, focus_clip=False) -> None:
         self._upload(self.order, ids.astype(np.int32).tobytes())
         self.order.bind_to_storage_buffer(3)
         projection = None if outline or halo else self._projection
         lens = self._lens if cut else None
         mode = {"MODE_SPRITE": sprite, "MODE_BLEND": blend, "MODE_OUTLINE": outline, "MODE_COLLECT": collect,
-                "MODE_HALO": halo,
+                "MODE_HALO": halo, "FOCUS_CLIP": focus_clip,
                 "WITH_AO": ao and not outline,
                 "PROJECTOR": projection is not None, "LENS": lens is not None, "UPSAMPLE": upsample}
         on = [k for k, v in mode.items() if v]

@@ -93,9 +93,11 @@ def _read(path: Path, suffix: str, smooth: bool) -> tuple[list[str], list[Path],
 
 
 def _triangles(mesh) -> bool:
+    if isinstance(mesh, Decoded):                 # read directly: trimesh need not even be imported
+        return len(mesh.faces) > 0
     import trimesh
 
-    return isinstance(mesh, (trimesh.Trimesh, Decoded)) and len(mesh.faces) > 0
+    return isinstance(mesh, trimesh.Trimesh) and len(mesh.faces) > 0
 
 
 def _items(path: Path, suffix: str) -> tuple[list[str], list[Path], list[tuple]]:

@@ -221,6 +221,16 @@ def test_keys_wheel_files_and_resizes(driven):
     assert result["after_resize"] == [1280, 720] and result["gl_errors"] == []
 
 
+def test_files_open_on_a_worker_thread(driven):
+    """A dropped 10,000-part file loads while the window keeps drawing frames; a second file
+    meanwhile is refused with a line; a broken file opened the same way keeps the scene."""
+    later = driven[0]["later"]
+    assert later["message_at_start"] == "loading later.glb ..." and later["second_refused"]
+    assert later["frames_while_loading"] >= 3, later
+    assert later["count"] == 10_000 and not later["error"] and later["message"].startswith("opened later.glb")
+    assert later["bad_error"] and "broken.glb" in later["bad_message"] and later["bad_kept"]
+
+
 def test_projector_toggle_and_move(driven):
     result, shots = driven
     assert result["projector"]["on"] and not result["projector"]["attached"]

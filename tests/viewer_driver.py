@@ -158,6 +158,36 @@ result["scene_kept"] = app.renderer.scene is before
 result["message"] = app.message
 frames(2, shot="error")
 
+# a large file opened the way the file browser and drag-and-drop open it: on a worker
+# thread, the window drawing meanwhile; then a broken one the same way
+import time  # noqa: E402
+
+from rtta.scene.assembly import write_assembly  # noqa: E402
+
+big = write_assembly(OUT / "later.glb", 10_000)
+later = {}
+send("on_file_drop", 10, 10, [str(big)])
+frames(1)                                              # the window's events are handled in the frame
+later["message_at_start"] = app.message
+app.open_scene_later(bad)                              # a second file while the first loads: refused
+later["second_refused"] = app.message_is_error and "still loading" in app.message
+drawn, t0 = 0, time.perf_counter()
+while app.loading is not None and time.perf_counter() - t0 < 300:
+    frames(1, shot="loading" if drawn == 3 else None)
+    drawn += 1
+frames(1)
+later.update(frames_while_loading=drawn, count=app.renderer.scene.count, message=app.message,
+             error=app.message_is_error)
+loaded = app.renderer.scene
+app.open_scene_later(bad)
+while app.loading is not None and time.perf_counter() - t0 < 300:
+    frames(1)
+frames(1)
+later.update(bad_error=app.message_is_error, bad_message=app.message, bad_kept=app.renderer.scene is loaded)
+result["later"] = later
+app.set_scene(before)
+frames(1)
+
 from bad_inputs import make_corpus  # noqa: E402  (tests/ is this script's folder)
 
 corpus = OUT / "corpus"

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import itertools
 import re
+import threading
 import time
 from pathlib import Path
 
@@ -48,7 +49,8 @@ class Viewer:
         imgui.get_io().set_ini_filename("")          # never write imgui.ini into the user's folder
         self.imgui = GrowingImguiRenderer(wnd)
         self.view_pass = ViewPass(self.ctx)
-        self.files = FileBrowser(self.open_scene)
+        self.files = FileBrowser(self.open_scene_later)
+        self.loading: tuple | None = None            # (path, worker thread, result box) while a file loads
         self.controls = Controls(self)
         self.stats = Stats()
         self.screenshot_dir = Path(screenshot_dir or Path.cwd())
@@ -94,14 +96,32 @@ class Viewer:
         self.orbit.frame(corners=corners, aspect=w / h if w > 0 and h > 0 else 1.0)
 
     def open_scene(self, path) -> bool:
-        """Load `path`; on failure show the error in the panel and keep the current scene."""
-        try:
-            scene = load_scene(str(path), **self.load_options)
-        except RttaError as exc:
-            return self.say(str(exc), error=True)
-        except Exception as exc:      # a broken file must never take the session down
-            reason = str(exc).strip().splitlines()[0][:200] if str(exc).strip() else ""
-            return self.say(f"{path}: cannot open ({type(exc).__name__}: {reason})", error=True)
+        """Load `path` now; on failure show the error in the panel and keep the current scene."""
+        return self._opened(path, *_read_scene(path, self.load_options))
+
+    def open_scene_later(self, path) -> None:
+        """Load `path` on a worker thread, so the window keeps drawing while a large file
+        loads (seconds at 10^5 parts); `frame()` takes the scene, or the error, once it is
+        there. The file browser and drag-and-drop open files this way."""
+        if self.loading is not None:
+            self.say(f"still loading {Path(self.loading[0]).name}; open another file when it is done", error=True)
+            return
+        box: dict = {}
+        worker = threading.Thread(target=lambda: box.update(result=_read_scene(path, self.load_options)),
+                                  name="rtta-load", daemon=True)
+        self.loading = (path, worker, box)
+        self.say(f"loading {Path(path).name} ...")
+        worker.start()
+
+    def _take_loaded(self) -> None:
+        if self.loading is not None and not self.loading[1].is_alive():
+            path, _, box = self.loading
+            self.loading = None
+            self._opened(path, *box.get("result", (None, f"{path}: cannot open (the load stopped)")))
+
+    def _opened(self, path, scene: Scene | None, error: str | None) -> bool:
+        if scene is None:
+            return self.say(error or f"{path}: cannot open", error=True)
         self.set_scene(scene)
         self.say("; ".join([f"opened {Path(path).name}", *(f"warning: {w}" for w in scene.warnings)]))
         return True
@@ -119,6 +139,7 @@ class Viewer:
     def frame(self) -> None:
         """One frame into the window's framebuffer (call swap_buffers after it)."""
         self.stats.tick()
+        self._take_loaded()
         minimized = self.wnd.width <= 0 or self.wnd.height <= 0
         size = (0, 0) if minimized else self.wnd.buffer_size
         self.layout = Layout.of(size, self.state.show_atlas)
@@ -311,3 +332,14 @@ class Viewer:
         self.renderer.release()
         self.view_pass.release()
         self.imgui.shutdown()
+
+
+def _read_scene(path, options: dict) -> tuple[Scene | None, str | None]:
+    """(scene, None) or (None, the one-line error): a broken file never takes the session down."""
+    try:
+        return load_scene(str(path), **options), None
+    except RttaError as exc:
+        return None, str(exc)
+    except Exception as exc:
+        reason = str(exc).strip().splitlines()[0][:200] if str(exc).strip() else ""
+        return None, f"{path}: cannot open ({type(exc).__name__}: {reason})"

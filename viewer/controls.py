@@ -127,7 +127,7 @@ class Controls:
 
     def on_drop(self, x, y, paths) -> None:
         if paths:
-            self.app.open_scene(paths[0])
+            self.app.open_scene_later(paths[0])
 
     def on_key(self, key, action, modifiers) -> None:
         app, keys = self.app, self.app.wnd.keys

@@ -3,8 +3,8 @@
 The meshes (each a "group") are concatenated and every step runs as one numpy pass over
 a chunk of groups, keyed by group, so nothing merges across meshes and no Python loop runs
 per mesh: 10^5 parts cost a few dozen passes, not 10^5 small ones. The results match
-preprocess.index_vertices / smooth_normals applied to each mesh alone, vertex order
-included (rows sort by group first, then as those functions sort them).
+preprocess.index_vertices / smooth_normals applied to each mesh alone: the same triangles
+and normals, the vertices in order of first appearance (those functions sort them).
 """
 
 from __future__ import annotations

@@ -27,18 +27,18 @@ from rtta.scene.gltf_read import plain
 from rtta.scene.loader import load_scene
 
 
-def _load(path, direct: bool, monkeypatch):
+def _load(path, direct: bool, monkeypatch, smooth: bool = False):
     with monkeypatch.context() as m:
         if not direct:
             m.setattr(gltf.Prepared, "decoded", lambda self: None)
         try:
-            return load_scene(path)
+            return load_scene(path, smooth=smooth)
         except RttaError as exc:
             return str(exc)
 
 
-def _same(path, monkeypatch) -> None:
-    a, b = _load(path, True, monkeypatch), _load(path, False, monkeypatch)
+def _same(path, monkeypatch, smooth: bool = False) -> None:
+    a, b = _load(path, True, monkeypatch, smooth), _load(path, False, monkeypatch, smooth)
     if isinstance(a, str) or isinstance(b, str):
         assert a == b
         return
@@ -123,11 +123,12 @@ def test_plain_files_are_read_directly_and_equal_trimesh(folder, name, monkeypat
     _same(path, monkeypatch)
 
 
-@pytest.mark.parametrize("normals", [False, True])
-def test_assembly_is_read_directly_and_equals_trimesh(folder, normals, monkeypatch):
+@pytest.mark.parametrize(("normals", "smooth"), [(False, False), (True, False), (True, True)])
+def test_assembly_is_read_directly_and_equals_trimesh(folder, normals, smooth, monkeypatch):
+    """Also with `smooth` (file normals ignored, every part smoothed) on a file that has them."""
     path = write_assembly(folder / f"assembly_{normals}.glb", 300, seed=3, normals=normals)
     assert _direct(path)
-    _same(path, monkeypatch)
+    _same(path, monkeypatch, smooth)
 
 
 @pytest.mark.parametrize("name", sorted(gltf_loading_files()))

@@ -26,12 +26,15 @@ NO_FACTOR = [102 / 255, 102 / 255, 102 / 255, 1.0]   # trimesh's colour for a ma
 class Decoded:
     """One primitive's geometry: vertices float64 [V, 3], faces int32 [F, 3], the file's
     normals (float32 [V, 3]; None when it has none or they are not finite), base colour
-    (RGBA in [0, 1], None for the palette; one list per material, shared)."""
+    (RGBA in [0, 1], None for the palette; one list per material, shared); uvs (float32
+    [V, 2]) and the texture's index where textured (the loader's records of trimesh meshes)."""
 
     vertices: np.ndarray
     faces: np.ndarray
     normals: np.ndarray | None
     color: list[float] | None
+    uv: np.ndarray | None = None
+    texture: int = -1
 
 
 def accessor_array(doc: dict, index: int, buffers: list[bytes]) -> np.ndarray:

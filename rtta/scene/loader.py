@@ -11,6 +11,7 @@ import io
 import logging
 import re
 import warnings
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -77,27 +78,61 @@ def _read(path: Path, suffix: str, smooth: bool) -> tuple[list[str], list[Path],
     names, node transforms, node paths or None)); trimesh's own objects are freed before
     this returns (their cycles collected), so they never sit in memory beside the batch."""
     notes, inputs, items = _items(path, suffix)
-    items = [item for item in items if _triangles(item[1])]
+    textures, records = TextureTable(), _Records(smooth)
+    items = [(name, records.of(mesh, textures), matrix, tree) for name, mesh, matrix, tree in items]
+    items = [item for item in items if item[1] is not None and len(item[1].faces) > 0]
     if not items:
         raise RttaError("scene has no objects with triangle geometry", path)
     names = [str(item[0]) for item in items]
     transforms = np.array([np.asarray(item[2], np.float64) for item in items]).reshape(-1, 4, 4)
     paths = [tuple(item[3]) for item in items]
-    gathered = _Gathered(items, transforms, smooth)
-    trimeshes = not all(isinstance(item[1], Decoded) for item in items)
-    del items
+    gathered = _Gathered(items, transforms, textures)
+    trimeshes = records.trimesh
+    del items, records                    # the per-geometry arrays go as they are concatenated
     meshes = gathered.concatenated()
     if trimeshes:
         gc.collect()
     return notes, inputs, (gathered, meshes, names, transforms, paths if any(paths) else None)
 
 
-def _triangles(mesh) -> bool:
-    if isinstance(mesh, Decoded):                 # read directly: trimesh need not even be imported
-        return len(mesh.faces) > 0
-    import trimesh
+class _Records:
+    """Every geometry as a Decoded record, whichever reader gave it, made once per geometry
+    (its instances share the record): glTF's direct reader gives them (their file normals
+    dropped when `smooth`); a trimesh mesh is converted with its file normals (none when
+    `smooth`), uvs and texture, and base colour (one list per material); anything without
+    triangles (paths, point clouds) is None."""
 
-    return isinstance(mesh, trimesh.Trimesh) and len(mesh.faces) > 0
+    def __init__(self, smooth: bool) -> None:
+        self.smooth = smooth
+        self.trimesh = False               # a trimesh mesh was converted: its cycles want collecting
+        self._made: dict[int, Decoded | None] = {}
+        self._color_of: dict = {}
+
+    def of(self, mesh, textures: TextureTable) -> Decoded | None:
+        if mesh is None:
+            return None
+        if id(mesh) not in self._made:
+            self._made[id(mesh)] = self._record(mesh, textures)
+        return self._made[id(mesh)]
+
+    def _record(self, mesh, textures: TextureTable) -> Decoded | None:
+        if isinstance(mesh, Decoded):         # read directly: trimesh need not even be imported
+            return replace(mesh, normals=None) if self.smooth and mesh.normals is not None else mesh
+        import trimesh
+
+        self.trimesh = True
+        if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
+            return None
+        uv, texture = textures.of(mesh)
+        material = getattr(mesh.visual, "material", None)
+        key = id(material) if material is not None and getattr(mesh.visual, "kind", None) not in ("face", "vertex") \
+            else None
+        color = self._color_of[key] if key in self._color_of else _color(mesh)
+        if key is not None:
+            self._color_of[key] = color
+        faces = np.asarray(mesh.faces).astype(np.int32, copy=False)   # an index past 2^31 wraps negative: out of range
+        return Decoded(np.asarray(mesh.vertices, np.float64), faces, None if self.smooth else _file_normals(mesh),
+                       color, uv, texture)
 
 
 def _items(path: Path, suffix: str) -> tuple[list[str], list[Path], list[tuple]]:
@@ -213,13 +248,13 @@ def _parts(read: tuple, path: Path, smooth_angle: float) -> tuple:
 
 
 class _Gathered:
-    """The distinct meshes of the nodes, read once each: vertices, faces, file normals
-    (or smoothing), uvs, texture, colour. A node whose mesh must be smoothed in world space
-    (a shear, a mirror or a non-uniform scale, and no file normals) or whose transform is
-    singular gets a copy of the mesh in world coordinates of its own (`baked`)."""
+    """The distinct meshes of the nodes (Decoded records), read once each: vertices, faces,
+    file normals (or smoothing), uvs, texture, colour. A node whose mesh must be smoothed in
+    world space (a shear, a mirror or a non-uniform scale, and no file normals) or whose
+    transform is singular gets a copy of the mesh in world coordinates of its own (`baked`)."""
 
-    def __init__(self, items: list[tuple], transforms: np.ndarray, smooth: bool) -> None:
-        self.textures = TextureTable()
+    def __init__(self, items: list[tuple], transforms: np.ndarray, textures: TextureTable) -> None:
+        self.textures = textures
         self.colors: list = []
         self.texture_ids: list[int] = []
         self.smoothed: list[bool] = []
@@ -231,41 +266,25 @@ class _Gathered:
         similar = batch.similar(transforms) & usable
         self.baked = np.zeros(len(items), bool)
         seen: dict = {}
-        color_of: dict = {}
         for i, (_, mesh, _, _) in enumerate(items):     # the items hold every mesh, so ids stay unique
-            normals = None if smooth else mesh.normals if isinstance(mesh, Decoded) else _file_normals(mesh)
-            bake = usable[i] and normals is None and not similar[i]
+            bake = usable[i] and mesh.normals is None and not similar[i]
             key = (id(mesh), i) if bake else id(mesh)
             if key not in seen:
                 seen[key] = len(self._arrays)
-                self._add(mesh, normals, transforms[i] if bake else None, color_of)
+                self._add(mesh, transforms[i] if bake else None)
             self.baked[i] = bake
             self.mesh_of.append(seen[key])
 
-    def _add(self, mesh, normals, transform, color_of: dict) -> None:
-        v = np.asarray(mesh.vertices, np.float64)
-        f = np.asarray(mesh.faces).astype(np.int32, copy=False)   # an index past 2^31 wraps negative: out of range
+    def _add(self, mesh: Decoded, transform) -> None:
+        v, f = mesh.vertices, mesh.faces
         if transform is not None:
             v = v @ transform[:3, :3].T + transform[:3, 3]
             if np.linalg.det(transform[:3, :3]) < 0:
                 f = f[:, ::-1]             # a mirroring transform turns the winding: keep faces front-facing
-        self.smoothed.append(normals is None)
-        if isinstance(mesh, Decoded):
-            self._arrays.append((v, f, normals, None))
-            self.texture_ids.append(-1)
-            self.colors.append(mesh.color)
-            return
-        uv, texture = self.textures.of(mesh)
-        self._arrays.append((v, f, normals, uv))
-        self.texture_ids.append(texture)
-        material = getattr(mesh.visual, "material", None)
-        key = id(material) if material is not None and getattr(mesh.visual, "kind", None) not in ("face", "vertex") \
-            else None
-        if key is None or key not in color_of:
-            color_of[key] = _color(mesh)
-        self.colors.append(color_of[key])
-        if key is None:
-            del color_of[key]
+        self._arrays.append((v, f, mesh.normals, mesh.uv))
+        self.smoothed.append(mesh.normals is None)
+        self.texture_ids.append(mesh.texture)
+        self.colors.append(mesh.color)
 
     def concatenated(self) -> batch.Meshes:
         """The meshes as one batch.Meshes (zero normals where smoothed, zero uvs where none)."""

@@ -114,3 +114,21 @@ def test_merge_never_replaces_an_input_or_a_users_file(tmp_path, capsys):
     _one_error(capsys, "none: no such file or folder")
     assert main(["dataset", "merge", str(out), "--out", str(tmp_path / "m.json")]) == 0
     assert read_json(tmp_path / "m.json")["images"][0]["file_name"].startswith("ds/images/")
+
+
+def test_shards_starting_together_see_each_others_marker_on_its_way(tmp_path):
+    """Two shards into a new folder: the second finds the first's dataset.json temporary
+    (imageio.atomic_write's) before the marker and must not take it for a foreign file; a
+    file that only looks like one (a folder of that name) still counts."""
+    from rtta.errors import RttaError
+    from rtta.tools.dataset import prepare_out
+
+    out = tmp_path / "d"
+    out.mkdir()
+    (out / ".dataset.json.k2j9x_.json").write_text("{")          # the other shard, mid-write
+    prepare_out(out, {"views": 3})
+    assert (out / "dataset.json").is_file()
+    other = tmp_path / "e"
+    (other / ".dataset.json.x.json").mkdir(parents=True)
+    with pytest.raises(RttaError, match="holds no rtta dataset"):
+        prepare_out(other, {"views": 3})

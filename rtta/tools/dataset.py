@@ -185,7 +185,7 @@ def prepare_out(out: Path, s: dict) -> None:
         raise RttaError("parent directory does not exist", out.parent)
     marker = out / "dataset.json"
     doc = {"format": FORMAT, "settings": s}
-    if out.is_dir() and not marker.exists() and any(out.iterdir()):
+    if out.is_dir() and not marker.exists() and any(not _marker_temporary(p) for p in out.iterdir()):
         raise RttaError("is not empty and holds no rtta dataset (dataset.json): choose a new or empty folder", out)
     out.mkdir(exist_ok=True)
     try:
@@ -201,6 +201,13 @@ def prepare_out(out: Path, s: dict) -> None:
             diff = [k for k in new["settings"] if theirs.get(k) != new["settings"][k]] or ["format"]
             raise RttaError(f"holds a dataset made with other settings ({', '.join(diff[:4])}): "
                             "choose another --out, or the same settings to resume", out) from None
+
+
+def _marker_temporary(entry: Path) -> bool:
+    """Another shard's dataset.json on its way into place (imageio.atomic_write's temporary):
+    shards started together into a new folder see it before the marker, and it is no
+    foreign file."""
+    return entry.name.startswith(".dataset.json.") and entry.name.endswith(".json") and entry.is_file()
 
 
 def annotations_name(shard: tuple[int, int]) -> str:

@@ -27,7 +27,7 @@ from ..errors import RttaError
 from .files import MAX_OBJECTS_LARGE, TextureBudget, image_problem, local_file, max_objects, memory_limit, read_limited
 from .gltf_check import COMPONENT_BYTES, TYPE_WIDTH, check, read_document
 from .gltf_read import Decoded, decode
-from .gltf_rewrite import fan_indices, rewrite
+from .gltf_rewrite import fan_indices, geometry_name, rewrite
 from .precheck import check_size
 
 MAX_DEPTH = 1000            # levels of the node graph
@@ -58,7 +58,7 @@ class Prepared:
         """Every drawn primitive read directly (rtta.scene.gltf_read), keyed like
         Instance.geometry; None when the file needs trimesh."""
         found = decode(self.doc, self.pairs, self.buffers)
-        return None if found is None else {f"rtta.{m}.{p}": d for (m, p), d in found.items()}
+        return None if found is None else {geometry_name(m, p): d for (m, p), d in found.items()}
 
     def for_trimesh(self) -> bytes:
         """The rewritten, self-contained GLB trimesh reads (rtta.scene.gltf_rewrite)."""
@@ -84,7 +84,7 @@ def prepare(path: Path) -> Prepared:
     per_mesh: dict[int, list[int]] = {}
     for m, p in out.pairs:
         per_mesh.setdefault(m, []).append(p)
-    out.instances = [Instance(name, f"rtta.{mesh}.{p}", matrix,       # a node's primitives: a group of its own
+    out.instances = [Instance(name, geometry_name(mesh, p), matrix,       # a node's primitives: a group of its own
                               (*tree, name.replace("/", "\u2215")) if len(per_mesh[mesh]) > 1 else tree)
                      for name, mesh, matrix, tree in walk for p in per_mesh.get(mesh, [])]
     if len(out.instances) > limit:

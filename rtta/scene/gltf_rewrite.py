@@ -12,6 +12,12 @@ import numpy as np
 from .gltf_read import accessor_array
 
 
+def geometry_name(mesh: int, primitive: int) -> str:
+    """The name of a drawn (mesh, primitive) in the rewritten document: trimesh's geometry
+    key, and the key of the direct reader's records (rtta.scene.gltf)."""
+    return f"rtta.{mesh}.{primitive}"
+
+
 def fan_indices(doc: dict, prim: dict, buffers: list) -> np.ndarray:
     """A triangle fan's indices as a triangle list (uint32)."""
     if "indices" in prim:
@@ -60,7 +66,7 @@ def rewrite(doc: dict, pairs: list, buffers: list[bytes], images: dict[int, byte
             new["indices"] = len(accessors)
             accessors.append({"bufferView": append(fan.tobytes()), "componentType": 5125, "count": len(fan),
                               "type": "SCALAR"} if len(fan) else {"componentType": 5125, "count": 3, "type": "SCALAR"})
-        meshes.append({"name": f"rtta.{m}.{p}", "primitives": [new]})
+        meshes.append({"name": geometry_name(m, p), "primitives": [new]})
     new_images = [{"bufferView": append(images[i]), "mimeType": "image/png"} if i in images else {}
                   for i in range(len(doc.get("images", [])))]
     materials = [{"pbrMetallicRoughness": {k: v for k, v in mat.get("pbrMetallicRoughness", {}).items()

@@ -132,3 +132,29 @@ def test_shards_starting_together_see_each_others_marker_on_its_way(tmp_path):
     (other / ".dataset.json.x.json").mkdir(parents=True)
     with pytest.raises(RttaError, match="holds no rtta dataset"):
         prepare_out(other, {"views": 3})
+
+
+def test_a_marker_that_lands_while_the_folder_is_read(tmp_path, monkeypatch):
+    """The other shard's dataset.json lands in place between this shard's look at the folder
+    and its look for the marker: the folder is listed first, so it is found."""
+    import json
+    from pathlib import Path
+
+    from rtta.tools.dataset import prepare_out
+
+    out = tmp_path / "d"
+    out.mkdir()
+    settings = {"views": 3}
+    real, landed = Path.iterdir, []
+
+    def listing(self):
+        if self == out and not landed:
+            landed.append(True)
+            monkeypatch.setattr(Path, "iterdir", real)
+            prepare_out(out, settings)                   # the other shard, just then
+            (out / "parts").mkdir()
+        return real(self)
+
+    monkeypatch.setattr(Path, "iterdir", listing)
+    prepare_out(out, settings)
+    assert json.loads((out / "dataset.json").read_text())["settings"] == settings

@@ -185,7 +185,9 @@ def prepare_out(out: Path, s: dict) -> None:
         raise RttaError("parent directory does not exist", out.parent)
     marker = out / "dataset.json"
     doc = {"format": FORMAT, "settings": s}
-    if out.is_dir() and not marker.exists() and any(not _marker_temporary(p) for p in out.iterdir()):
+    # listed before the marker is looked for: another shard writes nothing but the marker's
+    # temporary until its marker is in place, so what the listing saw is then explained
+    if out.is_dir() and any(not _marker_temporary(p) for p in list(out.iterdir())) and not marker.exists():
         raise RttaError("is not empty and holds no rtta dataset (dataset.json): choose a new or empty folder", out)
     out.mkdir(exist_ok=True)
     try:

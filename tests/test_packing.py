@@ -180,3 +180,31 @@ def test_alignment_is_remembered_only_for_read_only_corners():
     fresh = parameterize(np.array(writable), vpm, (320, 240))
     assert np.array_equal(turned.viewport_rect, fresh.viewport_rect)
     assert not np.array_equal(turned.viewport_rect, first.viewport_rect)
+
+
+@pytest.mark.parametrize("turned", [False, True])
+def test_projection_in_chunks_equals_one_pass(monkeypatch, turned):
+    """project_bounds works through the boxes CHUNK at a time, reusing its buffers: the bounds
+    are the same, bit for bit, as one pass over all boxes, across chunk boundaries and for a
+    last short chunk, with boxes behind the camera and crossing the near plane among them."""
+    import importlib
+
+    param = importlib.import_module("rtta.atlas.parameterize")   # the module, not the function
+
+    scene = random_scene(700, seed=5)
+    cam = Camera.orbit(scene.center, scene.radius, 40.0, 15.0, 0.3)     # inside: crossings
+    vpm = cam.projection(4 / 3) @ cam.view(scene.origin)
+    corners = np.array(scene.box_corners())
+    if turned:
+        rot = np.array([[0.8, -0.6, 0.0], [0.6, 0.8, 0.0], [0.0, 0.0, 1.0]])
+        centre = corners.mean(axis=1, keepdims=True)
+        corners = (corners - centre) @ rot.T + centre
+    planar = np.ascontiguousarray(corners.transpose(2, 1, 0)).transpose(2, 1, 0)
+    whole = param.project_bounds(planar, vpm)
+    front = [((np.c_[c, np.ones(8)] @ vpm.T)[:, 2:].sum(axis=1) >= 0).sum() for c in corners]
+    crossing = np.isin(front, range(1, 8))
+    assert crossing.any() and whole[0].any() and not whole[0].all()
+    monkeypatch.setattr(param, "CHUNK", 64)                  # 11 chunks, the last of 60 boxes
+    chunked = param.project_bounds(planar, vpm)
+    for a, b in zip(whole, chunked, strict=True):
+        assert np.array_equal(a, b)

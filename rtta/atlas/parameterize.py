@@ -58,39 +58,57 @@ class Records:
         return float((r[:, 2] * r[:, 3]).sum() / area) if area else 0.0
 
 
+CHUNK = 16_384    # boxes per pass of project_bounds: its rows (128 KB) stay in the CPU's cache and
+                  # below the fixed mmap threshold of tools.memory.steady_heap (no page faults)
+
+
 def project_bounds(corners: np.ndarray, vpm: np.ndarray):
     """Projected, near-clipped NDC bounds of boxes: (visible [n], ndc_min [n,2], ndc_max [n,2]).
-    One corner at a time over all boxes, into planar [3, n] bounds (numpy runs fastest on
-    long contiguous rows, and nothing [8, n]-sized leaves the cache)."""
+    One corner at a time over up to CHUNK boxes, into planar [3, n] bounds (numpy runs fastest
+    on long contiguous rows; chunks keep them in cache)."""
     n = corners.shape[0]
     m = np.asarray(vpm, np.float64)
-    corner_clip = _corner_clip(corners.transpose(2, 1, 0), m)
-    lo = np.full((3, n), np.inf)
-    hi = np.full((3, n), -np.inf)
-    all_front = np.ones(n, bool)
-    some_front = np.zeros(n, bool)
-    q = np.empty(n)
+    planar = corners.transpose(2, 1, 0)
+    lo = np.empty((3, n))
+    hi = np.empty((3, n))
+    all_front = np.empty(n, bool)
+    some_front = np.empty(n, bool)
+    clip = _CornerClip(m, min(n, CHUNK), _axis_aligned(planar))
+    for s in range(0, n, CHUNK):
+        e = min(n, s + CHUNK)
+        _project_chunk(clip, planar[:, :, s:e], lo[:, s:e], hi[:, s:e], all_front[s:e], some_front[s:e])
+    if not all_front.all():
+        lo[:, ~all_front] = 0
+        hi[:, ~all_front] = 0
+        rows = np.flatnonzero(some_front & ~all_front)     # crossing the near plane: clipped
+        if rows.size:
+            pts = _points_clip(np.asarray(corners[rows], np.float64), m)
+            a, b = _clipped_bounds(pts, pts[..., 2] + pts[..., 3])
+            lo[:, rows], hi[:, rows] = a.T, b.T
+    in_frustum = (some_front & (lo[0] <= 1) & (hi[0] >= -1) & (lo[1] <= 1)
+                  & (hi[1] >= -1) & (lo[2] <= 1))
+    return in_frustum, lo[:2].T, hi[:2].T
+
+
+def _project_chunk(clip: _CornerClip, planar, lo, hi, all_front, some_front) -> None:
+    """project_bounds on one chunk (planar [3, 8, c]) into the chunk's views of its outputs."""
+    c = planar.shape[2]
+    lo[:] = np.inf
+    hi[:] = -np.inf
+    all_front[:] = True
+    some_front[:] = False
+    q, front = clip.q[:c], clip.front[:c]
+    rows = clip.start(planar)
     with np.errstate(divide="ignore", invalid="ignore"):
         for k in range(8):
-            x, y, z, w = corner_clip(k)
-            front = np.add(z, w, out=q) >= 0               # in front of the near plane
+            x, y, z, w = rows(k)
+            np.greater_equal(np.add(z, w, out=q), 0, out=front)    # in front of the near plane
             all_front &= front
             some_front |= front
             for j, v in enumerate((x, y, z)):
                 np.divide(v, w, out=q)
                 np.minimum(lo[j], q, out=lo[j])
                 np.maximum(hi[j], q, out=hi[j])
-    if not all_front.all():
-        lo[:, ~all_front] = 0
-        hi[:, ~all_front] = 0
-        rows = np.flatnonzero(some_front & ~all_front)     # crossing the near plane: clipped
-        if rows.size:
-            clip = _points_clip(np.asarray(corners[rows], np.float64), m)
-            a, b = _clipped_bounds(clip, clip[..., 2] + clip[..., 3])
-            lo[:, rows], hi[:, rows] = a.T, b.T
-    in_frustum = (some_front & (lo[0] <= 1) & (hi[0] >= -1) & (lo[1] <= 1)
-                  & (hi[1] >= -1) & (lo[2] <= 1))
-    return in_frustum, lo[:2].T, hi[:2].T
 
 
 def _points_clip(points: np.ndarray, m: np.ndarray) -> np.ndarray:
@@ -98,35 +116,43 @@ def _points_clip(points: np.ndarray, m: np.ndarray) -> np.ndarray:
     return points[..., 0, None] * m[:, 0] + points[..., 1, None] * m[:, 1] + points[..., 2, None] * m[:, 2] + m[:, 3]
 
 
-def _corner_clip(planar: np.ndarray, m: np.ndarray):
-    """A function k -> clip rows (x, y, z, w), each [n], of corner k of every box (planar
-    [3, 8, n]; the rows are overwritten by the next call). Axis-aligned boxes (corner k
-    built from corners 0 and 7 by its bits, as Scene's are) reuse per-axis products: two
-    adds per row and corner instead of three multiply-adds."""
-    n = planar.shape[2]
-    out = np.empty((4, n))
-    if not _axis_aligned(planar):
-        def rows(k: int) -> np.ndarray:
-            p = planar[:, k]
-            for r in range(4):
-                row = np.multiply(p[0], m[r, 0], out=out[r])
-                row += p[1] * m[r, 1]
-                row += p[2] * m[r, 2]
-                row += m[r, 3]
-            return out
-        return rows
-    ends = (planar[:, 0], planar[:, 7])                   # min and max corner, [3, n] each
-    prod = np.empty((3, 2, 4, n))                          # axis, end, clip row
-    for j in range(3):
-        for e in range(2):
-            np.multiply(m[:, j, None], ends[e][j], out=prod[j, e])
-    prod[0] += m[:, 3, None]
+class _CornerClip:
+    """Clip rows (x, y, z, w) of corner k of every box in a chunk, in buffers reused from chunk
+    to chunk. Axis-aligned boxes (corner k built from corners 0 and 7 by its bits, as Scene's
+    are) reuse per-axis products: two adds per row and corner instead of three multiply-adds."""
 
-    def rows_aabb(k: int) -> np.ndarray:
-        np.add(prod[0, k & 1], prod[1, (k >> 1) & 1], out=out)
-        np.add(out, prod[2, k >> 2], out=out)
-        return out
-    return rows_aabb
+    def __init__(self, m: np.ndarray, size: int, aligned: bool):
+        self.m, self.aligned = m, aligned
+        self.out = np.empty((4, size))
+        self.prod = np.empty((3, 2, 4, size)) if aligned else None    # axis, end, clip row
+        self.q = np.empty(size)
+        self.front = np.empty(size, bool)
+
+    def start(self, planar: np.ndarray):
+        """The function k -> rows [4, c] for the chunk planar [3, 8, c] (overwritten per call)."""
+        c, m = planar.shape[2], self.m
+        out = self.out[:, :c]
+        if not self.aligned:
+            def rows(k: int) -> np.ndarray:
+                p = planar[:, k]
+                for r in range(4):
+                    row = np.multiply(p[0], m[r, 0], out=out[r])
+                    row += p[1] * m[r, 1]
+                    row += p[2] * m[r, 2]
+                    row += m[r, 3]
+                return out
+            return rows
+        prod = self.prod[..., :c]
+        for j in range(3):
+            for e, corner in enumerate((0, 7)):                # min and max corner
+                np.multiply(m[:, j, None], planar[j, corner], out=prod[j, e])
+        prod[0] += m[:, 3, None]
+
+        def rows_aabb(k: int) -> np.ndarray:
+            np.add(prod[0, k & 1], prod[1, (k >> 1) & 1], out=out)
+            np.add(out, prod[2, k >> 2], out=out)
+            return out
+        return rows_aabb
 
 
 _ALIGNED: dict[int, tuple[weakref.ref, dict]] = {}   # id of a read-only corner array: (its ref, answers per view)
@@ -251,7 +277,9 @@ def parameterize(corners: np.ndarray, vpm: np.ndarray, viewport: tuple[int, int]
             atlas_rect[row][idx] = values
     tw, th = max(packing.width, 1), max(packing.height, 1)
     transform = _transforms(rt[:2], atlas_rect[:2], scale, border, (W, H), (tw, th))
-    clip_ndc = rt / np.array([[W], [H], [W], [H]], np.float64) * 2.0 - 1.0
+    clip_ndc = np.divide(rt, np.array([[W], [H], [W], [H]], np.float64))
+    clip_ndc *= 2.0
+    clip_ndc -= 1.0
     if not every:                                          # culled: zero T and clip rectangle
         transform *= vis
         clip_ndc *= vis
@@ -305,9 +333,19 @@ def _pack_with_scaling(inner, scale, border, max_w, max_h, max_layers) -> tuple[
 
 def _transforms(x0y0, atlas_xy, scale, border, viewport, atlas) -> np.ndarray:
     """T per object as rows [4, m]: atlas_px = atlas_xy + border + scale * (viewport_px - x0y0),
-    in NDC (x0y0, atlas_xy: [2, m] rows)."""
+    in NDC (x0y0, atlas_xy: [2, m] rows). Worked out in place (one [2, m] temporary)."""
     vp = np.asarray(viewport, np.float64)[:, None]
     at = np.asarray(atlas, np.float64)[:, None]
-    sxy = scale * vp / at
-    txy = (2.0 * (atlas_xy + border) + scale * (vp - 2.0 * x0y0)) / at - 1.0
-    return np.concatenate([sxy, txy])
+    out = np.empty((4, len(scale)))
+    sxy, txy = out[:2], out[2:]
+    np.multiply(scale, vp, out=sxy)
+    sxy /= at                                              # scale * vp / at
+    np.multiply(x0y0, 2.0, out=txy)
+    np.subtract(vp, txy, out=txy)
+    txy *= scale                                           # scale * (vp - 2 x0y0)
+    origin = np.add(atlas_xy, border, dtype=np.float64)
+    origin *= 2.0
+    txy += origin                                          # + 2 (atlas_xy + border)
+    txy /= at
+    txy -= 1.0
+    return out

@@ -196,7 +196,7 @@ void main() {
 #endif
     ivec2 origin = ivec2(g_map.zw);                 // B_viewport's first pixel
     uint i = g_node_base + uint((p.y - origin.y) * g_vp_width + (p.x - origin.x));
-    uint next = atomicExchange(heads[p.y * int(u_viewport.x) + p.x], i);
+    uint next = atomicExchange(heads[p.y * int(u_viewport.x) + p.x], i + 1u);   // 0: none
     nodes[i] = uvec4(floatBitsToUint(depth), packUnorm4x8(vec4(rgb, a)), next, 0u);
     out_color = vec4(0.0);
 #else

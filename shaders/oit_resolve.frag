@@ -37,14 +37,17 @@ void main() {
     vec3 tail_c = vec3(0.0);
     float tail_w = 0.0, tail_t = 1.0;
     for (int g = 0; next != NO_NODE && g < K; ++g) {
-        uvec4 node = nodes[next];
+        uvec4 node = nodes[next - 1u];
         float d = uintBitsToFloat(node.x);
         uint i = next, c = node.y;
         next = node.z;
-        SWAP(0) SWAP(1) SWAP(2) SWAP(3) SWAP(4) SWAP(5) SWAP(6) SWAP(7)
+        // slots g.. are empty: node g is carried past the g filled ones and lands in slot g
+        // (the loop unrolls, so each copy keeps only its own swaps: 36 for 8 nodes, not 64)
+        SWAP(0) if (g >= 1) SWAP(1) if (g >= 2) SWAP(2) if (g >= 3) SWAP(3)
+        if (g >= 4) SWAP(4) if (g >= 5) SWAP(5) if (g >= 6) SWAP(6) if (g >= 7) SWAP(7)
     }
     for (int g = 0; next != NO_NODE && g < MAX_LIST; ++g) {     // more than K: merged behind
-        uvec4 node = nodes[next];
+        uvec4 node = nodes[next - 1u];
         next = node.z;
         vec4 q = unpackUnorm4x8(node.y);
         tail_c += q.a * q.rgb;

@@ -64,7 +64,7 @@ class PixelOrderPass:
         if self.bases.size < bases.nbytes:
             self.bases.orphan(max(bases.nbytes, 2 * self.bases.size))
         self.bases.write(bases.tobytes())
-        self.heads.clear(size=4 * w * h, chunk=b"\xff\xff\xff\xff")
+        self.heads.clear(size=4 * w * h)       # 0: no node (a pattern clear took 8 ms at 1024²)
         self.heads.bind_to_storage_buffer(5)
         self.nodes.bind_to_storage_buffer(6)
         self.bases.bind_to_storage_buffer(7)

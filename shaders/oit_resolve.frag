@@ -1,7 +1,8 @@
 #version 430
 // defines:
 // `--order pixel`: each pixel's list of object surfaces (oit.glsl) blended front to back in
-// the order of their depths (ties: by node, so the order is stable). The list's first K = 8
+// the order of their depths (ties: by packed colour, so the blend depends on the surfaces
+// alone, not on the order their fragments arrived in). The list's first K = 8
 // surfaces are sorted in registers (each through a fixed chain of compare-and-swap selects,
 // in a loop short enough to unroll; no local arrays: on llvmpipe an array indexed per lane
 // is scattered lane by lane, and a sort over one cost 4 s a frame). The list holds the
@@ -20,12 +21,14 @@
 uniform int u_width;
 layout(location = 0) out vec4 out_color;
 
-// slot j holds (depth, node, colour); an empty slot has depth 2 and node NO_NODE
-#define SLOT(j) float d##j = 2.0; uint i##j = NO_NODE; uint c##j = 0u;
-// keep the nearer of (d, i, c) and slot j in the slot, carry the other on
-#define SWAP(j) { bool s = d < d##j || (d == d##j && i < i##j); \
+// slot j holds (depth, colour); an empty slot has depth 2
+#define SLOT(j) float d##j = 2.0; uint c##j = 0u;
+// keep the nearer of (d, c) and slot j in the slot, carry the other on. Equal depths (coplanar
+// faces of two parts) go by colour: a tie by node (draw order) cost a tenth of the composite
+// more, and on a GPU, whose fragments reach the lists in no fixed order, would still be stable
+// only through the node numbers; equal colours blend alike in either order.
+#define SWAP(j) { bool s = d < d##j || (d == d##j && c < c##j); \
     float td = s ? d##j : d; d##j = s ? d : d##j; d = td; \
-    uint ti = s ? i##j : i; i##j = s ? i : i##j; i = ti; \
     uint tc = s ? c##j : c; c##j = s ? c : c##j; c = tc; }
 #define BLEND(j) { vec4 q = d##j < 1.5 ? unpackUnorm4x8(c##j) : vec4(0.0); acc += t * q.a * q.rgb; t *= 1.0 - q.a; }
 
@@ -39,7 +42,7 @@ void main() {
     for (int g = 0; next != NO_NODE && g < K; ++g) {
         uvec4 node = nodes[next - 1u];
         float d = uintBitsToFloat(node.x);
-        uint i = next, c = node.y;
+        uint c = node.y;
         next = node.z;
         // slots g.. are empty: node g is carried past the g filled ones and lands in slot g
         // (the loop unrolls, so each copy keeps only its own swaps: 36 for 8 nodes, not 64)

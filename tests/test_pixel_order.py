@@ -187,3 +187,27 @@ def test_ghosted_context_in_pixel_order_equals_numpy(make_renderer, orbit, focus
     objects = r.composite("ghosted", Style(focus={1}, context_opacity=0.7, desaturate=0.2)).read()[0][..., :3]
     wrong = (np.abs(objects.astype(np.float64) - want).max(-1) > 8) & ~edge
     assert wrong.sum() > 30, "object order agrees with the per-pixel blend: the scene proves nothing"
+
+
+def test_coplanar_surfaces_blend_alike_in_any_draw_order(make_renderer):
+    """Two parts sharing a face (coincident boxes, as adjacent CAD parts often are): their
+    surfaces have equal depths, and the per-pixel blend of the pair must not depend on which
+    one is drawn (or reaches the list) first. The same scene with its objects in the other
+    order gives the same image; object order is shown to depend on it (so the pair's order
+    matters to the blend and the test can fail)."""
+    box = trimesh.creation.box(extents=(1.0, 1.0, 1.0))
+    red, blue = (0.9, 0.1, 0.1, 1), (0.1, 0.2, 0.9, 1)
+    part = (np.asarray(box.vertices), np.asarray(box.faces), None)
+    images = {}
+    for name, colors in (("red first", [red, blue]), ("blue first", [blue, red])):
+        scene = from_meshes([("a", *part), ("b", *part)], colors)
+        r = make_renderer(scene)
+        r.capture(Camera.orbit(scene.center, scene.radius, 20, 15, 2.2), VP)
+        images[name] = {order: r.composite("transparent", Style(default_opacity=0.6, order=order)).read()[0]
+                        [..., :3].astype(np.int64) for order in ("pixel", "object")}
+    covered = (np.abs(images["red first"]["pixel"] - np.array(BACKGROUND[:3]) * 255).max(-1) > 8).sum()
+    assert covered > 2000
+    by_object = np.abs(images["red first"]["object"] - images["blue first"]["object"]).max(-1)
+    assert (by_object > 8).sum() > 1000, "the pair's order does not matter to the blend: the test proves nothing"
+    by_pixel = np.abs(images["red first"]["pixel"] - images["blue first"]["pixel"]).max(-1)
+    assert by_pixel.max() <= 1, f"pixel order depends on the draw order at {int((by_pixel > 1).sum())} px"

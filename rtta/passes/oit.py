@@ -4,9 +4,9 @@ correctly, where the object order by bounding-box centre cannot).
 
 One pass over the sprite quads writes every covered (pixel, object) surface into a per-pixel
 linked list (an atomic exchange of the pixel's head; a surface's node is fixed by its pixel's
-place in the object's B_viewport, so no counter is shared), then one full-screen pass walks
-each list front to back (shaders/oit_resolve.frag: the K = 8 nearest in exact order, the
-rest merged behind them, weighted blended). Chosen over depth peeling, which draws every
+place in the object's B_viewport, so no counter is shared), then one pass over the union of
+the drawn objects' B_viewport walks each list front to back (shaders/oit_resolve.frag: the
+K = 8 nearest in exact order, the rest merged behind them, weighted blended). Chosen over depth peeling, which draws every
 sprite quad once per layer (BENCHMARKS.md). The nodes need 16 bytes per pixel of the drawn
 objects' viewport rectangles; a frame needing more than MAX_NODES blends in object order
 instead (the caller counts it).
@@ -49,6 +49,7 @@ class PixelOrderPass:
                                    fragment_shader=glsl.load("oit_resolve.frag"))
         self.vao = ctx.vertex_array(self.program, [])
         self._width = 1
+        self._rect = (-1.0, -1.0, 1.0, 1.0)
 
     def begin(self, viewport: tuple[int, int], ids: np.ndarray, records: Records) -> bool:
         bases, capacity = node_bases(records, ids)
@@ -56,6 +57,9 @@ class PixelOrderPass:
             return False
         w, h = int(viewport[0]), int(viewport[1])
         self._width = w
+        rects = records.viewport_rect[ids].reshape(-1, 4)
+        lo, hi = (rects[:, :2].min(axis=0), rects[:, 2:].max(axis=0)) if len(rects) else ((0, 0), (0, 0))
+        self._rect = (*(np.asarray(lo) / (w, h) * 2 - 1), *(np.asarray(hi) / (w, h) * 2 - 1))   # NDC
         if self.heads.size < 4 * w * h:
             self.heads.orphan(4 * w * h)
         need = NODE_BYTES * max(capacity, 1)
@@ -76,11 +80,12 @@ class PixelOrderPass:
         self.heads.bind_to_storage_buffer(5)
         self.nodes.bind_to_storage_buffer(6)
         self.program["u_width"].value = self._width
+        self.program["u_rect"].value = tuple(float(v) for v in self._rect)
         self.ctx.enable_only(moderngl.BLEND)
         self.ctx.blend_func = moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA
         fbo.depth_mask = False
         fbo.use()
-        self.vao.render(moderngl.TRIANGLES, vertices=3)
+        self.vao.render(moderngl.TRIANGLES, vertices=6)
         fbo.depth_mask = True
 
     @property

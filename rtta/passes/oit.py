@@ -3,13 +3,14 @@ surfaces, which the atlas holds for every object (nested and interpenetrating pa
 correctly, where the object order by bounding-box centre cannot).
 
 One pass over the sprite quads writes every covered (pixel, object) surface into a per-pixel
-linked list (an atomic exchange of the pixel's head; a surface's node is fixed by its pixel's
-place in the object's B_viewport, so no counter is shared), then one pass over the union of
-the drawn objects' B_viewport walks each list front to back (shaders/oit_resolve.frag: the
-K = 8 nearest in exact order, the rest merged behind them, weighted blended). Chosen over depth peeling, which draws every
-sprite quad once per layer (BENCHMARKS.md). The nodes need 16 bytes per pixel of the drawn
-objects' viewport rectangles; a frame needing more than MAX_NODES blends in object order
-instead (the caller counts it).
+linked list (an atomic exchange of the pixel's head; a surface's node is fixed by its
+pixel's place in the object's B_viewport, so no counter is shared), then one pass over the
+union of the drawn objects' B_viewport walks each list front to back
+(shaders/oit_resolve.frag: the K = 8 nearest in exact order, the rest merged behind them,
+weighted blended). Chosen over depth peeling, which draws every sprite quad once per layer
+(BENCHMARKS.md). The nodes need 16 bytes per pixel of the drawn objects' viewport
+rectangles; a frame needing more than MAX_NODES blends in object order instead (the caller
+counts it).
 """
 
 from __future__ import annotations

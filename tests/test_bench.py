@@ -45,7 +45,7 @@ def test_composite_bench_quick(gl, tmp_path, capsys):
     assert [s["name"] for s in data["scenes"]] == ["demo", "table1-5", "table1-21"]
     for s in data["scenes"]:
         assert set(s["modes"]) == {"sprites", "transparent", "ghosted", "ghosted-ao", "ghosted-ao full",
-                                   "transparent pixel"}
+                                   "transparent object"}
         assert all(v > 0 for v in s["modes"].values()) and s["std_ms"] > 0 and s["recomposite_ms"] > 0
         assert s["pixel_over_object"] > 0 and 0 <= s["ao_error"]["over_8"] <= 1
     assert "recomposite" in capsys.readouterr().out

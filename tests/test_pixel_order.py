@@ -75,7 +75,7 @@ def test_pixel_order_overflow_keeps_nearest(make_renderer, monkeypatch):
     r = make_renderer(scene)
     cam = Camera.orbit(scene.center, scene.radius, 10, 15, 2.0)
     r.capture(cam, VP)
-    by_object = r.composite("transparent", Style()).read()[0].copy()
+    by_object = r.composite("transparent", Style(order="object")).read()[0].copy()
     monkeypatch.setattr(oit, "MAX_NODES", 10)
     fallback = r.composite("transparent", Style(order="pixel")).read()[0]
     assert r._composite.fallbacks == 1 and np.array_equal(fallback, by_object)

@@ -72,9 +72,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="ambient occlusion on the focus objects only or on all (ghosted-ao; default: see README)")
     p.add_argument("--halo", type=int, default=0, metavar="WIDTH",
                    help="ghosted modes: a dark halo WIDTH pixels wide around focus objects where context lies behind")
-    p.add_argument("--order", choices=("object", "pixel"), default=None,
+    p.add_argument("--order", choices=("auto", "object", "pixel"), default=None,
                    help="transparency order (transparent, ghosted context): by object (bounds centres) or per "
-                        "pixel (each object's surface depth; nested parts blend right); default: see README")
+                        "pixel (each object's surface depth; nested parts blend right); auto (default): per pixel "
+                        "in transparent, by object in the ghosted context (see README)")
     p.add_argument("--edge-objects", choices=("focus", "all"), default=None,
                    help="edges on the focus objects only or on all (ghosted-ao; default: see README)")
     p.add_argument("--projector", default=None, metavar="IMAGE[,AZ,EL,DIST]",

@@ -8,8 +8,9 @@ desaturated context, with silhouettes), `ghosted-ao` (ghosted, shaded with ambie
 occlusion and edges computed on each object's own atlas images; by default AO on the focus
 objects only, Style.ao_objects / edge_objects). Regions captured below one texel per pixel
 (context objects at Settings.context_scale) are upsampled depth-aware (UPSAMPLE variant);
-`transparent` blends per pixel in surface order with Style.order 'pixel' (oit.py); Style.halo
-draws halos around focus objects where context lies behind them.
+`transparent` blends per pixel in surface order (Style.order 'pixel', and 'auto', the default;
+oit.py), the ghosted context with 'pixel'; Style.halo draws halos around focus objects where
+context lies behind them.
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ from ..gl import glraw, glsl
 from ..gl.gpu import GpuScene
 from ..gl.targets import SHRINK_AFTER_FRAMES, LayeredTarget, release_framebuffer, round_up
 from .capture import mat_bytes
-from .oit import ORDERS, PixelOrderPass
+from .oit import PixelOrderPass, resolved_order
 
 MODES = ("sprites", "transparent", "ghosted", "ghosted-ao")
 LENS_MODES = ("ghosted", "ghosted-ao")    # where a lens cuts the context away
@@ -51,7 +52,8 @@ class Style:
     # defaults from `rtta bench composite` on the demo at 1024² (README, BENCHMARKS.md)
     ao_objects: str = "focus"          # ghosted-ao: AO on 'focus' objects only (the paper) or on 'all'
     edge_objects: str = "all"          # ghosted-ao: edges on 'focus' objects only or on 'all'
-    order: str = "object"              # transparent and ghosted context: 'object' (bounds centres) or 'pixel'
+    order: str = "auto"                # transparent and ghosted context: 'object' (bounds centres), 'pixel'
+                                       # (surface depths), or 'auto' (oit.resolved_order: pixel in transparent)
     halo: int = 0                      # ghosted modes: halo width (pixels) around focus objects, 0: none
     halo_color: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.6)   # (rgb, strength)
 
@@ -213,7 +215,7 @@ class CompositePass:
             self._draw(everyone, style, records, sprite=True)
             self._draw(focus, style, records, outline=True)      # highlights, seen through
         elif mode == "transparent":
-            self._blend(back_to_front(records, view_depth, everyone), style, records, target, desaturate=0.0)
+            self._blend(back_to_front(records, view_depth, everyone), style, records, target, mode, desaturate=0.0)
             self._draw(focus, style, records, outline=True)
         else:
             with_ao = mode == "ghosted-ao"
@@ -223,7 +225,7 @@ class CompositePass:
             self._draw(focus, style, records, sprite=True, ao=with_ao)
             params[context, 0] = style.context_opacity * params[context, 0]
             self._upload(self.styles, params.tobytes())
-            self._blend(back_to_front(records, view_depth, context), style, records, target, behind=focus,
+            self._blend(back_to_front(records, view_depth, context), style, records, target, mode, behind=focus,
                         desaturate=style.desaturate, depth_test=True, ao=with_ao, cut=True)
             if style.halo > 0 and len(focus):
                 self._halo(focus, context, style, records, target)
@@ -261,14 +263,14 @@ class CompositePass:
             self._context_depth.release()
         self._context_depth = self._context_fbo = None
 
-    def _blend(self, ids, style: Style, records: Records, target: CompositeTarget, behind=None, **how) -> None:
+    def _blend(self, ids, style: Style, records: Records, target: CompositeTarget, mode: str, behind=None,
+               **how) -> None:
         """Blend `ids` (back to front) over the target: object by object, or per pixel in the
-        order of their surfaces (style.order 'pixel'; object order when over MAX_NODES).
+        order of their surfaces (style.order 'pixel', or 'auto' in `transparent`; object order
+        when over MAX_NODES).
         `behind`: opaque objects already drawn (the ghosted focus); surfaces behind them are
         hidden, by the depth test in object order and by their depth per pixel in pixel order."""
-        if style.order not in ORDERS:
-            raise ValueError(f"order must be one of {', '.join(ORDERS)}, got {style.order!r}")
-        if style.order == "pixel" and len(ids):
+        if resolved_order(style.order, mode) == "pixel" and len(ids):
             if self._pixel_order is None:
                 self._pixel_order = PixelOrderPass(self.ctx)
             ids = np.asarray(ids, np.int64)

@@ -32,6 +32,7 @@ from ..gl.context import Capabilities, shared_context
 from ..gl.readback import map_back
 from ..ldi.lens import Lens
 from ..passes.composite import Style
+from ..passes.oit import ORDERS
 from ..passes.projector import Projector
 from ..scene.camera import DEFAULT_ORBIT, Camera, parse_orbit
 from ..scene.loader import load_scene
@@ -80,7 +81,7 @@ def make_style(focus: Iterable[int] = (), opacity: Mapping[int, float] | None = 
         raise RttaError("--edge-width must be 1..8, --ao-radius in (0, 64], --ao-strength in [0, 4]")
     style.edge_width, style.ao_radius, style.ao_strength = edge_width, ao_radius, ao_strength
     roles = (("--ao-objects", ao_objects, ("focus", "all")), ("--edge-objects", edge_objects, ("focus", "all")),
-             ("--order", order, ("object", "pixel")))
+             ("--order", order, ORDERS))
     for what, value, choices in roles:
         if value is not None:
             _choice(what, value, choices)

@@ -129,7 +129,7 @@ def _print_capture(rows, scaling, renderer, viewport) -> None:
 def composite_row(ctx, name, scene, viewport, frames: int, settings=None) -> dict:
     """Full frame per mode (capture + post + composite) against STD at the default settings,
     plus ghosted-ao at full quality (AO and edges on every object, every region at scale 1)
-    and transparent in per-pixel order, all taking turns within each round; the error of the
+    and transparent in object order (the default is per pixel), all taking turns within each round; the error of the
     default ghosted-ao against the full-quality one; a re-composite after a focus change
     against the full ghosted-ao frame."""
     from ..passes.composite import MODES, Style
@@ -140,7 +140,7 @@ def composite_row(ctx, name, scene, viewport, frames: int, settings=None) -> dic
     cam = Camera.orbit(scene.center, scene.radius, 30.0, 20.0, 2.2)
     focus = {0, scene.count // 2}
     styles = {"full": Style(focus=focus, ao_objects="all", edge_objects="all"),
-              "pixel": Style(focus=focus, order="pixel")}
+              "object": Style(focus=focus, order="object")}
 
     def frame(renderer, mode, style):
         renderer.capture(cam, viewport, focus=style.focus)
@@ -149,7 +149,7 @@ def composite_row(ctx, name, scene, viewport, frames: int, settings=None) -> dic
     fns = {"std": _gl_timed(ctx, lambda: r.std(cam, viewport))}
     fns.update({mode: _gl_timed(ctx, lambda mode=mode: frame(r, mode, Style(focus=focus))) for mode in MODES})
     fns["ghosted-ao full"] = _gl_timed(ctx, lambda: frame(full, "ghosted-ao", styles["full"]))
-    fns["transparent pixel"] = _gl_timed(ctx, lambda: frame(r, "transparent", styles["pixel"]))
+    fns["transparent object"] = _gl_timed(ctx, lambda: frame(r, "transparent", styles["object"]))
     times = _interleaved_ms(fns, frames)
     std = np.array(times["std"])
     names = [n for n in fns if n != "std"]
@@ -157,7 +157,7 @@ def composite_row(ctx, name, scene, viewport, frames: int, settings=None) -> dic
            "std_ms": float(np.median(std)),
            "modes": {n: float(np.median(times[n])) for n in names},
            "ratios": {n: float(np.median(np.array(times[n]) / std)) for n in names},
-           "pixel_over_object": float(np.median(np.array(times["transparent pixel"]) / np.array(times["transparent"])))}
+           "pixel_over_object": float(np.median(np.divide(times["transparent"], times["transparent object"])))}
     want = frame(full, "ghosted-ao", styles["full"]).read()[0][..., :3].astype(np.int64)
     got = frame(r, "ghosted-ao", Style(focus=focus)).read()[0][..., :3].astype(np.int64)
     diff = np.abs(got - want)
@@ -222,9 +222,10 @@ def _print_composite(rows, renderer, viewport, frames) -> None:
         print(f"{r['name']:>13} {r['std_ms']:>8.2f} {cells} {r['pixel_over_object']:>8.2f}x "
               f"{100 * err['over_8']:>8.3f}% {255 * err['mae']:>7.3f} {rc:>8.2f} "
               f"({rc / r['modes']['ghosted-ao']:.2f}x)")
-    print("columns at the default settings, except 'ghosted-ao full' (AO and edges on every object, every region "
-          "at scale 1) and 'transparent pixel' (--order pixel); pixel/obj: transparent pixel over object order, "
-          "paired per round; ao >8/255, ao MAE (in 1/255): default ghosted-ao against full quality; "
+    print("columns at the default settings (transparent: --order pixel), except 'ghosted-ao full' (AO and edges on "
+          "every object, every region at scale 1) and 'transparent object' (--order object); pixel/obj: transparent "
+          "(pixel) over object order, paired per round; ao >8/255, ao MAE (in 1/255): default ghosted-ao against "
+          "full quality; "
           "recomposite: ghosted-ao after a focus change (post for the objects whose role changed + "
           "compositing), ratio to a full default ghosted-ao frame")
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..passes.composite import Style
+from ..passes.oit import resolved_order
 from ..renderer.renderer import Renderer, Settings
 from .bench import _gl_timed, _interleaved_ms
 
@@ -33,9 +34,10 @@ def _style(c: dict, focus: set[int]) -> Style:
 
 def _is_default(c: dict) -> bool:
     style = Style()
-    ok = c["scale"] == Settings.context_scale and c["order"] in ("object", style.order)
+    order = c["order"] == resolved_order(style.order, c["mode"])
     if c["mode"] == "transparent":
-        return c["order"] == style.order
+        return order
+    ok = c["scale"] == Settings.context_scale and order
     return ok and (c["ao"] == "-" or c["ao"] == style.ao_objects)
 
 

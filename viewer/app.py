@@ -180,10 +180,11 @@ class Viewer:
     def _capture(self, camera) -> None:
         vp = self.viewport
         focus = self.renderer.scaled_for(self.state.style.focus)     # empty unless a context scale
-        key = (tuple(camera.eye), tuple(camera.target), vp, self.state.capture_key(), focus)
+        normals = self.renderer.needs_normals(self.state.mode)        # ghosted-ao, the projector
+        key = (tuple(camera.eye), tuple(camera.target), vp, self.state.capture_key(), focus, normals)
         if key != self._capture_key:
             self.renderer.hidden = self.state.hidden
-            self.records = self.renderer.capture(camera, vp, focus=focus)
+            self.records = self.renderer.capture(camera, vp, focus=focus, normals=normals)
             self._capture_key, self._composite_key = key, None
 
     def _draw_composite(self) -> None:

@@ -63,6 +63,7 @@ class LayeredTarget:
         self.ctx = ctx
         self.depth_keyed = depth_keyed
         self.normals = normals
+        self.normals_written = normals   # False after a capture that left the normal image alone
         self.size = (0, 0)
         self.layers = 0
         self.allocations = 0
@@ -134,6 +135,11 @@ class LayeredTarget:
         """Texture memory: RGBA8 + RGBA8 (with normals) + R32I + D32F per texel."""
         return self.size[0] * self.size[1] * self.layers * (4 + 4 * self.normals + 4 + 4)
 
+    def write_normals(self, on: bool) -> None:
+        """Whether draws write the normal image (a colour mask; normals-less targets ignore it)."""
+        if self.normals:
+            self._fbo.color_mask = [(True,) * 4, (bool(on),) * 4, (True,) * 4]
+
     def bind(self, viewport: tuple[int, int, int, int] | None = None) -> None:
         """Bind for drawing, with the GL viewport set (default: the whole allocation)."""
         self._fbo.viewport = viewport or (0, 0, *self.size)
@@ -157,15 +163,18 @@ class LayeredTarget:
              parts: tuple[str, ...] | None = None) -> dict[str, np.ndarray]:
         """Layers as numpy [layers, H, W(, C)], cropped to `size`; row 0 is the bottom row;
         normals decoded to float32 xyz. `parts` picks which attachments are read (picking
-        needs only id and depth; None: all there are, so no "normal" without normals).
+        needs only id and depth; None: all there are, so no "normal" without normals or after
+        a capture that wrote none).
         Empty texels (depth 1) read as colour 0, normal 0, id -1, depth-keyed or not."""
         w, h = self.size
         n = self.layers
         cw, ch = size or (w, h)
         cl = n if layers is None else max(1, layers)
-        parts = parts or (("color", "normal", "id", "depth") if self.normals else ("color", "id", "depth"))
+        parts = parts or (("color", "normal", "id", "depth") if self.normals_written else ("color", "id", "depth"))
         if "normal" in parts and not self.normals:
             raise ValueError("this target has no normal image (normals=False)")
+        if "normal" in parts and not self.normals_written:
+            raise ValueError("the last capture wrote no normal image (capture with normals=True)")
         readers = {
             "color": lambda: np.frombuffer(self.color.read(), np.uint8).reshape(n, h, w, 4),
             "normal": lambda: decode_normals(np.frombuffer(self.normal.read(), np.uint8).reshape(n, h, w, 4)),

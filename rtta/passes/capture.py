@@ -84,9 +84,10 @@ class CapturePass(ScenePass):
             super().__init__(ctx, geometry="capture.geom", CAPTURE_GS=True)
 
     def render(self, *, gpu: GpuScene, records: Records, view: np.ndarray, proj: np.ndarray,
-               atlas: LayeredTarget) -> None:
+               atlas: LayeredTarget, normals: bool = True) -> None:
         """Upload R, then draw the whole batch once into `atlas` (sized to records.atlas_size);
-        objects without a region (culled, hidden) are left out of that one draw."""
+        objects without a region (culled, hidden) are left out of that one draw. normals=False:
+        the normal image is not written (a mode that reads none; 15% of the demo's capture)."""
         tw, th, td = records.atlas_size
         self.frames += 1
         atlas.ensure((tw, th), td)
@@ -96,6 +97,7 @@ class CapturePass(ScenePass):
         gpu.upload_records(records)
         vao = self.setup(gpu, view, proj, atlas)
         atlas.bind((0, 0, tw, th))
+        atlas.write_normals(normals)
         glraw.set_clip_distances(4, True)
         try:
             if records.visible.all():
@@ -104,6 +106,8 @@ class CapturePass(ScenePass):
                 self._draw_runs(vao, gpu.scene.index_runs(records.visible))
         finally:
             glraw.set_clip_distances(4, False)
+            atlas.write_normals(True)
+        atlas.normals_written = normals and atlas.normals
 
     def _draw_runs(self, vao: moderngl.VertexArray, runs: np.ndarray) -> None:
         """Draw index runs [(first, count)] in one call: one run directly, several as one

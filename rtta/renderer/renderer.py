@@ -57,6 +57,7 @@ class Renderer:
         self._post_done = np.zeros(0, np.int8)     # per object: 0 nothing, 1 edges, 2 AO + edges
         self._view: tuple | None = None            # (camera, viewport, path) of the last capture
         self.captured_focus: frozenset[int] = frozenset()   # the focus the last capture was scaled for
+        self.captured_normals = True       # whether the last capture wrote the normal image
         self._captures = 0
         self.target = CompositeTarget(ctx)
         self.last: tuple | None = None     # (records, view, proj) of the last capture
@@ -134,17 +135,21 @@ class Renderer:
             self._capture[path] = CapturePass(self.ctx, path)
         return self._capture[path]
 
-    def capture(self, camera: Camera, viewport: tuple[int, int], path: str | None = None, focus=()) -> Records:
+    def capture(self, camera: Camera, viewport: tuple[int, int], path: str | None = None, focus=(),
+                normals: bool = True) -> Records:
         """Parameterize and capture every visible object into the atlas; returns R. With a
-        context scale below 1, `focus` objects get full-scale regions and the rest smaller ones."""
+        context scale below 1, `focus` objects get full-scale regions and the rest smaller ones.
+        normals=False leaves the normal image unwritten, for modes that read none
+        (needs_normals); a composite that needs it then captures again."""
         view, proj = self.matrices(camera, viewport)
         self.captured_focus = self.scaled_for(focus)
+        self.captured_normals = bool(normals)
         self._view = (camera, viewport, path)
         with self._timed("parameterize"):
             records = self.parameterize(camera, viewport, (view, proj), self.captured_focus)
         with self._timed("capture"):
             self.capture_pass(path).render(gpu=self.gpu, records=records, view=view, proj=proj,
-                                           atlas=self.atlas)
+                                           atlas=self.atlas, normals=normals)
             self._throttle.flush()   # rasterize while Python goes on; bounds the driver's memory
         self.last = (records, view, proj)
         self._captures += 1
@@ -155,8 +160,10 @@ class Renderer:
         if self.last is None:
             raise RuntimeError("composite() needs a capture() first")
         style = style or Style()
-        if self.scaled_for(style.focus) != self.captured_focus:
-            self.capture(*self._view, focus=style.focus)    # the focus decides the region scales
+        missing = self.needs_normals(mode) and not self.captured_normals
+        if self.scaled_for(style.focus) != self.captured_focus or missing:
+            # the focus decides the region scales; AO, edges and the projector read normals
+            self.capture(*self._view, focus=style.focus, normals=self.captured_normals or missing)
         records, view, proj = self.last
         if self._composite is None:
             self._composite = CompositePass(self.ctx)
@@ -182,6 +189,11 @@ class Renderer:
                                    view_proj=proj @ view, projection=projection, lens=lens)
             self._throttle.flush()
         return self.target
+
+    def needs_normals(self, mode: str) -> bool:
+        """Whether compositing `mode` reads the atlas's normal image: AO and edges
+        (ghosted-ao) and the projector's lighting do; the other modes read colour and depth."""
+        return mode == "ghosted-ao" or self.projector is not None
 
     def _projection(self):
         """(ProjectorPass, Projector) with the shadow map up to date, or None without a projector."""

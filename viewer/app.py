@@ -184,7 +184,8 @@ class Viewer:
         key = (tuple(camera.eye), tuple(camera.target), vp, self.state.capture_key(), focus, normals)
         if key != self._capture_key:
             self.renderer.hidden = self.state.hidden
-            self.records = self.renderer.capture(camera, vp, focus=focus, normals=normals)
+            # no id image: compositing never reads it, picking reads depths (rtta.passes.picking)
+            self.records = self.renderer.capture(camera, vp, focus=focus, normals=normals, ids=False)
             self._capture_key, self._composite_key = key, None
 
     def _draw_composite(self) -> None:

@@ -64,6 +64,7 @@ class LayeredTarget:
         self.depth_keyed = depth_keyed
         self.normals = normals
         self.normals_written = normals   # False after a capture that left the normal image alone
+        self.ids_written = True          # False after a capture that left the id image alone
         self.size = (0, 0)
         self.layers = 0
         self.allocations = 0
@@ -135,10 +136,11 @@ class LayeredTarget:
         """Texture memory: RGBA8 + RGBA8 (with normals) + R32I + D32F per texel."""
         return self.size[0] * self.size[1] * self.layers * (4 + 4 * self.normals + 4 + 4)
 
-    def write_normals(self, on: bool) -> None:
-        """Whether draws write the normal image (a colour mask; normals-less targets ignore it)."""
-        if self.normals:
-            self._fbo.color_mask = [(True,) * 4, (bool(on),) * 4, (True,) * 4]
+    def write_mask(self, normals: bool = True, ids: bool = True) -> None:
+        """Whether draws write the normal and id images (colour masks; colour and depth are
+        always written)."""
+        masks = [(True,) * 4] + [(bool(normals),) * 4] * self.normals + [(bool(ids),) * 4]
+        self._fbo.color_mask = masks
 
     def bind(self, viewport: tuple[int, int, int, int] | None = None) -> None:
         """Bind for drawing, with the GL viewport set (default: the whole allocation)."""
@@ -170,11 +172,14 @@ class LayeredTarget:
         n = self.layers
         cw, ch = size or (w, h)
         cl = n if layers is None else max(1, layers)
-        parts = parts or (("color", "normal", "id", "depth") if self.normals_written else ("color", "id", "depth"))
+        parts = parts or tuple(k for k, on in (("color", True), ("normal", self.normals_written),
+                                               ("id", self.ids_written), ("depth", True)) if on)
         if "normal" in parts and not self.normals:
             raise ValueError("this target has no normal image (normals=False)")
         if "normal" in parts and not self.normals_written:
             raise ValueError("the last capture wrote no normal image (capture with normals=True)")
+        if "id" in parts and not self.ids_written:
+            raise ValueError("the last capture wrote no id image (capture with ids=True)")
         readers = {
             "color": lambda: np.frombuffer(self.color.read(), np.uint8).reshape(n, h, w, 4),
             "normal": lambda: decode_normals(np.frombuffer(self.normal.read(), np.uint8).reshape(n, h, w, 4)),
@@ -188,14 +193,19 @@ class LayeredTarget:
                 out[k][empty] = -1 if k == "id" else 0
         return out
 
-    def texels(self, points: np.ndarray) -> dict[str, np.ndarray]:
-        """'id' (int32) and 'depth' (float32) at `points` [k, 3] (x, y, layer; row 0 at the
-        bottom), each inside the target; an empty texel (depth 1) reads id -1, as in `read`."""
+    def texels(self, points: np.ndarray, ids: bool = True) -> dict[str, np.ndarray]:
+        """'depth' (float32) and, with `ids`, 'id' (int32) at `points` [k, 3] (x, y, layer;
+        row 0 at the bottom), each inside the target; an empty texel (depth 1) reads id -1,
+        as in `read`."""
         points = np.asarray(points, np.int64).reshape(-1, 3)
         depth = glraw.read_texels(self.depth.glo, points, depth=True)
-        ids = glraw.read_texels(self.ids.glo, points, depth=False)
-        ids[depth >= 1.0] = -1
-        return {"id": ids, "depth": depth}
+        if not ids:
+            return {"depth": depth}
+        if not self.ids_written:
+            raise ValueError("the last capture wrote no id image (capture with ids=True)")
+        found = glraw.read_texels(self.ids.glo, points, depth=False)
+        found[depth >= 1.0] = -1
+        return {"id": found, "depth": depth}
 
     def _free(self) -> None:
         if self._fbo is not None:

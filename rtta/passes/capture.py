@@ -84,20 +84,22 @@ class CapturePass(ScenePass):
             super().__init__(ctx, geometry="capture.geom", CAPTURE_GS=True)
 
     def render(self, *, gpu: GpuScene, records: Records, view: np.ndarray, proj: np.ndarray,
-               atlas: LayeredTarget, normals: bool = True) -> None:
+               atlas: LayeredTarget, normals: bool = True, ids: bool = True) -> None:
         """Upload R, then draw the whole batch once into `atlas` (sized to records.atlas_size);
-        objects without a region (culled, hidden) are left out of that one draw. normals=False:
-        the normal image is not written (a mode that reads none; 15% of the demo's capture)."""
+        objects without a region (culled, hidden) are left out of that one draw. normals=False,
+        ids=False: the normal or id image is not written, for readers that need neither
+        (compositing reads neither ids nor, but in ghosted-ao, normals; picking reads depth)."""
         tw, th, td = records.atlas_size
         self.frames += 1
         atlas.ensure((tw, th), td)
         atlas.clear()
+        atlas.normals_written, atlas.ids_written = normals and atlas.normals, ids
         if td == 0:
             return
         gpu.upload_records(records)
         vao = self.setup(gpu, view, proj, atlas)
         atlas.bind((0, 0, tw, th))
-        atlas.write_normals(normals)
+        atlas.write_mask(normals, ids)
         glraw.set_clip_distances(4, True)
         try:
             if records.visible.all():
@@ -106,8 +108,7 @@ class CapturePass(ScenePass):
                 self._draw_runs(vao, gpu.scene.index_runs(records.visible))
         finally:
             glraw.set_clip_distances(4, False)
-            atlas.write_normals(True)
-        atlas.normals_written = normals and atlas.normals
+            atlas.write_mask()
 
     def _draw_runs(self, vao: moderngl.VertexArray, runs: np.ndarray) -> None:
         """Draw index runs [(first, count)] in one call: one run directly, several as one

@@ -1,8 +1,8 @@
 """Picking from the atlas: every object under a viewport pixel, occluded ones included.
 
-The id image only names the front-most object; the atlas keeps each object's own id and
-depth, so the pixel is mapped through each candidate's transform T into its region and the
-objects that cover it there are returned front to back. Ghosted views use this to pick a
+The id image only names the front-most object; the atlas keeps each object's own depth
+in its own region, so the pixel is mapped through each candidate's transform T into its
+region and the objects that cover it there are returned front to back. Ghosted views use this to pick a
 focus object seen through the context.
 """
 
@@ -18,20 +18,22 @@ def objects_at(atlas, records: Records, x: int, y: int) -> list[tuple[int, float
     """(object id, window depth) of every object covering viewport pixel (x, y), nearest
     first; (x, y) counts from the bottom-left pixel. `atlas` is the atlas target itself,
     of which only the texels under the candidate objects are read (a few, however many
-    layers: picking at 10^5 objects stays as quick as at 24), or a dict of its 'id' and
-    'depth' arrays [layers, H, W] as `LayeredTarget.read` gives."""
+    layers: picking at 10^5 objects stays as quick as at 24), or a dict with its 'depth'
+    array [layers, H, W] as `LayeredTarget.read` gives. Only depths are read: each region
+    holds its own object's fragments alone (they are clipped to B_viewport before being
+    displaced into it), so a texel with depth < 1 there is the object's, and captures for
+    the viewer need not write the id image."""
     oids, points = _candidates(records, x, y)
     if not len(oids):
         return []
     if isinstance(atlas, dict):
-        ids, depth = atlas["id"], atlas["depth"]
-        inside = (points[:, 2] < ids.shape[0]) & (points[:, 1] < ids.shape[1]) & (points[:, 0] < ids.shape[2])
+        depth = atlas["depth"]
+        inside = (points[:, 2] < depth.shape[0]) & (points[:, 1] < depth.shape[1]) & (points[:, 0] < depth.shape[2])
         oids, points = oids[inside], points[inside]
-        found = {"id": ids[points[:, 2], points[:, 1], points[:, 0]],
-                 "depth": depth[points[:, 2], points[:, 1], points[:, 0]]}
+        found = {"depth": depth[points[:, 2], points[:, 1], points[:, 0]]}
     else:
-        found = atlas.texels(points)
-    hit = found["id"] == oids
+        found = atlas.texels(points, ids=False)
+    hit = found["depth"] < 1.0          # a region holds its own object's texels alone: depth < 1 is a hit
     hits = zip(oids[hit].tolist(), found["depth"][hit].tolist(), strict=True)
     return sorted(((int(o), float(d)) for o, d in hits), key=lambda h: (h[1], h[0]))
 

@@ -136,11 +136,12 @@ class Renderer:
         return self._capture[path]
 
     def capture(self, camera: Camera, viewport: tuple[int, int], path: str | None = None, focus=(),
-                normals: bool = True) -> Records:
+                normals: bool = True, ids: bool = True) -> Records:
         """Parameterize and capture every visible object into the atlas; returns R. With a
         context scale below 1, `focus` objects get full-scale regions and the rest smaller ones.
         normals=False leaves the normal image unwritten, for modes that read none
-        (needs_normals); a composite that needs it then captures again."""
+        (needs_normals); a composite that needs it then captures again. ids=False leaves the
+        id image unwritten (compositing and picking never read it; the export does)."""
         view, proj = self.matrices(camera, viewport)
         self.captured_focus = self.scaled_for(focus)
         self.captured_normals = bool(normals)
@@ -149,7 +150,7 @@ class Renderer:
             records = self.parameterize(camera, viewport, (view, proj), self.captured_focus)
         with self._timed("capture"):
             self.capture_pass(path).render(gpu=self.gpu, records=records, view=view, proj=proj,
-                                           atlas=self.atlas, normals=normals)
+                                           atlas=self.atlas, normals=normals, ids=ids)
             self._throttle.flush()   # rasterize while Python goes on; bounds the driver's memory
         self.last = (records, view, proj)
         self._captures += 1
@@ -163,7 +164,8 @@ class Renderer:
         missing = self.needs_normals(mode) and not self.captured_normals
         if self.scaled_for(style.focus) != self.captured_focus or missing:
             # the focus decides the region scales; AO, edges and the projector read normals
-            self.capture(*self._view, focus=style.focus, normals=self.captured_normals or missing)
+            self.capture(*self._view, focus=style.focus, normals=self.captured_normals or missing,
+                         ids=self.atlas.ids_written)
         records, view, proj = self.last
         if self._composite is None:
             self._composite = CompositePass(self.ctx)

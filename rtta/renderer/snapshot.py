@@ -106,7 +106,8 @@ def render_modes(renderer: Renderer, camera: Camera, viewport: tuple[int, int], 
     """One capture, then each requested mode composited from it: {mode: rgba [H, W, 4] (row 0 bottom)}."""
     out = {}
     if any(m != "std" for m in modes):
-        renderer.capture(camera, viewport, focus=style.focus, normals=any(map(renderer.needs_normals, modes)))
+        renderer.capture(camera, viewport, focus=style.focus, normals=any(map(renderer.needs_normals, modes)),
+                         ids=False)                 # no mode reads the id image
     for mode in modes:
         if mode == "std":
             out[mode] = over_background(renderer.std(camera, viewport).read(viewport, 1)["color"][0])

@@ -143,7 +143,7 @@ def composite_row(ctx, name, scene, viewport, frames: int, settings=None) -> dic
               "object": Style(focus=focus, order="object")}
 
     def frame(renderer, mode, style):
-        renderer.capture(cam, viewport, focus=style.focus, normals=renderer.needs_normals(mode))
+        renderer.capture(cam, viewport, focus=style.focus, normals=renderer.needs_normals(mode), ids=False)
         return renderer.composite(mode, style)
 
     fns = {"std": _gl_timed(ctx, lambda: r.std(cam, viewport))}

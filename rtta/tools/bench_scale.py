@@ -79,7 +79,7 @@ def frame_figures(ctx, path: Path, viewport: tuple[int, int], rounds: int) -> di
     style = Style(focus={0, scene.count // 2})
 
     def ghosted():
-        r.capture(cam, viewport, normals=False)
+        r.capture(cam, viewport, normals=False, ids=False)
         r.composite("ghosted", style)
 
     times = _interleaved_ms({"std": _gl_timed(ctx, lambda: r.std(cam, viewport)),

@@ -52,7 +52,7 @@ def steps(scenes: int, quick: bool) -> int:
 
 def _frame(r: Renderer, cam, viewport, mode: str, style: Style):
     def frame():
-        r.capture(cam, viewport, focus=style.focus, normals=r.needs_normals(mode))
+        r.capture(cam, viewport, focus=style.focus, normals=r.needs_normals(mode), ids=False)
         return r.composite(mode, style)
     return frame
 

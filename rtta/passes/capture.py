@@ -86,9 +86,9 @@ class CapturePass(ScenePass):
     def render(self, *, gpu: GpuScene, records: Records, view: np.ndarray, proj: np.ndarray,
                atlas: LayeredTarget, normals: bool = True, ids: bool = True) -> None:
         """Upload R, then draw the whole batch once into `atlas` (sized to records.atlas_size);
-        objects without a region (culled, hidden) are left out of that one draw. normals=False,
-        ids=False: the normal or id image is not written, for readers that need neither
-        (compositing reads neither ids nor, but in ghosted-ao, normals; picking reads depth)."""
+        objects without a region (culled, hidden) are left out of that one draw. normals=False
+        or ids=False: that image is not written (a colour mask). Compositing never reads ids
+        and reads normals only for AO, edges and the projector; picking reads depths."""
         tw, th, td = records.atlas_size
         self.frames += 1
         atlas.ensure((tw, th), td)

@@ -3,6 +3,8 @@ surfaces, checked against the blend computed in numpy from the atlas (issue 24).
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 import trimesh
@@ -70,15 +72,22 @@ def test_pixel_order_equals_numpy_blend(make_renderer, orbit):
 
 
 def test_pixel_order_overflow_keeps_nearest(make_renderer, monkeypatch):
-    """Over the node bound the frame falls back to object order (counted); the default is object."""
+    """Over the node bound the frame falls back to object order: counted, and said once (a
+    warning, and in Renderer.warnings), however many frames fall back."""
     scene = _nested_scene()
     r = make_renderer(scene)
     cam = Camera.orbit(scene.center, scene.radius, 10, 15, 2.0)
     r.capture(cam, VP)
     by_object = r.composite("transparent", Style(order="object")).read()[0].copy()
+    assert r.warnings == []
     monkeypatch.setattr(oit, "MAX_NODES", 10)
-    fallback = r.composite("transparent", Style(order="pixel")).read()[0]
+    with pytest.warns(UserWarning, match="more than 10 surfaces"):
+        fallback = r.composite("transparent", Style(order="pixel")).read()[0]
     assert r._composite.fallbacks == 1 and np.array_equal(fallback, by_object)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")                          # said once: no second warning
+        r.composite("transparent", Style())
+    assert r._composite.fallbacks == 2 and len(r.warnings) == 1 and "object order" in r.warnings[0]
     with pytest.raises(ValueError, match="order"):
         r.composite("transparent", Style(order="depth"))
 

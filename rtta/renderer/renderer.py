@@ -19,6 +19,7 @@ from ..gl import glraw
 from ..gl.context import Capabilities
 from ..gl.gpu import GpuScene
 from ..gl.targets import LayeredTarget
+from ..passes import oit
 from ..passes.capture import CapturePass, RttPass, StdPass
 from ..passes.composite import LENS_MODES, CompositePass, CompositeTarget, Style
 from ..passes.post import AtlasPostPass
@@ -84,10 +85,15 @@ class Renderer:
 
     def matrices(self, camera: Camera, viewport: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
         camera, message = camera.depth_limited()
-        if message and message not in self.warnings:
-            self.warnings.append(message)
-            warnings.warn(message, stacklevel=2)
+        if message:
+            self._warn(message)
         return camera.view(self.scene.origin), camera.projection(viewport[0] / viewport[1])
+
+    def _warn(self, message: str) -> None:
+        """Say what was degraded, once per renderer (Python's warnings, and `warnings`)."""
+        if message not in self.warnings:
+            self.warnings.append(message)
+            warnings.warn(message, stacklevel=3)
 
     def region_scales(self, focus=()) -> float | np.ndarray:
         """Atlas texels per pixel: region_scale for the focus, times context_scale for the rest."""
@@ -185,11 +191,15 @@ class Renderer:
             with self._timed("lens"):
                 self._lens_pass.textures(self.lens)     # built once per lens geometry, before compositing
             lens = (self._lens_pass, self.lens, origin)
+        fallbacks = self._composite.fallbacks
         with self._timed("composite"):
             self._composite.render(atlas=self.atlas, records=records, gpu=self.gpu, style=style,
                                    mode=mode, view_depth=view_depth, target=self.target, post=post,
                                    view_proj=proj @ view, projection=projection, lens=lens)
             self._throttle.flush()
+        if self._composite.fallbacks > fallbacks:
+            self._warn(f"per-pixel order would need more than {oit.MAX_NODES:,} surfaces in this view: "
+                       "blended in object order (a smaller viewport or fewer objects keep it per pixel)")
         return self.target
 
     def needs_normals(self, mode: str) -> bool:

@@ -220,3 +220,16 @@ def test_coplanar_surfaces_blend_alike_in_any_draw_order(make_renderer):
     assert (by_object > 8).sum() > 1000, "the pair's order does not matter to the blend: the test proves nothing"
     by_pixel = np.abs(images["red first"]["pixel"] - images["blue first"]["pixel"]).max(-1)
     assert by_pixel.max() <= 1, f"pixel order depends on the draw order at {int((by_pixel > 1).sum())} px"
+
+
+def test_cli_says_the_fallback_in_one_line(tmp_path, capsys, monkeypatch):
+    """`rtta snapshot` says a degraded frame as one `rtta: warning: ...` line (no Python
+    warning format, no source line) and still writes the image."""
+    from rtta.cli.main import main
+
+    monkeypatch.setattr(oit, "MAX_NODES", 10)
+    out = tmp_path / "t.png"
+    assert main(["snapshot", "--mode", "transparent", "--size", "96x72", "--out", str(out)]) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert out.is_file()
+    assert len(err) == 1 and err[0].startswith("rtta: warning: per-pixel order would need more than 10"), err

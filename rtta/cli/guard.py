@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import warnings
 from collections.abc import Callable
 
 from .. import imageio as outputs
@@ -62,6 +63,11 @@ def say(kind: str, text: str, path: str | None = None) -> None:
     print(f"rtta: {kind}: {where}{printable(text)}", file=sys.stderr)
 
 
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """A Python warning raised during a command, as one `rtta: warning: ...` line."""
+    say("warning", str(message))
+
+
 def _silence_stdout() -> None:
     """Point fd 1 at /dev/null so the interpreter's last flush cannot fail again."""
     try:
@@ -86,6 +92,8 @@ def run_command(handler: Callable[[argparse.Namespace], int], args: argparse.Nam
     old_handlers = outputs.install_signal_handlers()
     real_stdout = sys.stdout
     sys.stdout = _GuardedStdout(real_stdout)
+    shown = warnings.showwarning
+    warnings.showwarning = _show_warning       # what the library degraded: `rtta: warning: ...`
     try:
         with outputs.signals_held():    # the scene readers' native libraries: a signal must not cut their start
             _import_readers()
@@ -103,6 +111,7 @@ def run_command(handler: Callable[[argparse.Namespace], int], args: argparse.Nam
         print("rtta: interrupted", file=sys.stderr)   # what failed was the work the signal cut short
         return 130
     finally:
+        warnings.showwarning = shown
         sys.stdout = real_stdout
         if not (process and outputs.finished()):
             outputs.restore_signal_handlers(old_handlers)

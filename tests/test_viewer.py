@@ -264,6 +264,15 @@ def test_bad_input_corpus_in_the_viewer(driven):
             assert c["opened"] and not c["error"] and c["says"] in c["message"], (name, c["message"])
 
 
+def test_degraded_frames_are_said_in_the_panel(driven):
+    """A view whose per-pixel order falls back to object order says so in the panel's
+    message line (a warning, not an error), once."""
+    result, _ = driven
+    fb = result["fallback"]
+    assert not fb["error"] and fb["message"].startswith("warning: per-pixel order would need more than 10")
+    assert len([w for w in fb["warnings"] if "per-pixel order" in w]) == 1
+
+
 def test_screenshot_that_cannot_be_written_says_so(driven):
     result, _ = driven
     bad = result["screenshot_bad_dir"]

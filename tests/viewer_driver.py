@@ -203,6 +203,15 @@ for case in make_corpus(corpus):
         app.set_scene(before)
     frames(1)
 
+from rtta.passes import oit  # noqa: E402
+
+kept, oit.MAX_NODES = oit.MAX_NODES, 10               # a view whose pixel order falls back: said in the panel
+mode, app.state.mode = app.state.mode, "transparent"
+frames(2)
+result["fallback"] = {"message": app.message, "error": app.message_is_error, "warnings": app.renderer.warnings}
+oit.MAX_NODES, app.state.mode = kept, mode
+frames(1)
+
 app.screenshot_dir = OUT / "no" / "such" / "folder"     # a screenshot that cannot be written: one line
 result["screenshot_bad_dir"] = {"written": [str(p) for p in app.screenshot()], "message": app.message,
                                 "error": app.message_is_error}

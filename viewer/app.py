@@ -11,6 +11,7 @@ import itertools
 import re
 import threading
 import time
+import warnings
 from pathlib import Path
 
 import moderngl
@@ -153,11 +154,16 @@ class Viewer:
         self.ctx.clear(*WINDOW_CLEAR, 1.0)
         if size[0] > 0 and size[1] > 0:
             self.renderer.timings.clear()
+            said = len(self.renderer.warnings)
             try:
-                self._draw_composite()
-                self._draw_atlas()
+                with warnings.catch_warnings():      # said in the panel instead of on stderr
+                    warnings.simplefilter("ignore")
+                    self._draw_composite()
+                    self._draw_atlas()
             except RttaError as exc:             # e.g. targets too large for a huge window: say so, keep going
                 self.say(str(exc), error=True)
+            if len(self.renderer.warnings) > said:   # what was degraded (each said once per scene)
+                self.say("warning: " + "; ".join(self.renderer.warnings[said:]))
             self.stats.stage_ms = dict(self.renderer.timings)     # what ran this frame
             self.stats.last_ms.update(self.renderer.timings)      # for the panel: the last run of each
         overlay.draw(self)

@@ -58,7 +58,6 @@ class Renderer:
         self._post_done = np.zeros(0, np.int8)     # per object: 0 nothing, 1 edges, 2 AO + edges
         self._view: tuple | None = None            # (camera, viewport, path) of the last capture
         self.captured_focus: frozenset[int] = frozenset()   # the focus the last capture was scaled for
-        self.captured_normals = True       # whether the last capture wrote the normal image
         self._captures = 0
         self.target = CompositeTarget(ctx)
         self.last: tuple | None = None     # (records, view, proj) of the last capture
@@ -135,6 +134,11 @@ class Renderer:
         """The focus as far as it changes the capture (empty when every object has one scale)."""
         return frozenset() if self.settings.context_scale == 1.0 else frozenset(focus)
 
+    @property
+    def captured_normals(self) -> bool:
+        """Whether the last capture wrote the normal image (the atlas keeps the answer)."""
+        return self.atlas.normals_written
+
     def capture_pass(self, path: str | None = None) -> CapturePass:
         path = self.caps.capture_path(path or self.settings.capture_path)
         if path not in self._capture:
@@ -150,7 +154,6 @@ class Renderer:
         id image unwritten (compositing and picking never read it; the export does)."""
         view, proj = self.matrices(camera, viewport)
         self.captured_focus = self.scaled_for(focus)
-        self.captured_normals = bool(normals)
         self._view = (camera, viewport, path)
         with self._timed("parameterize"):
             records = self.parameterize(camera, viewport, (view, proj), self.captured_focus)

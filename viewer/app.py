@@ -11,7 +11,6 @@ import itertools
 import re
 import threading
 import time
-import warnings
 from pathlib import Path
 
 import moderngl
@@ -78,6 +77,7 @@ class Viewer:
         self.state = state
         self.renderer = Renderer(self.ctx, scene, state.settings)
         self.renderer.measure = state.measure
+        self.renderer.python_warnings = False      # what it degrades is said in the panel (frame())
         self.orbit = Orbit.default(scene.center, scene.radius, up_axis=scene.up_axis)
         self.records = None
         self.scene_label = Path(scene.source).name
@@ -156,10 +156,8 @@ class Viewer:
             self.renderer.timings.clear()
             said = len(self.renderer.warnings)
             try:
-                with warnings.catch_warnings():      # said in the panel instead of on stderr
-                    warnings.simplefilter("ignore")
-                    self._draw_composite()
-                    self._draw_atlas()
+                self._draw_composite()
+                self._draw_atlas()
             except RttaError as exc:             # e.g. targets too large for a huge window: say so, keep going
                 self.say(str(exc), error=True)
             if len(self.renderer.warnings) > said:   # what was degraded (each said once per scene)

@@ -69,6 +69,7 @@ class Renderer:
         self.measure = False               # time each stage (waits for the GPU after each)
         self.timings: dict[str, float] = {}  # stage -> ms of its last run, when measuring
         self.warnings: list[str] = []      # what was degraded (each said once)
+        self.python_warnings = True        # also say it through warnings.warn (a viewer shows `warnings`)
         self._throttle = glraw.Throttle()  # one flushed batch in flight (glraw.Throttle)
 
     @contextmanager
@@ -89,10 +90,12 @@ class Renderer:
         return camera.view(self.scene.origin), camera.projection(viewport[0] / viewport[1])
 
     def _warn(self, message: str) -> None:
-        """Say what was degraded, once per renderer (Python's warnings, and `warnings`)."""
+        """Say what was degraded, once per renderer (`warnings`, and Python's warnings unless
+        python_warnings is off)."""
         if message not in self.warnings:
             self.warnings.append(message)
-            warnings.warn(message, stacklevel=3)
+            if self.python_warnings:
+                warnings.warn(message, stacklevel=3)
 
     def region_scales(self, focus=()) -> float | np.ndarray:
         """Atlas texels per pixel: region_scale for the focus, times context_scale for the rest."""

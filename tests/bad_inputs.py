@@ -182,6 +182,8 @@ def make_corpus(folder: str | Path) -> list[Case]:
         "property float z\nend_header\n0 0 0\n1 0 0\n0 1 0\n", True, "no objects")
     add("degenerate.obj", "v 0 0 0\nv 1 1 1\nv 2 2 2\nv 5 5 5\nf 1 2 3\nf 1 1 4\nf 2 3 4\n", True,
         "degenerate")
+    add("obj_cut_inside_a_vertex.obj", "o a\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\no b\nv 0 0 1\nv 1 0 1\nv 0.5", True,
+        "vertices of 1 coordinate(s)")
     add("face_index_out_of_range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 30\n", True, "index")
     add("index_out_of_range.glb", _glb(("a",), indices=60000), True, "index")
     add("stl_truncated_body.stl", _stl_header(1000, 10), True, "STL")

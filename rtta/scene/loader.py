@@ -81,6 +81,8 @@ def _read(path: Path, suffix: str, smooth: bool) -> tuple[list[str], list[Path],
     textures, records = TextureTable(), _Records(smooth)
     items = [(name, records.of(mesh, textures), matrix, tree) for name, mesh, matrix, tree in items]
     items = [item for item in items if item[1] is not None and len(item[1].faces) > 0]
+    for name, record, _, _ in items:
+        _check_shapes(record, str(name), path)
     if not items:
         raise RttaError("scene has no objects with triangle geometry", path)
     names = [str(item[0]) for item in items]
@@ -93,6 +95,19 @@ def _read(path: Path, suffix: str, smooth: bool) -> tuple[list[str], list[Path],
     if trimeshes:
         gc.collect()
     return notes, inputs, (gathered, meshes, names, transforms, paths if any(paths) else None)
+
+
+def _check_shapes(record: Decoded, name: str, path: Path) -> None:
+    """Vertices [n, 3] and triangles [m, 3]: a reader given a damaged file (an OBJ cut in the
+    middle of a 'v' line) can hand back rows of another width."""
+    v, f = record.vertices, record.faces
+    if v.ndim != 2 or v.shape[1] != 3:
+        width = v.shape[1] if v.ndim == 2 else 1
+        raise RttaError(f"object '{name}' has vertices of {width} coordinate(s) instead of 3 "
+                        "(is the file truncated or damaged?)", path)
+    if f.ndim != 2 or f.shape[1] != 3:
+        raise RttaError(f"object '{name}' has faces that are not triangles of 3 vertex indices "
+                        "(is the file truncated or damaged?)", path)
 
 
 class _Records:

@@ -9,6 +9,7 @@ refused with one line naming it.
 from __future__ import annotations
 
 import importlib
+import importlib.util
 import os
 import re
 import sys
@@ -34,6 +35,7 @@ READERS = {
     ".3dxml": ("threedxml", "trimesh", "all"),
 }
 SUFFIXES = tuple(READERS)
+ISOLATED = {"step": "OpenCASCADE (cascadio)", "ifc": "ifcopenshell", "usd": "USD"}   # read in a child process
 MAX_COORDINATE = 1e15    # as the mesh loader's: float64 keeps ~0.1 units of precision there
 
 
@@ -62,10 +64,16 @@ def read(path: Path) -> Assembly:
     """The assembly in `path` (suffix in SUFFIXES); RttaError when it cannot be read."""
     module, needs, extra = READERS[path.suffix.lower()]
     try:
-        importlib.import_module(needs)
-    except ImportError:
+        found = importlib.util.find_spec(needs) is not None
+    except (ImportError, ValueError):
+        found = False
+    if not found:
         raise RttaError(f"reading {path.suffix.lower()} files needs {needs}: "
                         f"pip install 'rtta[{extra}]'", path) from None
+    if module in ISOLATED:                # native libraries: a crash or a hang stays in a child
+        from . import isolated
+
+        return isolated.read(f"{__name__}.{module}", path, ISOLATED[module])
     reader = importlib.import_module(f"{__name__}.{module}")
     return reader.read(path)
 

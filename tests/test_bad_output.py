@@ -25,6 +25,7 @@ from rtta.cli.main import main
 
 RTTA = str(Path(sys.executable).with_name("rtta"))
 DEMO_ARGS = ["--size", "48x36"]
+GRID = Path(__file__).resolve().parents[1] / "assets" / "projector_grid.png"    # an image that exists
 
 
 def _run(args, cwd=None, env=None, **kw) -> subprocess.CompletedProcess:
@@ -165,7 +166,9 @@ def test_bad_flags_are_one_line_without_usage(argv, capsys):
     (["--camera", "1e300,0,2"], "--camera"), (["--fov", "nan"], "--fov"), (["--fov", "0"], "--fov"),
     (["--lens", "sphere", "--lens-at", "1e300,0,0"], "--lens-at"), (["--lens", "sphere,1e300"], "--lens radius"),
     (["--lens", ""], "--lens"), (["--region-scale", "nan"], "--region-scale"), (["--size", "0x0"], "--size"),
-    (["--projector", "default,0,0,1e300"], ""), (["--projector-fov", "nan", "--projector", "default"], "fov"),
+    (["--projector", "default,0,0,1e300"], "--projector 'default,0,0,1e300': AZ and EL"),
+    (["--projector", f"{GRID},nan,0,2"], f"--projector '{GRID},nan,0,2': AZ and EL"),
+    (["--projector-fov", "nan", "--projector", "default"], "fov"),
     (["--size", "4096x4096", "--region-scale", "4"], "memory limit"),
 ])
 def test_bad_values_are_one_line_without_warnings(flags, needle, tmp_path, capsys, gl):

@@ -27,6 +27,17 @@ def threemf(model: str | bytes, extra: dict[str, bytes] | None = None, level: in
     return buf.getvalue()
 
 
+def threemf_bad_deflate() -> bytes:
+    """A whole archive whose model member's compressed data is not deflate (a damaged copy)."""
+    data = bytearray(threemf_good())
+    with zipfile.ZipFile(io.BytesIO(bytes(data))) as z:
+        info = z.getinfo(MODEL)
+    name_len, extra_len = struct.unpack_from("<HH", data, info.header_offset + 26)
+    start = info.header_offset + 30 + name_len + extra_len
+    data[start:start + info.compress_size] = b"\xff" * info.compress_size     # reserved block type
+    return bytes(data)
+
+
 def _model(objects: str, items: str) -> str:
     return f'<?xml version="1.0"?><model unit="millimeter" {NS}><resources>{objects}</resources>' \
            f'<build>{items}</build></model>'

@@ -8,9 +8,11 @@ multiply into more objects than can be drawn. glTF is checked in rtta.scene.gltf
 
 from __future__ import annotations
 
+import lzma
 import re
 import struct
 import zipfile
+import zlib
 from pathlib import Path
 
 from ..errors import RttaError
@@ -108,7 +110,8 @@ def _threemf(path: Path) -> None:
                 head = stream.read(4096)
             with archive.open(model) as stream:
                 _threemf_graph(stream, head, path)
-    except (zipfile.BadZipFile, zipfile.LargeZipFile, EOFError, NotImplementedError) as exc:
+    except (zipfile.BadZipFile, zipfile.LargeZipFile, EOFError, NotImplementedError, OSError, zlib.error,
+            lzma.LZMAError) as exc:     # a damaged member's compressed data
         raise RttaError(f"not a readable 3MF archive ({str(exc)[:100] or type(exc).__name__})", path) from None
 
 

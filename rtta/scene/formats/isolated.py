@@ -38,7 +38,7 @@ except MemoryError:
     result = ("error", "out of memory while reading it")
 except Exception as exc:
     text = str(exc).strip().splitlines()
-    result = ("error", f"cannot read it ({type(exc).__name__}{': ' + text[0][:160] if text else ''})")
+    result = ("failed", type(exc).__name__ + (": " + text[0][:160] if text else ""))
 with open(out + ".part", "wb") as f:
     pickle.dump(result, f, protocol=5)
 os.replace(out + ".part", out)
@@ -91,6 +91,8 @@ def read(module: str, path: Path, library: str):
             raise RttaError(f"the {library} reader failed ({last})", path)
         with open(out, "rb") as f:
             status, value = pickle.load(f)
+    if status == "failed":               # an exception the reader did not expect
+        raise RttaError(f"the {library} reader failed ({value})", path)
     if status != "ok":
         raise RttaError(value, path)
     return value

@@ -62,7 +62,12 @@ def _bad_cases(tmp_path):
     hostile = zipfile.ZipFile(tmp_path / "hostile.3dxml", "w")
     hostile.writestr("../../evil.xml", "<a/>")
     hostile.close()
+    future = bytearray((tmp_path / "hostile.3dxml").read_bytes())
+    entry = future.index(b"PK\x01\x02")              # central directory: version needed to extract 10.6
+    future[entry + 6:entry + 8] = (106).to_bytes(2, "little")
     return {
+        "future_zip.3dxml": (bytes(future), "not a readable zip archive (zip file version 10.6)"),
+        "future_zip.zae": (bytes(future), "not a readable zip archive (zip file version 10.6)"),
         "cut.dae": (dae[: len(dae) // 2], "cannot read COLLADA file"),
         "empty.usda": (b"", "file is empty"),
         "cut.usdc": (usdc[: len(usdc) // 2], "cannot read USD file"),

@@ -121,7 +121,7 @@ def check_archive(path: Path) -> None:
     try:
         with zipfile.ZipFile(path) as z:
             members = z.infolist()
-    except (zipfile.BadZipFile, OSError, ValueError) as exc:
+    except (zipfile.BadZipFile, zipfile.LargeZipFile, OSError, ValueError, EOFError, NotImplementedError) as exc:
         raise RttaError(f"not a readable zip archive ({exc})", path) from None
     total = sum(m.file_size for m in members)
     if total > MAX_ARCHIVE_BYTES:

@@ -25,6 +25,7 @@ from rtta.renderer.renderer import Renderer
 from rtta.renderer.snapshot import over_background
 from rtta.scene.loader import load_scene
 from rtta.scene.model import Scene
+from rtta.tools.memory import loading_heap
 
 from . import overlay, panels
 from .controls import Controls
@@ -343,7 +344,8 @@ class Viewer:
 def _read_scene(path, options: dict) -> tuple[Scene | None, str | None]:
     """(scene, None) or (None, the one-line error): a broken file never takes the session down."""
     try:
-        return load_scene(str(path), **options), None
+        with loading_heap():
+            return load_scene(str(path), **options), None
     except RttaError as exc:
         return None, str(exc)
     except Exception as exc:

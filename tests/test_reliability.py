@@ -9,7 +9,7 @@ import numpy as np
 from rtta.scene.camera import Camera
 from rtta.scene.generate import random_scene
 from rtta.scene.textured import textured_scene
-from rtta.tools.memory import loading_heap, mapped_block_bytes, steady_heap
+from rtta.tools.memory import mapped_block_bytes, steady_heap
 from rtta.tools.reliability import drift, gl_census, random_camera, random_viewport, soak, sweep
 
 
@@ -79,11 +79,6 @@ def test_deleted_atlases_are_not_kept(make_renderer, demo_scene):
     wait it had dozens, reused rarely (rtta.glraw.Throttle). With one batch in flight, a
     handful of frames cycles through them all."""
     steady_heap()
-    with loading_heap():                  # every block of 256 KB or more is a mapping: the targets count
-        _frames_at_changing_sizes(make_renderer, demo_scene)
-
-
-def _frames_at_changing_sizes(make_renderer, demo_scene) -> None:
     before = mapped_block_bytes()
     assert before is not None, "glibc with mallinfo2 expected on the test machines"
     r = make_renderer(demo_scene)

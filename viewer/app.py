@@ -25,7 +25,6 @@ from rtta.renderer.renderer import Renderer
 from rtta.renderer.snapshot import over_background
 from rtta.scene.loader import load_scene
 from rtta.scene.model import Scene
-from rtta.tools.memory import loading_heap
 
 from . import overlay, panels
 from .controls import Controls
@@ -344,8 +343,7 @@ class Viewer:
 def _read_scene(path, options: dict) -> tuple[Scene | None, str | None]:
     """(scene, None) or (None, the one-line error): a broken file never takes the session down."""
     try:
-        with loading_heap():
-            return load_scene(str(path), **options), None
+        return load_scene(str(path), **options), None
     except RttaError as exc:
         return None, str(exc)
     except Exception as exc:

@@ -10,7 +10,6 @@ import numpy as np
 from rtta.errors import RttaError
 from rtta.scene.camera import DEFAULT_ORBIT
 from rtta.scene.loader import load_scene_or_demo
-from rtta.tools.memory import loading_heap
 
 from .orbit import DEGREES_PER_PIXEL
 from .state import VIEW_MODES
@@ -36,8 +35,7 @@ def run(scene_path: str | None, *, size: tuple[int, int], mode: str, screenshot_
     """`load`: the loader's options (smoothing), for this scene and those opened later."""
     from .app import Viewer
 
-    with loading_heap():
-        scene = load_scene_or_demo(scene_path, **(load or {}))   # a bad file on the command line: one line, exit 2
+    scene = load_scene_or_demo(scene_path, **(load or {}))   # a bad file on the command line: one line, exit 2
     wnd = create_window(size)
     app = Viewer(wnd, scene, screenshot_dir=screenshot_dir, mode=mode, load=load)
     try:

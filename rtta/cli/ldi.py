@@ -39,10 +39,8 @@ def load_mesh(spec: str) -> tuple[str, np.ndarray, np.ndarray, list[str]]:
         mesh = SHAPES[kind]()
         return spec, *closed_mesh(mesh.vertices, mesh.faces, spec), []
     from ..scene.loader import load_scene
-    from ..tools.memory import loading_heap
 
-    with loading_heap():
-        scene = load_scene(spec)
+    scene = load_scene(spec)
     for note in scene.warnings:
         say("warning", note, scene.source)
     vertices = scene.positions.astype(np.float64) + scene.origin

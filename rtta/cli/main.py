@@ -164,10 +164,8 @@ def load_options(args: argparse.Namespace) -> dict:
 
 def _load(args):
     from ..scene.loader import load_scene_or_demo
-    from ..tools.memory import loading_heap
 
-    with loading_heap():
-        scene = load_scene_or_demo(args.scene, **load_options(args))
+    scene = load_scene_or_demo(args.scene, **load_options(args))
     for note in scene.warnings:
         say("warning", note, scene.source)
     return scene

@@ -42,11 +42,10 @@ if which == "trimesh":
     trimesh.load(path, force="scene", process=False)
 else:
     from rtta.scene.loader import load_scene
-    from rtta.tools.memory import loading_heap, steady_heap
+    from rtta.tools.memory import steady_heap
     steady_heap()
     t = time.perf_counter()
-    with loading_heap():
-        load_scene(path)
+    load_scene(path)
 seconds = time.perf_counter() - t
 peak = [ln for ln in open("/proc/self/status") if ln.startswith("VmHWM:")][0].split()[1]
 print(seconds, int(peak) * 1024)

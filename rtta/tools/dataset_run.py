@@ -39,14 +39,11 @@ class Worker:
         from ..gl.context import shared_context
         from ..renderer.renderer import Renderer
         from ..scene.loader import load_scene
-        from .memory import loading_heap
 
         self.close()
         sc = self.s["scenes"][index]
-        scene = self.given.get(sc["file"])
-        if scene is None:
-            with loading_heap():
-                scene = load_scene(sc["file"], smooth_angle=self.s["smooth_angle"], smooth=self.s["smooth"])
+        scene = self.given.get(sc["file"]) or load_scene(sc["file"], smooth_angle=self.s["smooth_angle"],
+                                                         smooth=self.s["smooth"])
         for note in scene.warnings:
             print(f"rtta: warning: {printable(scene.source)}: {printable(note)}", file=sys.stderr)
         self.meta = object_meta(scene, self.s["category_by"])

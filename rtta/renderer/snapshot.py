@@ -73,12 +73,11 @@ def make_projector(scene: Scene, camera: Camera, spec: str, fov: float = 30.0, s
     parts = spec.rsplit(",", 3)
     if len(parts) == 4:
         try:
-            orbit = parse_orbit(",".join(parts[1:]))
+            orbit = parse_orbit(",".join(parts[1:]), "--projector", spec)
             name = parts[0]
-        except RttaError as exc:         # a file name with commas, or an image with a bad orbit
+        except RttaError:                # a file name with commas, or an image with a bad orbit
             if not Path(spec).exists() and (parts[0] == "default" or Path(parts[0]).exists()):
-                why = exc.message.split(": ", 1)[-1]          # parse_orbit's reason, without its '--camera'
-                raise RttaError(f"--projector '{spec}': {why}") from None
+                raise
             orbit = None
     if not 0.5 <= fov <= 170:
         raise RttaError(f"--projector-fov must be in [0.5, 170] degrees, got {fov}")

@@ -13,14 +13,16 @@ NEAR_RATIO = 1e-3   # near >= far * NEAR_RATIO: float32 depth keeps ~1e-4 relati
 MAX_FAR_NEAR = 1e4  # beyond this, window depth loses the surfaces' order (`rtta bench report`, section 4)
 
 
-def parse_orbit(text: str) -> tuple[float, float, float]:
-    """'AZ,EL,DIST' -> floats; DIST in units of the scene's bounding-sphere radius."""
+def parse_orbit(text: str, option: str = "--camera", given: str | None = None) -> tuple[float, float, float]:
+    """'AZ,EL,DIST' -> floats; DIST in units of the scene's bounding-sphere radius. Errors
+    name `option` and quote `given` (default: `text`), the value as the user wrote it."""
+    given = text if given is None else given
     try:
         az, el, dist = (float(x) for x in text.split(","))
     except ValueError:
-        raise RttaError(f"--camera expects AZ,EL,DIST (three numbers), got '{text}'") from None
+        raise RttaError(f"{option} expects AZ,EL,DIST (three numbers), got '{given}'") from None
     if not all(np.isfinite([az, el, dist])) or not 1e-6 <= dist <= 1e6 or max(abs(az), abs(el)) > 1e6:
-        raise RttaError(f"--camera '{text}': AZ and EL must be finite degrees (|value| up to 1e6) and DIST "
+        raise RttaError(f"{option} '{given}': AZ and EL must be finite degrees (|value| up to 1e6) and DIST "
                         "between 1e-6 and 1e6 scene radii")
     return az, el, dist
 

@@ -18,6 +18,11 @@ from pathlib import Path
 from ..errors import RttaError
 from .files import MAX_OBJECTS_LARGE, max_objects, memory_limit
 
+# what reading a damaged zip archive raises (3MF, 3DXML, ZAE): the directory, or a member's
+# compressed data (deflate, lzma), unreadable
+ZIP_ERRORS = (zipfile.BadZipFile, zipfile.LargeZipFile, EOFError, NotImplementedError, OSError, ValueError,
+              zlib.error, lzma.LZMAError)
+
 # Peak memory of loading, measured (RELIABILITY.md): with normals smoothed at load (a file
 # without normals) about 170 bytes per vertex and 1,300 per triangle (163,842 vertices and
 # 327,680 triangles: 435 MiB); a file with normals needs about a tenth of that. Half the
@@ -110,8 +115,7 @@ def _threemf(path: Path) -> None:
                 head = stream.read(4096)
             with archive.open(model) as stream:
                 _threemf_graph(stream, head, path)
-    except (zipfile.BadZipFile, zipfile.LargeZipFile, EOFError, NotImplementedError, OSError, zlib.error,
-            lzma.LZMAError) as exc:     # a damaged member's compressed data
+    except ZIP_ERRORS as exc:
         raise RttaError(f"not a readable 3MF archive ({str(exc)[:100] or type(exc).__name__})", path) from None
 
 

@@ -23,7 +23,7 @@ import numpy as np
 from ...errors import RttaError
 from .. import batch
 from ..model import Scene, from_batch
-from ..precheck import check_size
+from ..precheck import ZIP_ERRORS, check_size
 
 # suffix -> (module here, the import it needs, the extra that installs it)
 READERS = {
@@ -121,7 +121,7 @@ def check_archive(path: Path) -> None:
     try:
         with zipfile.ZipFile(path) as z:
             members = z.infolist()
-    except (zipfile.BadZipFile, zipfile.LargeZipFile, OSError, ValueError, EOFError, NotImplementedError) as exc:
+    except ZIP_ERRORS as exc:
         raise RttaError(f"not a readable zip archive ({exc})", path) from None
     total = sum(m.file_size for m in members)
     if total > MAX_ARCHIVE_BYTES:

@@ -5,15 +5,14 @@ the products (Reference3D) along that path. 3DXML stores millimetres, Z up."""
 
 from __future__ import annotations
 
-import lzma
 import zipfile
-import zlib
 from pathlib import Path
 
 import numpy as np
 from lxml import etree
 
 from ...errors import RttaError
+from ..precheck import ZIP_ERRORS
 from . import Assembly, check_archive
 
 
@@ -51,8 +50,7 @@ def _products(path: Path) -> dict[str, str]:
             main = root.find("{*}Root")
             doc = etree.fromstring(z.read(main.text.strip()), etree.XMLParser(resolve_entities=False,
                                                                               no_network=True, huge_tree=True))
-    except (KeyError, AttributeError, etree.XMLSyntaxError, zipfile.BadZipFile, zipfile.LargeZipFile, OSError,
-            EOFError, NotImplementedError, ValueError, zlib.error, lzma.LZMAError) as exc:   # a damaged member too
+    except (KeyError, AttributeError, etree.XMLSyntaxError, *ZIP_ERRORS) as exc:     # a damaged member too
         raise RttaError(f"cannot read 3DXML file (no readable product structure: {str(exc)[:120]})", path) from None
     return {r.get("id"): r.get("name") or r.get("id") for r in doc.iter("{*}Reference3D")}
 

@@ -53,7 +53,7 @@ def time_limit(path: Path) -> float:
             value = float(text)
         except ValueError:
             value = 0.0
-        if value > 0 and value == value:
+        if value > 0:                      # NaN is not
             return value
     try:
         size = path.stat().st_size

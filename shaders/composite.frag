@@ -1,9 +1,15 @@
-#version 430
+#version 450
 // defines: MODE_SPRITE MODE_BLEND MODE_OUTLINE MODE_COLLECT MODE_HALO FOCUS_CLIP WITH_AO PROJECTOR LENS UPSAMPLE
+// defines: SPRITE_OUTLINE OUTLINE_QUAD
 // Per-object compositing from the atlas:
 //   MODE_SPRITE  depth sprite: atlas colour, gl_FragDepth = atlas depth (focus objects, `sprites`)
 //   MODE_BLEND   premultiplied blend with the object's opacity (`transparent`, ghosted context)
 //   MODE_OUTLINE the object's silhouette from its own unoccluded coverage (ghosted focus)
+//   SPRITE_OUTLINE  with MODE_SPRITE: the outline drawn in the same pass, at depth 0 (the
+//                ghosted focus, whose outlines would otherwise take a pass of their own)
+//   OUTLINE_QUAD outlines of width 1, with a border of at least 1, at one texel per pixel: one
+//                depth gather per fragment and quad derivatives (quad_silhouette) instead of
+//                nine fetches
 //   MODE_HALO    around a focus object, where context lies behind it: a halo that fades over
 //                u_halo_width pixels from its silhouette (depth from its own atlas image)
 //   MODE_COLLECT as MODE_BLEND, but appended to the pixel's list (oit.glsl) for a per-pixel
@@ -36,6 +42,7 @@ uniform int u_lens_object;      // a scene object used as the lens is not cut (-
 
 uniform float u_desaturate;     // context desaturation in [0, 1] (MODE_BLEND)
 uniform vec4 u_edge_color;
+uniform vec4 u_outline_color;  // MODE_OUTLINE, SPRITE_OUTLINE
 uniform int u_outline_width;    // pixels (MODE_OUTLINE)
 uniform int u_halo_width;       // pixels (MODE_HALO)
 uniform vec4 u_halo_color;      // (rgb, strength)
@@ -66,6 +73,53 @@ bool outside(ivec2 s) { return any(lessThan(s, g_rect.xy)) || any(greaterThan(s,
 // Whether atlas texel `s` holds this object: inside its B_atlas and written by the capture.
 // The atlas is depth-keyed (targets.py): empty texels have depth 1 and stale colour.
 bool covered(ivec3 s) { return !outside(s.xy) && texelFetch(u_depth, s, 0).r < 1.0; }
+
+// Whether atlas texel `t` is on the object's silhouette: its own (inside B_atlas and
+// covered) with a texel within u_outline_width (square window) that is not.
+bool silhouette(ivec3 t) {
+    if (!covered(t)) return false;
+    for (int dy = -u_outline_width; dy <= u_outline_width; ++dy)
+        for (int dx = -u_outline_width; dx <= u_outline_width; ++dx)
+            if (!covered(t + ivec3(dx, dy, 0))) return true;
+    return false;
+}
+
+#ifdef OUTLINE_QUAD
+// silhouette() for width 1, a border of at least 1 and one texel per pixel, from ONE depth
+// gather per fragment. The border ring of B_atlas is never written (the capture clips to
+// B_atlas less its border), so a covered texel's 3x3 window lies inside B_atlas and holds
+// an empty texel (depth 1) exactly where it is a silhouette texel. Each fragment of a 2x2
+// quad gathers the 2x2 texels on its side away from the quad's other fragments (its own,
+// ax and ay beside it, axy across); the four gathers tile the 4x4 texels around the quad,
+// and the fine derivatives of their emptiness (0 or 1: exact in a difference) hand each
+// fragment the 5 texels of its window that its partners gathered. Helpers too must run
+// this: it is called before any discard, in uniform control flow.
+bool quad_silhouette(ivec3 t) {
+    ivec2 odd = ivec2(gl_FragCoord.xy) & 1, away = 2 * odd - 1;   // the partners lie at -away
+    ivec2 lo = min(t.xy, t.xy + away);
+    // components: x (lo.x, lo.y+1), y (lo.x+1, lo.y+1), z (lo.x+1, lo.y), w (lo.x, lo.y)
+    vec4 g = textureGather(u_depth, vec3((vec2(lo) + 1.0) / vec2(textureSize(u_depth, 0).xy), float(t.z)), 0);
+    vec2 own_row = odd.y == 1 ? g.wz : g.xy, away_row = odd.y == 1 ? g.xy : g.wz;
+    vec4 c = odd.x == 1 ? vec4(own_row.x, own_row.y, away_row.x, away_row.y)
+                        : vec4(own_row.y, own_row.x, away_row.y, away_row.x);     // (own, ax, ay, axy)
+    vec4 e = vec4(greaterThanEqual(c, vec4(1.0)));      // empty
+    vec2 s = vec2(1 - 2 * odd);
+    vec4 px = e + s.x * dFdxFine(e);                     // the partner across x: (own, ., ay, .)
+    vec4 py = e + s.y * dFdyFine(e);                     // across y: (own, ax, ., .)
+    float pxy = py.x + s.x * dFdxFine(py.x);             // the diagonal partner's own
+    float empty_near = max(max(max(e.y, e.z), max(e.w, pxy)), max(max(px.x, px.z), max(py.x, py.y)));
+    return !outside(t.xy) && e.x < 0.5 && empty_near > 0.5;
+}
+#endif
+
+// Whether this fragment draws the outline (MODE_OUTLINE, SPRITE_OUTLINE).
+bool outline_here(ivec3 t) {
+#ifdef OUTLINE_QUAD
+    return quad_silhouette(t);
+#else
+    return silhouette(t);
+#endif
+}
 
 // What a pixel takes from its object's atlas images: colour, window depth, (ao, edge), and
 // the texel it is nearest to (normals for the projector).
@@ -133,15 +187,8 @@ bool sampled(vec2 px, out Sample o) {
 
 void main() {
 #ifdef MODE_OUTLINE
-    ivec3 t = atlas_texel(g_map, g_scale, g_layer, gl_FragCoord.xy);
-    // a silhouette texel: the object's own, with a neighbour within the width that is not
-    if (!covered(t)) discard;
-    bool near_other = false;
-    for (int dy = -u_outline_width; dy <= u_outline_width && !near_other; ++dy)
-        for (int dx = -u_outline_width; dx <= u_outline_width; ++dx)
-            if (!covered(t + ivec3(dx, dy, 0))) { near_other = true; break; }
-    if (!near_other) discard;
-    out_color = vec4(u_edge_color.rgb, 1.0);
+    if (!outline_here(atlas_texel(g_map, g_scale, g_layer, gl_FragCoord.xy))) discard;
+    out_color = vec4(u_outline_color.rgb, 1.0);
 #elif defined(MODE_HALO)
     // the nearest own texel within the width (squared distance), and its depth
     ivec3 t = atlas_texel(g_map, g_scale, g_layer, gl_FragCoord.xy);
@@ -163,8 +210,14 @@ void main() {
     gl_FragDepth = near_depth;     // tested against the focus sprites: a nearer focus object stays clear
     out_color = vec4(u_halo_color.rgb * a, a);
 #else
+#if defined(SPRITE_OUTLINE) && defined(OUTLINE_QUAD)
+    bool outlined = quad_silhouette(atlas_texel(g_map, g_scale, g_layer, gl_FragCoord.xy));  // before any discard
+#endif
     Sample o;
     if (!sampled(gl_FragCoord.xy, o)) discard;
+#if defined(SPRITE_OUTLINE) && !defined(OUTLINE_QUAD)
+    bool outlined = silhouette(o.t);
+#endif
     float depth = o.depth;
     vec3 rgb = o.rgb;
 #if defined(PROJECTOR) || defined(LENS)
@@ -184,6 +237,13 @@ void main() {
 #ifdef MODE_SPRITE
     gl_FragDepth = depth;
     out_color = vec4(rgb, 1.0);
+#ifdef SPRITE_OUTLINE
+    // the outline at depth 0: nothing drawn after (context, halos) covers it, as if drawn last
+    if (outlined) {
+        gl_FragDepth = 0.0;
+        out_color = vec4(u_outline_color.rgb, 1.0);
+    }
+#endif
 #else
     float a = g_opacity;
     float grey = dot(rgb, vec3(0.299, 0.587, 0.114));

@@ -137,7 +137,7 @@ def test_only_needed_passes_run(make_renderer, demo_scene):
     r = make_renderer(demo_scene)
     cam = Camera.orbit(demo_scene.center, demo_scene.radius, *DEFAULT_ORBIT)
     r.capture(cam, VP)
-    expected = {"sprites": ["sprite"], "transparent": ["collect", "resolve"], "ghosted": ["sprite", "blend", "outline"]}
+    expected = {"sprites": ["sprite"], "transparent": ["collect", "resolve"], "ghosted": ["sprite+outline", "blend"]}
     for mode, passes in expected.items():
         r.composite(mode, Style(focus={1}))
         highlight = ["outline"] if mode != "ghosted" else []     # sprites/transparent: highlight outlines
@@ -145,8 +145,35 @@ def test_only_needed_passes_run(make_renderer, demo_scene):
         if highlight:
             r.composite(mode, Style())
             assert r._composite.passes == passes
+    r.composite("ghosted", Style(focus={1}, outline_width=0))   # no outline: no outline pass or variant
+    assert r._composite.passes == ["sprite", "blend"]
     r.composite("ghosted-ao", Style(focus={1}))
-    assert r._composite.passes == ["sprite+with_ao", "blend+with_ao", "outline"] and r._post is not None
+    assert r._composite.passes == ["sprite+outline+with_ao", "blend+with_ao"] and r._post is not None
+
+
+@pytest.mark.parametrize("mode, order, halo", [("ghosted", "object", 0), ("ghosted", "pixel", 0),
+                                               ("ghosted-ao", "object", 3), ("ghosted", "pixel", 3)])
+def test_ghosted_outlines_stay_on_top(make_renderer, demo_scene, mode, order, halo):
+    """The ghosted focus outlines are drawn in the focus sprites' pass at depth 0: the context
+    (blended by object or collected per pixel) and halos composited after never cover them,
+    so the outline pixels are exactly the focus objects' silhouette texels, as drawn last."""
+    r = make_renderer(demo_scene)
+    cam = Camera.orbit(demo_scene.center, demo_scene.radius, *DEFAULT_ORBIT)
+    rec = r.capture(cam, VP)
+    covered = r.atlas.read(rec.atlas_size[:2], rec.atlas_size[2], ("depth",))["depth"] < 1.0
+    focus = {1, 5, demo_scene.count // 2}
+    style = Style(focus=focus, order=order, halo=halo)
+    rgba, depth = r.composite(mode, style).read()
+    assert r._composite.passes[0].startswith("sprite+outline") and "outline" not in r._composite.passes[1:]
+    drawn = np.abs(rgba[..., :3].astype(int) - np.array(style.outline_color[:3]) * 255).max(-1) <= 3
+    expected = np.zeros(drawn.shape, bool)
+    for oid in focus:
+        x0, y0, x1, y1 = rec.viewport_rect[oid].astype(int)
+        sil = _silhouettes(rec, covered, oid, 1)
+        expected[y0:y1, x0:x1] |= sil[1:1 + y1 - y0, 1:1 + x1 - x0]
+    assert expected.sum() > 200
+    assert np.array_equal(drawn, expected), f"{(drawn != expected).sum()} pixels differ"
+    assert (depth[expected] == 0.0).all()
 
 
 def test_borders_are_marked_empty(make_renderer, demo_scene):
@@ -205,20 +232,24 @@ def _silhouettes(records, covered: np.ndarray, oid: int, width: int) -> np.ndarr
     return own[width:-width, width:-width] & near_other
 
 
-@pytest.mark.parametrize("border, width, distance", [(0, 1, 2.2), (0, 1, 0.6), (0, 3, 0.6), (1, 3, 2.2)])
-def test_outlines_match_numpy_silhouettes(make_renderer, demo_scene, border, width, distance):
+@pytest.mark.parametrize("mode", ["sprites", "ghosted"])
+@pytest.mark.parametrize("border, width, distance", [(0, 1, 2.2), (0, 1, 0.6), (0, 3, 0.6), (1, 3, 2.2),
+                                                     (1, 1, 2.2), (1, 1, 0.6), (2, 1, 0.6)])
+def test_outlines_match_numpy_silhouettes(make_renderer, demo_scene, border, width, distance, mode):
     """Every object in focus: the outline pixels are exactly the silhouette texels of each
     object's own atlas region mapped back through T^-1. With border 0 the regions touch, so
     a silhouette next to B_atlas's edge is found only if texels beyond it count as empty
     (not the neighbouring object's); close up (distance 0.6) parts cross the viewport's edge,
-    so their regions are full up to B_atlas's edge. A wide outline reaches past a 1-texel border."""
+    so their regions are full up to B_atlas's edge. A wide outline reaches past a 1-texel border.
+    `sprites` draws outlines in a pass of their own, `ghosted` in the focus sprites' pass;
+    width 1 with a border takes the quad-derivative silhouette (OUTLINE_QUAD) in both."""
     from rtta.renderer.renderer import Settings
     r = make_renderer(demo_scene, Settings(border=border))
     cam = Camera.orbit(demo_scene.center, demo_scene.radius, 30, 20, distance)
     rec = r.capture(cam, VP)
     covered = r.atlas.read(rec.atlas_size[:2], rec.atlas_size[2], ("depth",))["depth"] < 1.0
     style = Style(focus=set(range(demo_scene.count)), outline_width=width)
-    rgba, _ = r.composite("sprites", style).read()
+    rgba, _ = r.composite(mode, style).read()
     drawn = np.abs(rgba[..., :3].astype(int) - np.array(style.outline_color[:3]) * 255).max(-1) <= 3
     expected = np.zeros(drawn.shape, bool)
     for oid in np.flatnonzero(rec.visible):

@@ -120,7 +120,9 @@ class CompositeTarget:
         return self.viewport[0] / self.size[0], self.viewport[1] / self.size[1]
 
     def read(self) -> tuple[np.ndarray, np.ndarray]:
-        """(rgba uint8 [H, W, 4], depth float32 [H, W]) of the viewport; row 0 is the bottom row."""
+        """(rgba uint8 [H, W, 4], depth float32 [H, W]) of the viewport; row 0 is the bottom row.
+        The depth is the sprites' (1 where none); in the ghosted modes it is 0 under the focus
+        outlines, which are drawn at depth 0 so that nothing composited after covers them."""
         w, h = self.size
         vw, vh = self.viewport
         rgba = np.frombuffer(self.fbo.read(viewport=(0, 0, vw, vh), components=4), np.uint8).reshape(vh, vw, 4)
@@ -211,25 +213,32 @@ class CompositePass:
         if projection is not None:
             atlas.normal.use(4)
         everyone = np.arange(n)
+        outlined = style.outline_width >= 1
         if mode == "sprites":
             self._draw(everyone, style, records, sprite=True)
-            self._draw(focus, style, records, outline=True)      # highlights, seen through
+            if outlined:
+                self._draw(focus, style, records, outline=True)      # highlights, seen through
         elif mode == "transparent":
             self._blend(back_to_front(records, view_depth, everyone), style, records, target, mode, desaturate=0.0)
-            self._draw(focus, style, records, outline=True)
+            if outlined:
+                self._draw(focus, style, records, outline=True)
         else:
             with_ao = mode == "ghosted-ao"
             if with_ao:
                 post.texture.use(3)
             context = np.setdiff1d(everyone, focus)
-            self._draw(focus, style, records, sprite=True, ao=with_ao)
+            # the focus outlines in the focus sprites' pass (at depth 0, so that nothing drawn
+            # after covers them), unless a focus region is upsampled (outlines read texels)
+            fused = outlined and not (records.scale[focus[records.visible[focus]]] < UPSAMPLE_BELOW).any()
+            self._draw(focus, style, records, sprite=True, ao=with_ao, outlined=fused)
             params[context, 0] = style.context_opacity * params[context, 0]
             self._upload(self.styles, params.tobytes())
             self._blend(back_to_front(records, view_depth, context), style, records, target, mode, behind=focus,
-                        desaturate=style.desaturate, depth_test=True, ao=with_ao, cut=True)
+                        behind_outlined=fused, desaturate=style.desaturate, depth_test=True, ao=with_ao, cut=True)
             if style.halo > 0 and len(focus):
                 self._halo(focus, context, style, records, target)
-            self._draw(focus, style, records, outline=True)
+            if outlined and not fused:
+                self._draw(focus, style, records, outline=True)
 
     def _halo(self, focus, context, style: Style, records: Records, target: CompositeTarget) -> None:
         """Halos around the focus objects where context lies behind them: the farthest
@@ -242,9 +251,10 @@ class CompositePass:
         self._draw(focus, style, records, halo=True, depth_test=True)
 
     def _sprite_depth(self, ids, style: Style, records: Records, target: CompositeTarget, *, farthest: bool,
-                      cut: bool) -> moderngl.Texture:
+                      cut: bool, outlined: bool = False) -> moderngl.Texture:
         """The nearest (or farthest) sprite depth of `ids` per pixel, in a depth texture of
-        the target's size (1, or 0 for farthest, where none); the target is bound again after."""
+        the target's size (1, or 0 for farthest, where none); the target is bound again after.
+        `outlined`: their outlines at depth 0 (as the fused focus pass draws them)."""
         if self._context_depth is None or self._context_depth.size != target.size:
             self._release_context_depth()
             self._context_depth = self.ctx.depth_texture(target.size)
@@ -253,7 +263,7 @@ class CompositePass:
         self._context_fbo.viewport = (0, 0, *target.viewport)
         self._context_fbo.use()
         self._context_fbo.clear(depth=0.0 if farthest else 1.0)
-        self._draw(ids, style, records, sprite=True, cut=cut, farthest=farthest)
+        self._draw(ids, style, records, sprite=True, cut=cut, farthest=farthest, outlined=outlined)
         target.fbo.use()
         return self._context_depth
 
@@ -264,12 +274,13 @@ class CompositePass:
         self._context_depth = self._context_fbo = None
 
     def _blend(self, ids, style: Style, records: Records, target: CompositeTarget, mode: str, behind=None,
-               **how) -> None:
+               behind_outlined: bool = False, **how) -> None:
         """Blend `ids` (back to front) over the target: object by object, or per pixel in the
         order of their surfaces (style.order 'pixel', or 'auto' in `transparent`; object order
         when over MAX_NODES).
         `behind`: opaque objects already drawn (the ghosted focus); surfaces behind them are
-        hidden, by the depth test in object order and by their depth per pixel in pixel order."""
+        hidden, by the depth test in object order and by their depth per pixel in pixel order;
+        `behind_outlined`: their outlines were drawn with them (at depth 0: nothing covers them)."""
         if resolved_order(style.order, mode) == "pixel" and len(ids):
             if self._pixel_order is None:
                 self._pixel_order = PixelOrderPass(self.ctx)
@@ -278,7 +289,8 @@ class CompositePass:
             if self._pixel_order.begin(records.viewport, ids, records):
                 clip = behind is not None and len(behind) > 0
                 if clip:
-                    self._sprite_depth(behind, style, records, target, farthest=False, cut=False).use(7)
+                    self._sprite_depth(behind, style, records, target, farthest=False, cut=False,
+                                       outlined=behind_outlined).use(7)
                 collect = {**how, "depth_test": False}     # collected surfaces write no depth: clipped instead
                 self._draw(ids, style, records, collect=True, focus_clip=clip, **collect)
                 self._pixel_order.resolve(target.fbo)
@@ -303,17 +315,21 @@ class CompositePass:
 
     def _draw_run(self, ids, style: Style, records: Records, *, sprite=False, blend=False, outline=False,
                   desaturate=0.0, depth_test=False, ao=False, cut=False, upsample=False, collect=False,
-                  halo=False, farthest=False, focus_clip=False) -> None:
+                  halo=False, farthest=False, focus_clip=False, outlined=False) -> None:
         self._upload(self.order, ids.astype(np.int32).tobytes())
         self.order.bind_to_storage_buffer(3)
         projection = None if outline or halo else self._projection
         lens = self._lens if cut else None
         mode = {"MODE_SPRITE": sprite, "MODE_BLEND": blend, "MODE_OUTLINE": outline, "MODE_COLLECT": collect,
                 "MODE_HALO": halo, "FOCUS_CLIP": focus_clip,
+                "SPRITE_OUTLINE": outlined and sprite,
+                "OUTLINE_QUAD": ((outline or outlined) and int(style.outline_width) == 1 and records.border >= 1
+                                 and bool((records.scale[ids] == 1.0).all())),
                 "WITH_AO": ao and not outline,
                 "PROJECTOR": projection is not None, "LENS": lens is not None, "UPSAMPLE": upsample}
         on = [k for k, v in mode.items() if v]
-        self.passes.append("+".join(k.removeprefix("MODE_").lower() for k in on))
+        self.passes.append("+".join(k.removeprefix("MODE_").removeprefix("SPRITE_").lower()
+                                    for k in on if k != "OUTLINE_QUAD"))
         prog, vao = self._program(**{k: True for k in on})
         prog["u_viewport"].value = tuple(float(v) for v in records.viewport)
         if projection is not None or lens is not None:
@@ -324,8 +340,8 @@ class CompositePass:
         if lens is not None:
             lens_pass, lens_, origin = lens
             lens_pass.bind(prog, lens_, origin)
-        edge_color = style.outline_color if outline else style.edge_color
-        for name, value in (("u_desaturate", desaturate), ("u_edge_color", edge_color),
+        for name, value in (("u_desaturate", desaturate), ("u_edge_color", style.edge_color),
+                            ("u_outline_color", style.outline_color),
                             ("u_outline_width", style.outline_width), ("u_halo_width", int(style.halo)),
                             ("u_halo_color", tuple(style.halo_color))):
             if name in prog:       # the compiler drops what a variant does not use

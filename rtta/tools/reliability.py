@@ -249,6 +249,8 @@ def _reference_frame(renderer: Renderer) -> None:
     camera = Camera.orbit(scene.center, scene.radius, 30.0, 20.0, 2.2)
     renderer.capture(camera, (320, 240))
     renderer.trim()
+    for mode in MODES:     # every mode with a focus once: its shader variants exist from the first sample
+        renderer.composite(mode, Style(focus={0}))
     for _ in range(REFERENCE_REPEATS):
         renderer.capture(camera, (320, 240))
         renderer.composite("ghosted-ao")

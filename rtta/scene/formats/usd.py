@@ -5,6 +5,7 @@ references, payloads) must lie in its folder: no absolute paths, no URLs."""
 
 from __future__ import annotations
 
+import codecs
 import re
 from pathlib import Path
 
@@ -64,6 +65,7 @@ def _check_layers(path: Path) -> None:
         if current in seen or current.suffix.lower() == ".usdz":
             continue
         seen.add(current)
+        _check_text(current, path)
         with native_output() as said:
             try:
                 layer = Sdf.Layer.FindOrOpen(str(current))
@@ -85,6 +87,37 @@ def _check_layers(path: Path) -> None:
             if not target.is_file():
                 raise RttaError(f"layer reference '{asset}' is missing", path)
             todo.append(target)
+
+
+def _check_text(layer: Path, path: Path) -> None:
+    """A text layer (#usda) must be UTF-8: usd-core's Python side fails on other bytes with
+    a decoding error that names neither the file nor the place. Read in chunks, so a large
+    layer is not held twice."""
+    decoder = codecs.getincrementaldecoder("utf-8")()
+    lines, first = 1, True
+    try:
+        with open(layer, "rb") as fh:
+            while chunk := fh.read(1 << 20):
+                if first and not chunk.startswith(b"#usda"):
+                    return                        # binary (usdc) or not USD: the reader says
+                first = False
+                pending = len(decoder.getstate()[0])     # bytes of a character cut by the last chunk
+                try:
+                    decoder.decode(chunk)
+                except UnicodeDecodeError as exc:
+                    line = lines + chunk.count(b"\n", 0, max(0, exc.start - pending))
+                    raise RttaError(f"{_which(layer, path)}not UTF-8 text at line {line} (USDA layers are UTF-8)",
+                                    path) from None
+                lines += chunk.count(b"\n")
+            decoder.decode(b"", final=True)
+    except UnicodeDecodeError:
+        raise RttaError(f"{_which(layer, path)}not UTF-8 text: it ends inside a character", path) from None
+    except OSError:
+        return                                    # unreadable: Sdf says so
+
+
+def _which(layer: Path, path: Path) -> str:
+    return "" if layer == path.resolve() else f"layer '{layer.name}' it refers to is "
 
 
 def _mesh(mesh) -> tuple[np.ndarray, np.ndarray]:

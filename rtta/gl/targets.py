@@ -174,12 +174,7 @@ class LayeredTarget:
         cl = n if layers is None else max(1, layers)
         parts = parts or tuple(k for k, on in (("color", True), ("normal", self.normals_written),
                                                ("id", self.ids_written), ("depth", True)) if on)
-        if "normal" in parts and not self.normals:
-            raise ValueError("this target has no normal image (normals=False)")
-        if "normal" in parts and not self.normals_written:
-            raise ValueError("the last capture wrote no normal image (capture with normals=True)")
-        if "id" in parts and not self.ids_written:
-            raise ValueError("the last capture wrote no id image (capture with ids=True)")
+        self._check_readable(parts)
         readers = {
             "color": lambda: np.frombuffer(self.color.read(), np.uint8).reshape(n, h, w, 4),
             "normal": lambda: decode_normals(np.frombuffer(self.normal.read(), np.uint8).reshape(n, h, w, 4)),
@@ -197,15 +192,23 @@ class LayeredTarget:
         """'depth' (float32) and, with `ids`, 'id' (int32) at `points` [k, 3] (x, y, layer;
         row 0 at the bottom), each inside the target; an empty texel (depth 1) reads id -1,
         as in `read`."""
+        self._check_readable(("id", "depth") if ids else ("depth",))
         points = np.asarray(points, np.int64).reshape(-1, 3)
         depth = glraw.read_texels(self.depth.glo, points, depth=True)
         if not ids:
             return {"depth": depth}
-        if not self.ids_written:
-            raise ValueError("the last capture wrote no id image (capture with ids=True)")
         found = glraw.read_texels(self.ids.glo, points, depth=False)
         found[depth >= 1.0] = -1
         return {"id": found, "depth": depth}
+
+    def _check_readable(self, parts) -> None:
+        """ValueError for a part this target lacks or the last capture left unwritten."""
+        if "normal" in parts and not self.normals:
+            raise ValueError("this target has no normal image (normals=False)")
+        if "normal" in parts and not self.normals_written:
+            raise ValueError("the last capture wrote no normal image (capture with normals=True)")
+        if "id" in parts and not self.ids_written:
+            raise ValueError("the last capture wrote no id image (capture with ids=True)")
 
     def _free(self) -> None:
         if self._fbo is not None:

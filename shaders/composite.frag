@@ -210,14 +210,12 @@ void main() {
     gl_FragDepth = near_depth;     // tested against the focus sprites: a nearer focus object stays clear
     out_color = vec4(u_halo_color.rgb * a, a);
 #else
-#if defined(SPRITE_OUTLINE) && defined(OUTLINE_QUAD)
-    bool outlined = quad_silhouette(atlas_texel(g_map, g_scale, g_layer, gl_FragCoord.xy));  // before any discard
+#ifdef SPRITE_OUTLINE
+    // before any discard (OUTLINE_QUAD reads the quad partners through derivatives)
+    bool outlined = outline_here(atlas_texel(g_map, g_scale, g_layer, gl_FragCoord.xy));
 #endif
     Sample o;
     if (!sampled(gl_FragCoord.xy, o)) discard;
-#if defined(SPRITE_OUTLINE) && !defined(OUTLINE_QUAD)
-    bool outlined = silhouette(o.t);
-#endif
     float depth = o.depth;
     vec3 rgb = o.rgb;
 #if defined(PROJECTOR) || defined(LENS)

@@ -1,7 +1,10 @@
 #version 430
-// defines: CAPTURE_VS CAPTURE_GS PROJECTOR TEXTURED
+// defines: CAPTURE_VS CAPTURE_GS PROJECTOR TEXTURED REGION_CLIP
 // One vertex shader for STD/RTT (no define), the RTTA vertex-shader path (CAPTURE_VS,
 // needs GL_ARB_shader_viewport_layer_array) and the RTTA geometry-shader path (CAPTURE_GS).
+// REGION_CLIP (with CAPTURE_VS): clip every vertex to its object's B_viewport. Only objects
+// whose region meets the viewport's edge need it (CapturePass draws them apart): llvmpipe
+// spends about a sixth of a capture's vertex stage on clip distances even when none is negative.
 #ifdef CAPTURE_VS
 #extension GL_ARB_shader_viewport_layer_array : require
 #endif
@@ -30,7 +33,7 @@ out VertexData {
 #endif
 } vs_out;
 
-#ifdef CAPTURE_VS
+#if defined(CAPTURE_VS) && defined(REGION_CLIP)
 out float gl_ClipDistance[4];
 #endif
 
@@ -50,9 +53,11 @@ void main() {
 #endif
 #ifdef CAPTURE_VS
     Record r = records[in_object];
+#ifdef REGION_CLIP
     float d[4];
     region_clip_distances(clip_pos, r.clip, d);
     for (int i = 0; i < 4; ++i) gl_ClipDistance[i] = r.info.y != 0 ? d[i] : -1.0;
+#endif
     gl_Layer = r.info.x;
     gl_Position = displace(clip_pos, r.transform);
 #else

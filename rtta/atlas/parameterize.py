@@ -50,6 +50,14 @@ class Records:
         return out
 
     @property
+    def meets_edge(self) -> np.ndarray:
+        """bool [n]: the inner B_viewport lies on an edge of the viewport, so the object may
+        reach beyond it (its projection was clipped there). Any other region holds its
+        object's whole projection (B_world's, snapped outward): the capture need not clip to it."""
+        rect, (w, h) = self.viewport_rect, self.viewport
+        return (rect[:, 0] <= 0) | (rect[:, 1] <= 0) | (rect[:, 2] >= w) | (rect[:, 3] >= h)
+
+    @property
     def utilization(self) -> float:
         """Sum of region areas over the allocated atlas area (0 when nothing is packed)."""
         tw, th, td = self.atlas_size

@@ -1,7 +1,9 @@
 """Render passes, one class each, with explicit inputs and outputs.
 
-- `CapturePass` (RTTA): the whole batch in ONE draw call into the layered atlas; each
-  vertex displaced by its object's T and routed to its layer (vertex- or geometry-shader path).
+- `CapturePass` (RTTA): the whole batch in ONE pass into the layered atlas; each vertex
+  displaced by its object's T and routed to its layer (vertex- or geometry-shader path). On the
+  vertex-shader path the objects whose region meets the viewport's edge, the only ones that
+  must be clipped to their regions, take a second draw call.
 - `StdPass`: the scene drawn normally into one target (baseline STD).
 - `RttPass`: each object drawn alone into its own full-viewport target (baseline RTT).
 """
@@ -34,16 +36,18 @@ class ScenePass:
                  **defines: object) -> None:
         self.ctx = ctx
         self._source = (geometry, fragment, defines)
-        self._programs: dict[tuple[bool, bool], moderngl.Program] = {}
+        self._programs: dict[tuple, moderngl.Program] = {}
         self.program = self.program_for(False)
 
-    def program_for(self, textured: bool, normals: bool = True) -> moderngl.Program:
+    def program_for(self, textured: bool, normals: bool = True, **variant: bool) -> moderngl.Program:
         """The pass's program for untextured or textured scenes, writing a normal image or
-        not (to match the target: LayeredTarget.normals); compiled on first use."""
-        key = (textured, normals)
+        not (to match the target: LayeredTarget.normals), with the `variant` defines that are
+        true (e.g. REGION_CLIP); compiled on first use."""
+        on = tuple(sorted(k for k, v in variant.items() if v))
+        key = (textured, normals, on)
         if key not in self._programs:
             geometry, fragment, defines = self._source
-            defines = {**defines, "TEXTURED": textured}
+            defines = {**defines, "TEXTURED": textured, **dict.fromkeys(on, True)}
             if not normals:
                 defines["NO_NORMAL"] = True
             stages = {"vertex_shader": "scene.vert", "geometry_shader": geometry, "fragment_shader": fragment}
@@ -51,10 +55,10 @@ class ScenePass:
         return self._programs[key]
 
     def setup(self, gpu: GpuScene, view: np.ndarray, proj: np.ndarray,
-              target: LayeredTarget | None = None) -> moderngl.VertexArray:
+              target: LayeredTarget | None = None, **variant: bool) -> moderngl.VertexArray:
         """Program, matrices, buffers and state for drawing the batch into `target` (its
         attachments pick the program's outputs; None: a target of its own, e.g. a shadow map)."""
-        self.program = self.program_for(gpu.textured, target is None or target.normals)
+        self.program = self.program_for(gpu.textured, target is None or target.normals, **variant)
         self.program["u_view"].write(mat_bytes(view))
         self.program["u_proj"].write(mat_bytes(proj))
         gpu.bind_storage()
@@ -85,8 +89,9 @@ class CapturePass(ScenePass):
 
     def render(self, *, gpu: GpuScene, records: Records, view: np.ndarray, proj: np.ndarray,
                atlas: LayeredTarget, normals: bool = True, ids: bool = True) -> None:
-        """Upload R, then draw the whole batch once into `atlas` (sized to records.atlas_size);
-        objects without a region (culled, hidden) are left out of that one draw. normals=False
+        """Upload R, then draw the whole batch once into `atlas` (sized to records.atlas_size):
+        one draw call, two on the vertex-shader path when some regions meet the viewport's edge
+        (those alone are clipped); objects without a region (culled, hidden) are left out. normals=False
         or ids=False: that image is not written (a colour mask). Compositing never reads ids
         and reads normals only for AO, edges and the projector; picking reads depths."""
         tw, th, td = records.atlas_size
@@ -97,22 +102,38 @@ class CapturePass(ScenePass):
         if td == 0:
             return
         gpu.upload_records(records)
-        vao = self.setup(gpu, view, proj, atlas)
         atlas.bind((0, 0, tw, th))
         atlas.write_mask(normals, ids)
-        glraw.set_clip_distances(4, True)
         try:
-            if records.visible.all():
-                vao.render(moderngl.TRIANGLES)
-            else:                                # culled and hidden objects: not drawn at all
-                self._draw_runs(vao, gpu.scene.index_runs(records.visible))
+            if self.path == "gs":            # the geometry shader clips every triangle
+                self._draw(gpu, view, proj, atlas, records.visible, clip=True)
+            else:                            # only regions on the viewport's edge clip
+                edge = records.visible & records.meets_edge
+                self._draw(gpu, view, proj, atlas, records.visible & ~edge, clip=False)
+                self._draw(gpu, view, proj, atlas, edge, clip=True)
         finally:
-            glraw.set_clip_distances(4, False)
             atlas.write_mask()
 
-    def _draw_runs(self, vao: moderngl.VertexArray, runs: np.ndarray) -> None:
-        """Draw index runs [(first, count)] in one call: one run directly, several as one
-        indirect multi-draw, its command buffer grown as needed and reused across frames."""
+    def _draw(self, gpu: GpuScene, view: np.ndarray, proj: np.ndarray, atlas: LayeredTarget,
+              objects: np.ndarray, *, clip: bool) -> None:
+        """Draw the objects in `objects` (bool [n]; culled and hidden ones are never in it),
+        clipped to their regions or not, in one call."""
+        if not objects.any():
+            return
+        vao = self.setup(gpu, view, proj, atlas, REGION_CLIP=clip and self.path == "vs")
+        glraw.set_clip_distances(4, clip)
+        try:
+            self._draw_runs(vao, None if objects.all() else gpu.scene.index_runs(objects))
+        finally:
+            glraw.set_clip_distances(4, False)
+
+    def _draw_runs(self, vao: moderngl.VertexArray, runs: np.ndarray | None) -> None:
+        """Draw index runs [(first, count)] in one call (None: the whole batch): one run
+        directly, several as one indirect multi-draw, its command buffer grown as needed and
+        reused across frames."""
+        if runs is None:
+            vao.render(moderngl.TRIANGLES)
+            return
         if len(runs) <= DIRECT_RUNS:
             for first, count in runs:
                 vao.render(moderngl.TRIANGLES, vertices=int(count), first=int(first))

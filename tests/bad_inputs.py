@@ -176,7 +176,9 @@ def make_corpus(folder: str | Path) -> list[Case]:
     add("nan_vertices.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n", True, "NaN")
     add("inf_vertices.obj", "v 0 0 0\nv inf 0 0\nv 0 1 0\nf 1 2 3\n", True, "NaN or infinite")
     add("nan_vertices.glb", _glb(("a",), positions=np.nan), True, "NaN")
-    add("huge_coordinates.obj", "v 0 0 0\nv 1e300 0 0\nv 0 1 0\nf 1 2 3\n", True, "coordinates")
+    add("huge_coordinates.obj", "v 0 0 0\nv 1e300 0 0\nv 0 1 0\nf 1 2 3\n", True, "up to 1e+300, beyond the")
+    add("beyond_float32.obj", "v 0 0 0\nv 1e39 0 0\nv 0 1 0\nf 1 2 3\n", True, "up to 1e+39, beyond the")
+    add("large_coordinates.obj", "v 0 0 0\nv 1e20 0 0\nv 0 1 0\nf 1 2 3\n", True, "up to 1e+20, beyond the")
     add("zero_faces.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n", True, "no objects")
     add("points.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
         "property float z\nend_header\n0 0 0\n1 0 0\n0 1 0\n", True, "no objects")

@@ -26,6 +26,7 @@ from .precheck import BYTES_PER_TRIANGLE, BYTES_PER_VERTEX, check_size, memory_l
 from .preprocess import DEFAULT_SMOOTH_ANGLE
 from .textures import TextureTable
 
+F32_MAX = float(np.finfo(np.float32).max)
 MAX_COORDINATE = 1e15    # float64 keeps ~0.1 units of precision there; float32 offsets stay finite
 
 
@@ -316,7 +317,8 @@ class _Gathered:
 def _check(meshes: batch.Meshes, mesh_of: np.ndarray, transforms: np.ndarray, names: list[str], path: Path) -> None:
     """The first node (in graph order) with non-finite vertices, face indices out of range
     or a non-finite transform raises; then the memory limit, counted as the nodes add up."""
-    finite = np.logical_and.reduceat(np.isfinite(meshes.vertices).all(axis=1), meshes.vstart)
+    # |v| beyond float32's range (NaN and infinities too): preprocessing works in float32
+    finite = np.logical_and.reduceat(np.abs(meshes.vertices).max(axis=1) <= F32_MAX, meshes.vstart)
     low = np.minimum.reduceat(meshes.faces.min(axis=1), meshes.fstart)
     high = np.maximum.reduceat(meshes.faces.max(axis=1), meshes.fstart)
     in_range = (low >= 0) & (high < meshes.vcount)
@@ -325,7 +327,12 @@ def _check(meshes: batch.Meshes, mesh_of: np.ndarray, transforms: np.ndarray, na
     if bad.any():
         i = int(np.flatnonzero(bad)[0])
         if not finite[mesh_of[i]]:
-            raise RttaError(f"object '{names[i]}' has NaN or infinite vertex coordinates", path)
+            m = mesh_of[i]
+            v = meshes.vertices[meshes.vstart[m]:meshes.vstart[m] + meshes.vcount[m]]
+            if not np.isfinite(v).all():
+                raise RttaError(f"object '{names[i]}' has NaN or infinite vertex coordinates", path)
+            raise RttaError(f"object '{names[i]}' has coordinates up to {np.abs(v).max():.3g}, beyond "
+                            f"the ±{MAX_COORDINATE:.0e} this program handles", path)
         if not in_range[mesh_of[i]]:
             raise RttaError(f"object '{names[i]}' has face indices out of range", path)
         raise RttaError(f"object '{names[i]}' has a transform that makes coordinates non-finite", path)

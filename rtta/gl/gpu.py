@@ -1,6 +1,6 @@
 """GPU-side scene data shared by every pass: one vertex buffer, one index buffer, the
-object buffer (colours), the record buffer R (one std430 entry per object ID) and, for a
-textured scene, the material atlas and its per-object buffer."""
+object buffer (colours), B_world per object, the record buffer R (one std430 entry per
+object ID) and, for a textured scene, the material atlas and its per-object buffer."""
 
 from __future__ import annotations
 
@@ -38,6 +38,12 @@ class GpuScene:
         self.objects = ctx.buffer(np.ascontiguousarray(scene.colors, np.float32).tobytes())
         self.records = ctx.buffer(reserve=max(1, scene.count) * RECORD_DTYPE.itemsize)
         self._vaos: dict[int, moderngl.VertexArray] = {}
+        # B_world per object as two vec4 (min, max), the scene origin at 0 as for the vertex
+        # positions: compositing draws sprites over their projected outlines (composite.geom)
+        bounds = np.zeros((max(scene.count, 1), 2, 4), np.float32)
+        bounds[:scene.count, 0, :3] = scene.aabb_min - scene.origin
+        bounds[:scene.count, 1, :3] = scene.aabb_max - scene.origin
+        self.bounds = ctx.buffer(bounds.tobytes())
 
     def vao(self, program: moderngl.Program) -> moderngl.VertexArray:
         """The shared buffers bound to `program` (one vertex array per program, cached)."""
@@ -97,6 +103,7 @@ class GpuScene:
         for vao in self._vaos.values():
             vao.release()
         self._vaos.clear()
-        for buf in (self.vbo, self.ibo, self.objects, self.records, self.materials, self.material_atlas):
+        for buf in (self.vbo, self.ibo, self.objects, self.records, self.materials, self.material_atlas,
+                    self.bounds):
             if buf is not None:
                 buf.release()

@@ -31,6 +31,7 @@ MODES = ("sprites", "transparent", "ghosted", "ghosted-ao")
 LENS_MODES = ("ghosted", "ghosted-ao")    # where a lens cuts the context away
 BACKGROUND = (0.93, 0.93, 0.95, 1.0)
 UPSAMPLE_BELOW = 0.999                    # regions with fewer texels per pixel are upsampled
+HULL_MIN_AREA = 2048                      # pixels per B_viewport, on average over a draw, for outline sprites
 ROLES = ("focus", "all")                  # which objects get AO / edges in ghosted-ao
 
 
@@ -139,6 +140,14 @@ class CompositeTarget:
         self.size = (0, 0)
 
 
+def _large(records: Records, ids: np.ndarray) -> bool:
+    """Whether the B_viewport of `ids` cover HULL_MIN_AREA pixels each on average: there, a
+    sprite over the projected outline of B_world (about a quarter fewer fragments) is worth
+    the geometry shader's work for it (about a microsecond an object on llvmpipe)."""
+    rect = records.viewport_rect[ids]
+    return bool(((rect[:, 2] - rect[:, 0]) * (rect[:, 3] - rect[:, 1])).mean() >= HULL_MIN_AREA)
+
+
 def back_to_front(records: Records, view_depth: np.ndarray, ids: np.ndarray) -> np.ndarray:
     """`ids` ordered farthest first by the view depth of their bounds centre; ties by id,
     so the order is stable and intersecting parts do not flicker."""
@@ -161,14 +170,15 @@ class CompositePass:
         self._context_depth = self._context_fbo = None    # front-most context depth, for halos
         self.fallbacks = 0                 # frames that asked for pixel order and got object order
         self._projection = self._lens = self._inv_view_proj = None
+        self._hull = None                  # (P V bytes, eye): sprites over the projected outlines of B_world
+        self.hull_draws = 0                # draws of the last render whose sprites covered projected outlines
 
     def _program(self, **defines) -> tuple[moderngl.Program, moderngl.VertexArray]:
         key = tuple(sorted(defines.items()))
         if key not in self._programs:
-            geom = {k: v for k, v in defines.items() if k in glsl.declared_defines("composite.geom")}
-            prog = self.ctx.program(vertex_shader=glsl.load("composite.vert"),
-                                    geometry_shader=glsl.load("composite.geom", **geom),
-                                    fragment_shader=glsl.load("composite.frag", **defines))
+            sources = glsl.stage_sources({"vertex_shader": "composite.vert", "geometry_shader": "composite.geom",
+                                          "fragment_shader": "composite.frag"}, **defines)
+            prog = self.ctx.program(**sources)
             self._programs[key] = prog
             self._vaos[key] = self.ctx.vertex_array(prog, [])
         return self._programs[key], self._vaos[key]
@@ -180,15 +190,18 @@ class CompositePass:
 
     def render(self, *, atlas: LayeredTarget, records: Records, gpu: GpuScene, style: Style, mode: str,
                view_depth: np.ndarray, target: CompositeTarget, post=None, view_proj=None,
-               projection=None, lens=None) -> None:
+               projection=None, lens=None, eye=None) -> None:
         """Composite the captured atlas into `target` (sized to the records' viewport).
         `projection`: (ProjectorPass, Projector, scene origin) to paint with; `lens`: (LensPass,
-        Lens, scene origin) cutting the context away in the ghosted modes. Both need `view_proj`."""
+        Lens, scene origin) cutting the context away in the ghosted modes. Both need `view_proj`.
+        `eye`: the camera's position (scene origin at 0); with `view_proj`, sprites cover the
+        projected outline of each object's B_world instead of all of B_viewport."""
         if lens is not None and mode not in LENS_MODES:
             lens = None
         self._projection, self._lens = projection, lens
         # (P V)^-1 once per render, for every draw that rebuilds world positions
         self._inv_view_proj = None if projection is None and lens is None else mat_bytes(np.linalg.inv(view_proj))
+        self._hull = None if eye is None or view_proj is None else (mat_bytes(view_proj), tuple(float(v) for v in eye))
         if mode not in MODES:
             raise ValueError(f"unknown mode {mode!r}; modes: {', '.join(MODES)}")
         n = len(records.visible)
@@ -203,10 +216,12 @@ class CompositePass:
             params[:n, 2], params[:n, 3] = ao, edges
         self._upload(self.styles, params.tobytes())
         self.passes = []
+        self.hull_draws = 0
         target.ensure(records.viewport)
         target.fbo.use()
         target.fbo.clear(*BACKGROUND, depth=1.0)
         gpu.bind_storage()
+        gpu.bounds.bind_to_storage_buffer(4)
         self.styles.bind_to_storage_buffer(2)
         atlas.color.use(0)
         glraw.bind_texture_array(1, atlas.depth.glo)     # depth-keyed: no id image is read
@@ -320,6 +335,8 @@ class CompositePass:
         self.order.bind_to_storage_buffer(3)
         projection = None if outline or halo else self._projection
         lens = self._lens if cut else None
+        # upsampled pixels reach past the outline; small sprites do not repay the outline's cost
+        hull = None if halo or upsample or not _large(records, ids) else self._hull
         mode = {"MODE_SPRITE": sprite, "MODE_BLEND": blend, "MODE_OUTLINE": outline, "MODE_COLLECT": collect,
                 "MODE_HALO": halo, "FOCUS_CLIP": focus_clip,
                 "SPRITE_OUTLINE": outlined and sprite,
@@ -334,6 +351,12 @@ class CompositePass:
         prog["u_viewport"].value = tuple(float(v) for v in records.viewport)
         if projection is not None or lens is not None:
             prog["u_inv_view_proj"].write(self._inv_view_proj)
+        prog["u_hull"].value = hull is not None
+        if hull is not None:
+            self.hull_draws += 1
+            view_proj, eye = hull
+            prog["u_view_proj"].write(view_proj)
+            prog["u_eye"].value = eye
         if projection is not None:
             pass_, projector, origin = projection
             pass_.bind(prog, projector, origin)

@@ -201,7 +201,8 @@ class Renderer:
         with self._timed("composite"):
             self._composite.render(atlas=self.atlas, records=records, gpu=self.gpu, style=style,
                                    mode=mode, view_depth=view_depth, target=self.target, post=post,
-                                   view_proj=proj @ view, projection=projection, lens=lens)
+                                   view_proj=proj @ view, projection=projection, lens=lens,
+                                   eye=np.linalg.inv(view)[:3, 3])
             self._throttle.flush()
         if self._composite.fallbacks > fallbacks:
             self._warn(f"per-pixel order would need more than {oit.MAX_NODES:,} surfaces in this view: "

@@ -28,6 +28,7 @@ from .textures import TextureTable
 
 F32_MAX = float(np.finfo(np.float32).max)
 MAX_COORDINATE = 1e15    # float64 keeps ~0.1 units of precision there; float32 offsets stay finite
+BEYOND = f"coordinates up to {{:.3g}}, beyond the ±{MAX_COORDINATE:.0e} this program handles"
 
 
 def load_scene(path: str | Path, smooth_angle: float = DEFAULT_SMOOTH_ANGLE, smooth: bool = False) -> Scene:
@@ -327,12 +328,9 @@ def _check(meshes: batch.Meshes, mesh_of: np.ndarray, transforms: np.ndarray, na
     if bad.any():
         i = int(np.flatnonzero(bad)[0])
         if not finite[mesh_of[i]]:
-            m = mesh_of[i]
-            v = meshes.vertices[meshes.vstart[m]:meshes.vstart[m] + meshes.vcount[m]]
-            if not np.isfinite(v).all():
-                raise RttaError(f"object '{names[i]}' has NaN or infinite vertex coordinates", path)
-            raise RttaError(f"object '{names[i]}' has coordinates up to {np.abs(v).max():.3g}, beyond "
-                            f"the ±{MAX_COORDINATE:.0e} this program handles", path)
+            v = meshes.vertices[meshes.vstart[mesh_of[i]]:][:meshes.vcount[mesh_of[i]]]
+            raise RttaError(f"object '{names[i]}' has NaN or infinite vertex coordinates" if not np.isfinite(v).all()
+                            else f"object '{names[i]}' has " + BEYOND.format(np.abs(v).max()), path)
         if not in_range[mesh_of[i]]:
             raise RttaError(f"object '{names[i]}' has face indices out of range", path)
         raise RttaError(f"object '{names[i]}' has a transform that makes coordinates non-finite", path)
@@ -355,8 +353,7 @@ def _check_world(placed: batch.Meshes, names: list[str], path: Path) -> None:
     peak = np.abs(placed.vertices[placed.vstart[i]:placed.vstart[i] + placed.vcount[i]]).max()
     if not np.isfinite(peak):
         raise RttaError(f"object '{names[i]}' has a transform that makes coordinates non-finite", path)
-    raise RttaError(f"object '{names[i]}' has coordinates up to {peak:.3g}, beyond "
-                    f"the ±{MAX_COORDINATE:.0e} this program handles", path)
+    raise RttaError(f"object '{names[i]}' has " + BEYOND.format(peak), path)
 
 
 def _file_normals(mesh) -> np.ndarray | None:

@@ -208,3 +208,22 @@ def test_projection_in_chunks_equals_one_pass(monkeypatch, turned):
     chunked = param.project_bounds(planar, vpm)
     for a, b in zip(whole, chunked, strict=True):
         assert np.array_equal(a, b)
+
+
+def test_records_are_not_reused_by_the_next_call():
+    """Algorithm 1's temporaries are reused from call to call (atlas/scratch.py), its records
+    never: those of one frame stay as they were when the next frames are parameterized, with
+    the same objects from another camera and viewport, and with other objects."""
+    scene, other = random_scene(300, seed=5), random_scene(500, seed=6)
+    cam = Camera.orbit(scene.center, scene.radius, 30.0, 20.0, 2.5)
+    vpm = cam.projection(4 / 3) @ cam.view(scene.origin)
+    keys = ("visible", "viewport_rect", "atlas_rect", "layer", "scale", "transform", "clip_ndc")
+    rec = parameterize(scene.box_corners(), vpm, (320, 240))
+    kept = {k: np.array(getattr(rec, k)) for k in keys}
+    cam2 = Camera.orbit(scene.center, scene.radius, 120.0, -10.0, 1.5)
+    again = parameterize(scene.box_corners(), cam2.projection(1.0) @ cam2.view(scene.origin), (200, 200), border=2)
+    assert not np.array_equal(again.viewport_rect, kept["viewport_rect"])
+    parameterize(scene.box_corners(), vpm, (640, 480))                     # all visible: packed in place
+    parameterize(other.box_corners(), vpm, (320, 240), hidden=np.arange(500) % 3 == 0)
+    for k in keys:
+        assert np.array_equal(getattr(rec, k), kept[k]), k

@@ -12,6 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .scratch import scratch
+
 
 @dataclass
 class Packing:
@@ -30,7 +32,9 @@ class Packing:
 def _breaks(cum: np.ndarray, sizes: np.ndarray, limit: int) -> np.ndarray:
     """Start indices of greedy runs of `sizes` (cumsum `cum`) whose sum stays <= limit: the
     end of a run from every index in one vectorised search, then one hop per run."""
-    nxt = cum.searchsorted(cum - sizes + limit, side="right")   # where a run from each index ends
+    reach = np.subtract(cum, sizes, out=scratch("pack.reach", len(cum), cum.dtype))
+    reach += limit
+    nxt = cum.searchsorted(reach, side="right")     # where a run from each index ends
     starts = []
     n = len(sizes)
     i = 0
@@ -43,16 +47,31 @@ def _breaks(cum: np.ndarray, sizes: np.ndarray, limit: int) -> np.ndarray:
 
 def _decreasing_order(w: np.ndarray, h: np.ndarray) -> np.ndarray:
     """np.lexsort((-w, -h)) (tallest first, then widest, then by index), as two stable
-    16-bit sorts when the sizes allow (numpy sorts those by radix: about 10x faster at 10^5)."""
+    16-bit sorts when the sizes allow (numpy sorts those by radix: about 10x faster at 10^5).
+    The result is a scratch array (this module's pack_shelves consumes it)."""
     top = max(int(w.max()), int(h.max()))
     if top >= 1 << 16:
         return np.lexsort((-w, -h))
-    by_w = np.argsort((top - w).astype(np.uint16), kind="stable")
-    return by_w[np.argsort((top - h[by_w]).astype(np.uint16), kind="stable")]
+    n = len(w)
+    key = scratch("pack.key", n, np.uint16)
+    np.subtract(top, w, out=key, casting="unsafe")
+    by_w = np.argsort(key, kind="stable")
+    np.subtract(top, np.take(h, by_w, out=scratch("pack.h_by_w", n, h.dtype)), out=key, casting="unsafe")
+    return np.take(by_w, np.argsort(key, kind="stable"), out=scratch("pack.order", n, np.int64))
 
 
-def pack_shelves(w: np.ndarray, h: np.ndarray, max_w: int, max_h: int) -> Packing:
-    """Pack w x h rectangles (each <= max_w x max_h) into shelves and layers."""
+def _by_shelf(starts: np.ndarray, n: int) -> np.ndarray:
+    """The shelf (or run) of each of n items, runs beginning at `starts` (scratch)."""
+    of = scratch("pack.shelf_of", n, np.int64)
+    of[:] = 0
+    of[starts[1:]] = 1
+    return np.cumsum(of, out=of)
+
+
+def pack_shelves(w: np.ndarray, h: np.ndarray, max_w: int, max_h: int,
+                 out: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None) -> Packing:
+    """Pack w x h rectangles (each <= max_w x max_h) into shelves and layers. `out`: int64
+    arrays [n] to write x, y and layer into (fresh ones when None)."""
     w = np.asarray(w, np.int64)
     h = np.asarray(h, np.int64)
     n = len(w)
@@ -62,11 +81,14 @@ def pack_shelves(w: np.ndarray, h: np.ndarray, max_w: int, max_h: int) -> Packin
     if (w > max_w).any() or (h > max_h).any() or (w < 1).any() or (h < 1).any():
         raise ValueError("rectangles must be between 1x1 and the atlas size")
     order = _decreasing_order(w, h)       # tallest first, then widest
-    ws, hs = w[order], h[order]
-    cum = np.cumsum(ws)
+    ws = np.take(w, order, out=scratch("pack.ws", n, np.int64))
+    hs = np.take(h, order, out=scratch("pack.hs", n, np.int64))
+    cum = np.cumsum(ws, out=scratch("pack.cum", n, np.int64))
     shelf_start = _breaks(cum, ws, max_w)
-    shelf_of = np.repeat(np.arange(len(shelf_start)), np.diff(np.append(shelf_start, n)))
-    xs = cum - ws - (cum[shelf_start] - ws[shelf_start])[shelf_of]
+    shelf_of = _by_shelf(shelf_start, n)
+    xs = np.subtract(cum, ws, out=scratch("pack.xs", n, np.int64))
+    gathered = scratch("pack.gathered", n, np.int64)
+    xs -= np.take(xs[shelf_start], shelf_of, out=gathered)      # from the shelf's left end
     shelf_h = hs[shelf_start]
     shelf_w = np.add.reduceat(ws, shelf_start)
     cum_h = np.cumsum(shelf_h)
@@ -75,12 +97,10 @@ def pack_shelves(w: np.ndarray, h: np.ndarray, max_w: int, max_h: int) -> Packin
                                np.diff(np.append(layer_start, len(shelf_h))))
     shelf_y = cum_h - shelf_h - (cum_h[layer_start] - shelf_h[layer_start])[layer_of_shelf]
     layer_h = np.add.reduceat(shelf_h, layer_start)
-    x = np.empty(n, np.int64)
-    y = np.empty(n, np.int64)
-    layer = np.empty(n, np.int64)
+    x, y, layer = out if out is not None else (np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n, np.int64))
     x[order] = xs
-    y[order] = shelf_y[shelf_of]
-    layer[order] = layer_of_shelf[shelf_of]
+    y[order] = np.take(shelf_y, shelf_of, out=gathered)
+    layer[order] = np.take(layer_of_shelf, shelf_of, out=gathered)
     return Packing(x, y, layer, int(shelf_w.max()), int(layer_h.max()), len(layer_start))
 
 

@@ -15,6 +15,7 @@ import numpy as np
 
 from ..scene.model import BOX_EDGES
 from .packing import Packing, pack_shelves
+from .scratch import scratch
 
 EPS_PX = 1e-3        # slack against CPU/GPU rounding when snapping bounds to pixels
 RECORD_DTYPE = np.dtype([("transform", "<f4", 4), ("clip", "<f4", 4), ("atlas", "<f4", 4),
@@ -70,17 +71,19 @@ CHUNK = 16_384    # boxes per pass of project_bounds: its rows (128 KB) stay in 
                   # below the fixed mmap threshold of tools.memory.steady_heap (no page faults)
 
 
-def project_bounds(corners: np.ndarray, vpm: np.ndarray):
+def project_bounds(corners: np.ndarray, vpm: np.ndarray, reuse: bool = False):
     """Projected, near-clipped NDC bounds of boxes: (visible [n], ndc_min [n,2], ndc_max [n,2]).
     One corner at a time over up to CHUNK boxes, into planar [3, n] bounds (numpy runs fastest
-    on long contiguous rows; chunks keep them in cache)."""
+    on long contiguous rows; chunks keep them in cache). reuse: the bounds are scratch arrays,
+    valid until the next call that reuses (parameterize consumes them at once)."""
     n = corners.shape[0]
     m = np.asarray(vpm, np.float64)
     planar = corners.transpose(2, 1, 0)
-    lo = np.empty((3, n))
-    hi = np.empty((3, n))
-    all_front = np.empty(n, bool)
-    some_front = np.empty(n, bool)
+    new = scratch if reuse else (lambda _, shape, dtype=np.float64: np.empty(shape, dtype))
+    lo = new("bounds.lo", (3, n))
+    hi = new("bounds.hi", (3, n))
+    all_front = new("bounds.all_front", n, bool)
+    some_front = new("bounds.some_front", n, bool)
     clip = _CornerClip(m, min(n, CHUNK), _axis_aligned(planar))
     for s in range(0, n, CHUNK):
         e = min(n, s + CHUNK)
@@ -131,10 +134,10 @@ class _CornerClip:
 
     def __init__(self, m: np.ndarray, size: int, aligned: bool):
         self.m, self.aligned = m, aligned
-        self.out = np.empty((4, size))
-        self.prod = np.empty((3, 2, 4, size)) if aligned else None    # axis, end, clip row
-        self.q = np.empty(size)
-        self.front = np.empty(size, bool)
+        self.out = scratch("clip.out", (4, size))
+        self.prod = scratch("clip.prod", (3, 2, 4, size)) if aligned else None    # axis, end, clip row
+        self.q = scratch("clip.q", size)
+        self.front = scratch("clip.front", size, bool)
 
     def start(self, planar: np.ndarray):
         """The function k -> rows [4, c] for the chunk planar [3, 8, c] (overwritten per call)."""
@@ -224,7 +227,8 @@ def viewport_rects(vis: np.ndarray, lo: np.ndarray, hi: np.ndarray, size: tuple[
     """Clip NDC bounds to the viewport and snap outward to whole pixels: [n,4] x0,y0,x1,y1
     (a transposed view of planar [4, n] rows, as numpy is fastest on long contiguous rows)."""
     wh = np.asarray(size, np.float64)[:, None]
-    px = np.concatenate([lo.T, hi.T])                      # [4, n], worked on in place
+    px = scratch("rects.px", (4, len(vis)))                # [4, n], worked on in place
+    px[:2], px[2:] = lo.T, hi.T
     np.minimum(np.maximum(px, -1, out=px), 1, out=px)
     px += 1
     px *= np.tile(0.5 * wh, (2, 1))                        # == (c + 1) * 0.5 * wh: halving is exact
@@ -261,23 +265,25 @@ def parameterize(corners: np.ndarray, vpm: np.ndarray, viewport: tuple[int, int]
     max_w, max_h = atlas_max or default_atlas_max((W, H), border, float(region_scale.max(initial=1e-3)))
     if max_w < 1 + 2 * border or max_h < 1 + 2 * border:
         raise ValueError(f"atlas maximum {max_w}x{max_h} cannot hold a 1-pixel region with border {border}")
-    vis, lo, hi = project_bounds(corners, vpm) if corners.ndim == 3 else _intersected(corners, vpm)
+    vis, lo, hi = project_bounds(corners, vpm, reuse=True) if corners.ndim == 3 else _intersected(corners, vpm)
     if hidden is not None:
         vis = vis & ~np.asarray(hidden, bool)
     vis, rect = viewport_rects(vis, lo, hi, (W, H))
     idx = np.flatnonzero(vis)
     every = len(idx) == n                                  # all visible: views, no gathers
     rt = rect.T                                            # planar [4, n]
-    inner = (rt[2:] - rt[:2]).astype(np.float64)           # [2, n]; row-wise 1-D gathers below
+    inner = np.subtract(rt[2:], rt[:2], out=scratch("param.inner", (2, n)))   # [2, n]; row-wise 1-D gathers below
     inner_v = inner if every else np.stack([inner[0][idx], inner[1][idx]])
-    fit = np.minimum((max_w - 2 * border) / inner_v[0], (max_h - 2 * border) / inner_v[1])
-    packing, scale_v, sizes = _pack_with_scaling(inner_v, np.minimum(region_scale if every else region_scale[idx],
-                                                                     fit), border, max_w, max_h, max_layers)
-    scale = scale_v if every else np.zeros(n)
+    fit = np.divide(max_w - 2 * border, inner_v[0], out=scratch("param.fit", len(idx)))
+    np.minimum(fit, np.divide(max_h - 2 * border, inner_v[1], out=scratch("param.fit_h", len(idx))), out=fit)
     atlas_rect = np.zeros((4, n), np.int64)
-    layer = packing.layer if every else np.zeros(n, np.int64)
+    layer = np.empty(n, np.int64) if every else np.zeros(n, np.int64)
+    out = (atlas_rect[0], atlas_rect[1], layer) if every else None      # packed straight into the records
+    packing, scale_v, sizes = _pack_with_scaling(inner_v, np.minimum(region_scale if every else region_scale[idx],
+                                                                     fit), border, max_w, max_h, max_layers, out)
+    scale = scale_v if every else np.zeros(n)
     if every:
-        atlas_rect[0], atlas_rect[1], atlas_rect[2:] = packing.x, packing.y, sizes
+        atlas_rect[2:] = sizes
     else:
         scale[idx] = scale_v
         layer[idx] = packing.layer
@@ -317,17 +323,27 @@ def default_atlas_max(viewport: tuple[int, int], border: int, region_scale: floa
 
 
 def _region_sizes(inner: np.ndarray, scale: np.ndarray, border: int) -> np.ndarray:
-    """Atlas region sizes [2, m] (w, h rows, border included) of inner sizes [2, m] at `scale` [m]."""
-    return (np.maximum(np.ceil(inner * scale - 1e-9), 1) + 2 * border).astype(np.int64)
+    """Atlas region sizes [2, m] (w, h rows, border included) of inner sizes [2, m] at `scale` [m]
+    (a scratch array)."""
+    t = np.multiply(inner, scale, out=scratch("param.sizes_f", inner.shape))
+    t -= 1e-9
+    np.ceil(t, out=t)
+    np.maximum(t, 1, out=t)
+    t += 2 * border
+    sizes = scratch("param.sizes", inner.shape, np.int64)
+    sizes[...] = t
+    return sizes
 
 
-def _pack_with_scaling(inner, scale, border, max_w, max_h, max_layers) -> tuple[Packing, np.ndarray, np.ndarray]:
+def _pack_with_scaling(inner, scale, border, max_w, max_h, max_layers,
+                       out=None) -> tuple[Packing, np.ndarray, np.ndarray]:
     """Pack the visible regions (inner sizes [2, m] at `scale` [m]); while more layers than
-    allowed are needed, scale all regions down (none dropped). Returns (packing, scale, sizes)."""
+    allowed are needed, scale all regions down (none dropped). Returns (packing, scale, sizes);
+    `out`: pack_shelves' x, y, layer arrays."""
     capacity = float(max_w) * max_h * max_layers
     for _ in range(64):
         sizes = _region_sizes(inner, scale, border)
-        packing = pack_shelves(sizes[0], sizes[1], max_w, max_h)
+        packing = pack_shelves(sizes[0], sizes[1], max_w, max_h, out)
         if packing.layers <= max_layers:
             return packing, scale, sizes
         if (sizes == 1 + 2 * border).all():
@@ -351,7 +367,7 @@ def _transforms(x0y0, atlas_xy, scale, border, viewport, atlas) -> np.ndarray:
     np.multiply(x0y0, 2.0, out=txy)
     np.subtract(vp, txy, out=txy)
     txy *= scale                                           # scale * (vp - 2 x0y0)
-    origin = np.add(atlas_xy, border, dtype=np.float64)
+    origin = np.add(atlas_xy, border, out=scratch("param.origin", txy.shape))
     origin *= 2.0
     txy += origin                                          # + 2 (atlas_xy + border)
     txy /= at

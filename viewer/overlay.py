@@ -18,7 +18,7 @@ REGION = imgui.IM_COL32(120, 200, 255, 140)
 TEXT = imgui.IM_COL32(235, 235, 240, 255)
 HOVER = imgui.IM_COL32(255, 200, 80, 255)
 HOVER_MAX = 2000          # outlines drawn for a hovered group at most (imgui's buffers are finite)
-MAX_OUTLINES = 3000      # region outlines drawn per frame (each is a few imgui calls)
+MAX_OUTLINES = 1000      # region outlines drawn per frame: each is a call into imgui (3,000 took 5-8 ms a frame)
 
 
 def _col(rgba) -> int:

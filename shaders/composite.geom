@@ -3,8 +3,8 @@
 // Point-sprite expansion: a screen-aligned quad over the object's B_viewport (its atlas
 // bounds mapped back through T^-1). What the fragments need of the record and the style
 // goes as flat values: no fragment reads the buffers (per-fragment loads cost on llvmpipe).
-// u_hull: the projected outline of B_world instead (a hexagon or quad, grown by a sixteenth
-// of a pixel), where it can be had: every pixel the object covers lies inside it, and it
+// u_hull: the projected outline of B_world instead (a hexagon or quad, grown by
+// u_hull_margin pixels), where it can be had: every pixel the object covers lies inside it, and it
 // covers a quarter to a third fewer pixels than B_viewport (fragments outside B_viewport are
 // discarded by the fragment shader, which reads nothing outside B_atlas). A uniform, not a
 // define: one program draws with and without it (the choice is made per draw).
@@ -35,7 +35,7 @@ layout(std430, binding = 4) readonly buffer BoundsBuffer { vec4 bounds[]; };  //
 uniform bool u_hull;
 uniform mat4 u_view_proj;
 uniform vec3 u_eye;        // the camera's position, scene origin at 0
-const float HULL_MARGIN = 0.0625;    // pixels: covers float32 and sub-pixel snapping
+uniform float u_hull_margin;   // pixels: float32 and sub-pixel snapping, and the reach of a texel (CompositePass)
 
 // The corners (bit 0: x, 1: y, 2: z at the maximum) on the outline of a box seen from each of
 // the 27 regions around it (per axis: 0 within the slab, 1 below, 2 above; region 0, inside,
@@ -49,7 +49,7 @@ const int OUTLINE[162] = int[](
     1, 5, 4, 6, 7, 3,  0, 4, 6, 7, 5, 1,  0, 2, 6, 7, 5, 1,  0, 4, 6, 7, 3, 1,  2, 3, 7, 5, 4, 6,
     0, 2, 3, 7, 5, 4,  1, 5, 4, 6, 2, 3);
 
-// The object's projected outline grown by HULL_MARGIN, in viewport pixels, in strip order
+// The object's projected outline grown by u_hull_margin, in viewport pixels, in strip order
 // (0, 1, n-1, 2, n-2, ...); returns its vertex count, 0 where B_viewport's rectangle is drawn
 // instead: the camera inside the box, a corner behind the near plane or far off screen, a
 // flat box (an edge of no length) or a corner too sharp to grow by a small step.
@@ -83,7 +83,7 @@ int hull(int object, out vec2 strip[6]) {
         vec2 n0 = s * vec2(d0.y, -d0.x) / l0, n1 = s * vec2(d1.y, -d1.x) / l1;   // outward
         float c = 1.0 + dot(n0, n1);
         if (i < n && c < 0.01) return 0;
-        grown[i] = p[i] + HULL_MARGIN * (n0 + n1) / max(c, 0.01);
+        grown[i] = p[i] + u_hull_margin * (n0 + n1) / max(c, 0.01);
     }
     strip[0] = grown[0];
     strip[1] = grown[1];

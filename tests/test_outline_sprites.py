@@ -8,6 +8,7 @@ import pytest
 import trimesh
 
 from rtta.passes.composite import CompositePass, Style
+from rtta.renderer.renderer import Settings
 from rtta.scene.camera import Camera
 from rtta.scene.model import from_meshes
 
@@ -41,10 +42,12 @@ def _rectangles(render):
     return render_without_outlines
 
 
-@pytest.mark.parametrize("which", ["demo", "boxes"])
-def test_outline_sprites_shade_what_rectangles_shade(make_renderer, demo_scene, which, monkeypatch):
+@pytest.mark.parametrize("which,scale", [("demo", 1.0), ("boxes", 1.0), ("boxes", 2.0), ("demo", 1.37)])
+def test_outline_sprites_shade_what_rectangles_shade(make_renderer, demo_scene, which, scale, monkeypatch):
+    """Also supersampled (region scale above 1): a pixel then takes the texel its centre falls
+    in, which the capture covered if the texel's own centre was inside the object."""
     scene = demo_scene if which == "demo" else _boxes()
-    r = make_renderer(scene)
+    r = make_renderer(scene, Settings(region_scale=scale))
     focus = {0, scene.count // 2}
     render = CompositePass.render
     cases = used = 0

@@ -148,6 +148,14 @@ def _large(records: Records, ids: np.ndarray) -> bool:
     return bool(((rect[:, 2] - rect[:, 0]) * (rect[:, 3] - rect[:, 1])).mean() >= HULL_MIN_AREA)
 
 
+def hull_margin(scale: np.ndarray) -> float:
+    """How far (pixels) the outline sprites of objects at these region scales are grown: 1/16
+    for float32 and the rasterizer's snapping, and at any other scale than 1 the reach of the
+    nearest texel (a pixel takes the texel its centre falls in, whose own centre, the one the
+    capture tested, lies up to half a texel away on each axis: 0.5 / scale pixels)."""
+    return 1 / 16 if (scale == 1.0).all() else 1 / 16 + 0.75 / float(scale.min())
+
+
 def back_to_front(records: Records, view_depth: np.ndarray, ids: np.ndarray) -> np.ndarray:
     """`ids` ordered farthest first by the view depth of their bounds centre; ties by id,
     so the order is stable and intersecting parts do not flicker."""
@@ -357,6 +365,7 @@ class CompositePass:
             view_proj, eye = hull
             prog["u_view_proj"].write(view_proj)
             prog["u_eye"].value = eye
+            prog["u_hull_margin"].value = hull_margin(records.scale[ids])
         if projection is not None:
             pass_, projector, origin = projection
             pass_.bind(prog, projector, origin)

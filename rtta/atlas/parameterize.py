@@ -279,8 +279,9 @@ def parameterize(corners: np.ndarray, vpm: np.ndarray, viewport: tuple[int, int]
     atlas_rect = np.zeros((4, n), np.int64)
     layer = np.empty(n, np.int64) if every else np.zeros(n, np.int64)
     out = (atlas_rect[0], atlas_rect[1], layer) if every else None      # packed straight into the records
-    packing, scale_v, sizes = _pack_with_scaling(inner_v, np.minimum(region_scale if every else region_scale[idx],
-                                                                     fit), border, max_w, max_h, max_layers, out)
+    wanted = region_scale if every or region_scale.ndim == 0 else region_scale[idx]
+    packing, scale_v, sizes = _pack_with_scaling(inner_v, np.minimum(wanted, fit), border, max_w, max_h,
+                                                 max_layers, out)
     scale = scale_v if every else np.zeros(n)
     if every:
         atlas_rect[2:] = sizes
@@ -304,11 +305,10 @@ def parameterize(corners: np.ndarray, vpm: np.ndarray, viewport: tuple[int, int]
 
 
 def _checked_scale(region_scale, n: int) -> np.ndarray:
-    """The region scale as one float per object, each in (0, 16]."""
+    """The region scale, one for all (a 0-d array: no per-object array to fill and check
+    every frame) or one per object, each in (0, 16]."""
     scale = np.asarray(region_scale, np.float64)
-    if scale.ndim == 0:
-        scale = np.full(n, float(scale))
-    if scale.shape != (n,):
+    if scale.ndim != 0 and scale.shape != (n,):
         raise ValueError(f"region scale must be a float or one per object ({n}), got shape {scale.shape}")
     if not (np.isfinite(scale).all() and (scale > 0).all() and (scale <= 16).all()):
         bad = scale[~(np.isfinite(scale) & (scale > 0) & (scale <= 16))][0]

@@ -26,12 +26,12 @@ from ..gl.gpu import GpuScene
 from ..gl.targets import SHRINK_AFTER_FRAMES, LayeredTarget, release_framebuffer, round_up
 from .capture import mat_bytes
 from .oit import PixelOrderPass, resolved_order
+from .outlines import hull_margin, worth_outlines
 
 MODES = ("sprites", "transparent", "ghosted", "ghosted-ao")
 LENS_MODES = ("ghosted", "ghosted-ao")    # where a lens cuts the context away
 BACKGROUND = (0.93, 0.93, 0.95, 1.0)
 UPSAMPLE_BELOW = 0.999                    # regions with fewer texels per pixel are upsampled
-HULL_MIN_AREA = 2048                      # pixels per B_viewport, on average over a draw, for outline sprites
 ROLES = ("focus", "all")                  # which objects get AO / edges in ghosted-ao
 
 
@@ -138,22 +138,6 @@ class CompositeTarget:
         self._parts = []
         self.fbo = None
         self.size = (0, 0)
-
-
-def _large(records: Records, ids: np.ndarray) -> bool:
-    """Whether the B_viewport of `ids` cover HULL_MIN_AREA pixels each on average: there, a
-    sprite over the projected outline of B_world (about a quarter fewer fragments) is worth
-    the geometry shader's work for it (about a microsecond an object on llvmpipe)."""
-    rect = records.viewport_rect[ids]
-    return bool(((rect[:, 2] - rect[:, 0]) * (rect[:, 3] - rect[:, 1])).mean() >= HULL_MIN_AREA)
-
-
-def hull_margin(scale: np.ndarray) -> float:
-    """How far (pixels) the outline sprites of objects at these region scales are grown: 1/16
-    for float32 and the rasterizer's snapping, and at any other scale than 1 the reach of the
-    nearest texel (a pixel takes the texel its centre falls in, whose own centre, the one the
-    capture tested, lies up to half a texel away on each axis: 0.5 / scale pixels)."""
-    return 1 / 16 if (scale == 1.0).all() else 1 / 16 + 0.75 / float(scale.min())
 
 
 def back_to_front(records: Records, view_depth: np.ndarray, ids: np.ndarray) -> np.ndarray:
@@ -344,7 +328,7 @@ class CompositePass:
         projection = None if outline or halo else self._projection
         lens = self._lens if cut else None
         # upsampled pixels reach past the outline; small sprites do not repay the outline's cost
-        hull = None if halo or upsample or not _large(records, ids) else self._hull
+        hull = None if halo or upsample or not worth_outlines(records, ids) else self._hull
         mode = {"MODE_SPRITE": sprite, "MODE_BLEND": blend, "MODE_OUTLINE": outline, "MODE_COLLECT": collect,
                 "MODE_HALO": halo, "FOCUS_CLIP": focus_clip,
                 "SPRITE_OUTLINE": outlined and sprite,

@@ -38,7 +38,7 @@ uniform vec3 u_eye;        // the camera's position, scene origin at 0
 uniform float u_hull_margin;   // pixels: float32 and sub-pixel snapping, and the reach of a texel (CompositePass)
 
 // The corners (bit 0: x, 1: y, 2: z at the maximum) on the outline of a box seen from each of
-// the 27 regions around it (per axis: 0 within the slab, 1 below, 2 above; region 0, inside,
+// the 27 regions around it (a perspective view: the outline follows from the eye's position) (per axis: 0 within the slab, 1 below, 2 above; region 0, inside,
 // has none), in order around the outline; 4 or 6 of them, padded to 6.
 const int OUTLINE_COUNT[27] = int[](0, 4, 4, 4, 6, 6, 4, 6, 6, 4, 6, 6, 6, 6, 6, 6, 6, 6, 4, 6, 6, 6, 6, 6, 6, 6, 6);
 const int OUTLINE[162] = int[](

@@ -227,3 +227,21 @@ def test_records_are_not_reused_by_the_next_call():
     parameterize(other.box_corners(), vpm, (320, 240), hidden=np.arange(500) % 3 == 0)
     for k in keys:
         assert np.array_equal(getattr(rec, k), kept[k]), k
+
+
+def test_scratch_is_reused_until_released(gl):
+    """A scratch array is the same memory from call to call (no fresh mapping per frame)
+    until released, as a renderer does when it is released (a scene closed)."""
+    from rtta.atlas import scratch
+    from rtta.renderer.renderer import Renderer
+
+    a = scratch.scratch("test.a", (4, 1000))
+    assert np.shares_memory(a, scratch.scratch("test.a", (2, 500), np.int64))
+    scratch.release()
+    assert not np.shares_memory(a, scratch.scratch("test.a", (4, 1000)))
+    scene = random_scene(50, seed=3)
+    r = Renderer(gl, scene)
+    r.parameterize(Camera.orbit(scene.center, scene.radius, 30.0, 20.0, 2.5), (320, 240))
+    kept = scratch.scratch("bounds.lo", (3, 50))
+    r.release()
+    assert not np.shares_memory(kept, scratch.scratch("bounds.lo", (3, 50)))

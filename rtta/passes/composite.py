@@ -328,7 +328,7 @@ class CompositePass:
         projection = None if outline or halo else self._projection
         lens = self._lens if cut else None
         # upsampled pixels reach past the outline; small sprites do not repay the outline's cost
-        hull = None if halo or upsample or not worth_outlines(records, ids) else self._hull
+        hull = None if halo or upsample or self._hull is None or not worth_outlines(records, ids) else self._hull
         mode = {"MODE_SPRITE": sprite, "MODE_BLEND": blend, "MODE_OUTLINE": outline, "MODE_COLLECT": collect,
                 "MODE_HALO": halo, "FOCUS_CLIP": focus_clip,
                 "SPRITE_OUTLINE": outlined and sprite,

@@ -286,6 +286,13 @@ def similar(m: np.ndarray) -> np.ndarray:
     return np.isfinite(s) & (s > 0) & (off <= 1e-9 * s) & (np.linalg.det(r) > 0)
 
 
+def rows_within(v: np.ndarray, limit: float) -> np.ndarray:
+    """bool [V]: every coordinate of the row within ±limit (NaN is not); in chunks, no copy of all."""
+    step = 1 << 18
+    return np.concatenate([np.abs(v[a:a + step]).max(axis=1) <= limit
+                           for a in range(0, len(v), step)]) if len(v) else np.zeros(0, bool)
+
+
 def has_area(meshes: Meshes) -> np.ndarray:
     """Per mesh: whether any triangle has a non-zero area (relative to the mesh's size)."""
     v, vstart = meshes.vertices, meshes.vstart

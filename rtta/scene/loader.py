@@ -318,8 +318,8 @@ class _Gathered:
 def _check(meshes: batch.Meshes, mesh_of: np.ndarray, transforms: np.ndarray, names: list[str], path: Path) -> None:
     """The first node (in graph order) with non-finite vertices, face indices out of range
     or a non-finite transform raises; then the memory limit, counted as the nodes add up."""
-    # |v| beyond float32's range (NaN and infinities too): preprocessing works in float32
-    finite = np.logical_and.reduceat(np.abs(meshes.vertices).max(axis=1) <= F32_MAX, meshes.vstart)
+    # |v| within float32's range (not NaN or infinite either): preprocessing works in float32
+    finite = np.logical_and.reduceat(batch.rows_within(meshes.vertices, F32_MAX), meshes.vstart)
     low = np.minimum.reduceat(meshes.faces.min(axis=1), meshes.fstart)
     high = np.maximum.reduceat(meshes.faces.max(axis=1), meshes.fstart)
     in_range = (low >= 0) & (high < meshes.vcount)
@@ -344,9 +344,7 @@ def _check(meshes: batch.Meshes, mesh_of: np.ndarray, transforms: np.ndarray, na
 
 def _check_world(placed: batch.Meshes, names: list[str], path: Path) -> None:
     """World coordinates are finite and within ±MAX_COORDINATE (first offending object)."""
-    v, step = placed.vertices, 1 << 18
-    bad = np.concatenate([~(np.abs(v[a:a + step]).max(axis=1) <= MAX_COORDINATE)     # NaN too; in chunks,
-                          for a in range(0, len(v), step)]) if len(v) else np.zeros(0, bool)   # no copy of all
+    bad = ~batch.rows_within(placed.vertices, MAX_COORDINATE)
     if not bad.any():
         return
     i = int(np.searchsorted(placed.vstart, np.flatnonzero(bad)[0], side="right") - 1)

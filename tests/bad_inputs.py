@@ -179,6 +179,9 @@ def make_corpus(folder: str | Path) -> list[Case]:
     add("huge_coordinates.obj", "v 0 0 0\nv 1e300 0 0\nv 0 1 0\nf 1 2 3\n", True, "up to 1e+300, beyond the")
     add("beyond_float32.obj", "v 0 0 0\nv 1e39 0 0\nv 0 1 0\nf 1 2 3\n", True, "up to 1e+39, beyond the")
     add("large_coordinates.obj", "v 0 0 0\nv 1e20 0 0\nv 0 1 0\nf 1 2 3\n", True, "up to 1e+20, beyond the")
+    # one vertex far out flattens every triangle relative to the object's size: the range is the reason
+    add("far_vertex_flattens.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1e27 0 0\nf 1 2 3\nf 1 2 4\n", True,
+        "up to 1e+27, beyond the")
     add("zero_faces.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n", True, "no objects")
     add("points.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
         "property float z\nend_header\n0 0 0\n1 0 0\n0 1 0\n", True, "no objects")

@@ -71,7 +71,8 @@ def _bad_cases(tmp_path):
         "cut.dae": (dae[: len(dae) // 2], "cannot read COLLADA file"),
         "empty.usda": (b"", "file is empty"),
         "cut.usdc": (usdc[: len(usdc) // 2], "cannot read USD file"),
-        "junk.usda": (b"#usda 1.0\ndef Mesh \"m\" { point3f[] points = [(0, 0, \n", "cannot read USD file"),
+        "junk.usda": (b"#usda 1.0\ndef Mesh \"m\" { point3f[] points = [(0, 0, \n",
+                      "cannot read USD file (line 3, column 1: syntax error at"),
         "ref.usda": (f'#usda 1.0\n(\n    subLayers = [@{outside}@]\n)\n'.encode(), "outside the scene's folder"),
         "url.usda": (b'#usda 1.0\n(\n    subLayers = [@http://example.com/a.usda@]\n)\n', "is a URL"),
         "latin1.usda": (b'#usda 1.0\n(\n    doc = "caf\xe9"\n)\n', "not UTF-8 text at line 3"),
@@ -97,3 +98,22 @@ def test_bad_files_one_line_exit_2_nothing_written(tmp_path, capsys):
         assert sorted(p.name for p in tmp_path.iterdir()) == before
         with pytest.raises(RttaError):
             load_scene(path)
+
+
+def test_usd_errors_are_one_short_line():
+    """usd-core's exception text: the cause, without C++ places and namespaces, the layer's
+    path as line and column; an exception whose text is not UTF-8 still gives a reason."""
+    from rtta.scene.formats import usd
+
+    text = ("\n\tError in 'pxrInternal_v0_26_11__pxrReserved__::Sdf_TextFileFormatParser::_RaiseErrorPEGTL' "
+            "at line 48 in file /opt/USD/pxr/usd/sdf/textParserHelpers.h : '/tmp/a b/c.usda:29:17: Expected } at "
+            "'uniform token[]' in </p>\n'\n\tError in 'pxrInternal_v0_26_11__pxrReserved__::UsdStage::Open' at "
+            "line 1287 in file /opt/USD/pxr/usd/usd/stage.cpp : 'Failed to open layer @/tmp/a b/c.usda@'")
+    assert usd._short(text) == "line 29, column 17: Expected } at 'uniform token[]' in </p>"
+    assert usd._short("plain words\nmore") == "plain words"
+
+    class NotUtf8(Exception):
+        def __str__(self):
+            raise UnicodeDecodeError("utf-8", b"\x8c", 0, 1, "invalid start byte")
+
+    assert usd._error_text(NotUtf8()) == "NotUtf8"

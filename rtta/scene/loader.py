@@ -244,11 +244,14 @@ def _parts(read: tuple, path: Path, smooth_angle: float) -> tuple:
     _check(meshes, mesh_of, transforms, names, path)
     meshes = batch.preprocess(meshes, np.asarray(gathered.smoothed, bool), smooth_angle)
     area = batch.has_area(meshes)[mesh_of]
+    placing = np.where(gathered.baked[:, None, None], np.eye(4), transforms)
+    flat = np.flatnonzero(~area)
+    if len(flat):     # an object spread beyond the range is flat relative to its size: say the range
+        _check_world(batch.instance(meshes, mesh_of[flat], placing[flat]), [names[i] for i in flat], path)
     if not area.any():
         raise RttaError("every triangle of the scene is degenerate (zero area)", path)
     keep = np.flatnonzero(area)
-    placed = batch.instance(meshes, mesh_of[keep], np.where(gathered.baked[keep, None, None], np.eye(4),
-                                                             transforms[keep]), consume=True)
+    placed = batch.instance(meshes, mesh_of[keep], placing[keep], consume=True)
     del meshes
     with np.errstate(all="ignore"):
         mirrored = ~gathered.baked[keep] & (np.linalg.det(transforms[keep, :3, :3]) < 0)

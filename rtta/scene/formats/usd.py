@@ -29,10 +29,9 @@ def read(path: Path) -> Assembly:
         try:
             stage = Usd.Stage.Open(str(path))
         except Exception as exc:              # pxr.Tf.ErrorException and others
-            stage, said = None, [*said, str(exc)]
+            stage, said = None, [*said, _error_text(exc)]
     if stage is None:
-        why = next((line for line in said if line.strip()), "not a USD stage")
-        raise RttaError(f"cannot read USD file ({_short(why)})", path)
+        raise RttaError(f"cannot read USD file ({_short(chr(10).join(said))})", path)
     out = Assembly(unit=unit_name(float(UsdGeom.GetStageMetersPerUnit(stage))),
                    up_axis="z" if UsdGeom.GetStageUpAxis(stage) == UsdGeom.Tokens.z else "y")
     cache = UsdGeom.XformCache(Usd.TimeCode.Default())
@@ -48,10 +47,32 @@ def read(path: Path) -> Assembly:
     return out
 
 
+_TF_ERROR = re.compile(r"\s*Error in '[^']*' at line \d+ in file .*? : '")
+_NAMESPACE = re.compile(r"pxrInternal_v[0-9_]*?__pxrReserved__(?:::)?")
+_PLACE = re.compile(r"^.*?\.usd[acz]?:(\d+):(\d+):\s*", re.IGNORECASE)
+
+
+def _error_text(exc: Exception) -> str:
+    """str(exc), or the exception's type where usd-core's message holds bytes that are not
+    UTF-8 (its __str__ then raises)."""
+    try:
+        return str(exc)
+    except Exception:
+        return type(exc).__name__
+
+
 def _short(text: str) -> str:
-    text = re.sub(r"\s+", " ", str(text)).strip()
-    m = re.search(r"(?:Error|error)[^:]*:\s*(.*)", text)
-    return (m.group(1) if m else text)[:160]
+    """usd-core's error text made one short line: its first message that is a cause (not
+    'Failed to open layer'), without the C++ function, source file and namespaces, the
+    layer's path turned into 'line L, column C' (the error line names the file already)."""
+    text = str(text)
+    messages = [m.strip().rstrip("'").strip() for m in _TF_ERROR.split(text)[1:]]
+    first = next((line.strip() for line in text.splitlines() if line.strip()), "not a USD stage")
+    messages = [m for m in messages if m] or [first]
+    cause = next((m for m in messages if not m.startswith("Failed to open layer")), messages[0])
+    cause = re.sub(r"parse error matching .*? at '", "syntax error at '", cause)   # pegtl's grammar rule: noise
+    cause = _PLACE.sub(lambda m: f"line {m.group(1)}, column {m.group(2)}: ", _NAMESPACE.sub("", cause), count=1)
+    return re.sub(r"\s+", " ", cause).strip()[:160]
 
 
 def _check_layers(path: Path) -> None:
@@ -70,11 +91,10 @@ def _check_layers(path: Path) -> None:
             try:
                 layer = Sdf.Layer.FindOrOpen(str(current))
             except Exception as exc:
-                layer, said = None, [*said, str(exc)]
+                layer, said = None, [*said, _error_text(exc)]
         if layer is None:
             if current == path.resolve():
-                why = next((line for line in said if line.strip()), "not a USD layer")
-                raise RttaError(f"cannot read USD file ({_short(why)})", path)
+                raise RttaError(f"cannot read USD file ({_short(chr(10).join(said) or 'not a USD layer')})", path)
             raise RttaError(f"layer '{current.name}' it refers to cannot be read", path)
         for asset in layer.GetCompositionAssetDependencies():
             if not asset:                        # an internal reference: this layer itself

@@ -26,7 +26,7 @@ import numpy as np
 from ..errors import RttaError
 from .files import MAX_OBJECTS_LARGE, TextureBudget, image_problem, local_file, max_objects, memory_limit, read_limited
 from .gltf_check import COMPONENT_BYTES, TYPE_WIDTH, check, read_document
-from .gltf_read import Decoded, decode
+from .gltf_read import Decoded, decode, densify_sparse
 from .gltf_rewrite import fan_indices, geometry_name, rewrite
 from .precheck import check_size
 
@@ -73,9 +73,13 @@ def prepare(path: Path) -> Prepared:
     doc, binary = read_document(path)
     check(doc, path, None if binary is None else len(binary))
     out = Prepared([], doc=doc)
-    _check_extensions(doc, path, out.warnings)
+    _check_extensions(doc, path)
     out.buffers = _buffers(doc, binary, path, out)
     _check_memory(doc, out.buffers, path)
+    try:
+        densify_sparse(doc, out.buffers)
+    except ValueError as exc:
+        raise RttaError(f"glTF {exc}", path) from None
     limit = max_objects(path, sum(target.stat().st_size for target in out.inputs))   # buffer files so far
     walk = _walk(doc, path, out.warnings, limit)
     out.pairs = _primitives(doc, walk, out.buffers, path, out.warnings)
@@ -94,7 +98,7 @@ def prepare(path: Path) -> Prepared:
     return out
 
 
-def _check_extensions(doc: dict, path: Path, warnings: list[str]) -> None:
+def _check_extensions(doc: dict, path: Path) -> None:
     required = set(doc.get("extensionsRequired", []))
     for name in sorted(required & {"KHR_draco_mesh_compression", "EXT_meshopt_compression"}):
         if name == "KHR_draco_mesh_compression":
@@ -104,10 +108,6 @@ def _check_extensions(doc: dict, path: Path, warnings: list[str]) -> None:
             except ImportError:
                 pass
         raise RttaError(f"needs the glTF extension {name}, which rtta cannot decode here", path)
-    for i, acc in enumerate(doc.get("accessors", [])):
-        if "sparse" in acc:
-            warnings.append(f"accessor {i} is sparse; its sparse values are not applied")
-            break
 
 
 def _buffers(doc: dict, binary: bytes | None, path: Path, out: Prepared) -> list[bytes]:
@@ -143,10 +143,10 @@ def _data_uri(uri: str, path: Path, where: str) -> bytes:
 
 
 def _check_memory(doc: dict, buffers: list[bytes], path: Path) -> None:
-    """Accessors without a bufferView become arrays of zeros: their sizes count too; and the
-    buffers are held about BUFFER_COPIES times while trimesh reads them."""
+    """Accessors without a bufferView become arrays of zeros, sparse ones dense copies: their
+    sizes count too; and the buffers are held about BUFFER_COPIES times while trimesh reads them."""
     zeros = sum(a["count"] * COMPONENT_BYTES[a["componentType"]] * TYPE_WIDTH[a["type"]]
-                for a in doc.get("accessors", []) if "bufferView" not in a)
+                for a in doc.get("accessors", []) if "bufferView" not in a or "sparse" in a)
     need = zeros + BUFFER_COPIES * sum(len(b) for b in buffers)
     if need > memory_limit():
         raise RttaError(f"reading the file's buffers and accessors needs about {need / 2**20:,.0f} MiB, over "

@@ -234,11 +234,11 @@ def _accessors(c: Checker) -> None:
         kind = c.text(acc, "type", where)
         if kind not in TYPE_WIDTH:
             c.fail(f"{where}.type", f"is {kind!r}, not one of {', '.join(TYPE_WIDTH)}")
-        if "sparse" in acc and not isinstance(acc["sparse"], dict):
-            c.fail(f"{where}.sparse", "must be an object")
         v = c.index(acc, "bufferView", where, "bufferViews")
         offset = c.integer(acc, "byteOffset", where, default=0)
         element = COMPONENT_BYTES[ctype] * TYPE_WIDTH[kind]
+        if "sparse" in acc:
+            _sparse(c, acc["sparse"], views, f"{where}.sparse", count, element)
         if v is None:
             if offset:
                 c.fail(f"{where}.byteOffset", "is set, but the accessor has no bufferView")
@@ -251,6 +251,29 @@ def _accessors(c: Checker) -> None:
                           f"({count:,} x {kind} of {COMPONENT_BYTES[ctype]}-byte components)")
         if offset % COMPONENT_BYTES[ctype]:
             c.fail(f"{where}.byteOffset", f"is {offset}, not a multiple of the component size")
+
+
+def _sparse(c: Checker, sparse, views: list, where: str, count: int, element: int) -> None:
+    """A sparse accessor's substitutions: at most `count` of them, indices of an index type
+    and values of the accessor's element size, each within its bufferView."""
+    if not isinstance(sparse, dict):
+        c.fail(where, "must be an object")
+    n = c.integer(sparse, "count", where, least=1, required=True)
+    if n > count:
+        c.fail(f"{where}.count", f"is {n:,}, more than the accessor's {count:,} values")
+    for key in ("indices", "values"):
+        part = c.obj(sparse, key, where)
+        v = c.index(part, "bufferView", f"{where}.{key}", "bufferViews", required=True)
+        offset = c.integer(part, "byteOffset", f"{where}.{key}", default=0)
+        size = element
+        if key == "indices":
+            ctype = c.integer(part, "componentType", f"{where}.indices", required=True)
+            if ctype not in INDEX_TYPES:
+                c.fail(f"{where}.indices.componentType", f"is {ctype}, not an index type")
+            size = COMPONENT_BYTES[ctype]
+        if offset + n * size > views[v]["byteLength"]:
+            c.fail(f"{where}.{key}", f"needs bytes {offset:,} to {offset + n * size:,} of bufferView {v}, "
+                                     f"which has {views[v]['byteLength']:,}")
 
 
 def _meshes(c: Checker) -> None:

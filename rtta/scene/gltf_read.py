@@ -5,7 +5,7 @@ colour per material, no textures. For such a file trimesh's per-primitive object
 Trimesh, a visual, a material each) cost more than the geometry itself: at 10^4 parts they
 are most of the load time and a large share of the peak memory. `decode` reads every
 drawn (mesh, primitive) of a plain file into arrays; any other file (textures, vertex
-colours, strips, sparse or quantized accessors, compression) returns None and goes through
+colours, strips, quantized accessors, compression) returns None and goes through
 trimesh as before. The arrays equal what trimesh gives (tests/test_gltf_read.py); the
 document has been checked (rtta.scene.gltf_check), so every byte range lies in its buffer.
 """
@@ -57,9 +57,38 @@ def accessor_array(doc: dict, index: int, buffers: list[bytes]) -> np.ndarray:
     return np.ascontiguousarray(rows).view(dtype).reshape(count, width)
 
 
+def densify_sparse(doc: dict, buffers: list[bytes]) -> None:
+    """Every sparse accessor made dense (glTF 2.0, 3.6.2.3): its base values (zeros without
+    a bufferView) with the substitutions applied, in a buffer of its own appended to
+    `buffers` and to the document, so trimesh (which ignores `sparse`) and decode() read
+    the values the file means. ValueError names an accessor whose indices are out of range."""
+    for i, acc in enumerate(doc.get("accessors", [])):
+        sparse = acc.pop("sparse", None)
+        if sparse is None:
+            continue
+        dense = np.array(accessor_array(doc, i, buffers))
+        n, indices = sparse["count"], sparse["indices"]
+        at = _packed(doc, buffers, indices, indices["componentType"], 1, n).reshape(-1).astype(np.int64)
+        if at.max() >= len(dense):
+            raise ValueError(f"accessor {i} has sparse indices up to {at.max():,}, but {len(dense):,} values")
+        dense[at] = _packed(doc, buffers, sparse["values"], acc["componentType"], dense.shape[1], n)
+        buffers.append(dense.tobytes())
+        doc.setdefault("buffers", []).append({"byteLength": len(buffers[-1])})
+        doc.setdefault("bufferViews", []).append({"buffer": len(buffers) - 1, "byteLength": len(buffers[-1])})
+        acc["bufferView"], acc["byteOffset"] = len(doc["bufferViews"]) - 1, 0
+
+
+def _packed(doc: dict, buffers: list[bytes], part: dict, ctype: int, width: int, n: int) -> np.ndarray:
+    """n tightly packed elements of `width` components at a sparse part's bufferView and offset."""
+    view = doc["bufferViews"][part["bufferView"]]
+    start = view.get("byteOffset", 0) + part.get("byteOffset", 0)
+    dtype = np.dtype(DTYPES[ctype])
+    return np.frombuffer(buffers[view["buffer"]][start:start + n * width * dtype.itemsize], dtype).reshape(n, width)
+
+
 def plain(doc: dict, pairs: list[tuple[int, int]]) -> bool:
     """Whether every drawn primitive can be decoded here: a triangle list or fan, float
-    POSITION (and NORMAL), no COLOR_0, no extension, no sparse accessor, and a material
+    POSITION (and NORMAL), no COLOR_0, no extension, no sparse accessor left, and a material
     (if any) without a base-colour texture."""
     accessors, materials = doc.get("accessors", []), doc.get("materials", [])
     for m, p in pairs:

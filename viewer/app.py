@@ -343,7 +343,9 @@ class Viewer:
 def _read_scene(path, options: dict) -> tuple[Scene | None, str | None]:
     """(scene, None) or (None, the one-line error): a broken file never takes the session down."""
     try:
-        return load_scene(str(path), **options), None
+        scene = load_scene(str(path), **options)
+        _ = scene.closed    # which parts cull back faces: worked out here, not in the drawing thread
+        return scene, None
     except RttaError as exc:
         return None, str(exc)
     except Exception as exc:

@@ -51,14 +51,18 @@ class SeparatePass(ScenePass):
             self.program["u_texture"].value = 0
         ids = gpu.scene.texture_ids if gpu.textured else None
         self.draw_calls = 0
-        for oid, (first, count) in enumerate(gpu.scene.index_ranges):
-            if ids is not None:
-                has = ids[oid] >= 0
-                self.program["u_textured"].value = bool(has)
-                if has:
-                    textures[ids[oid]].use(0)
-            vao.render(moderngl.TRIANGLES, vertices=int(count), first=int(first))
-            self.draw_calls += 1
+        try:
+            for oid, (first, count) in enumerate(gpu.scene.index_ranges):
+                if ids is not None:
+                    has = ids[oid] >= 0
+                    self.program["u_textured"].value = bool(has)
+                    if has:
+                        textures[ids[oid]].use(0)
+                self.cull(bool(self._cullable[oid]))          # as STD culls (ScenePass.draw_objects)
+                vao.render(moderngl.TRIANGLES, vertices=int(count), first=int(first))
+                self.draw_calls += 1
+        finally:
+            self.cull(False)
 
     def _release_textures(self) -> None:
         for tex in self._textures:
@@ -104,8 +108,12 @@ class ChunkedStdPass(ScenePass):
         ranges = visible_leaves(bvh, proj @ view)
         self.visible = int(ranges[:, 2].sum()) if len(ranges) else 0
         self.draw_calls = len(ranges)
-        for first, count, _ in ranges:
-            vaos[key].render(moderngl.TRIANGLES, vertices=int(count), first=int(first))
+        self.cull(bool(self._cullable.all()))     # chunks mix objects: culled when every object may be
+        try:
+            for first, count, _ in ranges:
+                vaos[key].render(moderngl.TRIANGLES, vertices=int(count), first=int(first))
+        finally:
+            self.cull(False)
 
     def _release_chunks(self) -> None:
         if self._built is not None:

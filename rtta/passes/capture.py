@@ -5,6 +5,8 @@
   vertex-shader path the objects whose region meets the viewport's edge, the only ones that
   must be clipped to their regions, take a second draw call.
 - `StdPass`: the scene drawn normally into one target (baseline STD).
+- All three cull the back faces of closed objects (Scene.closed) wholly beyond the near
+  plane, which are never seen.
 - `RttPass`: each object drawn alone into its own full-viewport target (baseline RTT).
 """
 
@@ -19,6 +21,7 @@ from ..atlas.parameterize import Records
 from ..gl import glraw, glsl
 from ..gl.gpu import GpuScene
 from ..gl.targets import LayeredTarget
+from ..scene.closure import beyond_near
 
 DIRECT_RUNS = 1          # more runs of visible objects than this: one indirect multi-draw
 
@@ -37,6 +40,8 @@ class ScenePass:
         self.ctx = ctx
         self._source = (geometry, fragment, defines)
         self._programs: dict[tuple, moderngl.Program] = {}
+        self._indirect: moderngl.Buffer | None = None
+        self._cullable = np.zeros(0, bool)     # per object, for the view of the last setup()
         self.program = self.program_for(False)
 
     def program_for(self, textured: bool, normals: bool = True, **variant: bool) -> moderngl.Program:
@@ -61,13 +66,62 @@ class ScenePass:
         self.program = self.program_for(gpu.textured, target is None or target.normals, **variant)
         self.program["u_view"].write(mat_bytes(view))
         self.program["u_proj"].write(mat_bytes(proj))
+        scene = gpu.scene
+        self._cullable = scene.closed & beyond_near(scene.aabb_min - scene.origin, scene.aabb_max - scene.origin,
+                                                    view, proj)
         gpu.bind_storage()
         gpu.bind_material(self.program)
         self.ctx.enable_only(moderngl.DEPTH_TEST)
         self.ctx.depth_func = "<"
         return gpu.vao(self.program)
 
+    def draw_objects(self, vao: moderngl.VertexArray, gpu: GpuScene, objects: np.ndarray | None) -> None:
+        """Draw the objects in `objects` (bool [n]; None: all) as setup() prepared them: the
+        closed ones (Scene.closed) wholly beyond the near plane with their back faces culled,
+        which are never seen then, the others double-sided; one call for each kind there is."""
+        closed = self._cullable
+        try:
+            for cull, kind in ((True, closed), (False, ~closed)):
+                mask = kind if objects is None else kind & objects
+                if mask.any():
+                    self.cull(cull)
+                    self._draw_runs(vao, None if mask.all() else gpu.scene.index_runs(mask))
+        finally:
+            self.cull(False)
+
+    def cull(self, on: bool) -> None:
+        """Back-face culling on (counter-clockwise fronts) or off."""
+        if on:
+            self.ctx.enable(moderngl.CULL_FACE)
+            self.ctx.cull_face, self.ctx.front_face = "back", "ccw"
+        else:
+            self.ctx.disable(moderngl.CULL_FACE)
+
+    def _draw_runs(self, vao: moderngl.VertexArray, runs: np.ndarray | None) -> None:
+        """Draw index runs [(first, count)] in one call (None: the whole batch): one run
+        directly, several as one indirect multi-draw, its command buffer grown as needed and
+        reused across frames."""
+        if runs is None:
+            vao.render(moderngl.TRIANGLES)
+            return
+        if len(runs) <= DIRECT_RUNS:
+            for first, count in runs:
+                vao.render(moderngl.TRIANGLES, vertices=int(count), first=int(first))
+            return
+        commands = np.zeros((len(runs), 5), np.uint32)      # count, instances, first index, base vertex, base instance
+        commands[:, 0], commands[:, 1], commands[:, 2] = runs[:, 1], 1, runs[:, 0]
+        data = commands.tobytes()
+        if self._indirect is None or self._indirect.size < len(data):
+            if self._indirect is not None:
+                self._indirect.release()
+            self._indirect = self.ctx.buffer(reserve=max(len(data), 4096) * 2)
+        self._indirect.write(data)
+        vao.render_indirect(self._indirect, moderngl.TRIANGLES, count=len(runs))
+
     def release(self) -> None:
+        if self._indirect is not None:
+            self._indirect.release()
+            self._indirect = None
         for program in self._programs.values():
             program.release()
         self._programs.clear()
@@ -81,7 +135,6 @@ class CapturePass(ScenePass):
             raise ValueError(f"capture path must be 'vs' or 'gs', got {path!r}")
         self.path = path
         self.frames = 0
-        self._indirect: moderngl.Buffer | None = None
         if path == "vs":
             super().__init__(ctx, CAPTURE_VS=True)
         else:
@@ -123,36 +176,9 @@ class CapturePass(ScenePass):
         vao = self.setup(gpu, view, proj, atlas, REGION_CLIP=clip and self.path == "vs")
         glraw.set_clip_distances(4, clip)
         try:
-            self._draw_runs(vao, None if objects.all() else gpu.scene.index_runs(objects))
+            self.draw_objects(vao, gpu, None if objects.all() else objects)
         finally:
             glraw.set_clip_distances(4, False)
-
-    def _draw_runs(self, vao: moderngl.VertexArray, runs: np.ndarray | None) -> None:
-        """Draw index runs [(first, count)] in one call (None: the whole batch): one run
-        directly, several as one indirect multi-draw, its command buffer grown as needed and
-        reused across frames."""
-        if runs is None:
-            vao.render(moderngl.TRIANGLES)
-            return
-        if len(runs) <= DIRECT_RUNS:
-            for first, count in runs:
-                vao.render(moderngl.TRIANGLES, vertices=int(count), first=int(first))
-            return
-        commands = np.zeros((len(runs), 5), np.uint32)      # count, instances, first index, base vertex, base instance
-        commands[:, 0], commands[:, 1], commands[:, 2] = runs[:, 1], 1, runs[:, 0]
-        data = commands.tobytes()
-        if self._indirect is None or self._indirect.size < len(data):
-            if self._indirect is not None:
-                self._indirect.release()
-            self._indirect = self.ctx.buffer(reserve=max(len(data), 4096) * 2)
-        self._indirect.write(data)
-        vao.render_indirect(self._indirect, moderngl.TRIANGLES, count=len(runs))
-
-    def release(self) -> None:
-        if self._indirect is not None:
-            self._indirect.release()
-            self._indirect = None
-        super().release()
 
 
 class StdPass(ScenePass):
@@ -165,8 +191,8 @@ class StdPass(ScenePass):
 
     def render(self, *, gpu: GpuScene, view: np.ndarray, proj: np.ndarray,
                target: LayeredTarget, viewport: tuple[int, int], projection=None,
-               ranges: list[tuple[int, int]] | None = None) -> None:
-        """ranges: (first, count) index runs to draw (None: the whole batch in one call)."""
+               objects: np.ndarray | None = None) -> None:
+        """objects: bool [n], the objects to draw (None: all)."""
         target.ensure(viewport, 1)
         target.clear()
         scene_pass: ScenePass = self
@@ -179,10 +205,7 @@ class StdPass(ScenePass):
             pass_, projector = projection
             pass_.bind(scene_pass.program, projector, gpu.scene.origin)
         target.bind((0, 0, *viewport))
-        if ranges is None:
-            vao.render(moderngl.TRIANGLES)
-        for first, count in ranges or ():
-            vao.render(moderngl.TRIANGLES, vertices=count, first=first)
+        scene_pass.draw_objects(vao, gpu, objects)
 
     def release(self) -> None:
         super().release()
@@ -205,11 +228,15 @@ class RttPass(ScenePass):
                consume: Callable[[int, LayeredTarget], None] | None = None) -> None:
         target.ensure(viewport, 1)
         vao = self.setup(gpu, view, proj, target)
-        ranges = gpu.scene.index_ranges
-        for oid in objects:
-            target.clear()
-            target.bind((0, 0, *viewport))
-            first, count = ranges[oid]
-            vao.render(moderngl.TRIANGLES, vertices=int(count), first=int(first))
-            if consume is not None:
-                consume(int(oid), target)
+        ranges, closed = gpu.scene.index_ranges, self._cullable
+        try:
+            for oid in objects:
+                target.clear()
+                target.bind((0, 0, *viewport))
+                first, count = ranges[oid]
+                self.cull(bool(closed[oid]))       # as draw_objects does
+                vao.render(moderngl.TRIANGLES, vertices=int(count), first=int(first))
+                if consume is not None:
+                    consume(int(oid), target)
+        finally:
+            self.cull(False)

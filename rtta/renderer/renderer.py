@@ -126,6 +126,11 @@ class Renderer:
         mask[[i for i in self.hidden if 0 <= i < self.scene.count]] = True
         return mask
 
+    def shown_mask(self) -> np.ndarray | None:
+        """bool [n] of the objects not hidden (None: all of them)."""
+        mask = self.hidden_mask()
+        return None if mask is None else ~mask
+
     def shown_ranges(self) -> list[tuple[int, int]] | None:
         """(first, count) index runs of the objects not hidden (None: all of them, one run).
         Objects lie contiguously in object order, so hiding k objects makes at most k + 1 runs."""
@@ -262,7 +267,7 @@ class Renderer:
         projection = self._projection()
         with self._timed("std"):
             self._std.render(gpu=self.gpu, view=view, proj=proj, target=self.single_target, viewport=viewport,
-                             projection=projection, ranges=self.shown_ranges())
+                             projection=projection, objects=self.shown_mask())
             self._throttle.flush()
         return self.single_target
 

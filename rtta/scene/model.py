@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import RttaError, printable
+from .closure import closed_objects
 
 SUPPORTED = (".glb", ".gltf", ".obj", ".stl", ".ply", ".3mf", ".off")
 
@@ -95,6 +96,15 @@ class Scene:
             planar = np.stack([self._corners["aabb"].transpose(2, 1, 0), obb.transpose(2, 1, 0)])
             self._corners["obb"] = planar.transpose(0, 3, 2, 1)
         return self._corners[kind]
+
+    @property
+    def closed(self) -> np.ndarray:
+        """bool [N]: the objects that are closed surfaces facing outward (scene.closure), whose
+        back faces the scene passes cull; computed once, on first use."""
+        if "closed" not in self._corners:
+            centers = (self.aabb_min + self.aabb_max) / 2 - self.origin
+            self._corners["closed"] = closed_objects(self.positions, self.indices, self.index_ranges, centers)
+        return self._corners["closed"]
 
     def index_runs(self, mask: np.ndarray) -> np.ndarray:
         """[(first index, index count)] of the runs of consecutive objects in `mask` (bool [N]):

@@ -67,8 +67,8 @@ class ScenePass:
         self.program["u_view"].write(mat_bytes(view))
         self.program["u_proj"].write(mat_bytes(proj))
         scene = gpu.scene
-        self._cullable = scene.closed & beyond_near(scene.aabb_min - scene.origin, scene.aabb_max - scene.origin,
-                                                    view, proj)
+        self._cullable = (scene.closed & beyond_near(scene.aabb_min - scene.origin, scene.aabb_max - scene.origin,
+                                                     view, proj) if gpu.cull_closed else np.zeros(scene.count, bool))
         gpu.bind_storage()
         gpu.bind_material(self.program)
         self.ctx.enable_only(moderngl.DEPTH_TEST)

@@ -39,6 +39,8 @@ class Settings:
     region_scale: float = 1.0                  # atlas texels per viewport pixel
     context_scale: float = 1.0                 # of region_scale, for objects outside the focus
     bounds: str = "aabb"                       # B_world: 'aabb' (the paper's) or 'obb' (tighter)
+    cull_closed: bool = True                   # cull the back faces of closed parts (scene.closure); the
+                                               # images are the same, False draws all double-sided
 
 
 class Renderer:
@@ -48,6 +50,7 @@ class Renderer:
         self.scene = scene
         self.settings = settings or Settings()
         self.gpu = GpuScene(ctx, scene)
+        self.gpu.cull_closed = self.settings.cull_closed
         self._capture: dict[str, CapturePass] = {}
         self._std: StdPass | None = None
         self._rtt: RttPass | None = None

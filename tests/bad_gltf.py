@@ -169,7 +169,7 @@ GLTF_ERRORS: list[tuple[str, Callable, str]] = [
      "baseColorFactor"),
     ("texture_index_out_of_range", _set("materials", [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 3}}}]),
      "index"),
-    ("extensions_required_draco", _set("extensionsRequired", ["KHR_draco_mesh_compression"]), "draco"),
+    ("extensions_required_meshopt", _set("extensionsRequired", ["EXT_meshopt_compression"]), "meshopt"),
     ("extensions_required_int", _set("extensionsRequired", [1]), "extensionsRequired"),
 ]
 

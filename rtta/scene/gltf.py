@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import RttaError
+from . import draco
 from .files import MAX_OBJECTS_LARGE, TextureBudget, image_problem, local_file, max_objects, memory_limit, read_limited
 from .gltf_check import COMPONENT_BYTES, TYPE_WIDTH, check, read_document
 from .gltf_read import Decoded, decode, densify_sparse
@@ -83,6 +84,8 @@ def prepare(path: Path) -> Prepared:
     limit = max_objects(path, sum(target.stat().st_size for target in out.inputs))   # buffer files so far
     walk = _walk(doc, path, out.warnings, limit)
     out.pairs = _primitives(doc, walk, out.buffers, path, out.warnings)
+    if draco.available():
+        draco.decompress(doc, out.pairs, out.buffers, path)
     out.images = _images(doc, out.buffers, path, out)
     _colors(doc, out.warnings)
     per_mesh: dict[int, list[int]] = {}
@@ -101,13 +104,10 @@ def prepare(path: Path) -> Prepared:
 def _check_extensions(doc: dict, path: Path) -> None:
     required = set(doc.get("extensionsRequired", []))
     for name in sorted(required & {"KHR_draco_mesh_compression", "EXT_meshopt_compression"}):
-        if name == "KHR_draco_mesh_compression":
-            try:
-                import DracoPy  # noqa: F401
-                continue
-            except ImportError:
-                pass
-        raise RttaError(f"needs the glTF extension {name}, which rtta cannot decode here", path)
+        if name == draco.EXTENSION and draco.available():
+            continue
+        how = "; `pip install rtta[draco]` adds it" if name == draco.EXTENSION else ""
+        raise RttaError(f"needs the glTF extension {name}, which rtta cannot decode here{how}", path)
 
 
 def _buffers(doc: dict, binary: bytes | None, path: Path, out: Prepared) -> list[bytes]:

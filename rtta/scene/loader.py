@@ -22,6 +22,7 @@ from .files import MAX_FILE_BYTES, SafeResolver, max_objects, regular_file
 from .gltf import prepare
 from .gltf_read import Decoded
 from .model import SUPPORTED, Scene, from_batch
+from .obj import obj_objects
 from .precheck import BYTES_PER_TRIANGLE, BYTES_PER_VERTEX, check_size, memory_limit, precheck
 from .preprocess import DEFAULT_SMOOTH_ANGLE
 from .textures import TextureTable
@@ -170,8 +171,8 @@ def _items(path: Path, suffix: str) -> tuple[list[str], list[Path], list[tuple]]
         data, names = obj_objects(path)
         limit = max_objects(path)
         if len(names) > limit:
-            raise RttaError(f"OBJ file has {len(names):,} objects ('o' statements; at most {limit:,} for a file "
-                            "of its size)", path)
+            raise RttaError(f"OBJ file has {len(names):,} objects ('o' statements, or 'g' without them; at most "
+                            f"{limit:,} for a file of its size)", path)
         source = io.BytesIO(data)
     loaded = _trimesh_load(source, suffix[1:], path, resolver)
     items = []
@@ -186,24 +187,6 @@ def _items(path: Path, suffix: str) -> tuple[list[str], list[Path], list[tuple]]
         items.append((key, name, loaded.geometry.get(geom_name), np.asarray(transform, np.float64), tree))
     items.sort(key=lambda item: item[0])                  # file order
     return notes + resolver.warnings, resolver.inputs, [item[1:] for item in items]
-
-
-def obj_objects(path: Path) -> tuple[bytes, list[str]]:
-    """The OBJ's bytes with each `o NAME` line made `o rtta.o.K` (trimesh merges objects of the
-    same name, and an unnamed one into its neighbour), and the names in file order, decoded
-    as UTF-8 or else Windows-1252."""
-    data = path.read_bytes()
-    names: list[str] = []
-
-    def rename(match: re.Match) -> bytes:
-        raw = (match.group(2) or b"").strip()
-        try:
-            names.append(raw.decode("utf-8"))
-        except UnicodeDecodeError:
-            names.append(raw.decode("cp1252", errors="replace"))
-        return match.group(1) + f"o rtta.o.{len(names) - 1}".encode()
-
-    return re.sub(rb"(^|\n)[ \t]*o(?:[ \t]+([^\r\n]*)|(?=[\r\n]|$))", rename, data), names
 
 
 def _texture_notes(scene: Scene) -> list[str]:

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import RttaError
+from .files import memory_limit
 
 EXTENSION = "KHR_draco_mesh_compression"
 ATTRIBUTES = ("POSITION", "NORMAL", "TEXCOORD_0", "COLOR_0")
@@ -84,8 +85,15 @@ def _decode(blobs: list[bytes], path: Path) -> list[dict]:
 
 def read(path: Path) -> list[dict]:
     """Child side: each pickled blob decoded to {'faces': uint32 [F, 3], 'attributes':
-    {Draco id: array [V, k]}}."""
+    {Draco id: array [V, k]}}. The child's address space is capped at the memory limit plus
+    1 GiB, so a blob that claims a huge mesh fails here instead of exhausting the machine."""
+    import resource
+
     import DracoPy
+
+    hard = resource.getrlimit(resource.RLIMIT_AS)[1]
+    cap = memory_limit() + (1 << 30)
+    resource.setrlimit(resource.RLIMIT_AS, (cap if hard == resource.RLIM_INFINITY else min(cap, hard), hard))
 
     out = []
     for i, blob in enumerate(pickle.loads(path.read_bytes())):

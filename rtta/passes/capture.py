@@ -5,9 +5,10 @@
   vertex-shader path the objects whose region meets the viewport's edge, the only ones that
   must be clipped to their regions, take a second draw call.
 - `StdPass`: the scene drawn normally into one target (baseline STD).
-- All three cull the back faces of closed objects (Scene.closed) wholly beyond the near
-  plane, which are never seen.
 - `RttPass`: each object drawn alone into its own full-viewport target (baseline RTT).
+
+All three cull the back faces of closed objects (Scene.closed) wholly beyond the near
+plane, which are never seen.
 """
 
 from __future__ import annotations

@@ -18,6 +18,7 @@ import numpy as np
 
 from ..errors import RttaError
 from .files import memory_limit
+from .gltf_read import append_accessor
 
 EXTENSION = "KHR_draco_mesh_compression"
 ATTRIBUTES = ("POSITION", "NORMAL", "TEXCOORD_0", "COLOR_0")
@@ -129,7 +130,7 @@ def _replace(doc: dict, buffers: list[bytes], prim: dict, ext: dict, decoded: di
         if data.shape[1] != width or len(data) > declared["count"]:
             raise RttaError(f"glTF {where}: its Draco data decodes {name} to {len(data):,} values of "
                             f"{data.shape[1]}, where the file declares {declared['count']:,} of {width}", path)
-        attrs[name] = _accessor(doc, buffers, data.astype(np.float32), declared["type"])
+        attrs[name] = append_accessor(doc, buffers, data.astype(np.float32), declared["type"])
     faces = decoded["faces"].reshape(-1)
     if accessors[attrs["POSITION"]].get("count", 0) < 1 or not len(faces):    # a point cloud: one flat triangle,
         faces = np.zeros(3, np.uint32)                                        # which the loader leaves out
@@ -141,16 +142,4 @@ def _replace(doc: dict, buffers: list[bytes], prim: dict, ext: dict, decoded: di
     vertices = accessors[attrs["POSITION"]]["count"]
     if len(faces) and int(faces.max()) >= vertices:
         raise RttaError(f"glTF {where}: its Draco data has indices beyond its {vertices:,} vertices", path)
-    prim["indices"] = _accessor(doc, buffers, faces.astype(np.uint32), "SCALAR")
-
-
-def _accessor(doc: dict, buffers: list[bytes], data: np.ndarray, kind: str) -> int:
-    """A new buffer, view and accessor holding `data` (float32 or uint32); its index."""
-    raw = np.ascontiguousarray(data).tobytes()
-    buffers.append(raw)
-    doc.setdefault("buffers", []).append({"byteLength": len(raw)})
-    doc.setdefault("bufferViews", []).append({"buffer": len(buffers) - 1, "byteLength": max(len(raw), 1)})
-    component = 5125 if data.dtype == np.uint32 else 5126
-    doc["accessors"].append({"bufferView": len(doc["bufferViews"]) - 1, "componentType": component,
-                             "count": len(data), "type": kind})
-    return len(doc["accessors"]) - 1
+    prim["indices"] = append_accessor(doc, buffers, faces.astype(np.uint32), "SCALAR")

@@ -27,7 +27,7 @@ from ..errors import RttaError
 from . import draco
 from .files import MAX_OBJECTS_LARGE, TextureBudget, image_problem, local_file, max_objects, memory_limit, read_limited
 from .gltf_check import COMPONENT_BYTES, TYPE_WIDTH, check, read_document
-from .gltf_read import Decoded, decode, densify_sparse
+from .gltf_read import Decoded, decode, densify_sparse, transform_texcoords
 from .gltf_rewrite import fan_indices, geometry_name, rewrite
 from .precheck import check_size
 
@@ -86,6 +86,7 @@ def prepare(path: Path) -> Prepared:
     out.pairs = _primitives(doc, walk, out.buffers, path, out.warnings)
     if draco.available():
         draco.decompress(doc, out.pairs, out.buffers, path)
+    transform_texcoords(doc, out.pairs, out.buffers, out.warnings)
     out.images = _images(doc, out.buffers, path, out)
     _colors(doc, out.warnings)
     per_mesh: dict[int, list[int]] = {}

@@ -78,6 +78,67 @@ def densify_sparse(doc: dict, buffers: list[bytes]) -> None:
         acc["bufferView"], acc["byteOffset"] = len(doc["bufferViews"]) - 1, 0
 
 
+def transform_texcoords(doc: dict, pairs: list[tuple[int, int]], buffers: list[bytes], warnings: list[str]) -> None:
+    """KHR_texture_transform of the base-colour texture (offset, rotation, scale: glTF's
+    T R S) applied to each drawn primitive's TEXCOORD_0, into a float accessor of its own, so
+    trimesh (which ignores the extension) and the material atlas read the coordinates the
+    file means. A transform that is not numbers is left out with a warning."""
+    materials, bad = doc.get("materials", []), 0
+    for m, p in pairs:
+        prim = doc["meshes"][m]["primitives"][p]
+        if "material" not in prim or "TEXCOORD_0" not in prim["attributes"]:
+            continue
+        texture = materials[prim["material"]].get("pbrMetallicRoughness", {}).get("baseColorTexture")
+        extensions = texture.get("extensions") if isinstance(texture, dict) else None
+        transform = extensions.get("KHR_texture_transform") if isinstance(extensions, dict) else None
+        if transform is None:
+            continue
+        matrix = _uv_matrix(transform)
+        if matrix is None:
+            bad += 1
+            continue
+        uv = _float_texcoords(doc, prim["attributes"]["TEXCOORD_0"], buffers)
+        prim["attributes"]["TEXCOORD_0"] = append_accessor(doc, buffers, (uv @ matrix[:, :2].T + matrix[:, 2])
+                                                           .astype(np.float32), "VEC2")
+    if bad:
+        warnings.append(f"{bad} primitive(s) with a KHR_texture_transform that is not numbers: drawn untransformed")
+
+
+def _uv_matrix(t) -> np.ndarray | None:
+    """The 2x3 matrix T(offset) R(rotation) S(scale) of a KHR_texture_transform, or None."""
+    try:
+        ox, oy = (float(v) for v in t.get("offset", (0.0, 0.0)))
+        sx, sy = (float(v) for v in t.get("scale", (1.0, 1.0)))
+        r = float(t.get("rotation", 0.0))
+    except (TypeError, ValueError, AttributeError):
+        return None
+    if not np.isfinite([ox, oy, sx, sy, r]).all():
+        return None
+    c, s = np.cos(r), np.sin(r)
+    return np.array([[c * sx, s * sy, ox], [-s * sx, c * sy, oy]])
+
+
+def _float_texcoords(doc: dict, index: int, buffers: list[bytes]) -> np.ndarray:
+    """TEXCOORD accessor `index` as float64 [V, 2] (normalized integers mapped to [0, 1] or [-1, 1])."""
+    acc = doc["accessors"][index]
+    raw = accessor_array(doc, index, buffers)
+    if raw.dtype.kind == "f" or not acc.get("normalized"):
+        return raw.astype(np.float64)
+    return np.maximum(raw / float(np.iinfo(raw.dtype).max), -1.0)
+
+
+def append_accessor(doc: dict, buffers: list[bytes], data: np.ndarray, kind: str) -> int:
+    """A new buffer, view and accessor holding `data` (float32 or uint32, tightly packed); its index."""
+    raw = np.ascontiguousarray(data).tobytes()
+    buffers.append(raw)
+    doc.setdefault("buffers", []).append({"byteLength": len(raw)})
+    doc.setdefault("bufferViews", []).append({"buffer": len(buffers) - 1, "byteLength": max(len(raw), 1)})
+    component = 5125 if data.dtype == np.uint32 else 5126
+    doc.setdefault("accessors", []).append({"bufferView": len(doc["bufferViews"]) - 1, "componentType": component,
+                                            "count": len(data), "type": kind})
+    return len(doc["accessors"]) - 1
+
+
 def _packed(doc: dict, buffers: list[bytes], part: dict, ctype: int, width: int, n: int) -> np.ndarray:
     """n tightly packed elements of `width` components at a sparse part's bufferView and offset."""
     view = doc["bufferViews"][part["bufferView"]]

@@ -68,3 +68,28 @@ def test_a_transform_that_is_not_numbers_is_left_out_with_a_warning(tmp_path):
     scene, got = _uvs(tmp_path, {"rotation": "a lot"})
     np.testing.assert_array_equal(got, plain)
     assert any("KHR_texture_transform" in w for w in scene.warnings)
+
+
+def test_a_texture_on_the_second_coordinate_set_reads_that_set(tmp_path):
+    """`texCoord: 1`: the texture is mapped by TEXCOORD_1 (here the first set shifted by 0.5)."""
+    _, plain = _uvs(tmp_path, None)
+    data = _textured_quad(None)
+    n = struct.unpack_from("<I", data, 12)[0]
+    doc = json.loads(data[20:20 + n])
+    binary = data[28 + n:]
+    uv = np.frombuffer(binary[48:80], np.float32).reshape(4, 2) + 0.5
+    doc["bufferViews"].append({"buffer": 0, "byteOffset": len(binary), "byteLength": 32})
+    doc["accessors"].append({"bufferView": 4, "componentType": 5126, "count": 4, "type": "VEC2"})
+    binary += uv.tobytes()
+    doc["buffers"][0]["byteLength"] = len(binary)
+    prim = doc["meshes"][0]["primitives"][0]
+    prim["attributes"]["TEXCOORD_1"] = 3
+    doc["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["texCoord"] = 1
+    text = json.dumps(doc).encode()
+    text += b" " * (-len(text) % 4)
+    path = tmp_path / "second.glb"
+    path.write_bytes(struct.pack("<4sIII", b"glTF", 2, 28 + len(text) + len(binary), len(text)) + b"JSON" + text
+                     + struct.pack("<I", len(binary)) + b"BIN\0" + binary)
+    scene = load_scene(path)
+    got = scene.uvs[np.argsort(scene.positions[:, 0] * 2 + scene.positions[:, 1])]
+    np.testing.assert_allclose(got, plain + [0.5, -0.5], atol=1e-6)      # v is flipped on loading

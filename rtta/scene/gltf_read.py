@@ -79,16 +79,19 @@ def densify_sparse(doc: dict, buffers: list[bytes]) -> None:
 
 
 def transform_texcoords(doc: dict, pairs: list[tuple[int, int]], buffers: list[bytes], warnings: list[str]) -> None:
-    """KHR_texture_transform of the base-colour texture (offset, rotation, scale: glTF's
-    T R S) applied to each drawn primitive's TEXCOORD_0, into a float accessor of its own, so
+    """The base-colour texture's coordinate set (`texCoord`) made set 0, and its
+    KHR_texture_transform (offset, rotation, scale: glTF's T R S) applied to each drawn
+    primitive's TEXCOORD_0, into a float accessor of its own, so
     trimesh (which ignores the extension) and the material atlas read the coordinates the
     file means. A transform that is not numbers is left out with a warning."""
     materials, bad = doc.get("materials", []), 0
     for m, p in pairs:
         prim = doc["meshes"][m]["primitives"][p]
-        if "material" not in prim or "TEXCOORD_0" not in prim["attributes"]:
+        texture = materials[prim["material"]].get("pbrMetallicRoughness", {}).get("baseColorTexture") \
+            if "material" in prim else None
+        _use_texcoord_set(doc, prim, texture)
+        if "TEXCOORD_0" not in prim["attributes"]:
             continue
-        texture = materials[prim["material"]].get("pbrMetallicRoughness", {}).get("baseColorTexture")
         extensions = texture.get("extensions") if isinstance(texture, dict) else None
         transform = extensions.get("KHR_texture_transform") if isinstance(extensions, dict) else None
         if transform is None:
@@ -102,6 +105,18 @@ def transform_texcoords(doc: dict, pairs: list[tuple[int, int]], buffers: list[b
                                                            .astype(np.float32), "VEC2")
     if bad:
         warnings.append(f"{bad} primitive(s) with a KHR_texture_transform that is not numbers: drawn untransformed")
+
+
+def _use_texcoord_set(doc: dict, prim: dict, texture) -> None:
+    """A base-colour texture on coordinate set N > 0 (`texCoord`): that set is read as set 0,
+    the only one the readers take, where it is a VEC2 of a texture-coordinate type."""
+    n = texture.get("texCoord", 0) if isinstance(texture, dict) else 0
+    index = prim["attributes"].get(f"TEXCOORD_{n}") if type(n) is int and n > 0 else None
+    acc = doc["accessors"][index] if type(index) is int and 0 <= index < len(doc["accessors"]) else None
+    positions = doc["accessors"][prim["attributes"]["POSITION"]]["count"]
+    if (acc is not None and acc.get("type") == "VEC2" and acc.get("count") == positions
+            and acc.get("componentType") in (5126, 5121, 5123, 5120, 5122)):
+        prim["attributes"]["TEXCOORD_0"] = index
 
 
 def _uv_matrix(t) -> np.ndarray | None:

@@ -72,6 +72,7 @@ class Prepared:
 
 def prepare(path: Path) -> Prepared:
     doc, binary = read_document(path)
+    _specular_glossiness(doc)
     check(doc, path, None if binary is None else len(binary))
     out = Prepared([], doc=doc)
     _check_extensions(doc, path)
@@ -332,6 +333,23 @@ def _images(doc: dict, buffers: list, path: Path, out: Prepared) -> dict[int, by
         except RttaError as exc:
             out.warnings.append(f"texture '{label}' {exc.message.strip()}; objects using it keep their material colour")
     return good
+
+
+def _specular_glossiness(doc: dict) -> None:
+    """KHR_materials_pbrSpecularGlossiness (older exporters' materials): its diffuse factor
+    and texture stand for the base colour, as the extension says they replace the
+    metallic-roughness ones; checked afterwards like any base colour."""
+    materials = doc.get("materials")
+    for mat in materials if isinstance(materials, list) else ():
+        extensions = mat.get("extensions") if isinstance(mat, dict) else None
+        ext = extensions.get("KHR_materials_pbrSpecularGlossiness") if isinstance(extensions, dict) else None
+        if not isinstance(ext, dict) or not isinstance(mat.setdefault("pbrMetallicRoughness", {}), dict):
+            continue
+        pbr = mat["pbrMetallicRoughness"]
+        pbr["baseColorFactor"] = ext.get("diffuseFactor", [1.0, 1.0, 1.0, 1.0])
+        pbr.pop("baseColorTexture", None)
+        if "diffuseTexture" in ext:
+            pbr["baseColorTexture"] = ext["diffuseTexture"]
 
 
 def _base_textures(doc: dict) -> list[int]:

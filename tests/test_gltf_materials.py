@@ -1,0 +1,43 @@
+"""Older glTF materials (KHR_materials_pbrSpecularGlossiness): the diffuse factor and
+texture are the base colour, over the metallic-roughness fallback the file also carries."""
+
+from __future__ import annotations
+
+import numpy as np
+from bad_gltf import box_doc, glb, png
+
+from rtta.scene.loader import load_scene
+
+
+def _box_with(material: dict, tmp_path, image: bytes | None = None):
+    doc, binary = box_doc()
+    doc["meshes"][0]["primitives"][0]["material"] = 0
+    doc["materials"] = [material]
+    if image is not None:
+        uv = np.zeros((24, 2), np.float32)
+        doc["bufferViews"] += [{"buffer": 0, "byteOffset": len(binary), "byteLength": uv.nbytes},
+                               {"buffer": 0, "byteOffset": len(binary) + uv.nbytes, "byteLength": len(image)}]
+        binary += uv.tobytes() + image + b"\0" * (-len(image) % 4)
+        doc["buffers"][0]["byteLength"] = len(binary)
+        doc["accessors"].append({"bufferView": 3, "componentType": 5126, "count": 24, "type": "VEC2"})
+        doc["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"] = 3
+        doc["textures"], doc["images"] = [{"source": 0}], [{"bufferView": 4, "mimeType": "image/png"}]
+    path = tmp_path / "box.glb"
+    path.write_bytes(glb(doc, binary))
+    return load_scene(path)
+
+
+def test_specular_glossiness_diffuse_is_the_base_colour(tmp_path):
+    spec_gloss = {"diffuseFactor": [0.9, 0.1, 0.1, 1.0], "specularFactor": [0.2, 0.2, 0.2]}
+    material = {"pbrMetallicRoughness": {"baseColorFactor": [0.1, 0.9, 0.1, 1.0]},
+                "extensions": {"KHR_materials_pbrSpecularGlossiness": spec_gloss}}
+    scene = _box_with(material, tmp_path)
+    red = _box_with({"pbrMetallicRoughness": {"baseColorFactor": [0.9, 0.1, 0.1, 1.0]}}, tmp_path)
+    np.testing.assert_array_equal(scene.colors, red.colors)
+    assert scene.colors[0, 0] > scene.colors[0, 1]
+
+
+def test_specular_glossiness_diffuse_texture(tmp_path):
+    material = {"extensions": {"KHR_materials_pbrSpecularGlossiness": {"diffuseTexture": {"index": 0}}}}
+    assert _box_with(material, tmp_path, png((4, 4))).textured
+    assert not _box_with({}, tmp_path, png((4, 4))).textured

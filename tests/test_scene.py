@@ -104,13 +104,16 @@ TRIANGLES = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nv 3 0 0\nv 2 1 0\nv 4 0 0\nv 5 
 
 
 def test_obj_groups_are_the_parts_when_there_are_no_objects(tmp_path):
-    """Many CAD exporters write each part as a `g` group and no `o` line: the groups are the
-    objects then, named and ordered as in the file (repeated names numbered); in a file with
-    `o` lines, groups stay inside their objects."""
+    """Many CAD exporters write each part as a `g` group and no more than one `o` line: the
+    groups are the objects then, named and ordered as in the file (repeated names numbered);
+    in a file with several `o` lines, groups stay inside their objects."""
     scene = _obj(tmp_path, TRIANGLES + "g bolt\nf 1 2 3\ng nut front\nf 4 5 6\ng bolt\nf 7 8 9\n")
     assert scene.names == ["bolt", "nut front", "bolt_2"]
     assert np.allclose(scene.aabb_min[:, 0], [0, 2, 4])
     scene = _obj(tmp_path, TRIANGLES + "o assembly\ng bolt\nf 1 2 3\ng nut\nf 4 5 6\no washer\nf 7 8 9\n")
     assert scene.names == ["assembly", "washer"]
     assert scene.index_ranges[:, 1].tolist() == [6, 3]
+    scene = _obj(tmp_path, TRIANGLES + "o model\ng bolt\nf 1 2 3\ng nut\nf 4 5 6\nf 7 8 9\n")   # one `o`
+    assert scene.names == ["bolt", "nut"] and scene.index_ranges[:, 1].tolist() == [3, 6]
+    assert _obj(tmp_path, TRIANGLES + "o single\ng only\nf 1 2 3\nf 4 5 6\n").names == ["single"]
     assert _obj(tmp_path, TRIANGLES + "f 1 2 3\nf 4 5 6\n").count == 1

@@ -8,9 +8,10 @@ from pathlib import Path
 
 def obj_objects(path: Path) -> tuple[bytes, list[str]]:
     """The OBJ's bytes with each `o NAME` line made `o rtta.o.K` (trimesh merges objects of the
-    same name, and an unnamed one into its neighbour; in a file without `o` lines, each `g NAME`
-    group: CAD exporters write parts as groups), and the names in file order, decoded as
-    UTF-8 or else Windows-1252."""
+    same name, and an unnamed one into its neighbour), and the names in file order, decoded
+    as UTF-8 or else Windows-1252. A file with fewer than two `o` lines but several `g NAME`
+    groups has its groups made the objects so (its one `o` line left out): CAD exporters
+    write the parts of a model as groups."""
     data = path.read_bytes()
     names: list[str] = []
 
@@ -22,8 +23,17 @@ def obj_objects(path: Path) -> tuple[bytes, list[str]]:
             names.append(raw.decode("cp1252", errors="replace"))
         return match.group(1) + f"o rtta.o.{len(names) - 1}".encode()
 
-    for keyword in (b"o", b"g"):
-        out = re.sub(rb"(^|\n)[ \t]*" + keyword + rb"(?:[ \t]+([^\r\n]*)|(?=[\r\n]|$))", rename, data)
-        if names:
-            break
-    return out, names
+    objects = re.sub(_line(b"o"), rename, data)
+    if len(names) >= 2:
+        return objects, names
+    found = names[:]
+    names.clear()
+    groups = re.sub(_line(b"g"), rename, re.sub(_line(b"o"), lambda m: m.group(1) + b"#", data))
+    if len(names) >= 2:
+        return groups, names
+    return objects, found
+
+
+def _line(keyword: bytes) -> bytes:
+    """A line `KEYWORD NAME` (or a bare `KEYWORD`): group 1 what precedes it, group 2 the name."""
+    return rb"(^|\n)[ \t]*" + keyword + rb"(?:[ \t]+([^\r\n]*)|(?=[\r\n]|$))"

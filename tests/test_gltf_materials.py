@@ -9,7 +9,7 @@ from bad_gltf import box_doc, glb, png
 from rtta.scene.loader import load_scene
 
 
-def _box_with(material: dict, tmp_path, image: bytes | None = None):
+def _box_with(material: dict, tmp_path, image: bytes | None = None, texture: dict | None = None):
     doc, binary = box_doc()
     doc["meshes"][0]["primitives"][0]["material"] = 0
     doc["materials"] = [material]
@@ -21,7 +21,8 @@ def _box_with(material: dict, tmp_path, image: bytes | None = None):
         doc["buffers"][0]["byteLength"] = len(binary)
         doc["accessors"].append({"bufferView": 3, "componentType": 5126, "count": 24, "type": "VEC2"})
         doc["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"] = 3
-        doc["textures"], doc["images"] = [{"source": 0}], [{"bufferView": 4, "mimeType": "image/png"}]
+        doc["textures"] = [texture if texture is not None else {"source": 0}]
+        doc["images"] = [{"bufferView": 4, "mimeType": "image/png"}]
     path = tmp_path / "box.glb"
     path.write_bytes(glb(doc, binary))
     return load_scene(path)
@@ -41,3 +42,18 @@ def test_specular_glossiness_diffuse_texture(tmp_path):
     material = {"extensions": {"KHR_materials_pbrSpecularGlossiness": {"diffuseTexture": {"index": 0}}}}
     assert _box_with(material, tmp_path, png((4, 4))).textured
     assert not _box_with({}, tmp_path, png((4, 4))).textured
+
+
+def test_a_webp_only_texture_is_read(tmp_path):
+    """EXT_texture_webp with no PNG fallback: the texture's image is the extension's."""
+    import io
+
+    from PIL import Image
+
+    blob = io.BytesIO()
+    Image.new("RGB", (4, 4), (200, 30, 30)).save(blob, format="WEBP")
+    doc_texture = {"extensions": {"EXT_texture_webp": {"source": 0}}}
+    material = {"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}
+    scene = _box_with(material, tmp_path, blob.getvalue(), texture=doc_texture)
+    assert scene.textured and len(scene.textures) == 1
+    assert abs(int(scene.textures[0][..., 0].mean()) - 200) <= 8

@@ -73,6 +73,7 @@ class Prepared:
 def prepare(path: Path) -> Prepared:
     doc, binary = read_document(path)
     _specular_glossiness(doc)
+    _webp_sources(doc)
     check(doc, path, None if binary is None else len(binary))
     out = Prepared([], doc=doc)
     _check_extensions(doc, path)
@@ -350,6 +351,17 @@ def _specular_glossiness(doc: dict) -> None:
         pbr.pop("baseColorTexture", None)
         if "diffuseTexture" in ext:
             pbr["baseColorTexture"] = ext["diffuseTexture"]
+
+
+def _webp_sources(doc: dict) -> None:
+    """A texture whose only image is EXT_texture_webp's takes it as its source (Pillow reads
+    WebP); checked afterwards like any source."""
+    textures = doc.get("textures")
+    for tex in textures if isinstance(textures, list) else ():
+        extensions = tex.get("extensions") if isinstance(tex, dict) else None
+        webp = extensions.get("EXT_texture_webp") if isinstance(extensions, dict) else None
+        if "source" not in tex and isinstance(webp, dict) and "source" in webp:
+            tex["source"] = webp["source"]
 
 
 def _base_textures(doc: dict) -> list[int]:

@@ -43,7 +43,13 @@ OPTIONAL = [("scene",), ("nodes", 0, "matrix"), ("nodes", 0, "rotation"), ("node
             ("meshes", 0, "primitives", 0, "attributes", "TEXCOORD_0"),
             ("meshes", 0, "primitives", 0, "attributes", "COLOR_0"), ("buffers", 0, "uri"), ("images",),
             ("textures",), ("materials", 0, "pbrMetallicRoughness", "baseColorTexture"), ("extensionsRequired",),
-            ("extensionsUsed",), ("samplers",), ("cameras",), ("nodes", 0, "camera")]
+            ("extensionsUsed",), ("samplers",), ("cameras",), ("nodes", 0, "camera"),
+            # extensions rtta reads: Draco, texture transforms and sets, spec-gloss, WebP
+            ("meshes", 0, "primitives", 0, "extensions"), ("meshes", 0, "primitives", 0, "attributes", "TEXCOORD_1"),
+            ("materials", 0, "extensions"), ("materials", 0, "extensions", "KHR_materials_pbrSpecularGlossiness"),
+            ("materials", 0, "pbrMetallicRoughness", "baseColorTexture", "extensions"),
+            ("materials", 0, "pbrMetallicRoughness", "baseColorTexture", "texCoord"),
+            ("textures", 0, "extensions"), ("textures", 0, "extensions", "EXT_texture_webp")]
 PATHS = _paths(BASE) + OPTIONAL
 
 NUMBERS = st.one_of(st.integers(-(2**70), 2**70), st.sampled_from([-1, 0, 1, 2, 3, 7, 24, 36, 255, 2**31, 2**32 + 1,

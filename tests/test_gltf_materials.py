@@ -57,3 +57,15 @@ def test_a_webp_only_texture_is_read(tmp_path):
     scene = _box_with(material, tmp_path, blob.getvalue(), texture=doc_texture)
     assert scene.textured and len(scene.textures) == 1
     assert abs(int(scene.textures[0][..., 0].mean()) - 200) <= 8
+
+
+def test_nan_in_fields_rtta_does_not_read_is_no_traceback(tmp_path):
+    """Python's JSON reader takes NaN; a NaN in a texture's extensions, or a `normalized` that
+    is not a boolean, once reached the document rewritten for trimesh and failed there."""
+    material = {"pbrMetallicRoughness": {"baseColorTexture": {"index": 0, "extensions": {"X_any": float("nan")},
+                                                              "texCoord": float("nan")}}}
+    assert _box_with(material, tmp_path, png((4, 4))).textured
+    doc, binary = box_doc()
+    doc["accessors"][1]["normalized"] = float("nan")
+    (tmp_path / "n.glb").write_bytes(glb(doc, binary))
+    assert load_scene(tmp_path / "n.glb").count == 1

@@ -360,7 +360,7 @@ def _webp_sources(doc: dict) -> None:
     for tex in textures if isinstance(textures, list) else ():
         extensions = tex.get("extensions") if isinstance(tex, dict) else None
         webp = extensions.get("EXT_texture_webp") if isinstance(extensions, dict) else None
-        if "source" not in tex and isinstance(webp, dict) and "source" in webp:
+        if isinstance(webp, dict) and "source" in webp and "source" not in tex:
             tex["source"] = webp["source"]
 
 

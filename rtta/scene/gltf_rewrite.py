@@ -45,8 +45,9 @@ def rewrite(doc: dict, pairs: list, buffers: list[bytes], images: dict[int, byte
         blob += b"\0" * (-len(blob) % 4)
     views = [{"buffer": 0, "byteOffset": base[v["buffer"]] + v.get("byteOffset", 0), "byteLength": v["byteLength"],
               **({"byteStride": v["byteStride"]} if "byteStride" in v else {})} for v in doc.get("bufferViews", [])]
-    accessors = [{k: a[k] for k in ("bufferView", "byteOffset", "componentType", "count", "type", "normalized")
-                  if k in a} for a in doc.get("accessors", [])]
+    accessors = [{k: a[k] for k in ("bufferView", "byteOffset", "componentType", "count", "type") if k in a}
+                 | ({"normalized": a["normalized"]} if type(a.get("normalized")) is bool else {})
+                 for a in doc.get("accessors", [])]
 
     def append(data: bytes) -> int:
         views.append({"buffer": 0, "byteOffset": len(blob), "byteLength": len(data)})
@@ -69,8 +70,7 @@ def rewrite(doc: dict, pairs: list, buffers: list[bytes], images: dict[int, byte
         meshes.append({"name": geometry_name(m, p), "primitives": [new]})
     new_images = [{"bufferView": append(images[i]), "mimeType": "image/png"} if i in images else {}
                   for i in range(len(doc.get("images", [])))]
-    materials = [{"pbrMetallicRoughness": {k: v for k, v in mat.get("pbrMetallicRoughness", {}).items()
-                                           if k in ("baseColorFactor", "baseColorTexture")}}
+    materials = [{"pbrMetallicRoughness": _base_color(mat.get("pbrMetallicRoughness", {}))}
                  for mat in doc.get("materials", [])]
     textures = [{"source": t["source"]} if "source" in t else {} for t in doc.get("textures", [])]
     new_doc = {"asset": {"version": "2.0"}, "buffers": [{"byteLength": len(blob)}], "bufferViews": views,
@@ -78,3 +78,13 @@ def rewrite(doc: dict, pairs: list, buffers: list[bytes], images: dict[int, byte
                "images": new_images, "nodes": [{"mesh": j, "name": f"rtta.{j}"} for j in range(len(meshes))],
                "scenes": [{"nodes": list(range(len(meshes)))}], "scene": 0}
     return new_doc, bytes(blob)
+
+
+def _base_color(pbr: dict) -> dict:
+    """The checked base colour of a material: the factor and the texture's index alone (fields
+    rtta does not read, such as a texture's extensions, may hold NaN, which the rewritten JSON
+    cannot)."""
+    out = {"baseColorFactor": pbr["baseColorFactor"]} if "baseColorFactor" in pbr else {}
+    if "baseColorTexture" in pbr:
+        out["baseColorTexture"] = {"index": pbr["baseColorTexture"]["index"]}
+    return out

@@ -61,14 +61,13 @@ def closed_objects(positions: np.ndarray, indices: np.ndarray, index_ranges: np.
             h = hp[t]                                          # [k, 3]
             fwd = _mix(h * _K + np.roll(h, -1, axis=1))        # edges (a, b), (b, c), (c, a)
             rev = _mix(np.roll(h, -1, axis=1) * _K + h)        # the same edges reversed
-            diff = (fwd.sum(axis=1) - rev.sum(axis=1))         # wraps: exact modulo 2^64
+            diff = fwd.sum(axis=1) - rev.sum(axis=1)           # wraps: exact modulo 2^64
             p = positions[t].astype(np.float64) - centers[o][:, None, :]
             vol = np.einsum("ij,ij->i", p[:, 0], np.cross(p[:, 1], p[:, 2]))
             cuts = np.flatnonzero(np.r_[True, o[1:] != o[:-1]])
             imbalance[o[cuts]] += np.add.reduceat(diff, cuts)
             volume[o[cuts]] += np.add.reduceat(vol, cuts)
     return (imbalance == 0) & (volume > 0) & (tri_count > 0)
-
 
 
 def beyond_near(aabb_min: np.ndarray, aabb_max: np.ndarray, view: np.ndarray, proj: np.ndarray) -> np.ndarray:

@@ -18,7 +18,8 @@ import numpy as np
 
 from ..errors import RttaError
 from .files import memory_limit
-from .gltf_read import append_accessor
+from .gltf_check import TYPE_WIDTH
+from .gltf_read import append_accessor, view_bytes
 
 EXTENSION = "KHR_draco_mesh_compression"
 ATTRIBUTES = ("POSITION", "NORMAL", "TEXCOORD_0", "COLOR_0")
@@ -36,7 +37,7 @@ def decompress(doc: dict, pairs: list[tuple[int, int]], buffers: list[bytes], pa
     if not found:
         return
     views = sorted({ext["bufferView"] for _, _, ext in found})
-    decoded = dict(zip(views, _decode([_view_bytes(doc, buffers, v) for v in views], path), strict=True))
+    decoded = dict(zip(views, _decode([view_bytes(doc, buffers, v) for v in views], path), strict=True))
     for m, p, ext in found:
         prim = doc["meshes"][m]["primitives"][p]
         _replace(doc, buffers, prim, ext, decoded[ext["bufferView"]], f"meshes[{m}].primitives[{p}]", path)
@@ -63,12 +64,6 @@ def _extension(doc: dict, m: int, p: int, path: Path) -> dict | None:
     if prim.get("mode", 4) != 4:
         raise RttaError(f"{where}: a compressed primitive must be a triangle list", path)
     return ext
-
-
-def _view_bytes(doc: dict, buffers: list[bytes], v: int) -> bytes:
-    view = doc["bufferViews"][v]
-    start = view.get("byteOffset", 0)
-    return bytes(buffers[view["buffer"]][start:start + view["byteLength"]])
 
 
 def _decode(blobs: list[bytes], path: Path) -> list[dict]:
@@ -126,20 +121,20 @@ def _replace(doc: dict, buffers: list[bytes], prim: dict, ext: dict, decoded: di
         data = np.asarray(data).reshape(len(data), -1)
         if name == "COLOR_0" and data.dtype.kind in "ui":
             data = data / float(np.iinfo(data.dtype).max)
-        width = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4}.get(declared["type"])
+        width = TYPE_WIDTH[declared["type"]]
         if data.shape[1] != width or len(data) > declared["count"]:
             raise RttaError(f"glTF {where}: its Draco data decodes {name} to {len(data):,} values of "
                             f"{data.shape[1]}, where the file declares {declared['count']:,} of {width}", path)
         attrs[name] = append_accessor(doc, buffers, data.astype(np.float32), declared["type"])
-    faces = decoded["faces"].reshape(-1)
-    if accessors[attrs["POSITION"]].get("count", 0) < 1 or not len(faces):    # a point cloud: one flat triangle,
-        faces = np.zeros(3, np.uint32)                                        # which the loader leaves out
-    if accessors[attrs["POSITION"]]["count"] < 1:
+    vertices = accessors[attrs["POSITION"]]["count"]
+    if vertices < 1:
         raise RttaError(f"glTF {where}: its Draco data decodes to no vertices", path)
+    faces = decoded["faces"].reshape(-1)
+    if not len(faces):               # a point cloud: one flat triangle, which the loader leaves out
+        faces = np.zeros(3, np.uint32)
     if "indices" in prim and len(faces) > accessors[prim["indices"]]["count"]:
         raise RttaError(f"glTF {where}: its Draco data decodes to {len(faces):,} indices, where the file "
                         f"declares {accessors[prim['indices']]['count']:,}", path)
-    vertices = accessors[attrs["POSITION"]]["count"]
-    if len(faces) and int(faces.max()) >= vertices:
+    if int(faces.max()) >= vertices:
         raise RttaError(f"glTF {where}: its Draco data has indices beyond its {vertices:,} vertices", path)
     prim["indices"] = append_accessor(doc, buffers, faces.astype(np.uint32), "SCALAR")

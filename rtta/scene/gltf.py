@@ -27,7 +27,7 @@ from ..errors import RttaError
 from . import draco
 from .files import MAX_OBJECTS_LARGE, TextureBudget, image_problem, local_file, max_objects, memory_limit, read_limited
 from .gltf_check import COMPONENT_BYTES, TYPE_WIDTH, check, read_document
-from .gltf_read import Decoded, decode, densify_sparse, transform_texcoords
+from .gltf_read import Decoded, decode, densify_sparse, extension, transform_texcoords, view_bytes
 from .gltf_rewrite import fan_indices, geometry_name, rewrite
 from .precheck import check_size
 
@@ -312,9 +312,7 @@ def _images(doc: dict, buffers: list, path: Path, out: Prepared) -> dict[int, by
         label = uri if uri is not None and not uri.startswith("data:") else f"images[{i}] (embedded)"
         try:
             if uri is None and "bufferView" in image:
-                view = doc["bufferViews"][image["bufferView"]]
-                start = view.get("byteOffset", 0)
-                blob = buffers[view["buffer"]][start:start + view["byteLength"]]
+                blob = view_bytes(doc, buffers, image["bufferView"])
             elif uri is not None and uri.startswith("data:"):
                 blob = _data_uri(uri, path, f"images[{i}]")
             elif uri is not None:
@@ -342,8 +340,7 @@ def _specular_glossiness(doc: dict) -> None:
     metallic-roughness ones; checked afterwards like any base colour."""
     materials = doc.get("materials")
     for mat in materials if isinstance(materials, list) else ():
-        extensions = mat.get("extensions") if isinstance(mat, dict) else None
-        ext = extensions.get("KHR_materials_pbrSpecularGlossiness") if isinstance(extensions, dict) else None
+        ext = extension(mat, "KHR_materials_pbrSpecularGlossiness")
         if not isinstance(ext, dict) or not isinstance(mat.setdefault("pbrMetallicRoughness", {}), dict):
             continue
         pbr = mat["pbrMetallicRoughness"]
@@ -358,8 +355,7 @@ def _webp_sources(doc: dict) -> None:
     WebP); checked afterwards like any source."""
     textures = doc.get("textures")
     for tex in textures if isinstance(textures, list) else ():
-        extensions = tex.get("extensions") if isinstance(tex, dict) else None
-        webp = extensions.get("EXT_texture_webp") if isinstance(extensions, dict) else None
+        webp = extension(tex, "EXT_texture_webp")
         if isinstance(webp, dict) and "source" in webp and "source" not in tex:
             tex["source"] = webp["source"]
 

@@ -72,10 +72,7 @@ def densify_sparse(doc: dict, buffers: list[bytes]) -> None:
         if at.max() >= len(dense):
             raise ValueError(f"accessor {i} has sparse indices up to {at.max():,}, but {len(dense):,} values")
         dense[at] = _packed(doc, buffers, sparse["values"], acc["componentType"], dense.shape[1], n)
-        buffers.append(dense.tobytes())
-        doc.setdefault("buffers", []).append({"byteLength": len(buffers[-1])})
-        doc.setdefault("bufferViews", []).append({"buffer": len(buffers) - 1, "byteLength": len(buffers[-1])})
-        acc["bufferView"], acc["byteOffset"] = len(doc["bufferViews"]) - 1, 0
+        acc["bufferView"], acc["byteOffset"] = append_view(doc, buffers, dense.tobytes()), 0
 
 
 def transform_texcoords(doc: dict, pairs: list[tuple[int, int]], buffers: list[bytes], warnings: list[str]) -> None:
@@ -92,8 +89,7 @@ def transform_texcoords(doc: dict, pairs: list[tuple[int, int]], buffers: list[b
         _use_texcoord_set(doc, prim, texture)
         if "TEXCOORD_0" not in prim["attributes"]:
             continue
-        extensions = texture.get("extensions") if isinstance(texture, dict) else None
-        transform = extensions.get("KHR_texture_transform") if isinstance(extensions, dict) else None
+        transform = extension(texture, "KHR_texture_transform")
         if transform is None:
             continue
         matrix = _uv_matrix(transform)
@@ -142,14 +138,33 @@ def _float_texcoords(doc: dict, index: int, buffers: list[bytes]) -> np.ndarray:
     return np.maximum(raw / float(np.iinfo(raw.dtype).max), -1.0)
 
 
-def append_accessor(doc: dict, buffers: list[bytes], data: np.ndarray, kind: str) -> int:
-    """A new buffer, view and accessor holding `data` (float32 or uint32, tightly packed); its index."""
-    raw = np.ascontiguousarray(data).tobytes()
+def extension(obj, name: str):
+    """obj["extensions"][name] where obj and its extensions are objects (None otherwise: the
+    checker does not look inside extensions)."""
+    extensions = obj.get("extensions") if isinstance(obj, dict) else None
+    return extensions.get(name) if isinstance(extensions, dict) else None
+
+
+def view_bytes(doc: dict, buffers: list[bytes], v: int) -> bytes:
+    """The bytes of bufferView `v` (the document has been checked: they lie in their buffer)."""
+    view = doc["bufferViews"][v]
+    start = view.get("byteOffset", 0)
+    return bytes(buffers[view["buffer"]][start:start + view["byteLength"]])
+
+
+def append_view(doc: dict, buffers: list[bytes], raw: bytes) -> int:
+    """A new buffer and a bufferView over all of it, holding `raw`; the view's index."""
     buffers.append(raw)
     doc.setdefault("buffers", []).append({"byteLength": len(raw)})
     doc.setdefault("bufferViews", []).append({"buffer": len(buffers) - 1, "byteLength": max(len(raw), 1)})
+    return len(doc["bufferViews"]) - 1
+
+
+def append_accessor(doc: dict, buffers: list[bytes], data: np.ndarray, kind: str) -> int:
+    """A new buffer, view and accessor holding `data` (float32 or uint32, tightly packed); its index."""
+    view = append_view(doc, buffers, np.ascontiguousarray(data).tobytes())
     component = 5125 if data.dtype == np.uint32 else 5126
-    doc.setdefault("accessors", []).append({"bufferView": len(doc["bufferViews"]) - 1, "componentType": component,
+    doc.setdefault("accessors", []).append({"bufferView": view, "componentType": component,
                                             "count": len(data), "type": kind})
     return len(doc["accessors"]) - 1
 

@@ -137,10 +137,8 @@ class Renderer:
     def shown_ranges(self) -> list[tuple[int, int]] | None:
         """(first, count) index runs of the objects not hidden (None: all of them, one run).
         Objects lie contiguously in object order, so hiding k objects makes at most k + 1 runs."""
-        mask = self.hidden_mask()
-        if mask is None:
-            return None
-        return [(int(first), int(count)) for first, count in self.scene.index_runs(~mask)]
+        shown = self.shown_mask()
+        return None if shown is None else [(int(first), int(count)) for first, count in self.scene.index_runs(shown)]
 
     def scaled_for(self, focus) -> frozenset[int]:
         """The focus as far as it changes the capture (empty when every object has one scale)."""

@@ -171,8 +171,8 @@ def _items(path: Path, suffix: str) -> tuple[list[str], list[Path], list[tuple]]
         data, names = obj_objects(path)
         limit = max_objects(path)
         if len(names) > limit:
-            raise RttaError(f"OBJ file has {len(names):,} objects ('o' statements, or 'g' without them; at most "
-                            f"{limit:,} for a file of its size)", path)
+            raise RttaError(f"OBJ file has {len(names):,} objects ('o' statements, or 'g' groups where there are "
+                            f"fewer than two; at most {limit:,} for a file of its size)", path)
         source = io.BytesIO(data)
     loaded = _trimesh_load(source, suffix[1:], path, resolver)
     items = []

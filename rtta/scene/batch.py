@@ -299,7 +299,7 @@ def has_area(meshes: Meshes) -> np.ndarray:
     extent = (np.maximum.reduceat(v, vstart, axis=0) - np.minimum.reduceat(v, vstart, axis=0)).max(axis=1)
     area = np.zeros(len(meshes.fcount))
     owner = np.repeat(np.arange(len(meshes.fcount)), meshes.fcount)
-    step = 1 << 18
+    step = 1 << 16
     for a in range(0, len(meshes.faces), step):
         o = owner[a:a + step]
         f = meshes.faces[a:a + step] + vstart[o][:, None]

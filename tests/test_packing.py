@@ -7,6 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from rtta.atlas import scratch
 from rtta.atlas.packing import overlaps, pack_shelves
 from rtta.atlas.parameterize import parameterize
 from rtta.scene.camera import Camera
@@ -229,10 +230,31 @@ def test_records_are_not_reused_by_the_next_call():
         assert np.array_equal(getattr(rec, k), kept[k]), k
 
 
+def test_records_memory_is_reused_once_released():
+    """The records' arrays come from blocks handed out again once no array of an earlier
+    result refers to them (no fresh pages per frame); results that are kept, more of them
+    than the pool holds, never share memory."""
+    scene = random_scene(300, seed=5)
+    cams = [Camera.orbit(scene.center, scene.radius, 30.0 + 20 * i, 20.0, 2.5) for i in range(6)]
+    vpms = [c.projection(4 / 3) @ c.view(scene.origin) for c in cams]
+    rec = parameterize(scene.box_corners(), vpms[0], (320, 240))
+    where = rec.transform.__array_interface__["data"][0]
+    del rec
+    again = parameterize(scene.box_corners(), vpms[1], (320, 240))
+    assert again.transform.__array_interface__["data"][0] == where
+    assert any(np.shares_memory(again.transform, block) for block in scratch._pool()["result:records"])
+    del again
+    kept = [parameterize(scene.box_corners(), m, (320, 240)) for m in vpms]
+    for i, a in enumerate(kept):
+        fresh = parameterize(scene.box_corners(), vpms[i], (320, 240))
+        assert np.array_equal(a.transform, fresh.transform) and np.array_equal(a.atlas_rect, fresh.atlas_rect)
+        for b in kept[i + 1:]:
+            assert not np.shares_memory(a.transform, b.transform)
+
+
 def test_scratch_is_reused_until_released(gl):
     """A scratch array is the same memory from call to call (no fresh mapping per frame)
     until released, as a renderer does when it is released (a scene closed)."""
-    from rtta.atlas import scratch
     from rtta.renderer.renderer import Renderer
 
     a = scratch.scratch("test.a", (4, 1000))

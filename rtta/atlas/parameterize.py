@@ -15,7 +15,7 @@ import numpy as np
 
 from ..scene.model import BOX_EDGES
 from .packing import Packing, pack_shelves
-from .scratch import scratch
+from .scratch import result_block, scratch
 
 EPS_PX = 1e-3        # slack against CPU/GPU rounding when snapping bounds to pixels
 RECORD_DTYPE = np.dtype([("transform", "<f4", 4), ("clip", "<f4", 4), ("atlas", "<f4", 4),
@@ -223,9 +223,11 @@ def _clipped_bounds(clip: np.ndarray, d: np.ndarray):
     return lo, hi
 
 
-def viewport_rects(vis: np.ndarray, lo: np.ndarray, hi: np.ndarray, size: tuple[int, int]):
+def viewport_rects(vis: np.ndarray, lo: np.ndarray, hi: np.ndarray, size: tuple[int, int],
+                   out: np.ndarray | None = None):
     """Clip NDC bounds to the viewport and snap outward to whole pixels: [n,4] x0,y0,x1,y1
-    (a transposed view of planar [4, n] rows, as numpy is fastest on long contiguous rows)."""
+    (a transposed view of planar [4, n] rows, as numpy is fastest on long contiguous rows;
+    `out`: int64 [4, n] to hold them)."""
     wh = np.asarray(size, np.float64)[:, None]
     px = scratch("rects.px", (4, len(vis)))                # [4, n], worked on in place
     px[:2], px[2:] = lo.T, hi.T
@@ -238,9 +240,11 @@ def viewport_rects(vis: np.ndarray, lo: np.ndarray, hi: np.ndarray, size: tuple[
     x1y1 += EPS_PX
     np.ceil(x1y1, out=x1y1)
     np.minimum(np.maximum(px, 0, out=px), np.tile(wh, (2, 1)), out=px)
-    np.maximum(x1y1, np.minimum(x0y0 + 1, wh), out=x1y1)
-    np.minimum(x0y0, x1y1 - 1, out=x0y0)
-    rect = px.astype(np.int64)
+    t = scratch("rects.t", x0y0.shape)
+    np.maximum(x1y1, np.minimum(np.add(x0y0, 1, out=t), wh, out=t), out=x1y1)
+    np.minimum(x0y0, np.subtract(x1y1, 1, out=t), out=x0y0)
+    rect = np.empty(px.shape, np.int64) if out is None else out
+    np.copyto(rect, px, casting="unsafe")                  # whole numbers: exact
     vis = vis & (rect[2] > rect[0]) & (rect[3] > rect[1])
     rect *= vis
     return vis, rect.T
@@ -268,31 +272,39 @@ def parameterize(corners: np.ndarray, vpm: np.ndarray, viewport: tuple[int, int]
     vis, lo, hi = project_bounds(corners, vpm, reuse=True) if corners.ndim == 3 else _intersected(corners, vpm)
     if hidden is not None:
         vis = vis & ~np.asarray(hidden, bool)
-    vis, rect = viewport_rects(vis, lo, hi, (W, H))
+    keep = _result_arrays(n)                               # the records' arrays: no fresh pages
+    vis, rect = viewport_rects(vis, lo, hi, (W, H), keep["rect"])
     idx = np.flatnonzero(vis)
     every = len(idx) == n                                  # all visible: views, no gathers
     rt = rect.T                                            # planar [4, n]
     inner = np.subtract(rt[2:], rt[:2], out=scratch("param.inner", (2, n)))   # [2, n]; row-wise 1-D gathers below
-    inner_v = inner if every else np.stack([inner[0][idx], inner[1][idx]])
+    inner_v = inner if every else scratch("param.inner_v", (2, len(idx)))
+    if not every:
+        np.take(inner[0], idx, out=inner_v[0])
+        np.take(inner[1], idx, out=inner_v[1])
     fit = np.divide(max_w - 2 * border, inner_v[0], out=scratch("param.fit", len(idx)))
     np.minimum(fit, np.divide(max_h - 2 * border, inner_v[1], out=scratch("param.fit_h", len(idx))), out=fit)
-    atlas_rect = np.zeros((4, n), np.int64)
-    layer = np.empty(n, np.int64) if every else np.zeros(n, np.int64)
-    out = (atlas_rect[0], atlas_rect[1], layer) if every else None      # packed straight into the records
+    atlas_rect, layer, scale = keep["atlas"], keep["layer"], keep["scale"]
+    out = ((atlas_rect[0], atlas_rect[1], layer) if every       # packed straight into the records
+           else tuple(scratch(f"param.packed_{k}", len(idx), np.int64) for k in "xyl"))
     wanted = region_scale if every or region_scale.ndim == 0 else region_scale[idx]
-    packing, scale_v, sizes = _pack_with_scaling(inner_v, np.minimum(wanted, fit), border, max_w, max_h,
-                                                 max_layers, out)
-    scale = scale_v if every else np.zeros(n)
+    first = np.minimum(wanted, fit, out=scale if every else scratch("param.first", len(idx)))
+    packing, scale_v, sizes = _pack_with_scaling(inner_v, first, border, max_w, max_h, max_layers, out)
     if every:
         atlas_rect[2:] = sizes
+        if scale_v is not scale:                           # scaled down to fit the layers
+            scale[:] = scale_v
     else:
+        atlas_rect[:] = 0
+        layer[:] = 0
+        scale[:] = 0
         scale[idx] = scale_v
         layer[idx] = packing.layer
         for row, values in enumerate((packing.x, packing.y, sizes[0], sizes[1])):
             atlas_rect[row][idx] = values
     tw, th = max(packing.width, 1), max(packing.height, 1)
-    transform = _transforms(rt[:2], atlas_rect[:2], scale, border, (W, H), (tw, th))
-    clip_ndc = np.divide(rt, np.array([[W], [H], [W], [H]], np.float64))
+    transform = _transforms(rt[:2], atlas_rect[:2], scale, border, (W, H), (tw, th), keep["transform"])
+    clip_ndc = np.divide(rt, np.array([[W], [H], [W], [H]], np.float64), out=keep["clip"])
     clip_ndc *= 2.0
     clip_ndc -= 1.0
     if not every:                                          # culled: zero T and clip rectangle
@@ -302,6 +314,21 @@ def parameterize(corners: np.ndarray, vpm: np.ndarray, viewport: tuple[int, int]
     return Records(visible=vis, viewport_rect=rect, atlas_rect=atlas_rect, layer=layer,
                    scale=scale, transform=transform, clip_ndc=clip_ndc, viewport=(W, H),
                    atlas_size=(packing.width, packing.height, packing.layers), border=border)
+
+
+_RESULT_ROWS = (("rect", 4, np.int64), ("atlas", 4, np.int64), ("layer", 1, np.int64), ("scale", 1, np.float64),
+                ("transform", 4, np.float64), ("clip", 4, np.float64))
+
+
+def _result_arrays(n: int) -> dict[str, np.ndarray]:
+    """Uninitialised arrays for the records, rows of one result block ([rows, n], or [n])."""
+    block = result_block("records", 8 * n * sum(rows for _, rows, _ in _RESULT_ROWS))
+    out, at = {}, 0
+    for name, rows, dtype in _RESULT_ROWS:
+        a = block[at:at + 8 * n * rows].view(dtype)
+        out[name] = a.reshape(rows, n) if rows > 1 else a
+        at += 8 * n * rows
+    return out
 
 
 def _checked_scale(region_scale, n: int) -> np.ndarray:
@@ -355,12 +382,11 @@ def _pack_with_scaling(inner, scale, border, max_w, max_h, max_layers,
                      f"layer(s) of {max_w}x{max_h} even at the smallest scale")
 
 
-def _transforms(x0y0, atlas_xy, scale, border, viewport, atlas) -> np.ndarray:
-    """T per object as rows [4, m]: atlas_px = atlas_xy + border + scale * (viewport_px - x0y0),
+def _transforms(x0y0, atlas_xy, scale, border, viewport, atlas, out: np.ndarray) -> np.ndarray:
+    """T per object as rows [4, m] into `out`: atlas_px = atlas_xy + border + scale * (viewport_px - x0y0),
     in NDC (x0y0, atlas_xy: [2, m] rows). Worked out in place (one [2, m] temporary)."""
     vp = np.asarray(viewport, np.float64)[:, None]
     at = np.asarray(atlas, np.float64)[:, None]
-    out = np.empty((4, len(scale)))
     sxy, txy = out[:2], out[2:]
     np.multiply(scale, vp, out=sxy)
     sxy /= at                                              # scale * vp / at

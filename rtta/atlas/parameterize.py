@@ -279,9 +279,8 @@ def parameterize(corners: np.ndarray, vpm: np.ndarray, viewport: tuple[int, int]
     rt = rect.T                                            # planar [4, n]
     inner = np.subtract(rt[2:], rt[:2], out=scratch("param.inner", (2, n)))   # [2, n]; row-wise 1-D gathers below
     inner_v = inner if every else scratch("param.inner_v", (2, len(idx)))
-    if not every:
-        np.take(inner[0], idx, out=inner_v[0])
-        np.take(inner[1], idx, out=inner_v[1])
+    for row in range(0 if every else 2):
+        np.take(inner[row], idx, out=inner_v[row])
     fit = np.divide(max_w - 2 * border, inner_v[0], out=scratch("param.fit", len(idx)))
     np.minimum(fit, np.divide(max_h - 2 * border, inner_v[1], out=scratch("param.fit_h", len(idx))), out=fit)
     atlas_rect, layer, scale = keep["atlas"], keep["layer"], keep["scale"]

@@ -267,3 +267,24 @@ def test_scratch_is_reused_until_released(gl):
     kept = scratch.scratch("bounds.lo", (3, 50))
     r.release()
     assert not np.shares_memory(kept, scratch.scratch("bounds.lo", (3, 50)))
+
+
+def test_packed_records_match_the_std430_layout_field_by_field():
+    """Records.packed (planar rows, one transposing copy; into scratch with reuse) holds every
+    field where shaders/records.glsl reads it, culled objects and per-object scales included."""
+    from rtta.atlas.parameterize import RECORD_DTYPE
+
+    scene = random_scene(400, seed=9)
+    cam = Camera.orbit(scene.center, scene.radius, 30.0, 20.0, 1.2)
+    rec = parameterize(scene.box_corners(), cam.projection(4 / 3) @ cam.view(scene.origin), (320, 240),
+                       region_scale=np.linspace(0.3, 1.0, 400))
+    assert not rec.visible.all()
+    ref = np.zeros(400, RECORD_DTYPE)
+    ref["transform"], ref["clip"], ref["atlas"], ref["viewport"] = (rec.transform, rec.clip_ndc, rec.atlas_rect,
+                                                                   rec.viewport_rect)
+    ref["info"][:, 0], ref["info"][:, 1], ref["info"][:, 2] = rec.layer, rec.visible, rec.border
+    ref["info"][:, 3] = rec.scale.astype(np.float32).view(np.int32)
+    for reuse in (False, True):
+        packed = rec.packed(reuse)
+        assert packed.dtype == RECORD_DTYPE and packed.shape == (400,)
+        assert packed.tobytes() == ref.tobytes()

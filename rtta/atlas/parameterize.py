@@ -37,18 +37,19 @@ class Records:
     atlas_size: tuple[int, int, int]   # (T_w, T_h, T_d)
     border: int
 
-    def packed(self) -> np.ndarray:
-        """The GPU record buffer contents (std430 layout of shaders/records.glsl)."""
-        out = np.zeros(len(self.visible), RECORD_DTYPE)
-        out["transform"] = self.transform
-        out["clip"] = self.clip_ndc
-        out["atlas"] = self.atlas_rect
-        out["viewport"] = self.viewport_rect
-        out["info"][:, 0] = self.layer
-        out["info"][:, 1] = self.visible
-        out["info"][:, 2] = self.border
-        out["info"][:, 3] = self.scale.astype(np.float32).view(np.int32)
-        return out
+    def packed(self, reuse: bool = False) -> np.ndarray:
+        """The GPU record buffer contents (std430 layout of shaders/records.glsl), [n] of RECORD_DTYPE,
+        from planar rows in one transposing copy; reuse: a scratch array, valid until the next reuse."""
+        n = len(self.visible)
+        rows = scratch("records.rows", (20, n), np.float32)
+        for k, field in enumerate((self.transform, self.clip_ndc, self.atlas_rect, self.viewport_rect)):
+            rows[4 * k:4 * k + 4] = field.T
+        ints = rows.view(np.int32)
+        ints[16], ints[17], ints[18] = self.layer, self.visible, self.border
+        rows[19] = self.scale                  # info.w: the scale's float bits
+        out = scratch("records.packed", (n, 20), np.float32) if reuse else np.empty((n, 20), np.float32)
+        np.copyto(out, rows.T)
+        return out.view(RECORD_DTYPE).reshape(n)
 
     @property
     def meets_edge(self) -> np.ndarray:
@@ -294,9 +295,8 @@ def parameterize(corners: np.ndarray, vpm: np.ndarray, viewport: tuple[int, int]
         if scale_v is not scale:                           # scaled down to fit the layers
             scale[:] = scale_v
     else:
-        atlas_rect[:] = 0
-        layer[:] = 0
-        scale[:] = 0
+        for a in (atlas_rect, layer, scale):         # culled objects: no region, scale 0
+            a[...] = 0
         scale[idx] = scale_v
         layer[idx] = packing.layer
         for row, values in enumerate((packing.x, packing.y, sizes[0], sizes[1])):

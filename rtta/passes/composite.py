@@ -175,9 +175,11 @@ class CompositePass:
             self._vaos[key] = self.ctx.vertex_array(prog, [])
         return self._programs[key], self._vaos[key]
 
-    def _upload(self, buf: moderngl.Buffer, data: bytes) -> None:
-        if buf.size < len(data):
-            buf.orphan(max(len(data), 2 * buf.size))
+    def _upload(self, buf: moderngl.Buffer, data) -> None:
+        """`data`: bytes or a contiguous array (written as it is: no copy to bytes)."""
+        size = memoryview(data).nbytes
+        if buf.size < size:
+            buf.orphan(max(size, 2 * buf.size))
         buf.write(data)
 
     def render(self, *, atlas: LayeredTarget, records: Records, gpu: GpuScene, style: Style, mode: str,
@@ -206,7 +208,7 @@ class CompositePass:
         if mode == "ghosted-ao":
             ao, edges = style.shaded(n)
             params[:n, 2], params[:n, 3] = ao, edges
-        self._upload(self.styles, params.tobytes())
+        self._upload(self.styles, params)
         self.passes = []
         self.hull_draws = 0
         target.ensure(records.viewport)
@@ -239,7 +241,7 @@ class CompositePass:
             fused = outlined and not (records.scale[focus[records.visible[focus]]] < UPSAMPLE_BELOW).any()
             self._draw(focus, style, records, sprite=True, ao=with_ao, outlined=fused)
             params[context, 0] = style.context_opacity * params[context, 0]
-            self._upload(self.styles, params.tobytes())
+            self._upload(self.styles, params)
             self._blend(back_to_front(records, view_depth, context), style, records, target, mode, behind=focus,
                         behind_outlined=fused, desaturate=style.desaturate, depth_test=True, ao=with_ao, cut=True)
             if style.halo > 0 and len(focus):
@@ -323,7 +325,7 @@ class CompositePass:
     def _draw_run(self, ids, style: Style, records: Records, *, sprite=False, blend=False, outline=False,
                   desaturate=0.0, depth_test=False, ao=False, cut=False, upsample=False, collect=False,
                   halo=False, farthest=False, focus_clip=False, outlined=False) -> None:
-        self._upload(self.order, ids.astype(np.int32).tobytes())
+        self._upload(self.order, np.ascontiguousarray(ids, np.int32))
         self.order.bind_to_storage_buffer(3)
         projection = None if outline or halo else self._projection
         lens = self._lens if cut else None

@@ -77,6 +77,18 @@ def install_signal_handlers() -> dict:
     return old
 
 
+def _ignore_signals() -> None:
+    """Once the final output is in place, rtta's own handlers become SIG_IGN: Python puts
+    SIG_DFL back for handlers written in Python while the interpreter shuts down, so a signal
+    in the last milliseconds of the process would kill it (exit -2) after its work was done."""
+    for sig in SIGNALS:
+        try:
+            if signal.getsignal(sig) is _handler:
+                signal.signal(sig, signal.SIG_IGN)
+        except (ValueError, OSError):      # not the main thread: the handler stays and returns
+            pass
+
+
 def restore_signal_handlers(old: dict) -> None:
     for sig, handler in old.items():
         signal.signal(sig, handler)
@@ -109,6 +121,7 @@ def committing(final: bool = False) -> Iterator[None]:
         _State.depth -= 1
     if final:
         _State.finished = True
+        _ignore_signals()
     elif _State.requested is not None and not _State.raised:
         _State.raised = True
         raise Interrupted(_State.requested)       # it came during the rename: stop now, the file is whole

@@ -281,3 +281,26 @@ def test_a_signal_waits_while_native_libraries_import():
         outputs.restore_signal_handlers(old)
         outputs.install_signal_handlers()              # resets the state for the tests after
         outputs.restore_signal_handlers(old)
+
+
+_LATE_SIGNAL = """
+import os, signal, sys, time
+from rtta import imageio
+imageio.install_signal_handlers()
+with imageio.committing(final=True):
+    pass
+class Late:
+    def __del__(self):          # runs while the interpreter shuts down
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(0.2)
+        sys.stderr.write("finished\\n")
+late = Late()
+"""
+
+
+def test_a_signal_while_the_finished_run_shuts_down_does_not_kill_it():
+    """Once the final output is in place the run finishes with exit 0, also when the signal
+    comes while Python shuts down (which puts SIG_DFL back for handlers written in Python: an
+    export interrupted in its last milliseconds exited -2 with its new output in place)."""
+    proc = subprocess.run([sys.executable, "-c", _LATE_SIGNAL], capture_output=True, text=True, timeout=60)
+    assert (proc.returncode, proc.stderr) == (0, "finished\n")

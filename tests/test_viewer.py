@@ -320,6 +320,9 @@ def test_large_assembly_survives_every_interaction(driven_large):
     r = driven_large
     assert r["objects"] == SCALE_PARTS and r["visible"] > SCALE_PARTS // 2
     assert r["dragged"] and r["zoomed"]
+    # fast navigation: parts left out while the camera moved (never the focus), every part at rest
+    assert max(r["drag_left_out"]) > 0 and r["moving_focus_packed"]
+    assert r["rest_left_out"] == 0 and r["rest_whole"]
     assert r["filter"] == "part0001" and r["filtered"] == 100          # part000100 .. part000199
     assert r["after_all"] == 100 and r["after_invert"] == 0
     assert r["filter_cleared"] == "" and r["all_everything"] == SCALE_PARTS and r["after_none"] == 0

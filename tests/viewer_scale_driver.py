@@ -81,12 +81,24 @@ result["layout"] = {"panel": app.layout.panel, "composite": app.layout.composite
 result["visible"] = int(app.records.visible.sum())
 cx, cy, cw, ch = app.layout.composite
 az0 = app.orbit.az
+app.state.navigation_fps = 240.0        # fast navigation over budget on any machine: parts are left out
 send("on_mouse_press", cx + cw // 2, wnd.size[1] - (cy + ch // 2), mouse.LEFT, 0)
+left, focus = [], set(range(0, PARTS, 97))
+app.state.style.focus.update(focus)
 for i in range(1, 6):
     send("on_mouse_drag", cx + cw // 2 + 20 * i, wnd.size[1] - (cy + ch // 2), 20, 0, mouse.LEFT, 0)
     frames(1, "drag")
+    left.append(app.left_out)
+result["moving_focus_packed"] = all(bool(app.records.visible[o]) for o in focus
+                                    if app.renderer.parameterize(app.orbit.camera(), app.viewport).visible[o])
 send("on_mouse_release", cx + cw // 2 + 100, wnd.size[1] - (cy + ch // 2), mouse.LEFT, 0)
-frames(1, "drag", shot="dragged")
+frames(2, "drag", shot="dragged")       # the camera rests (the release frame may still move it): every part
+result["drag_left_out"] = left
+result["rest_left_out"] = app.left_out
+full = app.renderer.parameterize(app.orbit.camera(), app.viewport)
+result["rest_whole"] = bool((app.records.visible == full.visible).all())
+app.state.style.focus.difference_update(focus)
+app.state.navigation_fps = 10.0
 result["dragged"] = app.orbit.az != az0
 dist = app.orbit.dist
 send("on_mouse_motion", cx + cw // 2, wnd.size[1] - (cy + ch // 2), 0, 0)

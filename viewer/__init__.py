@@ -26,6 +26,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="orbit for FRAMES frames per mode and print frame times, then exit")
     p.add_argument("--bench-modes", default=None, metavar="MODE,...",
                    help="with --bench: only these modes (default: every mode)")
+    p.add_argument("--navigation-fps", default="10", metavar="FPS",
+                   help="fast navigation: while the camera moves, leave out the parts smallest on screen to keep "
+                        "this frame rate (scenes of 500 parts or more; a view at rest shows every part); 0: off")
     add_load_options(p)
     return p
 
@@ -57,10 +60,24 @@ def main(argv: list[str] | None = None) -> int:
         bench_modes = _modes(args.bench_modes)
         return run(args.scene_opt or args.scene, size=size, mode=args.mode,
                    screenshot_dir=Path(args.screenshot_dir), bench=args.bench, load=load_options(args),
-                   bench_modes=bench_modes)
+                   bench_modes=bench_modes, navigation_fps=_fps(args.navigation_fps))
     except RttaError as exc:
         print(f"rtta-view: error: {printable(exc)}", file=sys.stderr)
         return 2
+
+
+def _fps(text: str) -> float:
+    import math
+
+    from rtta.errors import RttaError
+
+    try:
+        fps = float(text)
+    except ValueError:
+        fps = math.nan
+    if not (math.isfinite(fps) and 0 <= fps <= 240):
+        raise RttaError(f"--navigation-fps: expected frames per second from 0 (off) to 240, got {text!r}")
+    return fps
 
 
 def _modes(text: str | None) -> tuple[str, ...] | None:

@@ -21,6 +21,7 @@ from rtta.errors import RttaError, printable
 from rtta.imageio import check_file, save_png
 from rtta.ldi.lens import Lens, default_placement
 from rtta.passes.projector import Projector, default_image
+from rtta.renderer.navigation import FrameBudget, left_out
 from rtta.renderer.renderer import Renderer
 from rtta.renderer.snapshot import over_background
 from rtta.scene.loader import load_scene
@@ -72,7 +73,7 @@ class Viewer:
         state = ViewerState(scene.names, mode=mode or old.mode, paths=scene.paths)
         if old is not None:
             state.settings, state.atlas_max, state.show_atlas = old.settings, old.atlas_max, old.show_atlas
-            state.measure = old.measure
+            state.measure, state.navigation_fps = old.measure, old.navigation_fps
             self.renderer.release()
         self.state = state
         self.renderer = Renderer(self.ctx, scene, state.settings)
@@ -83,6 +84,10 @@ class Viewer:
         self.scene_label = Path(scene.source).name
         self.scene_dir = Path(scene.source).parent if Path(scene.source).exists() else Path.cwd()
         self._capture_key = self._composite_key = self._std_key = None
+        self.budget = FrameBudget(target_ms=1e3 / max(state.navigation_fps, 1e-3))
+        self._triangles = scene.index_ranges[:, 1] // 3       # per object
+        self.left_out = 0               # parts left out of the last capture (fast navigation)
+        self._moved = False             # the last frame captured while the camera moved
         self.frame_objects()
 
     def frame_objects(self, ids=None) -> None:
@@ -140,6 +145,9 @@ class Viewer:
     def frame(self) -> None:
         """One frame into the window's framebuffer (call swap_buffers after it)."""
         self.stats.tick()
+        if self._moved and self.stats.history:          # the last frame's time steers fast navigation
+            self.budget.update(self.stats.history[-1])
+        self._moved = False
         self._take_loaded()
         minimized = self.wnd.width <= 0 or self.wnd.height <= 0
         size = (0, 0) if minimized else self.wnd.buffer_size
@@ -186,11 +194,23 @@ class Viewer:
         focus = self.renderer.scaled_for(self.state.style.focus)     # empty unless a context scale
         normals = self.renderer.needs_normals(self.state.mode)        # ghosted-ao, the projector
         key = (tuple(camera.eye), tuple(camera.target), vp, self.state.capture_key(), focus, normals)
-        if key != self._capture_key:
+        if key != self._capture_key or self.left_out:     # a view at rest is captured whole
+            moving = self._capture_key is not None and key[:2] != self._capture_key[:2]
             self.renderer.hidden = self.state.hidden
+            leave = self._navigation_left_out() if moving else None
             # no id image: compositing never reads it, picking reads depths (rtta.passes.picking)
-            self.records = self.renderer.capture(camera, vp, focus=focus, normals=normals, ids=False)
+            self.records = self.renderer.capture(camera, vp, focus=focus, normals=normals, ids=False, left_out=leave)
             self._capture_key, self._composite_key = key, None
+            self.left_out, self._moved = (0 if leave is None else int(leave.sum())), moving
+
+    def _navigation_left_out(self):
+        """While the camera moves: the smallest parts on screen, as many as the frame budget
+        asks (rtta.renderer.navigation); None with fast navigation off or nothing to leave out."""
+        fps = self.state.navigation_fps
+        if fps <= 0 or self.records is None or len(self.records.visible) != self.renderer.scene.count:
+            return None
+        self.budget.target_ms = 1e3 / fps
+        return left_out(self.records, self._triangles, self.budget.keep, self.state.focus_mask())
 
     def _draw_composite(self) -> None:
         vp, s, r = self.viewport, self.state, self.renderer

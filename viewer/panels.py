@@ -159,12 +159,27 @@ def _atlas(app: PanelsHost) -> None:
                                             "all" if s.atlas_layer < 0 else "%d")
 
 
+def _navigation(app: PanelsHost) -> None:
+    """Fast navigation: the frame rate it keeps while moving, and what it left out."""
+    s = app.state
+    on = s.navigation_fps > 0
+    changed, on = imgui.checkbox("fast navigation", on)
+    if imgui.is_item_hovered():
+        imgui.set_tooltip("while the camera moves, leave out the parts smallest on screen to keep the frame rate\n"
+                          "(scenes of 500 parts or more); a view at rest always shows every part")
+    if changed:
+        s.navigation_fps = 10.0 if on else 0.0
+    if on:
+        _, s.navigation_fps = imgui.slider_float("target fps", s.navigation_fps, 1.0, 60.0, "%.0f")
+
+
 def _stats(app: PanelsHost) -> None:
     if not imgui.collapsing_header("Stats", imgui.TreeNodeFlags_.default_open):
         return
     st = app.stats
     imgui.text(f"frame {st.mean_ms():6.1f} ms  ({st.fps():5.1f} fps)")
     _, app.state.measure = imgui.checkbox("time stages (syncs the GPU)", app.state.measure)
+    _navigation(app)
     for k in STAGES:
         if k in st.last_ms:
             ran = k in st.stage_ms
@@ -172,7 +187,8 @@ def _stats(app: PanelsHost) -> None:
     r = app.records
     if r is not None:
         n, vis = len(r.visible), int(r.visible.sum())
-        imgui.text(f"visible {vis}  culled {n - vis}")
+        left = app.left_out
+        imgui.text(f"visible {vis}  culled {n - vis - left}" + (f"  left out {left}" if left else ""))
         imgui.text(f"atlas {r.atlas_size[0]}x{r.atlas_size[1]} x {r.atlas_size[2]} layers")
         imgui.text(f"utilization {100 * r.utilization:.0f}%")
     history = np.asarray(st.history, np.float32)

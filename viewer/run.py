@@ -31,13 +31,15 @@ def create_window(size: tuple[int, int], visible: bool = True):
 
 
 def run(scene_path: str | None, *, size: tuple[int, int], mode: str, screenshot_dir: Path, bench: int = 0,
-        load: dict | None = None, bench_modes: tuple[str, ...] | None = None) -> int:
-    """`load`: the loader's options (smoothing), for this scene and those opened later."""
+        load: dict | None = None, bench_modes: tuple[str, ...] | None = None, navigation_fps: float = 10.0) -> int:
+    """`load`: the loader's options (smoothing), for this scene and those opened later;
+    `navigation_fps`: the frame rate fast navigation keeps while the camera moves (0: off)."""
     from .app import Viewer
 
     scene = load_scene_or_demo(scene_path, **(load or {}))   # a bad file on the command line: one line, exit 2
     wnd = create_window(size)
     app = Viewer(wnd, scene, screenshot_dir=screenshot_dir, mode=mode, load=load)
+    app.state.navigation_fps = navigation_fps
     try:
         if bench:
             print_bench(app, bench, bench_modes)
@@ -51,9 +53,9 @@ def run(scene_path: str | None, *, size: tuple[int, int], mode: str, screenshot_
     return 0
 
 
-def _orbit_frames(app, frames: int, turn: float = 360.0) -> list[float]:
+def _orbit_frames(app, frames: int, turn: float = 360.0, left: list | None = None) -> list[float]:
     """Seconds per frame (swap included) while the camera orbits by `turn` degrees in all,
-    so every frame re-captures."""
+    so every frame re-captures; `left` gets the parts fast navigation left out of each."""
     times = []
     for _ in range(frames):
         app.orbit.rotate(turn / frames / DEGREES_PER_PIXEL, 0.0)
@@ -61,6 +63,8 @@ def _orbit_frames(app, frames: int, turn: float = 360.0) -> list[float]:
         app.frame()
         app.wnd.swap_buffers()
         times.append(time.perf_counter() - t0)
+        if left is not None:
+            left.append(app.left_out)
     return times
 
 
@@ -71,7 +75,8 @@ def bench_mode(app, mode: str, frames: int, warmup: int = 5) -> dict:
     app.state.measure = False
     _orbit_frames(app, warmup)
     app.orbit.az = DEFAULT_ORBIT[0]        # every mode sees the same views: one full turn
-    ms = 1e3 * float(np.mean(_orbit_frames(app, frames)))
+    left: list[int] = []
+    ms = 1e3 * float(np.mean(_orbit_frames(app, frames, left=left)))
     app.state.measure = True
     _orbit_frames(app, 2)
     app.orbit.az = DEFAULT_ORBIT[0]
@@ -80,7 +85,9 @@ def bench_mode(app, mode: str, frames: int, warmup: int = 5) -> dict:
         _orbit_frames(app, 1, 360.0 / frames)
         for k in STAGE_COLUMNS:
             stages[k].append(app.stats.stage_ms.get(k, 0.0))
-    return {"mode": mode, "ms": ms, "fps": 1e3 / ms, **{k: float(np.mean(v)) for k, v in stages.items()}}
+    share = float(np.mean(left)) / max(1, app.renderer.scene.count)
+    return {"mode": mode, "ms": ms, "fps": 1e3 / ms, "left_out": share,
+            **{k: float(np.mean(v)) for k, v in stages.items()}}
 
 
 def print_bench(app, frames: int, modes: tuple[str, ...] | None = None) -> list[dict]:
@@ -90,12 +97,16 @@ def print_bench(app, frames: int, modes: tuple[str, ...] | None = None) -> list[
     print(f"scene: {app.scene_label} ({app.renderer.scene.count} objects, {app.renderer.scene.vertex_count} "
           f"vertices); window {w}x{h}, composite {vp[0]}x{vp[1]}, atlas view shown; {frames} frames per mode, "
           "one full orbit")
-    print("stage columns: ms per stage from a second run that waits for the GPU after each stage")
-    print("| mode | fps | frame ms | " + " | ".join(STAGE_COLUMNS) + " |")
-    print("|---" * (3 + len(STAGE_COLUMNS)) + "|")
+    fps = app.state.navigation_fps
+    print("stage columns: ms per stage from a second run that waits for the GPU after each stage; left out: parts "
+          "fast navigation left out while orbiting (share of all, mean over the fps run; "
+          + (f"--navigation-fps {fps:g})" if fps > 0 else "off: --navigation-fps 0)"))
+    print("| mode | fps | frame ms | left out | " + " | ".join(STAGE_COLUMNS) + " |")
+    print("|---" * (4 + len(STAGE_COLUMNS)) + "|")
     rows = []
     for mode in modes or VIEW_MODES:
         r = bench_mode(app, mode, frames)
         rows.append(r)
-        print(f"| {mode} | {r['fps']:.1f} | {r['ms']:.1f} | " + " | ".join(f"{r[k]:.1f}" for k in STAGE_COLUMNS) + " |")
+        print(f"| {mode} | {r['fps']:.1f} | {r['ms']:.1f} | {100 * r['left_out']:.0f}% | "
+              + " | ".join(f"{r[k]:.1f}" for k in STAGE_COLUMNS) + " |")
     return rows

@@ -89,6 +89,8 @@ class ViewerState:
     atlas_layer: int = -1          # -1: all layers side by side
     filter: str = ""
     measure: bool = True           # time each stage (waits for the GPU after each: costs a little)
+    navigation_fps: float = 10.0   # fast navigation: while moving, the smallest parts are left out to keep
+                                   # this frame rate (scenes of 500 parts or more); 0: off
     projector: ProjectorState = field(default_factory=lambda: ProjectorState())
     lens: LensState = field(default_factory=lambda: LensState())
     paths: list[tuple[str, ...]] | None = None   # the part tree (Scene.paths)

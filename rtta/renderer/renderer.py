@@ -110,8 +110,14 @@ class Renderer:
         scale[[o for o in focus if 0 <= o < self.scene.count]] = s.region_scale
         return scale
 
-    def parameterize(self, camera: Camera, viewport: tuple[int, int], matrices=None, focus=()) -> Records:
+    def parameterize(self, camera: Camera, viewport: tuple[int, int], matrices=None, focus=(),
+                     left_out: np.ndarray | None = None) -> Records:
+        """`left_out`: bool [n], objects not packed this time besides the hidden ones (fast
+        navigation, rtta.renderer.navigation)."""
         view, proj = matrices or self.matrices(camera, viewport)
+        hidden = self.hidden_mask()
+        if left_out is not None:
+            hidden = left_out.copy() if hidden is None else hidden | left_out
         s = self.settings
         largest = max(s.region_scale, s.region_scale * s.context_scale)
         atlas_max = s.atlas_max or default_atlas_max(viewport, s.border, largest)
@@ -119,7 +125,7 @@ class Renderer:
         max_layers = min(s.max_layers or self.caps.max_layers, self.caps.max_layers)
         return parameterize(self.scene.box_corners(s.bounds), proj @ view, viewport, border=s.border,
                             atlas_max=atlas_max, max_layers=max_layers, region_scale=self.region_scales(focus),
-                            hidden=self.hidden_mask())
+                            hidden=hidden)
 
     def hidden_mask(self) -> np.ndarray | None:
         """bool [n] of the hidden objects (None when none is hidden)."""
@@ -156,17 +162,18 @@ class Renderer:
         return self._capture[path]
 
     def capture(self, camera: Camera, viewport: tuple[int, int], path: str | None = None, focus=(),
-                normals: bool = True, ids: bool = True) -> Records:
+                normals: bool = True, ids: bool = True, left_out: np.ndarray | None = None) -> Records:
         """Parameterize and capture every visible object into the atlas; returns R. With a
         context scale below 1, `focus` objects get full-scale regions and the rest smaller ones.
         normals=False leaves the normal image unwritten, for modes that read none
         (needs_normals); a composite that needs it then captures again. ids=False leaves the
-        id image unwritten (compositing and picking never read it; the export does)."""
+        id image unwritten (compositing and picking never read it; the export does).
+        `left_out`: bool [n], objects left out of this capture as if hidden (fast navigation)."""
         view, proj = self.matrices(camera, viewport)
         self.captured_focus = self.scaled_for(focus)
         self._view = (camera, viewport, path)
         with self._timed("parameterize"):
-            records = self.parameterize(camera, viewport, (view, proj), self.captured_focus)
+            records = self.parameterize(camera, viewport, (view, proj), self.captured_focus, left_out)
         with self._timed("capture"):
             self.capture_pass(path).render(gpu=self.gpu, records=records, view=view, proj=proj,
                                            atlas=self.atlas, normals=normals, ids=ids)

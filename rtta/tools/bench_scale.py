@@ -97,12 +97,14 @@ def frame_figures(ctx, path: Path, viewport: tuple[int, int], rounds: int) -> di
     return row
 
 
-def viewer_fps(path: Path, frames: int, size: str = "1280x720") -> float | None:
-    """Frames per second of `rtta-view --bench` in ghosted; None without a display or viewer."""
+def viewer_fps(path: Path, frames: int, size: str = "1280x720", navigation_fps: float = 10.0) -> float | None:
+    """Frames per second of `rtta-view --bench` in ghosted (with fast navigation keeping
+    `navigation_fps`, 0: every part in every frame); None without a display or viewer."""
     exe = shutil.which("rtta-view") or str(Path(sys.executable).with_name("rtta-view"))
     if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")) or not Path(exe).exists():
         return None
-    proc = subprocess.run([exe, str(path), "--bench", str(frames), "--bench-modes", "ghosted", "--size", size],
+    proc = subprocess.run([exe, str(path), "--bench", str(frames), "--bench-modes", "ghosted", "--size", size,
+                           "--navigation-fps", str(navigation_fps)],
                           capture_output=True, text=True, timeout=3600)
     rows = [ln for ln in proc.stdout.splitlines() if re.match(r"\| ghosted \|", ln)]
     return float(rows[0].split("|")[2]) if proc.returncode == 0 and rows else None
@@ -137,7 +139,9 @@ def run_scale(viewport: tuple[int, int], quick: bool = False, sizes: str | None 
             scenes.append(("engine_2cyl", engine))
         for name, path in scenes:
             row = {"scene": name, **frame_figures(ctx, path, viewport, rounds), "load": load_figures(path)}
-            row["viewer_fps"] = viewer_fps(path, 3 if quick else 10) if viewer else None
+            frames = 3 if quick else 10
+            row["viewer_fps"] = viewer_fps(path, frames) if viewer else None
+            row["viewer_fps_exact"] = viewer_fps(path, frames, navigation_fps=0) if viewer else None
             rows.append(row)
             _print_row(row, len(rows) == 1, renderer, viewport)
     if json_path:
@@ -150,15 +154,16 @@ def _print_row(r: dict, header: bool, renderer: str, viewport: tuple[int, int]) 
     if header:
         print(f"renderer: {renderer}; viewport {viewport[0]}x{viewport[1]}; load and peak RSS each in a fresh "
               "process; frame ms are medians over rounds of STD, capture and ghosted in turn, ratios to STD "
-              "taken within each round; viewer: rtta-view --bench in ghosted at 1280x720")
+              "taken within each round; viewer: rtta-view --bench in ghosted at 1280x720, with fast navigation "
+              "(the default, 10 fps) and exact (--navigation-fps 0: every part in every frame)")
         print("| scene | parts | triangles | load s | trimesh.load s | load / trimesh | peak RSS MB | "
               "trimesh RSS MB | RSS / trimesh | param+pack ms | STD ms | capture ms (x STD) | "
-              "ghosted ms (x STD) | viewer fps |")
-        print("|---" * 14 + "|")
+              "ghosted ms (x STD) | viewer fps | viewer fps exact |")
+        print("|---" * 15 + "|")
     ld = r["load"]
-    fps = "n/a" if r["viewer_fps"] is None else f"{r['viewer_fps']:.1f}"
+    fps, exact = ("n/a" if r[k] is None else f"{r[k]:.1f}" for k in ("viewer_fps", "viewer_fps_exact"))
     print(f"| {r['scene']} | {r['objects']:,} | {r['triangles']:,} | {ld['rtta']['s']:.2f} | {ld['trimesh']['s']:.2f} "
           f"| {ld['rtta']['s'] / ld['trimesh']['s']:.2f} | {ld['rtta']['peak_rss'] / 2**20:.0f} "
           f"| {ld['trimesh']['peak_rss'] / 2**20:.0f} | {ld['rtta']['peak_rss'] / ld['trimesh']['peak_rss']:.2f} "
           f"| {r['param_ms']:.1f} | {r['std_ms']:.1f} | {r['capture_ms']:.1f} ({r['capture_ratio']:.2f}x) "
-          f"| {r['ghosted_ms']:.1f} ({r['ghosted_ratio']:.2f}x) | {fps} |", flush=True)
+          f"| {r['ghosted_ms']:.1f} ({r['ghosted_ratio']:.2f}x) | {fps} | {exact} |", flush=True)

@@ -89,8 +89,8 @@ for i in range(1, 6):
     send("on_mouse_drag", cx + cw // 2 + 20 * i, wnd.size[1] - (cy + ch // 2), 20, 0, mouse.LEFT, 0)
     frames(1, "drag")
     left.append(app.left_out)
-result["moving_focus_packed"] = all(bool(app.records.visible[o]) for o in focus
-                                    if app.renderer.parameterize(app.orbit.camera(), app.viewport).visible[o])
+in_view = app.renderer.parameterize(app.orbit.camera(), app.viewport).visible
+result["moving_focus_packed"] = all(bool(app.records.visible[o]) for o in focus if in_view[o])
 send("on_mouse_release", cx + cw // 2 + 100, wnd.size[1] - (cy + ch // 2), mouse.LEFT, 0)
 frames(2, "drag", shot="dragged")       # the camera rests (the release frame may still move it): every part
 result["drag_left_out"] = left

@@ -26,9 +26,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="orbit for FRAMES frames per mode and print frame times, then exit")
     p.add_argument("--bench-modes", default=None, metavar="MODE,...",
                    help="with --bench: only these modes (default: every mode)")
-    p.add_argument("--navigation-fps", default="10", metavar="FPS",
-                   help="fast navigation: while the camera moves, leave out the parts smallest on screen to keep "
-                        "this frame rate (scenes of 500 parts or more; a view at rest shows every part); 0: off")
+    p.add_argument("--navigation-fps", default=None, metavar="FPS",
+                   help="fast navigation: while the camera moves, leave out the parts smallest on screen to keep this "
+                        "frame rate (default 10; scenes of 500 parts or more; a view at rest shows every part); 0: off")
     add_load_options(p)
     return p
 
@@ -66,11 +66,13 @@ def main(argv: list[str] | None = None) -> int:
         return 2
 
 
-def _fps(text: str) -> float:
+def _fps(text: str | None) -> float | None:
     import math
 
     from rtta.errors import RttaError
 
+    if text is None:
+        return None
     try:
         fps = float(text)
     except ValueError:

@@ -84,7 +84,7 @@ class Viewer:
         self.scene_label = Path(scene.source).name
         self.scene_dir = Path(scene.source).parent if Path(scene.source).exists() else Path.cwd()
         self._capture_key = self._composite_key = self._std_key = None
-        self.budget = FrameBudget(target_ms=1e3 / max(state.navigation_fps, 1e-3))
+        self.budget = FrameBudget()     # its target follows state.navigation_fps when used
         self._triangles = scene.index_ranges[:, 1] // 3       # per object
         self.left_out = 0               # parts left out of the last capture (fast navigation)
         self._moved = False             # the last frame captured while the camera moved

@@ -17,7 +17,7 @@ from rtta.passes.oit import ORDERS
 from rtta.scene.model import BOUNDS
 
 from . import tree
-from .state import ATLAS_MAX_CHOICES, VIEW_MODES
+from .state import ATLAS_MAX_CHOICES, NAVIGATION_FPS, VIEW_MODES
 
 if TYPE_CHECKING:
     from .commands import PanelsHost
@@ -168,7 +168,7 @@ def _navigation(app: PanelsHost) -> None:
         imgui.set_tooltip("while the camera moves, leave out the parts smallest on screen to keep the frame rate\n"
                           "(scenes of 500 parts or more); a view at rest always shows every part")
     if changed:
-        s.navigation_fps = 10.0 if on else 0.0
+        s.navigation_fps = NAVIGATION_FPS if on else 0.0
     if on:
         _, s.navigation_fps = imgui.slider_float("target fps", s.navigation_fps, 1.0, 60.0, "%.0f")
 

@@ -31,15 +31,18 @@ def create_window(size: tuple[int, int], visible: bool = True):
 
 
 def run(scene_path: str | None, *, size: tuple[int, int], mode: str, screenshot_dir: Path, bench: int = 0,
-        load: dict | None = None, bench_modes: tuple[str, ...] | None = None, navigation_fps: float = 10.0) -> int:
+        load: dict | None = None, bench_modes: tuple[str, ...] | None = None,
+        navigation_fps: float | None = None) -> int:
     """`load`: the loader's options (smoothing), for this scene and those opened later;
-    `navigation_fps`: the frame rate fast navigation keeps while the camera moves (0: off)."""
+    `navigation_fps`: the frame rate fast navigation keeps while the camera moves (0: off;
+    None: the viewer's default)."""
     from .app import Viewer
 
     scene = load_scene_or_demo(scene_path, **(load or {}))   # a bad file on the command line: one line, exit 2
     wnd = create_window(size)
     app = Viewer(wnd, scene, screenshot_dir=screenshot_dir, mode=mode, load=load)
-    app.state.navigation_fps = navigation_fps
+    if navigation_fps is not None:
+        app.state.navigation_fps = navigation_fps
     try:
         if bench:
             print_bench(app, bench, bench_modes)

@@ -17,6 +17,7 @@ from .parts import PartTree
 
 VIEW_MODES = ("std", *MODES)
 ATLAS_MAX_CHOICES = ("viewport", "512", "1024", "2048", "4096")
+NAVIGATION_FPS = 10.0      # the frame rate fast navigation keeps by default (rtta.renderer.navigation)
 
 
 @dataclass
@@ -89,7 +90,7 @@ class ViewerState:
     atlas_layer: int = -1          # -1: all layers side by side
     filter: str = ""
     measure: bool = True           # time each stage (waits for the GPU after each: costs a little)
-    navigation_fps: float = 10.0   # fast navigation: while moving, the smallest parts are left out to keep
+    navigation_fps: float = NAVIGATION_FPS  # fast navigation: while moving, the smallest parts are left out to keep
                                    # this frame rate (scenes of 500 parts or more); 0: off
     projector: ProjectorState = field(default_factory=lambda: ProjectorState())
     lens: LensState = field(default_factory=lambda: LensState())

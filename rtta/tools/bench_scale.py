@@ -97,14 +97,15 @@ def frame_figures(ctx, path: Path, viewport: tuple[int, int], rounds: int) -> di
     return row
 
 
-def viewer_fps(path: Path, frames: int, size: str = "1280x720", navigation_fps: float = 10.0) -> float | None:
-    """Frames per second of `rtta-view --bench` in ghosted (with fast navigation keeping
-    `navigation_fps`, 0: every part in every frame); None without a display or viewer."""
+def viewer_fps(path: Path, frames: int, size: str = "1280x720", navigation_fps: float | None = None) -> float | None:
+    """Frames per second of `rtta-view --bench` in ghosted (fast navigation at the viewer's
+    default, or keeping `navigation_fps`; 0: every part in every frame); None without a
+    display or viewer."""
     exe = shutil.which("rtta-view") or str(Path(sys.executable).with_name("rtta-view"))
     if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")) or not Path(exe).exists():
         return None
-    proc = subprocess.run([exe, str(path), "--bench", str(frames), "--bench-modes", "ghosted", "--size", size,
-                           "--navigation-fps", str(navigation_fps)],
+    flags = [] if navigation_fps is None else ["--navigation-fps", str(navigation_fps)]
+    proc = subprocess.run([exe, str(path), "--bench", str(frames), "--bench-modes", "ghosted", "--size", size, *flags],
                           capture_output=True, text=True, timeout=3600)
     rows = [ln for ln in proc.stdout.splitlines() if re.match(r"\| ghosted \|", ln)]
     return float(rows[0].split("|")[2]) if proc.returncode == 0 and rows else None

@@ -2,16 +2,17 @@
 // defines:
 // `--order pixel`: each pixel's list of object surfaces (oit.glsl) blended front to back in
 // the order of their depths (ties: by packed colour, so the blend depends on the surfaces
-// alone, not on the order their fragments arrived in). The list's first K = 8
-// surfaces are sorted in registers (each through a fixed chain of compare-and-swap selects,
-// in a loop short enough to unroll; no local arrays: on llvmpipe an array indexed per lane
-// is scattered lane by lane, and a sort over one cost 4 s a frame). The list holds the
-// objects in reverse draw order, and they are drawn back to front by bounding-box centre:
-// so with more than K objects over one pixel, the K nearest by centre are sorted exactly
-// and the others are merged into one layer behind them, with their opacity-weighted mean
-// colour and combined opacity 1 - prod(1 - a) (weighted blended, order-independent; up to
-// MAX_LIST surfaces). Walking the whole list in the sorting loop cost 10x more (487 ms
-// against 45 ms on the demo at 1024²): a long loop does not unroll.
+// alone, not on the order their fragments arrived in). The K = 8 nearest surfaces are sorted
+// exactly in registers (each through a fixed chain of compare-and-swap selects; no local
+// arrays: on llvmpipe an array indexed per lane is scattered lane by lane, and a sort over
+// one cost 4 s a frame). With more than K surfaces over one pixel, each further one goes
+// through the same chain and what leaves it (the farthest of the K + 1) is merged into one
+// layer behind the K kept, with the opacity-weighted mean colour and combined opacity
+// 1 - prod(1 - a) (weighted blended, up to MAX_LIST surfaces). Both are independent of the
+// list's order, which on a GPU is the order fragments arrived in. The list's first K nodes
+// are taken in a loop short enough to unroll: walking every node in one long loop cost 10x
+// more on llvmpipe (487 ms against 45 ms on the demo at 1024²), so the long loop below runs
+// only where a list holds more than K.
 // Output: premultiplied (colour, alpha), blended ONE, ONE_MINUS_SRC_ALPHA over the background.
 #include "oit.glsl"
 
@@ -49,10 +50,13 @@ void main() {
         SWAP(0) if (g >= 1) SWAP(1) if (g >= 2) SWAP(2) if (g >= 3) SWAP(3)
         if (g >= 4) SWAP(4) if (g >= 5) SWAP(5) if (g >= 6) SWAP(6) if (g >= 7) SWAP(7)
     }
-    for (int g = 0; next != NO_NODE && g < MAX_LIST; ++g) {     // more than K: merged behind
+    for (int g = 0; next != NO_NODE && g < MAX_LIST; ++g) {     // more than K: the farthest merged behind
         uvec4 node = nodes[next - 1u];
+        float d = uintBitsToFloat(node.x);
+        uint c = node.y;
         next = node.z;
-        vec4 q = unpackUnorm4x8(node.y);
+        SWAP(0) SWAP(1) SWAP(2) SWAP(3) SWAP(4) SWAP(5) SWAP(6) SWAP(7)
+        vec4 q = unpackUnorm4x8(c);
         tail_c += q.a * q.rgb;
         tail_w += q.a;
         tail_t *= 1.0 - q.a;

@@ -94,20 +94,22 @@ def test_pixel_order_overflow_keeps_nearest(make_renderer, monkeypatch):
 
 def test_more_surfaces_than_kept_merge_behind(make_renderer):
     """12 nested spheres, more than the K = 8 surfaces the resolve sorts: the stated fallback.
-    The list holds the objects in reverse draw order (back to front by bounds centre; the
-    centres tie here, so by id): the 8 drawn last are blended in exact depth order, the
-    others merged into one layer behind them (opacity-weighted mean colour, opacity
-    1 - prod(1 - a)). The numpy blend of that rule matches; the exact blend does not."""
+    The 8 nearest surfaces are blended in exact depth order, the others merged into one layer
+    behind them (opacity-weighted mean colour, opacity 1 - prod(1 - a)), whatever order the
+    list holds them in (on a GPU, the order fragments arrived in). The spheres are drawn by
+    id (equal bounds centres) and the nearest have the lowest ids, so keeping the 8 drawn
+    last (what the list order alone would give on llvmpipe) fails here. The numpy blend of
+    the rule matches; the exact blend does not."""
     k_kept, n = 8, 12
-    parts = [(f"s{i}", np.asarray(trimesh.creation.icosphere(3, 0.5 + 0.05 * i).vertices),
+    parts = [(f"s{i}", np.asarray(trimesh.creation.icosphere(3, 0.5 + 0.05 * (n - 1 - i)).vertices),
               np.asarray(trimesh.creation.icosphere(3, 1.0).faces), None) for i in range(n)]
     strong = [(0.9, 0.1, 0.1, 1), (0.1, 0.8, 0.1, 1), (0.1, 0.1, 0.9, 1), (0.9, 0.9, 0.1, 1)]
-    scene = from_meshes(parts, strong + [(0.5, 0.5, 0.5, 1)] * k_kept)
+    scene = from_meshes(parts, [(0.5, 0.5, 0.5, 1)] * k_kept + strong)
     r = make_renderer(scene)
     cam = Camera.orbit(scene.center, scene.radius, 0, 0, 2.5)
     r.capture(cam, VP)
-    # strong inner spheres (ids 0-3, drawn first: merged), faint outer shells (kept)
-    opacity = {i: 0.9 if i < 4 else 0.08 for i in range(n)}
+    # faint outer shells (ids 0-7, nearest: kept), strong inner spheres (ids 8-11: merged)
+    opacity = {i: 0.08 if i < k_kept else 0.9 for i in range(n)}
     got = r.composite("transparent", Style(order="pixel", opacity=opacity)).read()[0][..., :3].astype(np.float64)
     records = r.last[0]
     tw, th, td = records.atlas_size
@@ -118,17 +120,18 @@ def test_more_surfaces_than_kept_merge_behind(make_renderer):
     alpha = np.array([opacity[i] for i in range(n)])
     y, x = VP[1] // 2, VP[0] // 2                       # the centre: all 12 cover it
     assert (depth[:, y, x] < 1).all()
-    drawn = np.arange(n)                               # equal centres: drawn by id
-    kept, rest = drawn[-k_kept:], drawn[:-k_kept]
+    by_depth = np.argsort(depth[:, y, x])               # nearest first
+    kept, rest = by_depth[:k_kept], by_depth[k_kept:]
+    assert set(kept) == set(range(k_kept)), "the outer shells are not the nearest: the test proves nothing"
     w = alpha[rest]
     tail_rgb = (w[:, None] * color[rest, y, x]).sum(0) / w.sum()
     tail_a = 1 - np.prod(1 - w)
     out = np.array(BACKGROUND[:3]) * 255
     out = tail_rgb * tail_a + out * (1 - tail_a)
-    for o in kept[np.argsort(-depth[kept, y, x])]:     # farthest first
+    for o in kept[::-1]:                                # farthest first
         out = color[o, y, x] * alpha[o] + out * (1 - alpha[o])
     exact = np.array(BACKGROUND[:3]) * 255
-    for o in np.argsort(-depth[:, y, x]):
+    for o in by_depth[::-1]:
         exact = color[o, y, x] * alpha[o] + exact * (1 - alpha[o])
     assert np.abs(got[y, x] - out).max() <= 3, (got[y, x], out, exact)
     assert np.abs(exact - out).max() > 3, "the fallback equals the exact blend here: the test proves nothing"

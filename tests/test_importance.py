@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import trimesh
+from checks import assert_depth_close
 
 from rtta.atlas.parameterize import parameterize
 from rtta.passes.composite import BACKGROUND, Style
@@ -75,7 +76,7 @@ def test_focus_at_scale_one_is_exact(make_renderer, demo_scene):
     assert np.array_equal(out[0][0], out[1][0]) and np.array_equal(out[0][1], out[1][1])
     std = r.std(cam, VP).read(VP, 1)
     cov = std["id"][0] >= 0
-    assert np.abs(out[1][1][cov] - std["depth"][0][cov]).max() <= 1e-5
+    assert_depth_close(out[1][1], std["depth"][0], cov, std["id"][0], "sprites at context scale 0.5")
 
 
 def _neighbourhood(a: np.ndarray, fn, fill, r: int = 1) -> np.ndarray:

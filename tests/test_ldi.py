@@ -15,6 +15,7 @@ from rtta.ldi.gpu import ParityTest
 from rtta.ldi.pack import compress, decompress
 from rtta.ldi.peel import NIL, Peeler, build, classify, closed_mesh, crop_bounds, look_rotation, to_texture
 from rtta.scene import shapes
+from rtta.tools.compare import SNAP_PX
 
 COW = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "cow.glb"
 MESHES = ["sphere", "torus", "torus-knot", "vase", "cow"]
@@ -28,9 +29,10 @@ def _mesh(name: str) -> trimesh.Trimesh:
     return shapes.SHAPES[name]()
 
 
-def _ray_depths(vertices, faces, matrix, texels: np.ndarray, n: int) -> list[np.ndarray]:
-    """Sorted texture-space depths where each texel-centre ray meets the triangles (numpy,
-    float64): what peeling must find."""
+def _ray_depths(vertices, faces, matrix, texels: np.ndarray, n: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Per texel-centre ray, the sorted texture-space depths where it meets the triangles
+    (numpy, float64): what peeling must find; and with each, its triangle's depth slope per
+    texel (|dz/dx| + |dz/dy|), for the tolerance."""
     tv = vertices @ matrix[:3, :3].T + matrix[:3, 3]
     tri = tv[faces]                                          # [F, 3, 3] in texture space
     out = []
@@ -44,16 +46,21 @@ def _ray_depths(vertices, faces, matrix, texels: np.ndarray, n: int) -> list[np.
         w1 = ((c[:, 1] - a[:, 1]) * (s - c[:, 0]) + (a[:, 0] - c[:, 0]) * (t - c[:, 1])) / den
         w2 = 1 - w0 - w1
         hit = ok & (w0 >= 0) & (w1 >= 0) & (w2 >= 0)
-        z = w0 * tri[:, 0, 2] + w1 * tri[:, 1, 2] + w2 * tri[:, 2, 2]
-        out.append(np.sort(z[hit]))
+        z0, z1, z2 = tri[:, 0, 2], tri[:, 1, 2], tri[:, 2, 2]
+        z = w0 * z0 + w1 * z1 + w2 * z2
+        dzds = ((z0 - z2) * (b[:, 1] - c[:, 1]) + (z1 - z2) * (c[:, 1] - a[:, 1])) / den
+        dzdt = ((z0 - z2) * (c[:, 0] - b[:, 0]) + (z1 - z2) * (a[:, 0] - c[:, 0])) / den
+        order = np.argsort(z[hit])
+        out.append((z[hit][order], ((np.abs(dzds) + np.abs(dzdt)) / n)[hit][order]))
     return out
 
 
 def test_peeled_layers_are_the_ray_intersections(gl):
     """Every layer of a torus knot (depth complexity up to 8) equals the depths where the
-    texel's ray meets the triangles, on 3,000 random texels. Tolerance: the rasterizer snaps
-    vertices to subpixels, which moves steep triangles' depth by up to ~2e-5 of the range;
-    the median error must stay at float32 precision."""
+    texel's ray meets the triangles, on 3,000 random texels. Tolerance: 5e-5 plus the
+    triangle's depth slope times two sub-pixel steps (the rasterizer snaps vertices to its
+    sub-pixel grid: on llvmpipe up to ~2e-5 of the range on steep triangles, 1.8e-4 seen on
+    an NVIDIA H200); the median error must stay a small part of that allowance."""
     mesh = shapes.torus_knot()
     v, f = closed_mesh(mesh.vertices, mesh.faces)
     n = 128
@@ -69,16 +76,18 @@ def test_peeled_layers_are_the_ray_intersections(gl):
     assert np.array_equal((layers < NIL).sum(axis=0), counts.astype(int))
     texels = np.random.default_rng(0).integers(0, n, (3000, 2))
     errors, skipped = [], 0
-    for (i, j), want in zip(texels, _ray_depths(v, f, matrix, texels, n), strict=True):
+    for (i, j), (want, slope) in zip(texels, _ray_depths(v, f, matrix, texels, n), strict=True):
         got = layers[:, j, i]
         got = got[got < NIL]
         if len(want) != len(got):          # a ray through an edge or vertex: rasterization rules decide
             skipped += 1
             continue
-        assert np.allclose(got, want, atol=5e-5), (i, j, got, want)
-        errors.extend(np.abs(got - want))
+        assert (np.abs(got - want) <= 5e-5 + slope * SNAP_PX).all(), (i, j, got, want, slope)
+        errors.extend(np.abs(got - want) / (slope * SNAP_PX + 1e-7))
     assert skipped < 30 and len(errors) > 2500
-    assert np.median(errors) < 1e-6
+    # typically far inside the snapping allowance: llvmpipe's median is 0.0003 of it; an H200's
+    # median error, 4.5e-6, is about 0.05 of the median slope's. Half a texel off would be 64
+    assert np.median(errors) < 0.5
 
 
 @pytest.mark.parametrize("name", MESHES)

@@ -82,18 +82,22 @@ def test_fan_and_second_parent_are_drawn(tmp_path, gl):
         assert len(columns) and (np.diff(columns) > 1).any(), name          # two separate things side by side
 
 
-@pytest.mark.parametrize("scale,translate,renders", [
-    (1e-30, 0.0, True), (1e-36, 0.0, True), (1e-40, 0.0, False), (1e-5, 1e7, True), (1e-7, 1e7, True),
+@pytest.mark.parametrize("scale,translate,must_render,warns", [
+    (1e-12, 0.0, True, False), (1e-30, 0.0, False, True), (1e-36, 0.0, False, True), (1e-40, 0.0, False, True),
+    (1e-5, 1e7, True, False), (1e-7, 1e7, True, True),
 ])
-def test_tiny_and_far_scenes_render_or_warn(tmp_path, scale, translate, renders, gl):
+def test_tiny_and_far_scenes_render_or_warn(tmp_path, scale, translate, must_render, warns, gl):
+    """Boxes down to 1e-12 units, and small ones far from the origin, render. Below
+    TINY_SCENE (1e-15 units) a GPU may draw nothing (an NVIDIA H200 did at 1e-25 and below, llvmpipe
+    draws down to 1e-36): such a scene always warns, and a blank view never comes without a
+    warning that says why."""
     m = [scale, 0, 0, 0, 0, scale, 0, 0, 0, 0, scale, 0, translate, translate, translate, 1]
     doc, binary = box_doc([{"mesh": 0, "name": "box", "matrix": m}])
     path = tmp_path / f"box_{scale:g}_{translate:g}.glb"
     path.write_bytes(glb(doc, binary))
     scene = load_scene(path)
+    warned = any("scale the model up" in w or "cannot be placed" in w for w in scene.warnings)
+    assert warned == warns, scene.warnings
     img = _render(path)
     drawn = (np.abs(img[..., :3] - img[0, 0, :3]).max(-1) > 10).mean()
-    if drawn < 0.2:                              # blank: only with a warning saying why
-        assert not renders and any("underflow" in w or "cannot be placed" in w for w in scene.warnings)
-    else:
-        assert renders
+    assert drawn >= 0.2 or (not must_render and warned), drawn

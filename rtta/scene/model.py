@@ -21,7 +21,10 @@ BOX_EDGES = np.array([(0, 1), (2, 3), (4, 5), (6, 7), (0, 2), (1, 3), (4, 6), (5
                       (0, 4), (1, 5), (2, 6), (3, 7)], dtype=np.intp)
 _BITS = np.array([[(i >> k) & 1 for k in range(3)] for i in range(8)], dtype=bool)
 BOUNDS = ("aabb", "obb")
-TINY_SCENE = 1e-30          # scene extent below which float32 products underflow (measured: 1e-38 is blank)
+# scene extent below which a GPU may draw nothing (scripts/probe_tiny.py: llvmpipe draws a box
+# down to 1e-36 units and nothing at 1e-38, where float32 underflows; an NVIDIA H200 draws it
+# whole at 1e-15, 4% of it at 1e-20 and nothing at 1e-25, its clipping losing w that small)
+TINY_SCENE = 1e-15
 
 
 @dataclass
@@ -262,8 +265,8 @@ def _collapsed(names: list[str], lo: np.ndarray, hi: np.ndarray, origin: np.ndar
                      f"centre draw collapsed: {listed}")
     extent = float(np.linalg.norm(hi.max(axis=0) - lo.min(axis=0)))
     if extent < TINY_SCENE:
-        notes.append(f"the scene is only {extent:.3g} units across: below {TINY_SCENE:g} units the GPU's float32 "
-                     "arithmetic underflows, so views may be blank; scale the model up")
+        notes.append(f"the scene is only {extent:.3g} units across: below {TINY_SCENE:g} units GPUs lose it in "
+                     "clipping or float32 underflow, so views may be blank; scale the model up")
     elif extent < 100 * float(np.spacing(np.abs(origin).max())):
         notes.append(f"the scene is only {extent:.3g} units across at {np.abs(origin).max():.3g} units from the "
                      "world origin: cameras cannot be placed that finely there, so views may be blank or "

@@ -235,7 +235,9 @@ class CompositePass:
             with_ao = mode == "ghosted-ao"
             if with_ao:
                 post.texture.use(3)
-            context = np.setdiff1d(everyone, focus)
+            in_context = np.ones(n, bool)
+            in_context[focus] = False
+            context = everyone[in_context]      # (a mask: setdiff1d's sort took 1.6 ms at 10^4 objects)
             # the focus outlines in the focus sprites' pass (at depth 0, so that nothing drawn
             # after covers them), unless a focus region is upsampled (outlines read texels)
             fused = outlined and not (records.scale[focus[records.visible[focus]]] < UPSAMPLE_BELOW).any()

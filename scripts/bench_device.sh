@@ -1,0 +1,81 @@
+#!/usr/bin/env bash
+# The benchmarks and the GL tests on a machine with a GPU, through EGL, in one command that
+# ends well inside a lease: scripts/bench_device.sh [--local] [STEP ...]
+# STEPs (default: all, in this order): snapshots capture composite tests tiny profile scale.
+#
+# Made for this workplace's `device` tool, whose machines have an NVIDIA driver and Python
+# 3.12 with numpy, scipy, pillow, pytest and pytest-xdist but no GL loader and no rtta: it
+# unpacks the libglvnd packages carried in .gl/ and installs the wheels carried in .whl/
+# (moderngl, glcontext, trimesh, pycollada, rtree and rtta itself, built here by
+# `pip wheel --no-deps -w .whl .`). Scenes from ../shared/data come in .gpudata/.
+# Every step has its own time limit and a failing step does not stop the next; the log goes
+# to $OUT/log. --local runs the same steps here (llvmpipe), to check the script.
+set -uo pipefail
+OUT=${OUT:-/tmp/bench_device_out}
+mkdir -p "$OUT"
+exec > >(tee "$OUT/log") 2>&1
+export PYTHONUNBUFFERED=1
+
+if [[ "${1:-}" != "--local" ]]; then
+    for f in .gl/*.deb; do dpkg -x "$f" /; done
+    ldconfig
+    vendor=/usr/local/nvidia/share/glvnd/egl_vendor.d/10_nvidia.json
+    [ -e $vendor ] && export __EGL_VENDOR_LIBRARY_FILENAMES=$vendor
+    python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade \
+        --target /tmp/site .whl/*.whl || exit 1
+    export PYTHONPATH=/tmp/site PATH=/tmp/site/bin:$PATH
+    # the tests run the command beside their interpreter, as in a virtual environment
+    ln -sf /tmp/site/bin/rtta "$(dirname "$(readlink -f "$(command -v python3)")")/rtta"
+    ln -sf /tmp/site/bin/rtta "$(dirname "$(command -v python3)")/rtta"
+    XDIST="-n 12"
+else
+    shift
+    XDIST=
+fi
+STEPS=${*:-snapshots capture composite tests tiny profile scale}
+ROOT=$PWD DATA=$PWD/.gpudata TESTS=$PWD/tests
+cd /tmp        # import the installed rtta (with its shaders and assets), not the checkout's
+
+step() {    # step SECONDS NAME COMMAND...
+    local limit=$1 name=$2; shift 2
+    echo "=== $name (limit ${limit}s) $(date +%T)"
+    local t0=$SECONDS
+    timeout --signal=INT --kill-after=10 "$limit" "$@"
+    local rc=$?
+    echo "=== $name: rc $rc in $((SECONDS - t0)) s"
+    return $rc
+}
+wanted() { [[ " $STEPS " == *" $1 "* ]]; }
+
+# A driver that gives no context ends the run here, at a few seconds' cost.
+step 30 glinfo python3 -c "
+from rtta.gl.context import shared_context, Capabilities
+ctx = shared_context(); c = Capabilities.of(ctx)
+for k in ('GL_RENDERER', 'GL_VERSION', 'GL_VENDOR'): print(k, ctx.info[k])
+print('capture path', c.capture_path(), 'max layers', c.max_layers, 'max texture', c.max_texture)
+" || exit 1
+command -v nvidia-smi >/dev/null && nvidia-smi --query-gpu=name,driver_version,clocks.sm --format=csv
+
+# The pictures, to look at: every mode of the demo and the engine's ghosted-ao, one PNG.
+wanted snapshots && step 60 snapshots bash -c "python3 -m rtta snapshot --all-modes /tmp/modes --size 512x512 \
+    --focus \$(python3 -m rtta info | awk 'NR==3{print \$2}') && python3 -m rtta snapshot '$DATA/engine_2cyl.glb' \
+    --mode ghosted-ao --size 512x512 --out /tmp/modes/zengine.png && python3 -c \"
+import glob; from PIL import Image
+ims = [Image.open(f).convert('RGB') for f in sorted(glob.glob('/tmp/modes/*.png'))]
+m = Image.new('RGB', (512 * len(ims), 512)); [m.paste(im, (512 * i, 0)) for i, im in enumerate(ims)]
+m.save('$OUT/modes.png')\""
+wanted capture && step 60 capture python3 -m rtta bench capture --json "$OUT/capture.json"
+wanted composite && step 90 composite python3 -m rtta bench composite --scene demo "$DATA/engine_2cyl.glb" \
+    "$DATA/cycloidal.glb" table1-580 --json "$OUT/composite.json"
+GL_TESTS="api batch bounds capture capture_outputs closure composite export extremes gl_features glsl importance
+    ldi material outline_sprites pixel_order post projector references targets wrong_pictures"
+wanted tests && step 150 tests python3 -m pytest -q --tb=short -p no:cacheprovider $XDIST --maxfail=30 \
+    $(for t in $GL_TESTS; do echo "$TESTS/test_$t.py"; done)
+wanted tiny && step 60 tiny python3 "$ROOT/scripts/probe_tiny.py"
+wanted profile && step 120 profile bash -c "python3 '$ROOT/scripts/profile_frame.py' --frames 200 --top 25 &&
+    python3 -c \"from rtta.scene.assembly import write_assembly; write_assembly('/tmp/asm10k.glb', 10000)\" &&
+    python3 '$ROOT/scripts/profile_frame.py' /tmp/asm10k.glb --mode ghosted --size 1280x720 --frames 40 --top 25"
+# Last: the 100,000-part row may not finish; the rows before it print as they finish.
+wanted scale && step 200 scale python3 -m rtta bench scale --no-viewer --parts 1000,10000,100000 \
+    --json "$OUT/scale.json"
+echo "=== done $(date +%T)"

@@ -10,6 +10,7 @@ block of memory again only once no array of an earlier result refers to it.
 
 from __future__ import annotations
 
+import math
 import sys
 import threading
 
@@ -32,7 +33,7 @@ def scratch(name: str, shape: tuple[int, ...] | int, dtype=np.float64) -> np.nda
     The pool keeps the largest size asked for per name."""
     pool = _pool()
     dtype = np.dtype(dtype)
-    count = int(np.prod(shape, dtype=np.int64))
+    count = int(math.prod(shape)) if isinstance(shape, tuple) else int(shape)    # (np.prod: 5 µs a call)
     nbytes = count * dtype.itemsize
     buf = pool.get(name)
     if buf is None or buf.nbytes < nbytes:

@@ -286,6 +286,16 @@ def test_no_display_says_so_in_one_line():
     assert len(lines) == 1 and "rtta snapshot" in lines[0] and "Traceback" not in proc.stderr
 
 
+def test_bench_without_a_display_runs_headless():
+    """`--bench` needs no screen (a GPU server, CI): pyglet's headless window, through EGL."""
+    proc = subprocess.run([RTTA_VIEW, "--bench", "1", "--bench-modes", "ghosted", "--size", "320x200"],
+                          env=_env(None), capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert "headless window (EGL) 320x200" in proc.stdout
+    (row,) = [ln for ln in proc.stdout.splitlines() if ln.startswith("| ghosted |")]
+    assert float(row.split("|")[2]) > 0
+
+
 def test_bad_scene_on_the_command_line(display, tmp_path):
     bad = tmp_path / "scene.glb"
     bad.write_text("not a model")

@@ -97,8 +97,11 @@ def print_bench(app, frames: int, modes: tuple[str, ...] | None = None) -> list[
     w, h = app.wnd.buffer_size
     vp = app.viewport
     print(f"renderer: {app.ctx.info['GL_RENDERER']}")
+    import pyglet
+
+    kind = "headless window (EGL)" if pyglet.options["headless"] else "window"
     print(f"scene: {app.scene_label} ({app.renderer.scene.count} objects, {app.renderer.scene.vertex_count} "
-          f"vertices); window {w}x{h}, composite {vp[0]}x{vp[1]}, atlas view shown; {frames} frames per mode, "
+          f"vertices); {kind} {w}x{h}, composite {vp[0]}x{vp[1]}, atlas view shown; {frames} frames per mode, "
           "one full orbit")
     fps = app.state.navigation_fps
     print("stage columns: ms per stage from a second run that waits for the GPU after each stage; left out: parts "

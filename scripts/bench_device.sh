@@ -1,13 +1,15 @@
 #!/usr/bin/env bash
 # The benchmarks and the GL tests on a machine with a GPU, through EGL, in one command that
 # ends well inside a lease: scripts/bench_device.sh [--local] [STEP ...]
-# STEPs (default: all, in this order): snapshots capture composite tests tiny profile scale.
+# STEPs (default: all, in this order): snapshots capture composite tests tiny profile viewer scale.
 #
 # Made for this workplace's `device` tool, whose machines have an NVIDIA driver and Python
 # 3.12 with numpy, scipy, pillow, pytest and pytest-xdist but no GL loader and no rtta: it
 # unpacks the libglvnd packages carried in .gl/ and installs the wheels carried in .whl/
 # (moderngl, glcontext, trimesh, pycollada, rtree and rtta itself, built here by
-# `pip wheel --no-deps -w .whl .`). Scenes from ../shared/data come in .gpudata/.
+# `pip wheel --no-deps -w .whl .`; for the viewer step also moderngl-window, pyglet,
+# imgui-bundle and their needs: pyglm, munch, glfw, PyOpenGL, pydantic, pydantic-core,
+# annotated-types, typing-inspection: 43 MB in all). Scenes from ../shared/data come in .gpudata/.
 # Every step has its own time limit and a failing step does not stop the next; the log goes
 # to $OUT/log. --local runs the same steps here (llvmpipe), to check the script.
 set -uo pipefail
@@ -32,7 +34,7 @@ else
     shift
     XDIST=
 fi
-STEPS=${*:-snapshots capture composite tests tiny profile scale}
+STEPS=${*:-snapshots capture composite tests tiny profile viewer scale}
 ROOT=$PWD DATA=$PWD/.gpudata TESTS=$PWD/tests
 cd /tmp        # import the installed rtta (with its shaders and assets), not the checkout's
 
@@ -75,6 +77,9 @@ wanted tiny && step 60 tiny python3 "$ROOT/scripts/probe_tiny.py"
 wanted profile && step 120 profile bash -c "python3 '$ROOT/scripts/profile_frame.py' --frames 200 --top 25 &&
     python3 -c \"from rtta.scene.assembly import write_assembly; write_assembly('/tmp/asm10k.glb', 10000)\" &&
     python3 '$ROOT/scripts/profile_frame.py' /tmp/asm10k.glb --mode ghosted --size 1280x720 --frames 40 --top 25"
+# The viewer in pyglet's headless window: the demo, then 10,000 parts with and without fast navigation.
+wanted viewer && step 150 viewer bash -c "rtta-view --bench 20 --bench-modes ghosted,ghosted-ao &&
+    python3 -m rtta bench scale --parts 10000 --json '$OUT/scale_viewer.json'"
 # Last: the 100,000-part row may not finish; the rows before it print as they finish.
 wanted scale && step 200 scale python3 -m rtta bench scale --no-viewer --parts 1000,10000,100000 \
     --json "$OUT/scale.json"

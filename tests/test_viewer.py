@@ -136,7 +136,12 @@ def test_picking_finds_hidden_objects_and_front_most(make_renderer, demo_scene):
 
 @pytest.fixture(scope="module")
 def display():
-    """An X display: the one given, or a fresh Xvfb (the test starts it; CI has none)."""
+    """An X display: the one given, or a fresh Xvfb (the test starts it; CI has none). With
+    RTTA_TEST_HEADLESS=1, none: the viewer runs in pyglet's headless window through EGL, as
+    on a GPU server without X (scripts/bench_device.sh)."""
+    if os.environ.get("RTTA_TEST_HEADLESS"):
+        yield None
+        return
     if os.environ.get("DISPLAY"):
         yield os.environ["DISPLAY"]
         return
@@ -154,10 +159,13 @@ def display():
     proc.wait(10)
 
 
-def _env(display: str | None) -> dict:
-    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+def _env(display: str | None, headless: bool = True) -> dict:
+    """The environment with `display`; with none, pyglet headless under RTTA_TEST_HEADLESS."""
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY", "PYGLET_HEADLESS")}
     if display:
         env["DISPLAY"] = display
+    elif headless and os.environ.get("RTTA_TEST_HEADLESS"):
+        env["PYGLET_HEADLESS"] = "true"
     return env
 
 
@@ -280,7 +288,7 @@ def test_screenshot_that_cannot_be_written_says_so(driven):
 
 
 def test_no_display_says_so_in_one_line():
-    proc = subprocess.run([RTTA_VIEW], env=_env(None), capture_output=True, text=True)
+    proc = subprocess.run([RTTA_VIEW], env=_env(None, headless=False), capture_output=True, text=True)
     assert proc.returncode == 2
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and "rtta snapshot" in lines[0] and "Traceback" not in proc.stderr
@@ -289,7 +297,7 @@ def test_no_display_says_so_in_one_line():
 def test_bench_without_a_display_runs_headless():
     """`--bench` needs no screen (a GPU server, CI): pyglet's headless window, through EGL."""
     proc = subprocess.run([RTTA_VIEW, "--bench", "1", "--bench-modes", "ghosted", "--size", "320x200"],
-                          env=_env(None), capture_output=True, text=True, timeout=300)
+                          env=_env(None, headless=False), capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert "headless window (EGL) 320x200" in proc.stdout
     (row,) = [ln for ln in proc.stdout.splitlines() if ln.startswith("| ghosted |")]

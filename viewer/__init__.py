@@ -46,7 +46,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     steady_heap()          # long sessions resize targets often: keep the heap from creeping
     if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
-        if not args.bench:
+        if not (args.bench or os.environ.get("PYGLET_HEADLESS")):     # headless asked for: scripted runs
             print(NO_DISPLAY, file=sys.stderr)
             return 2
         import pyglet  # --bench needs no screen: pyglet's headless window, an EGL surface

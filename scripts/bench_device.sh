@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The benchmarks and the GL tests on a machine with a GPU, through EGL, in one command that
 # ends well inside a lease: scripts/bench_device.sh [--local] [STEP ...]
-# STEPs (default: all, in this order): snapshots capture composite tests tiny profile viewer scale.
+# STEPs (default: all, in this order): snapshots capture composite tests tiny profile viewer
+# viewer_tests scale.
 #
 # Made for this workplace's `device` tool, whose machines have an NVIDIA driver and Python
 # 3.12 with numpy, scipy, pillow, pytest and pytest-xdist but no GL loader and no rtta: it
@@ -27,14 +28,16 @@ if [[ "${1:-}" != "--local" ]]; then
         --target /tmp/site .whl/*.whl || exit 1
     export PYTHONPATH=/tmp/site PATH=/tmp/site/bin:$PATH
     # the tests run the command beside their interpreter, as in a virtual environment
-    ln -sf /tmp/site/bin/rtta "$(dirname "$(readlink -f "$(command -v python3)")")/rtta"
-    ln -sf /tmp/site/bin/rtta "$(dirname "$(command -v python3)")/rtta"
+    for exe in rtta rtta-view; do
+        ln -sf /tmp/site/bin/$exe "$(dirname "$(readlink -f "$(command -v python3)")")/$exe"
+        ln -sf /tmp/site/bin/$exe "$(dirname "$(command -v python3)")/$exe"
+    done
     XDIST="-n 12"
 else
     shift
     XDIST=
 fi
-STEPS=${*:-snapshots capture composite tests tiny profile viewer scale}
+STEPS=${*:-snapshots capture composite tests tiny profile viewer viewer_tests scale}
 ROOT=$PWD DATA=$PWD/.gpudata TESTS=$PWD/tests
 cd /tmp        # import the installed rtta (with its shaders and assets), not the checkout's
 
@@ -80,6 +83,9 @@ wanted profile && step 120 profile bash -c "python3 '$ROOT/scripts/profile_frame
 # The viewer in pyglet's headless window: the demo, then 10,000 parts with and without fast navigation.
 wanted viewer && step 150 viewer bash -c "rtta-view --bench 20 --bench-modes ghosted,ghosted-ao &&
     python3 -m rtta bench scale --parts 10000 --json '$OUT/scale_viewer.json'"
+# The viewer's tests, driven in the headless window (the tree viewer's need ifcopenshell: not there).
+wanted viewer_tests && step 150 viewer_tests env RTTA_TEST_HEADLESS=1 python3 -m pytest -q --tb=short \
+    -p no:cacheprovider $XDIST "$TESTS/test_viewer.py"
 # Last: the 100,000-part row may not finish; the rows before it print as they finish.
 wanted scale && step 200 scale python3 -m rtta bench scale --no-viewer --parts 1000,10000,100000 \
     --json "$OUT/scale.json"

@@ -6,8 +6,10 @@ from __future__ import annotations
 import json
 import os
 import shutil
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -302,6 +304,18 @@ def test_bench_without_a_display_runs_headless():
     assert "headless window (EGL) 320x200" in proc.stdout
     (row,) = [ln for ln in proc.stdout.splitlines() if ln.startswith("| ghosted |")]
     assert float(row.split("|")[2]) > 0
+
+
+def test_ctrl_c_closes_the_viewer_quietly():
+    """SIGINT from the terminal while the viewer runs (here in a headless window, so no X is
+    needed): exit 130, no traceback."""
+    env = {**_env(None, headless=False), "PYGLET_HEADLESS": "true"}
+    proc = subprocess.Popen([RTTA_VIEW, "--size", "320x200"], env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    time.sleep(12)                      # past start-up: in the frame loop
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130 and "Traceback" not in err, (proc.returncode, err[-2000:])
 
 
 def test_bad_scene_on_the_command_line(display, tmp_path):

@@ -69,6 +69,8 @@ def main(argv: list[str] | None = None) -> int:
     except RttaError as exc:
         print(f"rtta-view: error: {printable(exc)}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:           # Ctrl-C in the terminal: close quietly, as the window would
+        return 130
 
 
 def _fps(text: str | None) -> float | None:

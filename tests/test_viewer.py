@@ -304,6 +304,8 @@ def test_bench_without_a_display_runs_headless():
     assert "headless window (EGL) 320x200" in proc.stdout
     (row,) = [ln for ln in proc.stdout.splitlines() if ln.startswith("| ghosted |")]
     assert float(row.split("|")[2]) > 0
+    bad = subprocess.run([RTTA_VIEW, "--bench", "-1"], env=_env(None, headless=False), capture_output=True, text=True)
+    assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "--bench" in bad.stderr, bad.stderr   # no NaN table
 
 
 def test_ctrl_c_closes_the_viewer_quietly():

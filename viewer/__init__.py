@@ -45,6 +45,10 @@ def main(argv: list[str] | None = None) -> int:
         print(f"rtta-view: error: {printable(exc)}", file=sys.stderr)
         return 2
     steady_heap()          # long sessions resize targets often: keep the heap from creeping
+    if args.bench < 0:
+        print(f"rtta-view: error: --bench: expected a number of frames (0: no bench), got {args.bench}",
+              file=sys.stderr)
+        return 2
     if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
         if not (args.bench or os.environ.get("PYGLET_HEADLESS")):     # headless asked for: scripted runs
             print(NO_DISPLAY, file=sys.stderr)

@@ -94,11 +94,11 @@ def bench_mode(app, mode: str, frames: int, warmup: int = 5) -> dict:
 
 
 def print_bench(app, frames: int, modes: tuple[str, ...] | None = None) -> list[dict]:
+    import pyglet
+
     w, h = app.wnd.buffer_size
     vp = app.viewport
     print(f"renderer: {app.ctx.info['GL_RENDERER']}")
-    import pyglet
-
     kind = "headless window (EGL)" if pyglet.options["headless"] else "window"
     print(f"scene: {app.scene_label} ({app.renderer.scene.count} objects, {app.renderer.scene.vertex_count} "
           f"vertices); {kind} {w}x{h}, composite {vp[0]}x{vp[1]}, atlas view shown; {frames} frames per mode, "

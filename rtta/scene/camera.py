@@ -58,10 +58,10 @@ def fit_distance(corners, target, direction, up, fov_y: float, aspect: float, ma
     return float(max(need.max() if p.size else 0.0, (z.max() if p.size else 0.0) + extent * 1e-3, 1e-9))
 
 
-
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """a x b for two 3-vectors (np.cross takes 30 µs on them, a frame's view matrix two)."""
     return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
 
 @dataclass
 class Camera:

@@ -5,7 +5,7 @@ by the bench) and the real engine when ../shared/data has it: rtta's load time a
 `trimesh.load` of the same file and their peak RSS (each in a fresh process, so the peaks
 are the loads' own), parameterize + pack ms, STD, capture and ghosted frame ms (in turns
 within rounds, so ratios cancel a slow phase of the machine), and the viewer's frames per
-second in `ghosted` (`rtta-view --bench`, when a display is there).
+second in `ghosted` (`rtta-view --bench`, in a headless window where there is no display).
 """
 
 from __future__ import annotations

@@ -73,8 +73,6 @@ def main(argv: list[str] | None = None) -> int:
     except RttaError as exc:
         print(f"rtta-view: error: {printable(exc)}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:           # Ctrl-C in the terminal: close quietly, as the window would
-        return 130
 
 
 def _fps(text: str | None) -> float | None:
@@ -109,4 +107,8 @@ def _modes(text: str | None) -> tuple[str, ...] | None:
 
 
 def cli() -> None:
-    sys.exit(main())
+    try:
+        code = main()
+    except KeyboardInterrupt:       # Ctrl-C in the terminal, while starting or drawing: close quietly
+        code = 130
+    sys.exit(code)

@@ -57,8 +57,7 @@ def main(argv: list[str] | None = None) -> int:
 
         pyglet.options["headless"] = True
     try:
-        import moderngl_window  # noqa: F401
-        from imgui_bundle import imgui  # noqa: F401
+        _import_native()
     except ImportError as exc:
         print(f"rtta-view: broken install ({exc}); reinstall rtta: pip install --force-reinstall rtta", file=sys.stderr)
         return 2
@@ -104,6 +103,24 @@ def _modes(text: str | None) -> tuple[str, ...] | None:
         raise RttaError(f"--bench-modes: unknown mode(s) {', '.join(unknown) or '(none)'}; "
                         f"modes: {', '.join(VIEW_MODES)}")
     return modes
+
+
+def _import_native() -> None:
+    """The window's, the GUI's and the scene readers' native libraries, imported with signals
+    held (rtta.imageio, as the `rtta` command does): trimesh wraps its imports in `except
+    BaseException`, so a Ctrl-C while it imported was swallowed and the viewer opened anyway,
+    and one inside a native module's start can crash the process. A signal that came in is
+    raised once they are in."""
+    from rtta import imageio
+
+    old = imageio.install_signal_handlers()
+    try:
+        with imageio.signals_held():
+            import moderngl_window  # noqa: F401
+            import trimesh  # noqa: F401
+            from imgui_bundle import imgui  # noqa: F401
+    finally:
+        imageio.restore_signal_handlers(old)
 
 
 def cli() -> None:

@@ -107,25 +107,29 @@ def _modes(text: str | None) -> tuple[str, ...] | None:
 
 def _import_native() -> None:
     """The window's, the GUI's and the scene readers' native libraries, imported with signals
-    held (rtta.imageio, as the `rtta` command does): trimesh wraps its imports in `except
+    held (under cli()'s handlers, as the `rtta` command does): trimesh wraps its imports in `except
     BaseException`, so a Ctrl-C while it imported was swallowed and the viewer opened anyway,
     and one inside a native module's start can crash the process. A signal that came in is
     raised once they are in."""
     from rtta import imageio
 
-    old = imageio.install_signal_handlers()
-    try:
-        with imageio.signals_held():
-            import moderngl_window  # noqa: F401
-            import trimesh  # noqa: F401
-            from imgui_bundle import imgui  # noqa: F401
-    finally:
-        imageio.restore_signal_handlers(old)
+    with imageio.signals_held():
+        import moderngl_window  # noqa: F401
+        import trimesh  # noqa: F401
+        from imgui_bundle import imgui  # noqa: F401
 
 
 def cli() -> None:
+    """The command: rtta's signal handlers for the whole run (SIGINT, SIGTERM, SIGHUP raise
+    KeyboardInterrupt, held while native code that must not be cut runs: rtta.imageio), and
+    Ctrl-C, while starting or drawing, closes the viewer quietly."""
+    from rtta import imageio
+
+    old = imageio.install_signal_handlers()
     try:
         code = main()
-    except KeyboardInterrupt:       # Ctrl-C in the terminal, while starting or drawing: close quietly
+    except KeyboardInterrupt:
         code = 130
+    finally:
+        imageio.restore_signal_handlers(old)
     sys.exit(code)

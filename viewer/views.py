@@ -96,8 +96,8 @@ class ViewPass:
 
     def _program(self, array: bool) -> tuple[moderngl.Program, moderngl.VertexArray]:
         if array not in self._programs:
-            prog = self.ctx.program(vertex_shader=glsl.load("view.vert"),
-                                    fragment_shader=glsl.load("view.frag", ARRAY=array))
+            prog = glsl.program(self.ctx, vertex_shader=glsl.load("view.vert"),
+                                fragment_shader=glsl.load("view.frag", ARRAY=array))
             self._programs[array] = prog
             self._vaos[array] = self.ctx.vertex_array(prog, [])
         return self._programs[array], self._vaos[array]

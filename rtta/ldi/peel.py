@@ -121,8 +121,8 @@ class Peeler:
     def __init__(self, ctx: moderngl.Context) -> None:
         self.ctx = ctx
         vert = glsl.load("ldi.vert")
-        self.peel_prog = ctx.program(vertex_shader=vert, fragment_shader=glsl.load("ldi_peel.frag"))
-        self.count_prog = ctx.program(vertex_shader=vert, fragment_shader=glsl.load("ldi_peel.frag", COUNT=True))
+        self.peel_prog = glsl.program(ctx, vertex_shader=vert, fragment_shader=glsl.load("ldi_peel.frag"))
+        self.count_prog = glsl.program(ctx, vertex_shader=vert, fragment_shader=glsl.load("ldi_peel.frag", COUNT=True))
         self.query = glraw.SamplesQuery()
         self.vertices = np.zeros((0, 3))
         self._size = None

@@ -57,7 +57,7 @@ class ScenePass:
             if not normals:
                 defines["NO_NORMAL"] = True
             stages = {"vertex_shader": "scene.vert", "geometry_shader": geometry, "fragment_shader": fragment}
-            self._programs[key] = self.ctx.program(**glsl.stage_sources(stages, **defines))
+            self._programs[key] = glsl.program(self.ctx, **glsl.stage_sources(stages, **defines))
         return self._programs[key]
 
     def setup(self, gpu: GpuScene, view: np.ndarray, proj: np.ndarray,

@@ -170,7 +170,7 @@ class CompositePass:
         if key not in self._programs:
             sources = glsl.stage_sources({"vertex_shader": "composite.vert", "geometry_shader": "composite.geom",
                                           "fragment_shader": "composite.frag"}, **defines)
-            prog = self.ctx.program(**sources)
+            prog = glsl.program(self.ctx, **sources)
             self._programs[key] = prog
             self._vaos[key] = self.ctx.vertex_array(prog, [])
         return self._programs[key], self._vaos[key]

@@ -55,8 +55,8 @@ class PixelOrderPass:
         self.heads = ctx.buffer(reserve=4)
         self.nodes = ctx.buffer(reserve=NODE_BYTES)
         self.bases = ctx.buffer(reserve=4)
-        self.program = ctx.program(vertex_shader=glsl.load("oit_resolve.vert"),
-                                   fragment_shader=glsl.load("oit_resolve.frag"))
+        self.program = glsl.program(ctx, vertex_shader=glsl.load("oit_resolve.vert"),
+                                    fragment_shader=glsl.load("oit_resolve.frag"))
         self.vao = ctx.vertex_array(self.program, [])
         self._width = 1
         self._rect = (-1.0, -1.0, 1.0, 1.0)

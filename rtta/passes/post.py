@@ -80,7 +80,7 @@ class AtlasPostPass:
     def _variant(self, *defines: str) -> tuple:
         """(program, vao) compiled on first use; each stage gets the defines it declares."""
         if defines not in self._variants:
-            prog = self.ctx.program(**glsl.stage_sources(STAGES, **{d: True for d in defines}))
+            prog = glsl.program(self.ctx, **glsl.stage_sources(STAGES, **{d: True for d in defines}))
             self._variants[defines] = (prog, self.ctx.vertex_array(prog, []))
         return self._variants[defines]
 

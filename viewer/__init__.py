@@ -16,6 +16,8 @@ def build_parser() -> argparse.ArgumentParser:
     from rtta.cli.main import add_load_options
     from rtta.renderer.snapshot import SNAPSHOT_MODES
 
+    from .state import NAVIGATION_FPS
+
     p = OneLineParser(prog="rtta-view", description="Interactive ghosted views of multi-part models.")
     p.add_argument("scene", nargs="?", help="scene file (default: the built-in demo)")
     p.add_argument("--scene", dest="scene_opt", metavar="FILE", help="scene file (same as the positional)")
@@ -28,8 +30,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--bench-modes", default=None, metavar="MODE,...",
                    help="with --bench: only these modes (default: every mode)")
     p.add_argument("--navigation-fps", default=None, metavar="FPS",
-                   help="fast navigation: while the camera moves, leave out the parts smallest on screen to keep this "
-                        "frame rate (default 10; scenes of 500 parts or more; a view at rest shows every part); 0: off")
+                   help="fast navigation: while the camera moves, leave out the parts smallest on screen to keep "
+                        f"this frame rate (default {NAVIGATION_FPS:g}; scenes of 500 parts or more; a view at rest "
+                        "shows every part); 0: off")
     add_load_options(p)
     return p
 

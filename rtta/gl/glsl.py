@@ -9,8 +9,12 @@ from __future__ import annotations
 import re
 from functools import cache
 from importlib import resources
+from typing import TYPE_CHECKING
 
 from ..imageio import signals_held
+
+if TYPE_CHECKING:
+    import moderngl
 
 _INCLUDE = re.compile(r'^\s*#include\s+"([^"]+)"\s*$', re.MULTILINE)
 _DECLARED = re.compile(r"^//\s*defines:(.*)$", re.MULTILINE)
@@ -61,7 +65,7 @@ def stage_sources(stages: dict[str, str | None], **defines: object) -> dict[str,
             for stage, name in stages.items()}
 
 
-def program(ctx, **sources: str | None):
+def program(ctx: moderngl.Context, **sources: str | None) -> moderngl.Program:
     """`ctx.program(**sources)` with signals held (rtta.imageio.signals_held), raised once the
     program is made: moderngl builds a program's members through Python calls, and an
     interrupt raised among them crashed the process (SIGSEGV inside Context.program; 3 of 3

@@ -155,7 +155,7 @@ def _print_row(r: dict, header: bool, renderer: str, viewport: tuple[int, int]) 
         print(f"renderer: {renderer}; viewport {viewport[0]}x{viewport[1]}; load and peak RSS each in a fresh "
               "process; frame ms are medians over rounds of STD, capture and ghosted in turn, ratios to STD "
               "taken within each round; viewer: rtta-view --bench in ghosted at 1280x720, with fast navigation "
-              "(the default, 10 fps) and exact (--navigation-fps 0: every part in every frame)")
+              "(at the viewer's default frame rate) and exact (--navigation-fps 0: every part in every frame)")
         print("| scene | parts | triangles | load s | trimesh.load s | load / trimesh | peak RSS MB | "
               "trimesh RSS MB | RSS / trimesh | param+pack ms | STD ms | capture ms (x STD) | "
               "ghosted ms (x STD) | viewer fps | viewer fps exact |")

@@ -261,35 +261,43 @@ def test_an_interrupted_export_leaves_the_old_or_the_new_whole(tmp_path):
     assert outcomes                       # (both kinds happen on a typical run; either is correct)
 
 
-def test_a_signal_waits_while_native_libraries_import():
-    """A signal during signals_held() (the import of trimesh and OpenCASCADE) raises nothing
-    inside the block, where it would kill the process from inside a native module's start,
-    and stops the run as soon as the block ends."""
+@pytest.fixture
+def rtta_handlers():
+    """rtta's signal handlers for the test (rtta.imageio), then the previous ones and a clean
+    state for the tests after."""
     from rtta import imageio as outputs
 
     old = outputs.install_signal_handlers()
-    reached = []
     try:
-        with pytest.raises(outputs.Interrupted):
-            with outputs.signals_held():
-                os.kill(os.getpid(), signal.SIGINT)
-                for _ in range(1000):                  # bytecodes, where Python runs the handler
-                    pass
-                reached.append("end of block")
-        assert reached == ["end of block"]
+        yield outputs
     finally:
         outputs.restore_signal_handlers(old)
         outputs.install_signal_handlers()              # resets the state for the tests after
         outputs.restore_signal_handlers(old)
 
 
-def test_a_signal_waits_while_a_program_is_made(gl):
+def test_a_signal_waits_while_native_libraries_import(rtta_handlers):
+    """A signal during signals_held() (the import of trimesh and OpenCASCADE) raises nothing
+    inside the block, where it would kill the process from inside a native module's start,
+    and stops the run as soon as the block ends."""
+    outputs = rtta_handlers
+    reached = []
+    with pytest.raises(outputs.Interrupted):
+        with outputs.signals_held():
+            os.kill(os.getpid(), signal.SIGINT)
+            for _ in range(1000):                      # bytecodes, where Python runs the handler
+                pass
+            reached.append("end of block")
+    assert reached == ["end of block"]
+
+
+def test_a_signal_waits_while_a_program_is_made(gl, rtta_handlers):
     """A signal while moderngl makes a shader program (rtta.gl.glsl.program) is raised once the
     program is made: raised among moderngl's own Python calls it crashed the process
     (SIGSEGV in Context.program, 3 of 3 runs of 200 interrupted frames)."""
-    from rtta import imageio as outputs
     from rtta.gl import glsl
 
+    outputs = rtta_handlers
     made = []
 
     class Ctx:                      # the real context, with the signal arriving mid-call
@@ -300,7 +308,6 @@ def test_a_signal_waits_while_a_program_is_made(gl):
             made.append(gl.program(**sources))
             return made[-1]
 
-    old = outputs.install_signal_handlers()
     try:
         with pytest.raises(outputs.Interrupted):
             glsl.program(Ctx(), vertex_shader=glsl.load("view.vert"), fragment_shader=glsl.load("view.frag"))
@@ -308,9 +315,6 @@ def test_a_signal_waits_while_a_program_is_made(gl):
     finally:
         for p in made:
             p.release()
-        outputs.restore_signal_handlers(old)
-        outputs.install_signal_handlers()              # resets the state for the tests after
-        outputs.restore_signal_handlers(old)
 
 
 _LATE_SIGNAL = """

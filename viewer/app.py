@@ -197,20 +197,28 @@ class Viewer:
         if key != self._capture_key or self.left_out:     # a view at rest is captured whole
             moving = self._capture_key is not None and key[:2] != self._capture_key[:2]
             self.renderer.hidden = self.state.hidden
-            leave = self._navigation_left_out() if moving else None
+            self.left_out = 0
             # no id image: compositing never reads it, picking reads depths (rtta.passes.picking)
-            self.records = self.renderer.capture(camera, vp, focus=focus, normals=normals, ids=False, left_out=leave)
+            self.records = self.renderer.capture(camera, vp, focus=focus, normals=normals, ids=False,
+                                                 thin=self._navigation_thinning() if moving else None)
             self._capture_key, self._composite_key = key, None
-            self.left_out, self._moved = (0 if leave is None else int(leave.sum())), moving
+            self._moved = moving
 
-    def _navigation_left_out(self):
-        """While the camera moves: the smallest parts on screen, as many as the frame budget
-        asks (rtta.renderer.navigation); None with fast navigation off or nothing to leave out."""
+    def _navigation_thinning(self):
+        """While the camera moves: what picks the smallest parts on screen in the frame's own
+        projection, as many as the frame budget asks (rtta.renderer.navigation), and counts
+        them in `left_out`; None with fast navigation off."""
         fps = self.state.navigation_fps
-        if fps <= 0 or self.records is None or len(self.records.visible) != self.renderer.scene.count:
+        if fps <= 0:
             return None
         self.budget.target_ms = 1e3 / fps
-        return left_out(self.records, self._triangles, self.budget.keep, self.state.focus_mask())
+        keep, focus = self.budget.keep, self.state.focus_mask()
+
+        def thin(visible, viewport_rect):
+            out = left_out(visible, viewport_rect, self._triangles, keep, focus)
+            self.left_out = 0 if out is None else int(out.sum())
+            return out
+        return thin
 
     def _draw_composite(self) -> None:
         vp, s, r = self.viewport, self.state, self.renderer

@@ -9,6 +9,7 @@ that cross the near plane or surround the camera get a conservative, finite B_vi
 from __future__ import annotations
 
 import weakref
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -16,6 +17,9 @@ import numpy as np
 from ..scene.model import BOX_EDGES
 from .packing import Packing, pack_shelves
 from .scratch import result_block, scratch
+
+# (visible [n] bool, inner B_viewport [n, 4]) -> bool [n] of the objects to leave out, or None
+Thinning = Callable[[np.ndarray, np.ndarray], "np.ndarray | None"]
 
 EPS_PX = 1e-3        # slack against CPU/GPU rounding when snapping bounds to pixels
 RECORD_DTYPE = np.dtype([("transform", "<f4", 4), ("clip", "<f4", 4), ("atlas", "<f4", 4),
@@ -254,14 +258,17 @@ def viewport_rects(vis: np.ndarray, lo: np.ndarray, hi: np.ndarray, size: tuple[
 def parameterize(corners: np.ndarray, vpm: np.ndarray, viewport: tuple[int, int], *,
                  border: int = 1, atlas_max: tuple[int, int] | None = None,
                  max_layers: int = 2048, region_scale: float | np.ndarray = 1.0,
-                 hidden: np.ndarray | None = None) -> Records:
+                 hidden: np.ndarray | None = None, thin: Thinning | None = None) -> Records:
     """Algorithm 1: records for all objects, given B_world corners [n, 8, 3] (or several
     enclosing boxes per object [k, n, 8, 3], whose projections are intersected) and VPM.
 
     region_scale: atlas texels per viewport pixel wanted for every region (below 1 saves
     atlas memory and fill, above 1 supersamples); lowered per object only where it must be.
     A float, or one per object [n] (importance: focus objects at 1, context ones lower).
-    hidden: bool [n], objects the user hid: culled like those outside the view (no region)."""
+    hidden: bool [n], objects the user hid: culled like those outside the view (no region).
+    thin: chooses more objects to leave out from this frame's projection (fast navigation):
+    called with (visible [n] bool, inner B_viewport [n, 4] pixels) after culling, it returns
+    bool [n] or None; those are culled too."""
     n = corners.shape[-3]
     W, H = int(viewport[0]), int(viewport[1])
     if W < 1 or H < 1:
@@ -275,6 +282,10 @@ def parameterize(corners: np.ndarray, vpm: np.ndarray, viewport: tuple[int, int]
         vis = vis & ~np.asarray(hidden, bool)
     keep = _result_arrays(n)                               # the records' arrays: no fresh pages
     vis, rect = viewport_rects(vis, lo, hi, (W, H), keep["rect"])
+    if thin is not None and (more := thin(vis, rect)) is not None:
+        more = np.asarray(more, bool) & vis
+        vis = vis & ~more
+        rect[more] = 0
     idx = np.flatnonzero(vis)
     every = len(idx) == n                                  # all visible: views, no gathers
     rt = rect.T                                            # planar [4, n]

@@ -15,7 +15,7 @@ import moderngl
 import numpy as np
 
 from ..atlas import scratch
-from ..atlas.parameterize import Records, default_atlas_max, parameterize
+from ..atlas.parameterize import Records, Thinning, default_atlas_max, parameterize
 from ..gl import glraw
 from ..gl.context import Capabilities
 from ..gl.gpu import GpuScene
@@ -111,13 +111,11 @@ class Renderer:
         return scale
 
     def parameterize(self, camera: Camera, viewport: tuple[int, int], matrices=None, focus=(),
-                     left_out: np.ndarray | None = None) -> Records:
-        """`left_out`: bool [n], objects not packed this time besides the hidden ones (fast
-        navigation, rtta.renderer.navigation)."""
+                     thin: Thinning | None = None) -> Records:
+        """`thin`: picks objects not packed this time besides the hidden ones, from this
+        frame's projection (fast navigation, rtta.renderer.navigation; atlas.parameterize)."""
         view, proj = matrices or self.matrices(camera, viewport)
         hidden = self.hidden_mask()
-        if left_out is not None:
-            hidden = left_out.copy() if hidden is None else hidden | left_out
         s = self.settings
         largest = max(s.region_scale, s.region_scale * s.context_scale)
         atlas_max = s.atlas_max or default_atlas_max(viewport, s.border, largest)
@@ -125,7 +123,7 @@ class Renderer:
         max_layers = min(s.max_layers or self.caps.max_layers, self.caps.max_layers)
         return parameterize(self.scene.box_corners(s.bounds), proj @ view, viewport, border=s.border,
                             atlas_max=atlas_max, max_layers=max_layers, region_scale=self.region_scales(focus),
-                            hidden=hidden)
+                            hidden=hidden, thin=thin)
 
     def hidden_mask(self) -> np.ndarray | None:
         """bool [n] of the hidden objects (None when none is hidden)."""
@@ -162,18 +160,18 @@ class Renderer:
         return self._capture[path]
 
     def capture(self, camera: Camera, viewport: tuple[int, int], path: str | None = None, focus=(),
-                normals: bool = True, ids: bool = True, left_out: np.ndarray | None = None) -> Records:
+                normals: bool = True, ids: bool = True, thin: Thinning | None = None) -> Records:
         """Parameterize and capture every visible object into the atlas; returns R. With a
         context scale below 1, `focus` objects get full-scale regions and the rest smaller ones.
         normals=False leaves the normal image unwritten, for modes that read none
         (needs_normals); a composite that needs it then captures again. ids=False leaves the
         id image unwritten (compositing and picking never read it; the export does).
-        `left_out`: bool [n], objects left out of this capture as if hidden (fast navigation)."""
+        `thin`: picks objects left out of this capture as if hidden (fast navigation)."""
         view, proj = self.matrices(camera, viewport)
         self.captured_focus = self.scaled_for(focus)
         self._view = (camera, viewport, path)
         with self._timed("parameterize"):
-            records = self.parameterize(camera, viewport, (view, proj), self.captured_focus, left_out)
+            records = self.parameterize(camera, viewport, (view, proj), self.captured_focus, thin)
         with self._timed("capture"):
             self.capture_pass(path).render(gpu=self.gpu, records=records, view=view, proj=proj,
                                            atlas=self.atlas, normals=normals, ids=ids)

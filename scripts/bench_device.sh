@@ -82,7 +82,7 @@ wanted profile && step 120 profile bash -c "python3 '$ROOT/scripts/profile_frame
     python3 '$ROOT/scripts/profile_frame.py' /tmp/asm10k.glb --mode ghosted --size 1280x720 --frames 40 --top 25"
 wanted profile100k && step 150 profile100k bash -c "
     python3 -c \"from rtta.scene.assembly import write_assembly; write_assembly('/tmp/asm100k.glb', 100000)\" &&
-    python3 '$ROOT/scripts/profile_frame.py' /tmp/asm100k.glb --mode ghosted --size 1280x720 --frames 10 --top 30"
+    python3 '$ROOT/scripts/profile_frame.py' /tmp/asm100k.glb --mode ghosted --size 1280x720 --frames ${PROFILE_FRAMES:-10} --top 30"
 # The viewer in pyglet's headless window: the demo, then 10,000 parts with and without fast navigation.
 wanted viewer && step 150 viewer bash -c "rtta-view --bench 20 --bench-modes ghosted,ghosted-ao &&
     python3 -m rtta bench scale --parts 10000 --json '$OUT/scale_viewer.json'"

@@ -13,7 +13,8 @@
 //   MODE_HALO    around a focus object, where context lies behind it: a halo that fades over
 //                u_halo_width pixels from its silhouette (depth from its own atlas image)
 //   MODE_COLLECT as MODE_BLEND, but appended to the pixel's list (oit.glsl) for a per-pixel
-//                sorted blend (`--order pixel`); writes no colour
+//                sorted blend (`--order pixel`); writes no colour, unless with MODE_BLEND:
+//                blended too, every fragment listed (oit.OrderMarks)
 //   FOCUS_CLIP   with MODE_COLLECT: surfaces behind the nearest focus surface are left out (ghosted)
 //   WITH_AO      shade with the atlas post-process (ambient occlusion, edges) of `ghosted-ao`
 //   PROJECTOR    paint with the projector at the world position reconstructed from the atlas depth
@@ -256,6 +257,8 @@ void main() {
     uint i = g_node_base + uint((p.y - origin.y) * g_vp_width + (p.x - origin.x));
     uint next = atomicExchange(heads[p.y * int(u_viewport.x) + p.x], i + 1u);   // 0: none
     nodes[i] = uvec4(floatBitsToUint(depth), packUnorm4x8(vec4(rgb, a)), next, 0u);
+#endif
+#if defined(MODE_COLLECT) && !defined(MODE_BLEND)
     out_color = vec4(0.0);
 #else
     gl_FragDepth = depth;

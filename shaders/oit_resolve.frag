@@ -1,5 +1,5 @@
 #version 430
-// defines:
+// defines: OVER
 // `--order pixel`: each pixel's list of object surfaces (oit.glsl) blended front to back in
 // the order of their depths (ties: by packed colour, so the blend depends on the surfaces
 // alone, not on the order their fragments arrived in). The K = 8 nearest surfaces are sorted
@@ -13,13 +13,20 @@
 // are taken in a loop short enough to unroll: walking every node in one long loop cost 10x
 // more on llvmpipe (487 ms against 45 ms on the demo at 1024²), so the long loop below runs
 // only where a list holds more than K.
-// Output: premultiplied (colour, alpha), blended ONE, ONE_MINUS_SRC_ALPHA over the background.
+// Output: premultiplied (colour, alpha), blended ONE, ONE_MINUS_SRC_ALPHA over the background;
+// OVER: the blend over u_background written as it is (the pixels the object-order blend left out
+// of depth order hold that blend, which this replaces: oit.OrderMarks).
 #include "oit.glsl"
 
 #define K 8
 // a loop bound of 8192 or more made llvmpipe (LLVM 15) run every later loop once
 #define MAX_LIST 4096
 uniform int u_width;
+#ifdef OVER
+uniform vec3 u_background;
+// drawn with a stencil test for the marked pixels: tested first (else llvmpipe tests after the shader)
+layout(early_fragment_tests) in;
+#endif
 layout(location = 0) out vec4 out_color;
 
 // slot j holds (depth, colour); an empty slot has depth 2
@@ -68,5 +75,9 @@ void main() {
         acc += t * (1.0 - tail_t) * tail_c / tail_w;
         t *= tail_t;
     }
+#ifdef OVER
+    out_color = vec4(acc + t * u_background, 1.0);
+#else
     out_color = vec4(acc, 1.0 - t);
+#endif
 }

@@ -138,7 +138,8 @@ def test_only_needed_passes_run(make_renderer, demo_scene):
     r = make_renderer(demo_scene)
     cam = Camera.orbit(demo_scene.center, demo_scene.radius, *DEFAULT_ORBIT)
     r.capture(cam, VP)
-    expected = {"sprites": ["sprite"], "transparent": ["collect", "resolve"], "ghosted": ["sprite+outline", "blend"]}
+    expected = {"sprites": ["sprite"], "transparent": ["blend+collect", "resolve"],
+                "ghosted": ["sprite+outline", "blend"]}
     for mode, passes in expected.items():
         r.composite(mode, Style(focus={1}))
         highlight = ["outline"] if mode != "ghosted" else []     # sprites/transparent: highlight outlines

@@ -270,3 +270,63 @@ class BufferTexture:
         if self.glo:
             _lib().glDeleteTextures(1, ctypes.byref(ctypes.c_uint(self.glo)))
             self.glo = 0
+
+
+GL_RENDERBUFFER = 0x8D41
+GL_DEPTH32F_STENCIL8 = 0x8CAD
+GL_DEPTH_STENCIL_ATTACHMENT = 0x821A
+GL_DEPTH_STENCIL = 0x84F9
+GL_STENCIL_TEST = 0x0B90
+GL_ALWAYS = 0x0207
+GL_LESS = 0x0201
+GL_KEEP = 0x1E00
+GL_REPLACE = 0x1E01
+GL_INCR = 0x1E02
+
+
+class DepthStencil:
+    """A GL_DEPTH32F_STENCIL8 renderbuffer: moderngl makes no attachment with a stencil."""
+
+    def __init__(self, width: int, height: int) -> None:
+        gl = _lib()
+        rb = ctypes.c_uint(0)
+        gl.glGenRenderbuffers(1, ctypes.byref(rb))
+        self.glo, self.size = rb.value, (width, height)
+        gl.glBindRenderbuffer(GL_RENDERBUFFER, self.glo)
+        gl.glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH32F_STENCIL8, width, height)
+        gl.glBindRenderbuffer(GL_RENDERBUFFER, 0)
+
+    def attach_to_bound_framebuffer(self) -> None:
+        _lib().glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER, self.glo)
+
+    def release(self) -> None:
+        if self.glo:
+            _lib().glDeleteRenderbuffers(1, ctypes.byref(ctypes.c_uint(self.glo)))
+            self.glo = 0
+
+
+def clear_depth_stencil(depth: float = 1.0, stencil: int = 0) -> None:
+    """Clear depth and stencil of the bound framebuffer."""
+    _lib().glClearBufferfi(GL_DEPTH_STENCIL, 0, ctypes.c_float(depth), ctypes.c_int(stencil))
+
+
+def stencil_count_surfaces() -> None:
+    """Stencil test on, always passing: each fragment that passes the depth test adds 1 to its
+    pixel's stencil (saturating at 255), one that fails sets it to 255."""
+    gl = _lib()
+    gl.glEnable(GL_STENCIL_TEST)
+    gl.glStencilMask(0xFF)
+    gl.glStencilFunc(GL_ALWAYS, 255, 0xFF)
+    gl.glStencilOp(GL_KEEP, GL_REPLACE, GL_INCR)
+
+
+def stencil_above(value: int) -> None:
+    """Stencil test on: only where the stencil holds more than `value`, which stays."""
+    gl = _lib()
+    gl.glEnable(GL_STENCIL_TEST)
+    gl.glStencilFunc(GL_LESS, value, 0xFF)
+    gl.glStencilOp(GL_KEEP, GL_KEEP, GL_KEEP)
+
+
+def stencil_off() -> None:
+    _lib().glDisable(GL_STENCIL_TEST)

@@ -291,7 +291,9 @@ class CompositePass:
         when over MAX_NODES).
         `behind`: opaque objects already drawn (the ghosted focus); surfaces behind them are
         hidden, by the depth test in object order and by their depth per pixel in pixel order;
-        `behind_outlined`: their outlines were drawn with them (at depth 0: nothing covers them)."""
+        `behind_outlined`: their outlines were drawn with them (at depth 0: nothing covers them).
+        With nothing behind, pixel order blends in object order as it collects, marking the
+        pixels that order gets wrong (oit.OrderMarks), and resolves only those."""
         if resolved_order(style.order, mode) == "pixel" and len(ids):
             if self._pixel_order is None:
                 self._pixel_order = PixelOrderPass(self.ctx)
@@ -302,9 +304,14 @@ class CompositePass:
                 if clip:
                     self._sprite_depth(behind, style, records, target, farthest=False, cut=False,
                                        outlined=behind_outlined).use(7)
-                collect = {**how, "depth_test": False}     # collected surfaces write no depth: clipped instead
-                self._draw(ids, style, records, collect=True, focus_clip=clip, **collect)
-                self._pixel_order.resolve(target.fbo)
+                    # collected surfaces write no depth: clipped by the focus depth instead
+                    self._draw(ids, style, records, collect=True, focus_clip=True, **{**how, "depth_test": False})
+                else:       # only the background behind: blended in object order, sorted where that is wrong
+                    self._pixel_order.mark(target)
+                    self._draw(ids, style, records, collect=True, blend=True,
+                               **{**how, "depth_test": True, "depth_write": True})
+                self._pixel_order.resolve(target.fbo, over=None if clip else BACKGROUND)
+                target.fbo.use()
                 self.passes.append("resolve")
                 return
             self.fallbacks += 1
@@ -326,7 +333,7 @@ class CompositePass:
 
     def _draw_run(self, ids, style: Style, records: Records, *, sprite=False, blend=False, outline=False,
                   desaturate=0.0, depth_test=False, ao=False, cut=False, upsample=False, collect=False,
-                  halo=False, farthest=False, focus_clip=False, outlined=False) -> None:
+                  halo=False, farthest=False, focus_clip=False, outlined=False, depth_write=False) -> None:
         self._upload(self.order, np.ascontiguousarray(ids, np.int32))
         self.order.bind_to_storage_buffer(3)
         projection = None if outline or halo else self._projection
@@ -375,14 +382,14 @@ class CompositePass:
         self.ctx.depth_func = ">" if farthest else "<"
         self.ctx.blend_func = moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA
         fbo = self.ctx.fbo
-        fbo.depth_mask = bool(sprite)
-        if collect:
+        fbo.depth_mask = bool(sprite or depth_write)
+        if collect and not blend:
             fbo.color_mask = (False,) * 4
         fbo.use()
         vao.render(moderngl.POINTS, vertices=len(ids))
         fbo.depth_mask = True
         self.ctx.depth_func = "<"
-        if collect:
+        if collect and not blend:
             fbo.color_mask = (True,) * 4
 
     def release(self) -> None:

@@ -262,3 +262,27 @@ def test_outlines_match_numpy_silhouettes(make_renderer, demo_scene, border, wid
         expected[y0:y1, x0:x1] |= sil[border:border + y1 - y0, border:border + x1 - x0]
     assert expected.sum() > 500
     assert np.array_equal(drawn, expected), f"{(drawn != expected).sum()} pixels differ"
+
+
+def test_back_to_front_is_farthest_first_ties_by_id():
+    """The sort takes a plain argsort and falls back to a lexsort only on equal depths: both
+    give the order farthest first, equals by id, and only visible objects."""
+    from types import SimpleNamespace
+
+    from rtta.passes.composite import back_to_front
+    from rtta.passes.outlines import HULL_MIN_AREA, worth_outlines
+
+    rng = np.random.default_rng(5)
+    n = 5000
+    records = SimpleNamespace(visible=rng.random(n) > 0.2)
+    for depth in (rng.random(n), np.round(rng.random(n), 2)):          # no ties; many ties
+        ids = rng.permutation(n)[: n // 2]
+        got = back_to_front(records, depth, ids)
+        vis = np.sort(ids[records.visible[ids]])
+        assert np.array_equal(got, vis[np.lexsort((vis, -depth[vis]))])
+    lo = rng.integers(0, 400, (n, 2))
+    records.viewport_rect = np.hstack([lo, lo + rng.integers(1, 90, (n, 2))])
+    r = records.viewport_rect
+    area = (r[:, 2] - r[:, 0]) * (r[:, 3] - r[:, 1])
+    for ids in (np.arange(10), np.arange(n), rng.permutation(n)[:4000]):   # rows gathered; areas of all
+        assert worth_outlines(records, ids) == (area[ids].mean() >= HULL_MIN_AREA)

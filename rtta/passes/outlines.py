@@ -14,8 +14,14 @@ def worth_outlines(records: Records, ids: np.ndarray) -> bool:
     """Whether the B_viewport of `ids` cover HULL_MIN_AREA pixels each on average: there, a
     sprite over the projected outline of B_world (about a quarter fewer fragments) is worth
     the geometry shader's work for it (about a microsecond an object on llvmpipe)."""
-    rect = records.viewport_rect[ids]
-    return bool(((rect[:, 2] - rect[:, 0]) * (rect[:, 3] - rect[:, 1])).mean() >= HULL_MIN_AREA)
+    r = records.viewport_rect
+    if 8 * len(ids) < len(r):
+        r = r[ids]
+        return bool(((r[:, 2] - r[:, 0]) * (r[:, 3] - r[:, 1])).mean() >= HULL_MIN_AREA)
+    # most objects: the areas of all (the columns are contiguous rows of the planar records),
+    # then a gather of one value each; gathering rows of the transposed [n, 4] took 2.3 ms at 10^5
+    area = (r[:, 2] - r[:, 0]) * (r[:, 3] - r[:, 1])
+    return bool(area[ids].mean() >= HULL_MIN_AREA)
 
 
 def hull_margin(scale: np.ndarray) -> float:

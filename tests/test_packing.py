@@ -272,7 +272,7 @@ def test_scratch_is_reused_until_released(gl):
 def test_packed_records_match_the_std430_layout_field_by_field():
     """Records.packed (planar rows, one transposing copy; into scratch with reuse) holds every
     field where shaders/records.glsl reads it, culled objects and per-object scales included."""
-    from rtta.atlas.parameterize import RECORD_DTYPE
+    from rtta.atlas.records import RECORD_DTYPE
 
     scene = random_scene(400, seed=9)
     cam = Camera.orbit(scene.center, scene.radius, 30.0, 20.0, 1.2)

@@ -7,6 +7,7 @@ scene layer only: no GL here.
 """
 
 from .packing import Packing, pack_shelves
-from .parameterize import Records, default_atlas_max, parameterize
+from .parameterize import default_atlas_max, parameterize
+from .records import Records
 
 __all__ = ["Packing", "Records", "default_atlas_max", "pack_shelves", "parameterize"]

@@ -10,68 +10,18 @@ from __future__ import annotations
 
 import weakref
 from collections.abc import Callable
-from dataclasses import dataclass
 
 import numpy as np
 
 from ..scene.model import BOX_EDGES
 from .packing import Packing, pack_shelves
+from .records import Records
 from .scratch import result_block, scratch
 
 # (visible [n] bool, inner B_viewport [n, 4]) -> bool [n] of the objects to leave out, or None
 Thinning = Callable[[np.ndarray, np.ndarray], "np.ndarray | None"]
 
 EPS_PX = 1e-3        # slack against CPU/GPU rounding when snapping bounds to pixels
-RECORD_DTYPE = np.dtype([("transform", "<f4", 4), ("clip", "<f4", 4), ("atlas", "<f4", 4),
-                         ("viewport", "<f4", 4), ("info", "<i4", 4)])
-
-
-@dataclass
-class Records:
-    """The record set R for one frame (arrays indexed by object id)."""
-
-    visible: np.ndarray        # bool [n]
-    viewport_rect: np.ndarray  # int64 [n,4] inner B_viewport x0,y0,x1,y1 (pixels, clipped)
-    atlas_rect: np.ndarray     # int64 [n,4] B_atlas x,y,w,h (texels, border included)
-    layer: np.ndarray          # int64 [n]
-    scale: np.ndarray          # float64 [n] atlas texels per viewport pixel
-    transform: np.ndarray      # float64 [n,4] T as (sx, sy, tx, ty) in NDC
-    clip_ndc: np.ndarray       # float64 [n,4] inner B_viewport in viewport NDC
-    viewport: tuple[int, int]
-    atlas_size: tuple[int, int, int]   # (T_w, T_h, T_d)
-    border: int
-
-    def packed(self, reuse: bool = False) -> np.ndarray:
-        """The GPU record buffer contents (std430 layout of shaders/records.glsl), [n] of RECORD_DTYPE,
-        from planar rows in one transposing copy; reuse: a scratch array, valid until the next reuse."""
-        n = len(self.visible)
-        rows = scratch("records.rows", (20, n), np.float32)
-        for k, field in enumerate((self.transform, self.clip_ndc, self.atlas_rect, self.viewport_rect)):
-            rows[4 * k:4 * k + 4] = field.T
-        ints = rows.view(np.int32)
-        ints[16], ints[17], ints[18] = self.layer, self.visible, self.border
-        rows[19] = self.scale                  # info.w: the scale's float bits
-        out = scratch("records.packed", (n, 20), np.float32) if reuse else np.empty((n, 20), np.float32)
-        np.copyto(out, rows.T)
-        return out.view(RECORD_DTYPE).reshape(n)
-
-    @property
-    def meets_edge(self) -> np.ndarray:
-        """bool [n]: the inner B_viewport lies on an edge of the viewport, so the object may
-        reach beyond it (its projection was clipped there). Any other region holds its
-        object's whole projection (B_world's, snapped outward): the capture need not clip to it."""
-        rect, (w, h) = self.viewport_rect, self.viewport
-        return (rect[:, 0] <= 0) | (rect[:, 1] <= 0) | (rect[:, 2] >= w) | (rect[:, 3] >= h)
-
-    @property
-    def utilization(self) -> float:
-        """Sum of region areas over the allocated atlas area (0 when nothing is packed)."""
-        tw, th, td = self.atlas_size
-        area = tw * th * td
-        r = self.atlas_rect[self.visible]
-        return float((r[:, 2] * r[:, 3]).sum() / area) if area else 0.0
-
-
 CHUNK = 16_384    # boxes per pass of project_bounds: its rows (128 KB) stay in the CPU's cache and
                   # below the fixed mmap threshold of tools.memory.steady_heap (no page faults)
 

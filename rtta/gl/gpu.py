@@ -7,7 +7,7 @@ from __future__ import annotations
 import moderngl
 import numpy as np
 
-from ..atlas.parameterize import RECORD_DTYPE, Records
+from ..atlas.records import RECORD_DTYPE, Records
 from ..scene.model import Scene
 
 VERTEX_LAYOUT = (("in_position", "3f", "12x"), ("in_normal", "3f", "12x"), ("in_object", "u4", "4x"))

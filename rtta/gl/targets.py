@@ -223,3 +223,74 @@ class LayeredTarget:
 
     def release(self) -> None:
         self._free()
+
+
+class CompositeTarget:
+    """RGBA8 colour + 32-bit float depth of the composite. `viewport` is the part in use;
+    the allocation (`size`) grows in steps of 64 and shrinks only after SHRINK_AFTER_FRAMES
+    frames of needing less than half, so resizing a window does not reallocate per frame."""
+
+    def __init__(self, ctx: moderngl.Context) -> None:
+        self.ctx = ctx
+        self.size = (0, 0)
+        self.viewport = (0, 0)
+        self.fbo = None
+        self._parts: list = []
+        self._small_frames = 0
+
+    def ensure(self, viewport: tuple[int, int]) -> None:
+        vw, vh = max(1, int(viewport[0])), max(1, int(viewport[1]))
+        w, h = self.size
+        self.viewport = (vw, vh)
+        if vw > w or vh > h:
+            self._allocate((max(w, round_up(vw, 64)), max(h, round_up(vh, 64))))
+        elif 2 * vw * vh < w * h:
+            self._small_frames += 1
+            if self._small_frames >= SHRINK_AFTER_FRAMES:
+                self.trim()
+        else:
+            self._small_frames = 0
+        self.fbo.viewport = (0, 0, vw, vh)
+
+    def trim(self) -> None:
+        """Reallocate to just hold the current viewport (64-pixel steps) now (contents lost)."""
+        fit = (round_up(self.viewport[0], 64), round_up(self.viewport[1], 64))
+        if self.fbo is not None and fit != self.size:
+            self._allocate(fit)
+
+    def _allocate(self, size: tuple[int, int]) -> None:
+        viewport = self.viewport
+        self.release()
+        self.color = self.ctx.texture(size, 4)
+        self.depth = self.ctx.depth_texture(size)
+        self.fbo = self.ctx.framebuffer([self.color], self.depth)
+        self._parts = [self.color, self.depth]
+        self.size, self.viewport, self._small_frames = tuple(size), viewport, 0
+
+    @property
+    def nbytes(self) -> int:
+        return self.size[0] * self.size[1] * (4 + 4)
+
+    @property
+    def extent(self) -> tuple[float, float]:
+        """The used part as a fraction of the texture (for drawing `color` to a screen)."""
+        return self.viewport[0] / self.size[0], self.viewport[1] / self.size[1]
+
+    def read(self) -> tuple[np.ndarray, np.ndarray]:
+        """(rgba uint8 [H, W, 4], depth float32 [H, W]) of the viewport; row 0 is the bottom row.
+        The depth is the sprites' (1 where none); in the ghosted modes it is 0 under the focus
+        outlines, which are drawn at depth 0 so that nothing composited after covers them."""
+        w, h = self.size
+        vw, vh = self.viewport
+        rgba = np.frombuffer(self.fbo.read(viewport=(0, 0, vw, vh), components=4), np.uint8).reshape(vh, vw, 4)
+        depth = np.frombuffer(self.depth.read(), np.float32).reshape(h, w)[:vh, :vw]
+        return rgba, np.ascontiguousarray(depth)
+
+    def release(self) -> None:
+        if self.fbo is not None:
+            release_framebuffer(self.ctx, self.fbo)
+        for obj in self._parts:
+            obj.release()
+        self._parts = []
+        self.fbo = None
+        self.size = (0, 0)

@@ -74,7 +74,7 @@ wanted composite && step 90 composite python3 -m rtta bench composite --scene de
     "$DATA/cycloidal.glb" table1-580 --json "$OUT/composite.json"
 GL_TESTS="api batch bounds capture capture_outputs closure composite export extremes gl_features glsl importance
     ldi material outline_sprites pixel_order post projector references targets wrong_pictures"
-wanted tests && step 150 tests python3 -m pytest -q --tb=short -p no:cacheprovider $XDIST --maxfail=30 \
+wanted tests && step 200 tests python3 -m pytest -q --tb=short -p no:cacheprovider $XDIST --maxfail=30 \
     $(for t in $GL_TESTS; do echo "$TESTS/test_$t.py"; done)
 wanted tiny && step 60 tiny python3 "$ROOT/scripts/probe_tiny.py"
 wanted profile && step 120 profile bash -c "python3 '$ROOT/scripts/profile_frame.py' --frames 200 --top 25 &&

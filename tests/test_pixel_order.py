@@ -236,3 +236,21 @@ def test_cli_says_the_fallback_in_one_line(tmp_path, capsys, monkeypatch):
     err = capsys.readouterr().err.strip().splitlines()
     assert out.is_file()
     assert len(err) == 1 and err[0].startswith("rtta: warning: per-pixel order would need more than 10"), err
+
+
+def test_a_reallocated_target_is_drawn_into(make_renderer):
+    """The marking pass's framebuffer follows the composite target: released and allocated
+    again at the same size, the target gets the same picture, not one drawn into a framebuffer
+    kept from before. A driver that hands out a released name again (NVIDIA's does; Mesa's
+    does not) gives the new texture the old one's GL name: that is simulated here."""
+    scene = _nested_scene()
+    r = make_renderer(scene)
+    r.capture(Camera.orbit(scene.center, scene.radius, 10, 15, 2.0), VP)
+    first = r.composite("transparent", Style(order="pixel")).read()[0].copy()
+    for _ in range(2):
+        old_name = r.target.color.glo
+        r.target.release()
+        r.target.ensure(VP)
+        r.target.color._glo = old_name          # what the new texture is called on such a driver
+        again = r.composite("transparent", Style(order="pixel")).read()[0]
+        assert np.array_equal(again, first)

@@ -242,8 +242,11 @@ class CompositePass:
                     self._draw(ids, style, records, collect=True, focus_clip=True, **{**how, "depth_test": False})
                 else:       # only the background behind: blended in object order, sorted where that is wrong
                     self._pixel_order.mark(target)
-                    self._draw(ids, style, records, collect=True, blend=True,
-                               **{**how, "depth_test": True, "depth_write": True})
+                    try:
+                        self._draw(ids, style, records, collect=True, blend=True,
+                                   **{**how, "depth_test": True, "depth_write": True})
+                    finally:
+                        glraw.stencil_off()
                 self._pixel_order.resolve(target.fbo, over=None if clip else BACKGROUND)
                 target.fbo.use()
                 self.passes.append("resolve")

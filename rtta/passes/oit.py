@@ -124,9 +124,11 @@ class PixelOrderPass:
             self.ctx.blend_func = moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA
         fbo.depth_mask = False
         fbo.use()
-        self.vaos[over is not None].render(moderngl.TRIANGLES, vertices=6)
-        fbo.depth_mask = True
-        glraw.stencil_off()
+        try:
+            self.vaos[over is not None].render(moderngl.TRIANGLES, vertices=6)
+        finally:
+            fbo.depth_mask = True
+            glraw.stencil_off()
 
     @property
     def nbytes(self) -> int:
@@ -156,8 +158,10 @@ class OrderMarks:
         self.depth_stencil = self.fbo = None
 
     def begin(self, target) -> moderngl.Framebuffer:
-        key = (target.color.glo, target.size)
-        if key != self._key:
+        # the texture object itself, not its GL name: a target reallocated at the same size may
+        # get the name of the texture it released, and a stale framebuffer would draw into that
+        key = (target.color, target.size)
+        if self._key is None or key[0] is not self._key[0] or key[1] != self._key[1]:
             self.release()
             self.depth_stencil = glraw.DepthStencil(*target.size)
             self.fbo = self.ctx.framebuffer(color_attachments=[target.color])

@@ -2,7 +2,8 @@
 # The benchmarks and the GL tests on a machine with a GPU, through EGL, in one command that
 # ends well inside a lease: scripts/bench_device.sh [--local] [STEP ...]
 # STEPs (default: all, in this order): snapshots capture composite tests tiny profile viewer
-# viewer_tests scale; on request also profile100k (a 100,000-part frame under cProfile).
+# viewer_tests scale; on request also profile100k (a 100,000-part frame under cProfile) and
+# timers (GPU time per stage from timer queries, 10,000 and 100,000 parts).
 #
 # Made for this workplace's `device` tool, whose machines have an NVIDIA driver and Python
 # 3.12 with numpy, scipy, pillow, pytest and pytest-xdist but no GL loader and no rtta: it
@@ -83,6 +84,10 @@ wanted profile && step 120 profile bash -c "python3 '$ROOT/scripts/profile_frame
 wanted profile100k && step 150 profile100k bash -c "
     python3 -c \"from rtta.scene.assembly import write_assembly; write_assembly('/tmp/asm100k.glb', 100000)\" &&
     python3 '$ROOT/scripts/profile_frame.py' /tmp/asm100k.glb --mode ghosted --size 1280x720 --frames ${PROFILE_FRAMES:-10} --top 30"
+wanted timers && step 150 timers bash -c "
+    python3 -c \"from rtta.scene.assembly import write_assembly as w; w('/tmp/asm10k.glb', 10000); w('/tmp/asm100k.glb', 100000)\" &&
+    for f in /tmp/asm10k.glb /tmp/asm100k.glb; do for opt in '' --sync '--sync --no-hull'; do
+        python3 '$ROOT/scripts/gpu_timers.py' \$f \$opt; done; done"
 # The viewer in pyglet's headless window: the demo, then 10,000 parts with and without fast navigation.
 wanted viewer && step 150 viewer bash -c "rtta-view --bench 20 --bench-modes ghosted,ghosted-ao &&
     python3 -m rtta bench scale --parts 10000 --json '$OUT/scale_viewer.json'"

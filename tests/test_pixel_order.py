@@ -254,3 +254,15 @@ def test_a_reallocated_target_is_drawn_into(make_renderer):
         r.target.color._glo = old_name          # what the new texture is called on such a driver
         again = r.composite("transparent", Style(order="pixel")).read()[0]
         assert np.array_equal(again, first)
+
+
+def test_in_place_bound_follows_opacity():
+    """How many in-order surfaces keep the 8-bit object-order blend: the rounding each leaves
+    is damped by (1 - a) per surface over it, so from opacity 0.4 up any number (up to the
+    stencil's 254; at 0.4 the sum nears the budget only from below), and fewer as the
+    opacity falls (oit.ROUNDING_BUDGET)."""
+    bound = [oit.blended_in_place(a) for a in (1.0, 0.5, 0.3, 0.2, 0.1, 0.0)]
+    assert bound == [254, 254, 3, 3, 2, 2] and oit.blended_in_place(0.4) >= 64
+    for a in (0.3, 0.2, 0.1, 0.0):
+        n = oit.blended_in_place(a)
+        assert sum((1 - a) ** k for k in range(n)) <= oit.ROUNDING_BUDGET < sum((1 - a) ** k for k in range(n + 1))

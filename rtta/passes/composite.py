@@ -25,7 +25,7 @@ from ..gl import glraw, glsl
 from ..gl.gpu import GpuScene
 from ..gl.targets import CompositeTarget, LayeredTarget, release_framebuffer
 from .capture import mat_bytes
-from .oit import PixelOrderPass, resolved_order
+from .oit import PixelOrderPass, blended_in_place, resolved_order
 from .outlines import hull_margin, worth_outlines
 
 MODES = ("sprites", "transparent", "ghosted", "ghosted-ao")
@@ -97,6 +97,7 @@ class CompositePass:
         self.fallbacks = 0                 # frames that asked for pixel order and got object order
         self._projection = self._lens = self._inv_view_proj = None
         self._hull = None                  # (P V bytes, eye): sprites over the projected outlines of B_world
+        self._opacity = np.zeros(0, np.float32)   # per object, as the last render draws them
         self.hull_draws = 0                # draws of the last render whose sprites covered projected outlines
 
     def _program(self, **defines) -> tuple[moderngl.Program, moderngl.VertexArray]:
@@ -143,6 +144,7 @@ class CompositePass:
             ao, edges = style.shaded(n)
             params[:n, 2], params[:n, 3] = ao, edges
         self._upload(self.styles, params)
+        self._opacity = params[:n, 0]      # a view: as drawn (the ghosted context's too), for OrderMarks
         self.passes = []
         self.hull_draws = 0
         target.ensure(records.viewport)
@@ -247,7 +249,10 @@ class CompositePass:
                                    **{**how, "depth_test": True, "depth_write": True})
                     finally:
                         glraw.stencil_off()
-                self._pixel_order.resolve(target.fbo, over=None if clip else BACKGROUND)
+                a = self._opacity[ids]
+                a = a[a > 0]                   # invisible surfaces add no rounding
+                self._pixel_order.resolve(target.fbo, over=None if clip else BACKGROUND,
+                                          in_place=blended_in_place(a.min() if len(a) else 1.0))
                 target.fbo.use()
                 self.passes.append("resolve")
                 return

@@ -242,6 +242,7 @@ class CompositePass:
                                        outlined=behind_outlined).use(7)
                     # collected surfaces write no depth: clipped by the focus depth instead
                     self._draw(ids, style, records, collect=True, focus_clip=True, **{**how, "depth_test": False})
+                    self._pixel_order.resolve(target.fbo)
                 else:       # only the background behind: blended in object order, sorted where that is wrong
                     self._pixel_order.mark(target)
                     try:
@@ -249,10 +250,10 @@ class CompositePass:
                                    **{**how, "depth_test": True, "depth_write": True})
                     finally:
                         glraw.stencil_off()
-                a = self._opacity[ids]
-                a = a[a > 0]                   # invisible surfaces add no rounding
-                self._pixel_order.resolve(target.fbo, over=None if clip else BACKGROUND,
-                                          in_place=blended_in_place(a.min() if len(a) else 1.0))
+                    a = self._opacity[ids]
+                    a = a[a > 0]                   # invisible surfaces add no rounding
+                    self._pixel_order.resolve(target.fbo, over=BACKGROUND,
+                                              in_place=blended_in_place(a.min() if len(a) else 1.0))
                 target.fbo.use()
                 self.passes.append("resolve")
                 return

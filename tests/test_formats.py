@@ -117,6 +117,29 @@ def test_snapshot_focus_and_opacity_accept_groups(ifc_file, tmp_path):
     assert res.returncode == 2 and "did you mean Storey" in res.stderr and not (tmp_path / "no.png").exists()
 
 
+def test_ifc_tree_paths_shared_across_elements_match_each_walked_alone(ifc_file):
+    """The read walks each storey up once (tree_path's memo); in any element order, and with
+    a cycle of a damaged file (the site aggregated by a storey under it), every element
+    gets the path it gets walked alone."""
+    import random
+
+    import ifcopenshell
+
+    from rtta.scene.formats.ifc import tree_path
+
+    model = ifcopenshell.open(str(ifc_file[0]))
+    for damaged in (False, True):
+        if damaged:
+            model.by_type("IfcSite")[0].Decomposes[0].RelatingObject = model.by_type("IfcBuildingStorey")[1]
+        elements = list(model.by_type("IfcProduct"))
+        alone = {e.id(): tree_path(e) for e in elements}
+        assert alone[model.by_type("IfcSite")[0].id()] == (("House", "Storey 2") if damaged else ("Demo project",))
+        for seed in range(4):
+            random.Random(seed).shuffle(elements)
+            memo: dict = {}
+            assert {e.id(): tree_path(e, memo) for e in elements} == alone
+
+
 def test_ifc_truncated_is_refused(ifc_file, tmp_path):
     data = ifc_file[0].read_bytes()
     bad = tmp_path / "cut.ifc"

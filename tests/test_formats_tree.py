@@ -46,6 +46,12 @@ def test_usd_instances_and_meters_per_unit(tmp_path):
     s = load_scene(path)
     fingers = [s.index("finger"), s.index("finger_2")]
     assert np.allclose(s.aabb_max[fingers[1]] - s.aabb_max[fingers[0]], [14, 0, 0])
+    from rtta.scene.formats import usd
+
+    asm = usd.read(path)                    # the prototype's mesh is read once for both instances
+    a, b = (i for i, n in enumerate(asm.names) if n.startswith("finger"))
+    assert np.shares_memory(asm.faces[a], asm.faces[b]) and asm.colors[a] == asm.colors[b]
+    assert not np.shares_memory(asm.vertices[a], asm.vertices[b])     # each placed by its own transform
     package = tmp_path / "plant.usdz"
     assert UsdUtils.CreateNewUsdzPackage(str(path), str(package))
     z = load_scene(package)

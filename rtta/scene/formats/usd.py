@@ -35,15 +35,22 @@ def read(path: Path) -> Assembly:
     out = Assembly(unit=unit_name(float(UsdGeom.GetStageMetersPerUnit(stage))),
                    up_axis="z" if UsdGeom.GetStageUpAxis(stage) == UsdGeom.Tokens.z else "y")
     cache = UsdGeom.XformCache(Usd.TimeCode.Default())
+    prototypes: dict = {}       # prototype prim path -> (points, triangles, colour): read once for all its instances
     for prim in Usd.PrimRange.Stage(stage, Usd.TraverseInstanceProxies(Usd.PrimDefaultPredicate)):
         if not prim.IsA(UsdGeom.Mesh) or UsdGeom.Imageable(prim).ComputeVisibility() == UsdGeom.Tokens.invisible:
             continue
-        v, f = _mesh(UsdGeom.Mesh(prim))
+        if prim.IsInstanceProxy():
+            key = prim.GetPrimInPrototype().GetPath()
+            if key not in prototypes:
+                prototypes[key] = (*_mesh(UsdGeom.Mesh(prim)), _color(prim))
+            v, f, color = prototypes[key]
+        else:
+            (v, f), color = _mesh(UsdGeom.Mesh(prim)), _color(prim)
         if not len(f):
             continue
         m = np.array(cache.GetLocalToWorldTransform(prim), np.float64)      # row vectors: p @ M
         name, groups = _name(prim)
-        out.add(name, v @ m[:3, :3] + m[3, :3], f, _color(prim), groups)
+        out.add(name, v @ m[:3, :3] + m[3, :3], f, color, groups)
     return out
 
 

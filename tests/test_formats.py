@@ -60,6 +60,24 @@ def test_step_in_inches_keeps_inches(tmp_path):
     np.testing.assert_allclose(s.aabb_max[0], [100, 20, 10], atol=0.01)
 
 
+def test_step_length_unit_is_the_one_most_unit_contexts_name():
+    """A context per part (as assemblies have): each names its length unit; a unit that only
+    defines another (the millimetre an inch is converted from) or a missing entity counts not."""
+    from rtta.scene.formats.step import length_unit
+
+    def context(k: int, unit_ref: int) -> str:
+        return f"#{k}=(GEOMETRIC_REPRESENTATION_CONTEXT(3)GLOBAL_UNIT_ASSIGNED_CONTEXT((#{unit_ref},#2,#3))" \
+               "REPRESENTATION_CONTEXT('',''));\n"
+    units = ("#1=(LENGTH_UNIT()NAMED_UNIT(*)SI_UNIT(.MILLI.,.METRE.));\n#2=(NAMED_UNIT(*)PLANE_ANGLE_UNIT()"
+             "SI_UNIT($,.RADIAN.));\n#3=(NAMED_UNIT(*)SI_UNIT($,.STERADIAN.)SOLID_ANGLE_UNIT());\n"
+             "#4 = ( CONVERSION_BASED_UNIT('INCH',#5) LENGTH_UNIT() NAMED_UNIT(#6) );\n"
+             "#5=LENGTH_MEASURE_WITH_UNIT(LENGTH_MEASURE(25.4),#1);\n#6=DIMENSIONAL_EXPONENTS(1.,0.,0.,0.,0.,0.,0.);\n")
+    inch_parts = "".join(context(100 + k, 4) for k in range(3))
+    assert length_unit(units + inch_parts + context(200, 1) + context(201, 999)) == "in"
+    assert length_unit(units + inch_parts + "".join(context(300 + k, 1) for k in range(4))) == "mm"
+    assert length_unit(units) == ""
+
+
 def test_step_stdout_stays_clean_and_nothing_is_written(step_file):
     before = sorted(p.name for p in step_file.parent.iterdir())
     res = subprocess.run([RTTA, "info", str(step_file), "--tree"], capture_output=True, text=True, timeout=120)

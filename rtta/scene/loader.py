@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import RttaError
-from . import batch, formats
+from . import batch, formats, obj_read
 from .files import MAX_FILE_BYTES, SafeResolver, max_objects, regular_file
 from .gltf import prepare
 from .gltf_read import Decoded
@@ -173,6 +173,9 @@ def _items(path: Path, suffix: str) -> tuple[list[str], list[Path], list[tuple]]
         if len(names) > limit:
             raise RttaError(f"OBJ file has {len(names):,} objects ('o' statements, or 'g' groups where there are "
                             f"fewer than two; at most {limit:,} for a file of its size)", path)
+        decoded = obj_read.decode(data, names)
+        if decoded is not None:                 # a plain file: no trimesh (its split is quadratic)
+            return notes, [], [(name, geometry, np.eye(4), ()) for name, geometry in decoded]
         source = io.BytesIO(data)
     loaded = _trimesh_load(source, suffix[1:], path, resolver)
     items = []

@@ -1,0 +1,139 @@
+"""Plain OBJ files read without trimesh (rtta.scene.obj_read): the same scene as trimesh's
+reading (per object: name, triangles, file normals), and every other file left to trimesh."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rtta.scene import obj_read
+from rtta.scene.loader import load_scene
+from rtta.scene.obj import obj_objects
+
+BOX_V = [(x, y, z) for x in (0, 1) for y in (0, 1) for z in (0, 2)]
+BOX_QUADS = [(1, 2, 4, 3), (5, 7, 8, 6), (1, 5, 6, 2), (3, 4, 8, 7), (1, 3, 7, 5), (2, 6, 8, 4)]
+
+
+def _box(k: int, base: int, corner: str = "{v}", quads: bool = True, shift=(0.0, 0.0, 0.0)) -> list[str]:
+    """Object k: a box as 8 vertices (and 6 normals), its faces as quads or triangles;
+    `corner` formats each face corner from its vertex index v, normal index n, uv index t."""
+    lines = [f"o part{k}"] + [f"v {x + 3 * k + shift[0]:g} {y + shift[1]:g} {z + shift[2]:g}" for x, y, z in BOX_V]
+    axes = ((0, 0, -1), (0, 0, 1), (0, -1, 0), (0, 1, 0), (-1, 0, 0), (1, 0, 0))
+    lines += [f"vn {x:g} {y:g} {z:g}" for x, y, z in axes]
+    lines += ["vt 0.5 0.5"]
+    for q, quad in enumerate(BOX_QUADS):
+        cs = [corner.format(v=base + i, n=6 * k + q + 1, t=k + 1) for i in quad]
+        if quads:
+            lines.append("f " + " ".join(cs))
+        else:
+            lines += ["f " + " ".join(cs[:3]), "f " + " ".join([cs[0], cs[2], cs[3]])]
+    return lines
+
+
+def _file(tmp_path, name: str, corner: str = "{v}", quads: bool = True, extra: list[str] = (), objects: int = 3,
+          newline: str = "\n"):
+    lines = ["# made by the test", *extra]
+    for k in range(objects):
+        lines += _box(k, 8 * k, corner, quads=quads if k % 2 == 0 else not quads)
+        lines.append("g somegroup")
+    path = tmp_path / name
+    path.write_bytes(newline.join(lines).encode() + b"\n")
+    return path
+
+
+def _triangles(scene, oid: int) -> tuple[np.ndarray, np.ndarray]:
+    """An object's triangles as rows of their corners' (position, normal), rows sorted."""
+    first, count = scene.index_ranges[oid]
+    corners = scene.indices[first:first + count].astype(np.int64)
+    tri = np.round(np.concatenate([scene.positions[corners], scene.normals[corners]], axis=1).astype(np.float64),
+                   5).reshape(-1, 3, 6)
+    # each triangle from its smallest corner on (a rotation keeps the winding)
+    first = np.array([min(range(3), key=lambda i, t=t: tuple(t[i])) for t in tri])
+    tri = np.stack([tri[np.arange(len(tri)), (first + i) % 3] for i in range(3)], axis=1)
+    rows = tri.reshape(-1, 18)
+    return rows[np.lexsort(rows.T[::-1])], np.sort(np.round(scene.positions[corners], 5), axis=0)
+
+
+def _both(path, monkeypatch, **options):
+    direct = load_scene(path, **options)
+    with monkeypatch.context() as m:
+        m.setattr(obj_read, "decode", lambda data, names: None)
+        via_trimesh = load_scene(path, **options)
+    return direct, via_trimesh
+
+
+@pytest.mark.parametrize("corner,quads", [("{v}", True), ("{v}", False), ("{v}//{n}", True), ("{v}/{t}/{n}", False),
+                                          ("{v}/{t}", True)])
+@pytest.mark.parametrize("smooth", [False, True])
+def test_plain_files_read_as_trimesh_reads_them(tmp_path, monkeypatch, corner, quads, smooth):
+    path = _file(tmp_path, "parts.obj", corner, quads)
+    data, names = obj_objects(path)
+    assert obj_read.decode(data, names) is not None            # the direct reading is the one tested
+    direct, via_trimesh = _both(path, monkeypatch, smooth=smooth)
+    assert direct.names == via_trimesh.names == ["part0", "part1", "part2"]
+    np.testing.assert_allclose(direct.colors, via_trimesh.colors)
+    for oid in range(direct.count):
+        a, b = _triangles(direct, oid), _triangles(via_trimesh, oid)
+        np.testing.assert_allclose(a[1], b[1], atol=1e-6)       # the same triangles
+        np.testing.assert_allclose(a[0], b[0], atol=1e-5)       # with the same normals at their corners
+    np.testing.assert_allclose(direct.aabb_min, via_trimesh.aabb_min)
+
+
+def test_groups_as_objects_and_crlf(tmp_path, monkeypatch):
+    """No `o` lines but groups: the groups are the objects (rtta.scene.obj), CRLF line ends."""
+    lines = []
+    for k in range(3):
+        lines += [line.replace(f"o part{k}", f"g piece{k}") for line in _box(k, 8 * k, "{v}//{n}")]
+    path = tmp_path / "groups.obj"
+    path.write_bytes("\r\n".join(lines).encode())
+    direct, via_trimesh = _both(path, monkeypatch)
+    assert direct.names == via_trimesh.names == ["piece0", "piece1", "piece2"]
+    for oid in range(3):
+        np.testing.assert_allclose(_triangles(direct, oid)[0], _triangles(via_trimesh, oid)[0], atol=1e-5)
+
+
+@pytest.mark.parametrize("change", [
+    ("mtllib parts.mtl", None), ("usemtl red", None),             # materials: trimesh's
+    (None, "v 0 0 0 1 0 0"),                                      # vertex colours
+    (None, "l 1 2"),                                              # a line
+    (None, "f -1 -2 -3"),                                         # relative indices
+    (None, "f 1 2 99999"), (None, "f 0 1 2"),                     # out of range: trimesh's messages
+    (None, "v 1 2"), (None, "v 1 2 x"),                           # damaged rows
+    (None, "f 1 2"),                                              # a face of two corners
+    (None, "f 1/1/1 2//2 3/1"),                                   # mixed corner forms
+    (None, "v 1 2 3 \\"),                                         # a continued line
+    (None, "f 1 2 3.5"), (None, "f 1 2 99999999999999999999999"),  # indices that are not integers
+])
+def test_other_files_go_to_trimesh(tmp_path, change):
+    head, tail = change
+    path = _file(tmp_path, "other.obj", extra=[head] if head else [])
+    if tail:
+        path.write_bytes(path.read_bytes() + tail.encode() + b"\n")
+    data, names = obj_objects(path)
+    assert obj_read.decode(data, names) is None
+
+
+def test_faces_before_any_object_go_to_trimesh(tmp_path):
+    path = tmp_path / "loose.obj"
+    path.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n" + "\n".join(_box(0, 4)[:1] + _box(0, 4)[1:]) + "\n"
+                    + "\n".join(_box(1, 12)) + "\n")
+    data, names = obj_objects(path)
+    assert len(names) == 2 and obj_read.decode(data, names) is None
+
+
+def test_many_objects_each_get_their_own_vertices(tmp_path):
+    """1,000 parts: each object's vertices are the 8 of its box, its faces index them."""
+    lines = []
+    for k in range(1000):
+        lines += _box(k, 8 * k, "{v}//{n}")
+    path = tmp_path / "many.obj"
+    path.write_text("\n".join(lines) + "\n")
+    data, names = obj_objects(path)
+    decoded = obj_read.decode(data, names)
+    assert [n for n, _ in decoded] == [f"part{k}" for k in range(1000)]
+    for k in (0, 499, 999):
+        geometry = decoded[k][1]
+        assert geometry.faces.shape == (12, 3) and geometry.faces.max() == len(geometry.vertices) - 1
+        assert len(geometry.vertices) == 24                     # corners split by their normals
+        np.testing.assert_allclose(geometry.vertices.min(axis=0), (3 * k, 0, 0))
+        np.testing.assert_allclose(np.linalg.norm(geometry.normals, axis=1), 1.0)

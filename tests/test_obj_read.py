@@ -93,7 +93,6 @@ def test_groups_as_objects_and_crlf(tmp_path, monkeypatch):
 
 
 @pytest.mark.parametrize("change", [
-    ("mtllib parts.mtl", None), ("usemtl red", None),             # materials: trimesh's
     (None, "v 0 0 0 1 0 0"),                                      # vertex colours
     (None, "l 1 2"),                                              # a line
     (None, "f -1 -2 -3"),                                         # relative indices
@@ -130,10 +129,76 @@ def test_many_objects_each_get_their_own_vertices(tmp_path):
     path.write_text("\n".join(lines) + "\n")
     data, names = obj_objects(path)
     decoded = obj_read.decode(data, names)
-    assert [n for n, _ in decoded] == [f"part{k}" for k in range(1000)]
+    assert [names[k] for k, _ in decoded] == [f"part{k}" for k in range(1000)]
     for k in (0, 499, 999):
         geometry = decoded[k][1]
         assert geometry.faces.shape == (12, 3) and geometry.faces.max() == len(geometry.vertices) - 1
         assert len(geometry.vertices) == 24                     # corners split by their normals
         np.testing.assert_allclose(geometry.vertices.min(axis=0), (3 * k, 0, 0))
         np.testing.assert_allclose(np.linalg.norm(geometry.normals, axis=1), 1.0)
+
+
+MTL = "newmtl red\nKd 0.8 0.1 0.1\nnewmtl blue\nKd 0.1 0.2 0.9\nd 0.5\nnewmtl grey\nKa 0.2 0.2 0.2\n"
+
+
+def _material_file(tmp_path, mtllib: str | None, uses: list[list[str]], corner: str = "{v}") -> object:
+    """Objects part0.. each drawn as two triangles, the `usemtl` lines of uses[k] (before
+    its first and its second triangle) in effect; `mtllib` names the material file."""
+    lines = [f"mtllib {mtllib}"] if mtllib else []
+    for k, use in enumerate(uses):
+        box = _box(k, 8 * k, corner, quads=False)
+        faces = [line for line in box if line.startswith("f ")][:2]
+        lines += [line for line in box if not line.startswith("f ")]
+        for name, face in zip(use + [None] * (2 - len(use)), faces, strict=True):
+            lines += ([f"usemtl {name}"] if name else []) + [face]
+    path = tmp_path / "coloured.obj"
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+@pytest.mark.parametrize("case", ["carried", "missing file", "outside", "unknown", "uv", "no usemtl"])
+def test_material_colours_are_the_ones_trimesh_gives(tmp_path, monkeypatch, case):
+    """Colours from trimesh's reading of the material skeleton: a material in effect carries
+    over objects, an object of two materials takes one, a material without Kd, a missing or
+    refused material file (the same warning), an unknown name, faces with texture coordinates."""
+    (tmp_path / "parts.mtl").write_text(MTL)
+    (tmp_path.parent / "elsewhere.mtl").write_text(MTL)
+    uses = [["red"], ["blue"], ["red", "blue"], ["grey"], []]
+    mtllib, corner = "parts.mtl", "{v}"
+    if case == "missing file":
+        mtllib = "nothere.mtl"
+    elif case == "outside":
+        mtllib = "../elsewhere.mtl"
+    elif case == "unknown":
+        uses[1] = ["green"]
+    elif case == "uv":
+        corner = "{v}/{t}/{n}"
+    elif case == "no usemtl":
+        uses = [[] for _ in uses]
+    path = _material_file(tmp_path, mtllib, uses, corner)
+    data, names = obj_objects(path)
+    assert obj_read.decode(data, names) is not None and obj_read.has_materials(data)
+    direct, via_trimesh = _both(path, monkeypatch)
+    assert direct.names == via_trimesh.names
+    np.testing.assert_array_equal(direct.colors, via_trimesh.colors)
+    assert direct.warnings == via_trimesh.warnings and direct.inputs == via_trimesh.inputs
+    if case == "carried":
+        assert direct.colors[4].tolist() == direct.colors[3].tolist()        # grey carried over
+        assert not np.array_equal(direct.colors[0], direct.colors[1])
+    if case in ("missing file", "outside"):
+        assert any("nothere.mtl" in w or "elsewhere.mtl" in w for w in direct.warnings)
+    for oid in range(direct.count):
+        np.testing.assert_allclose(_triangles(direct, oid)[0], _triangles(via_trimesh, oid)[0], atol=1e-5)
+
+
+def test_textured_materials_go_to_trimesh(tmp_path, monkeypatch):
+    """A material with a texture: the whole file is read by trimesh (texture coordinates)."""
+    from PIL import Image
+
+    Image.new("RGB", (4, 4), (200, 30, 30)).save(tmp_path / "wood.png")
+    (tmp_path / "parts.mtl").write_text(MTL + "newmtl wood\nKd 1 1 1\nmap_Kd wood.png\n")
+    path = _material_file(tmp_path, "parts.mtl", [["wood"], ["red"]], "{v}/{t}/{n}")
+    direct, via_trimesh = _both(path, monkeypatch)
+    assert direct.textured and via_trimesh.textured
+    np.testing.assert_array_equal(direct.colors, via_trimesh.colors)
+    np.testing.assert_array_equal(direct.texture_ids, via_trimesh.texture_ids)

@@ -174,8 +174,12 @@ def _items(path: Path, suffix: str) -> tuple[list[str], list[Path], list[tuple]]
             raise RttaError(f"OBJ file has {len(names):,} objects ('o' statements, or 'g' groups where there are "
                             f"fewer than two; at most {limit:,} for a file of its size)", path)
         decoded = obj_read.decode(data, names)
-        if decoded is not None:                 # a plain file: no trimesh (its split is quadratic)
-            return notes, [], [(name, geometry, np.eye(4), ()) for name, geometry in decoded]
+        materials = SafeResolver(path)           # the skeleton's reads: kept only when its colours are
+        if decoded is not None and obj_read.has_materials(data):
+            decoded = _obj_colors(decoded, data, path, materials)
+        if decoded is not None:        # a plain file: its geometry without trimesh (whose split is quadratic)
+            return (notes + materials.warnings, materials.inputs,
+                    [(names[k], geometry, np.eye(4), ()) for k, geometry in decoded])
         source = io.BytesIO(data)
     loaded = _trimesh_load(source, suffix[1:], path, resolver)
     items = []
@@ -190,6 +194,23 @@ def _items(path: Path, suffix: str) -> tuple[list[str], list[Path], list[tuple]]
         items.append((key, name, loaded.geometry.get(geom_name), np.asarray(transform, np.float64), tree))
     items.sort(key=lambda item: item[0])                  # file order
     return notes + resolver.warnings, resolver.inputs, [item[1:] for item in items]
+
+
+def _obj_colors(decoded: list, data: bytes, path: Path, resolver: SafeResolver) -> list | None:
+    """The decoded objects coloured as trimesh colours them, from its reading of the file's
+    material skeleton (obj_read.material_skeleton) through `resolver`; None where a material
+    has a texture: the whole file then goes through trimesh, which reads its texture
+    coordinates."""
+    loaded = _trimesh_load(io.BytesIO(obj_read.material_skeleton(data)), "obj", path, resolver)
+    color_of: dict[int, list[float] | None] = {}
+    for node in loaded.graph.nodes_geometry:
+        mesh = loaded.geometry.get(loaded.graph[node][1])
+        if getattr(getattr(getattr(mesh, "visual", None), "material", None), "image", None) is not None:
+            return None
+        match = re.fullmatch(r"rtta\.o\.(\d+)", str(node))
+        if match and mesh is not None:
+            color_of[int(match.group(1))] = _color(mesh)
+    return [(k, replace(geometry, color=color_of.get(k, geometry.color))) for k, geometry in decoded]
 
 
 def _texture_notes(scene: Scene) -> list[str]:

@@ -4,9 +4,10 @@ trimesh splits an OBJ's objects by masking the file's whole vertex array once pe
 so its time grows with objects × vertices: 10,000 cylinders took 12.6 s split against 1.6 s
 unsplit, and 100,000 parts would take about 20 minutes. `decode` reads a plain file
 (`v` positions, `vn` normals, `vt` ignored, triangle and polygon faces, `o` objects as
-rtta.scene.obj names them, `s` and comments) in whole-file passes; any other file
-(materials, vertex colours, lines or points, relative indices, anything it cannot parse)
-returns None and goes through trimesh as before, with its messages for damaged files.
+rtta.scene.obj names them, `s`, `usemtl` and `mtllib`, comments) in whole-file passes; any
+other file (vertex colours, lines or points, relative indices, anything it cannot parse)
+returns None and goes through trimesh as before, with its messages for damaged files. The
+colours of a file with materials come from trimesh reading its material_skeleton.
 Each object gets the vertices its faces use, in file order (paired with their normals where
 the faces give them), as trimesh gives them; polygons are fans around their first corner.
 """
@@ -20,8 +21,11 @@ import numpy as np
 
 from .gltf_read import NO_FACTOR, Decoded
 
-# any line that is not v, vn, vt, f, o, s or g with its arguments, a comment or blank
-_OTHER = re.compile(rb"^(?![ \t]*(?:(?:vn?|vt|f|s|g|o)[ \t]|#|\r?$))", re.MULTILINE)
+# any line that is not v, vn, vt, f, o, s, g, usemtl or mtllib with its arguments, a comment or blank
+_OTHER = re.compile(rb"^(?![ \t]*(?:(?:vn?|vt|f|s|g|o|usemtl|mtllib)[ \t]|#|\r?$))", re.MULTILINE)
+_MATERIAL = re.compile(rb"^[ \t]*(?:usemtl|mtllib)[ \t]", re.MULTILINE)
+_KEPT = re.compile(rb"^[ \t]*(?:usemtl|mtllib|o|g)[ \t][^\r\n]*|^[ \t]*f[ \t][^\r\n]*(?:\r?\n[ \t]*f[ \t][^\r\n]*)*",
+                   re.MULTILINE)
 # a v or vn line of other than 3 numbers (w, vertex colours, a damaged row), or a continued line
 _ODD = re.compile(rb"^[ \t]*vn?[ \t](?![ \t]*[^ \t\r\n]+[ \t]+[^ \t\r\n]+[ \t]+[^ \t\r\n]+[ \t]*\r?$)|\\[ \t]*\r?$",
                   re.MULTILINE)
@@ -32,9 +36,10 @@ _V = re.compile(rb"^[ \t]*v[ \t]+([^\r\n]*)", re.MULTILINE)
 _VN = re.compile(rb"^[ \t]*vn[ \t]+([^\r\n]*)", re.MULTILINE)
 
 
-def decode(data: bytes, names: list[str]) -> list[tuple[str, Decoded]] | None:
-    """(name, geometry) per object with faces, in file order, for a plain OBJ whose objects
-    are `o rtta.o.K` lines (rtta.scene.obj.obj_objects); None for any other file."""
+def decode(data: bytes, names: list[str]) -> list[tuple[int, Decoded]] | None:
+    """(object number K, geometry) per object with faces, in file order, for a plain OBJ whose
+    objects are `o rtta.o.K` lines (rtta.scene.obj.obj_objects, K indexes `names`); None for
+    any other file."""
     if _OTHER.search(data) or _ODD.search(data):
         return None
     parts = _OBJECT.split(data)              # [before any object, K, its lines, K, its lines ...]
@@ -61,6 +66,29 @@ def decode(data: bytes, names: list[str]) -> list[tuple[str, Decoded]] | None:
     *corners, uv = corners
     # faces with texture coordinates get trimesh's grey for a material it made up, others the palette
     return _objects(names, v, vn, *corners, NO_FACTOR if uv else None)
+
+
+def has_materials(data: bytes) -> bool:
+    """Whether the file names materials (their colours come from trimesh: material_skeleton)."""
+    return _MATERIAL.search(data) is not None
+
+
+def material_skeleton(data: bytes) -> bytes:
+    """The file with what decides each object's material only: its `mtllib`, `usemtl`, `o`
+    and `g` lines in order, each run of faces one face over three dummy vertices in the run's
+    corner form (so trimesh makes the same visuals: a made-up material where faces have
+    texture coordinates). trimesh reads it with the file's resolver in time linear in the
+    objects, and the colours it gives each object are those it gives on the whole file."""
+    lines = [b"v 0 0 0", b"v 1 0 0", b"v 0 1 0", b"vt 0 0", b"vn 0 0 1"]
+    for m in _KEPT.finditer(data):
+        line = m.group(0).strip()
+        if not line.startswith(b"f"):
+            lines.append(line)
+            continue
+        corner = line.split(b"\n", 1)[0].split()[1].split(b"/")
+        form = b"/".join([b"%d"] + [b"1" if part else b"" for part in corner[1:]])
+        lines.append(b"f " + b" ".join(form % i for i in (1, 2, 3)))
+    return b"\n".join(lines) + b"\n"
 
 
 def _numbers(rows: list[bytes], dtype) -> np.ndarray:
@@ -118,7 +146,7 @@ def _corners(face_rows: list[bytes], face_sizes: list[list[int]], face_object: l
 
 
 def _objects(names: list[str], v: np.ndarray, vn: np.ndarray, tri: np.ndarray, tri_n: np.ndarray | None,
-             objects: np.ndarray, color: list[float] | None) -> list[tuple[str, Decoded]]:
+             objects: np.ndarray, color: list[float] | None) -> list[tuple[int, Decoded]]:
     """Per object its own vertices (each (vertex, normal) pair once, in file order) and faces."""
     if (np.diff(objects) < 0).any():                   # objects come in file order: sorted already
         order = np.argsort(objects, kind="stable")
@@ -147,6 +175,6 @@ def _objects(names: list[str], v: np.ndarray, vn: np.ndarray, tri: np.ndarray, t
             continue
         lo, hi = object_start[o], object_start[o + 1]
         n = None if normals is None else normals[lo:hi]
-        out.append((names[o], Decoded(positions[lo:hi], local[a:b],
+        out.append((o, Decoded(positions[lo:hi], local[a:b],
                                       n if n is not None and np.isfinite(n).all() else None, color)))
     return out

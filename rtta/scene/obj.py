@@ -12,28 +12,30 @@ def obj_objects(path: Path) -> tuple[bytes, list[str]]:
     as UTF-8 or else Windows-1252. A file with fewer than two `o` lines but several `g NAME`
     groups has its groups made the objects so (its one `o` line left out): CAD exporters
     write the parts of a model as groups."""
-    data = path.read_bytes()
+    data = b"\n" + path.read_bytes()         # every line after a newline: _line's patterns start there
     names: list[str] = []
 
     def rename(match: re.Match) -> bytes:
-        raw = (match.group(2) or b"").strip()
+        raw = (match.group(1) or b"").strip()
         try:
             names.append(raw.decode("utf-8"))
         except UnicodeDecodeError:
             names.append(raw.decode("cp1252", errors="replace"))
-        return match.group(1) + f"o rtta.o.{len(names) - 1}".encode()
+        return f"\no rtta.o.{len(names) - 1}".encode()
 
     objects = re.sub(_line(b"o"), rename, data)
     if len(names) >= 2:
-        return objects, names
+        return objects[1:], names
     found = names[:]
     names.clear()
-    groups = re.sub(_line(b"g"), rename, re.sub(_line(b"o"), lambda m: m.group(1) + b"#", data))
+    groups = re.sub(_line(b"g"), rename, re.sub(_line(b"o"), lambda m: b"\n#", data))
     if len(names) >= 2:
-        return groups, names
-    return objects, found
+        return groups[1:], names
+    return objects[1:], found
 
 
 def _line(keyword: bytes) -> bytes:
-    """A line `KEYWORD NAME` (or a bare `KEYWORD`): group 1 what precedes it, group 2 the name."""
-    return rb"(^|\n)[ \t]*" + keyword + rb"(?:[ \t]+([^\r\n]*)|(?=[\r\n]|$))"
+    """A line `KEYWORD NAME` (or a bare `KEYWORD`) with the newline before it; group 1 the name.
+    A literal first character lets the engine skip to the newlines (a pattern starting with
+    `(^|\n)` tried every position: 8 s of a 100,000-part file)."""
+    return rb"\n[ \t]*" + keyword + rb"(?:[ \t]+([^\r\n]*)|(?=[\r\n]|$))"

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import gc
 import io
-import logging
 import re
 import warnings
 from dataclasses import replace
@@ -22,10 +21,11 @@ from .files import MAX_FILE_BYTES, SafeResolver, max_objects, regular_file
 from .gltf import prepare
 from .gltf_read import Decoded
 from .model import SUPPORTED, Scene, from_batch
-from .obj import obj_objects
+from .obj import material_colors, obj_objects
 from .precheck import BYTES_PER_TRIANGLE, BYTES_PER_VERTEX, check_size, memory_limit, precheck
 from .preprocess import DEFAULT_SMOOTH_ANGLE
 from .textures import TextureTable
+from .trimesh_io import base_color, trimesh_load
 
 F32_MAX = float(np.finfo(np.float32).max)
 MAX_COORDINATE = 1e15    # float64 keeps ~0.1 units of precision there; float32 offsets stay finite
@@ -145,7 +145,7 @@ class _Records:
         material = getattr(mesh.visual, "material", None)
         key = id(material) if material is not None and getattr(mesh.visual, "kind", None) not in ("face", "vertex") \
             else None
-        color = self._color_of[key] if key in self._color_of else _color(mesh)
+        color = self._color_of[key] if key in self._color_of else base_color(mesh)
         if key is not None:
             self._color_of[key] = color
         faces = np.asarray(mesh.faces).astype(np.int32, copy=False)   # an index past 2^31 wraps negative: out of range
@@ -161,7 +161,7 @@ def _items(path: Path, suffix: str) -> tuple[list[str], list[Path], list[tuple]]
         prepared = prepare(path)
         geometry = prepared.decoded()
         if geometry is None:
-            geometry = _trimesh_load(io.BytesIO(prepared.for_trimesh()), "glb", path, None).geometry
+            geometry = trimesh_load(io.BytesIO(prepared.for_trimesh()), "glb", path, None).geometry
         items = [(i.name, geometry.get(i.geometry), i.matrix, i.path) for i in prepared.instances]
         return prepared.warnings, prepared.inputs, items
     notes = precheck(path)
@@ -176,12 +176,12 @@ def _items(path: Path, suffix: str) -> tuple[list[str], list[Path], list[tuple]]
         decoded = obj_read.decode(data, names)
         materials = SafeResolver(path)           # the skeleton's reads: kept only when its colours are
         if decoded is not None and obj_read.has_materials(data):
-            decoded = _obj_colors(decoded, data, path, materials)
+            decoded = material_colors(decoded, data, path, materials)
         if decoded is not None:        # a plain file: its geometry without trimesh (whose split is quadratic)
             return (notes + materials.warnings, materials.inputs,
                     [(names[k], geometry, np.eye(4), ()) for k, geometry in decoded])
         source = io.BytesIO(data)
-    loaded = _trimesh_load(source, suffix[1:], path, resolver)
+    loaded = trimesh_load(source, suffix[1:], path, resolver)
     items = []
     order = {name: i for i, name in enumerate(loaded.geometry)}
     nodes = list(loaded.graph.nodes_geometry)
@@ -196,23 +196,6 @@ def _items(path: Path, suffix: str) -> tuple[list[str], list[Path], list[tuple]]
     return notes + resolver.warnings, resolver.inputs, [item[1:] for item in items]
 
 
-def _obj_colors(decoded: list, data: bytes, path: Path, resolver: SafeResolver) -> list | None:
-    """The decoded objects coloured as trimesh colours them, from its reading of the file's
-    material skeleton (obj_read.material_skeleton) through `resolver`; None where a material
-    has a texture: the whole file then goes through trimesh, which reads its texture
-    coordinates."""
-    loaded = _trimesh_load(io.BytesIO(obj_read.material_skeleton(data)), "obj", path, resolver)
-    color_of: dict[int, list[float] | None] = {}
-    for node in loaded.graph.nodes_geometry:
-        mesh = loaded.geometry.get(loaded.graph[node][1])
-        if getattr(getattr(getattr(mesh, "visual", None), "material", None), "image", None) is not None:
-            return None
-        match = re.fullmatch(r"rtta\.o\.(\d+)", str(node))
-        if match and mesh is not None:
-            color_of[int(match.group(1))] = _color(mesh)
-    return [(k, replace(geometry, color=color_of.get(k, geometry.color))) for k, geometry in decoded]
-
-
 def _texture_notes(scene: Scene) -> list[str]:
     """A warning when textures are too large for the material atlas and get halved."""
     if not scene.textured:
@@ -225,20 +208,6 @@ def _texture_notes(scene: Scene) -> list[str]:
             users[tid].append(name)
     note = oversized_note(scene.textures, users)
     return [note] if note else []
-
-
-def _trimesh_load(source, file_type: str, path: Path, resolver):
-    import trimesh
-
-    logging.getLogger("trimesh").setLevel(logging.ERROR)
-    try:
-        options = {"split_objects": True, "group_material": False} if file_type == "obj" else {}
-        return trimesh.load(source, file_type=file_type, force="scene", process=False, resolver=resolver, **options)
-    except (MemoryError, RecursionError) as exc:
-        raise RttaError(f"cannot read {path.suffix[1:].upper()} file ({type(exc).__name__})", path) from None
-    except Exception as exc:  # trimesh raises many types for corrupt files
-        reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        raise RttaError(f"cannot read {path.suffix[1:].upper()} file ({reason[:160]})", path) from None
 
 
 def _parts(read: tuple, path: Path, smooth_angle: float) -> tuple:
@@ -381,23 +350,6 @@ def _file_has_normals(mesh) -> bool:
     """Whether the file gave vertex normals (trimesh computes them lazily otherwise)."""
     cache = getattr(getattr(mesh, "_cache", None), "cache", None)
     return cache is None or "vertex_normals" in cache
-
-
-def _color(mesh) -> list[float] | None:
-    """Base colour from the material or visual, RGBA in [0, 1]; None for the palette."""
-    visual = mesh.visual
-    material = getattr(visual, "material", None)
-    factor = getattr(material, "baseColorFactor", None)
-    if factor is not None:
-        c = np.asarray(factor, np.float64).reshape(-1)
-        return list((c / 255.0 if c.max() > 1 else c)[:4]) + [1.0] * (4 - min(4, c.size))
-    main = getattr(material, "main_color", None)
-    if main is None and getattr(visual, "kind", None) in ("face", "vertex"):
-        main = getattr(visual, "main_color", None)
-    if main is not None:
-        c = np.asarray(main, np.float64).reshape(-1)[:4] / 255.0
-        return list(c) + [1.0] * (4 - c.size)
-    return None
 
 
 def load_scene_or_demo(path: str | None, **options) -> Scene:

@@ -1,9 +1,15 @@
-"""OBJ's objects made distinct for trimesh, which merges objects of one name and ignores groups."""
+"""OBJ's objects made distinct for trimesh, which merges objects of one name and ignores groups;
+the colours of a file rtta reads itself (obj_read) as trimesh gives them."""
 
 from __future__ import annotations
 
+import io
 import re
+from dataclasses import replace
 from pathlib import Path
+
+from . import obj_read
+from .trimesh_io import base_color, trimesh_load
 
 
 def obj_objects(path: Path) -> tuple[bytes, list[str]]:
@@ -39,3 +45,20 @@ def _line(keyword: bytes) -> bytes:
     A literal first character lets the engine skip to the newlines (a pattern starting with
     `(^|\n)` tried every position: 8 s of a 100,000-part file)."""
     return rb"\n[ \t]*" + keyword + rb"(?:[ \t]+([^\r\n]*)|(?=[\r\n]|$))"
+
+
+def material_colors(decoded: list, data: bytes, path: Path, resolver) -> list | None:
+    """obj_read's objects coloured as trimesh colours them, from its reading of the file's
+    material skeleton (obj_read.material_skeleton) through `resolver`; None where a material
+    has a texture: the whole file then goes through trimesh, which reads its texture
+    coordinates."""
+    loaded = trimesh_load(io.BytesIO(obj_read.material_skeleton(data)), "obj", path, resolver)
+    color_of: dict[int, list[float] | None] = {}
+    for node in loaded.graph.nodes_geometry:
+        mesh = loaded.geometry.get(loaded.graph[node][1])
+        if getattr(getattr(getattr(mesh, "visual", None), "material", None), "image", None) is not None:
+            return None
+        match = re.fullmatch(r"rtta\.o\.(\d+)", str(node))
+        if match and mesh is not None:
+            color_of[int(match.group(1))] = base_color(mesh)
+    return [(k, replace(geometry, color=color_of.get(k, geometry.color))) for k, geometry in decoded]

@@ -202,3 +202,22 @@ def test_textured_materials_go_to_trimesh(tmp_path, monkeypatch):
     assert direct.textured and via_trimesh.textured
     np.testing.assert_array_equal(direct.colors, via_trimesh.colors)
     np.testing.assert_array_equal(direct.texture_ids, via_trimesh.texture_ids)
+
+
+@pytest.mark.parametrize("damage", ["vt 0.5x 0.5", "vt 0.33800.245", "texture index past the rows", "texture index 1o"])
+def test_damaged_texture_coordinates_go_to_trimesh(tmp_path, monkeypatch, damage):
+    """Rows and indices of texture coordinates no material uses are still checked: trimesh
+    refuses a damaged row and drops an object's uvs (its colour) for an index past them, so
+    such files are left to it (found by a fuzzer comparing both readings on damaged files)."""
+    path = _file(tmp_path, "uv.obj", "{v}/{t}/{n}")
+    text = path.read_text()
+    if damage.startswith("vt"):
+        text = text.replace("vt 0.5 0.5", damage, 1)
+    else:
+        face = next(line for line in text.splitlines() if line.startswith("f "))
+        corner = face.split()[1]
+        v, _, n = corner.split("/")
+        text = text.replace(face, face.replace(corner, f"{v}/{'99' if 'past' in damage else '1o'}/{n}", 1), 1)
+    path.write_text(text)
+    data, names = obj_objects(path)
+    assert obj_read.decode(data, names) is None

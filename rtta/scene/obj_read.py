@@ -36,6 +36,7 @@ _POLYGON = re.compile(rb"\n[ \t]*f[ \t](?![ \t]*[^ \t\r\n]+[ \t]+[^ \t\r\n]+[ \t
 _FACE = re.compile(rb"\n[ \t]*f[ \t]+([^\r\n]*)")
 _V = re.compile(rb"\n[ \t]*v[ \t]+([^\r\n]*)")
 _VN = re.compile(rb"\n[ \t]*vn[ \t]+([^\r\n]*)")
+_VT = re.compile(rb"\n[ \t]*vt[ \t]+([^\r\n]*)")
 
 
 def decode(data: bytes, names: list[str]) -> list[tuple[int, Decoded]] | None:
@@ -61,7 +62,8 @@ def decode(data: bytes, names: list[str]) -> list[tuple[int, Decoded]] | None:
         return None
     try:
         v, vn = (_numbers(pattern.findall(data), np.float64).reshape(-1, 3) for pattern in (_V, _VN))
-        corners = _corners(face_rows, face_sizes, face_object, len(v), len(vn))
+        n_vt = _texture_rows(data)
+        corners = None if n_vt is None else _corners(face_rows, face_sizes, face_object, len(v), len(vn), n_vt)
     except (ValueError, OverflowError):      # a number or an index that does not parse
         return None
     if corners is None:
@@ -103,7 +105,20 @@ def _numbers(rows: list[bytes], dtype) -> np.ndarray:
         return np.fromstring(b" ".join(rows), dtype=dtype, sep=" ")
 
 
-def _corners(face_rows: list[bytes], face_sizes: list[list[int]], face_object: list[int], n_v: int, n_vn: int):
+def _texture_rows(data: bytes) -> int | None:
+    """How many `vt` rows the file has; None where they are not all of 2 or all of 3 numbers
+    (trimesh's reading refuses or drops them: its outcome is kept). ValueError where one
+    does not parse. They are read though no material here uses them."""
+    rows = _VT.findall(data)
+    widths = {len(row.split()) for row in rows}
+    if len(widths) > 1 or widths - {2, 3}:
+        return None
+    _numbers(rows, np.float64)
+    return len(rows)
+
+
+def _corners(face_rows: list[bytes], face_sizes: list[list[int]], face_object: list[int], n_v: int, n_vn: int,
+             n_vt: int):
     """(triangle corners' vertex indices [T, 3], their normal indices [T, 3] or None, the
     object of each triangle [T], whether the corners name texture coordinates) with 0-based
     indices checked, or None. Per object with faces: its face rows joined, their sizes, its number."""
@@ -131,6 +146,9 @@ def _corners(face_rows: list[bytes], face_sizes: list[list[int]], face_object: l
             normal = np.array([int(p[2]) for p in pieces], np.int64)
             uv = True
         else:
+            return None
+        texture = np.array([int(p[1]) for p in pieces], np.int64)
+        if texture.min() < 1 or texture.max() > n_vt:      # trimesh drops such an object's uvs: its colour
             return None
     if len(index) != total or index.min() < 1 or index.max() > n_v:       # relative indices go to trimesh
         return None

@@ -3,7 +3,7 @@
 trimesh splits an OBJ's objects by masking the file's whole vertex array once per object,
 so its time grows with objects × vertices: 10,000 cylinders took 12.6 s split against 1.6 s
 unsplit, and 100,000 parts would take about 20 minutes. `decode` reads a plain file
-(`v` positions, `vn` normals, `vt` ignored, triangle and polygon faces, `o` objects as
+(`v` positions, `vn` normals, `vt` checked but not used, triangle and polygon faces, `o` objects as
 rtta.scene.obj names them, `s`, `usemtl` and `mtllib`, comments) in whole-file passes; any
 other file (vertex colours, lines or points, relative indices, anything it cannot parse)
 returns None and goes through trimesh as before, with its messages for damaged files. The
@@ -75,6 +75,7 @@ def decode(data: bytes, names: list[str]) -> list[tuple[int, Decoded]] | None:
 
 def has_materials(data: bytes) -> bool:
     """Whether the file names materials (their colours come from trimesh: material_skeleton)."""
+    # the first line has no newline before it: matched on its own, the file not copied
     return _MATERIAL.search(data) is not None or _MATERIAL.match(b"\n" + data[:64]) is not None
 
 

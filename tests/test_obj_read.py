@@ -221,3 +221,19 @@ def test_damaged_texture_coordinates_go_to_trimesh(tmp_path, monkeypatch, damage
     path.write_text(text)
     data, names = obj_objects(path)
     assert obj_read.decode(data, names) is None
+
+
+def test_objects_of_one_material_share_their_skeleton_object(tmp_path, monkeypatch):
+    """1,000 parts over 3 materials, some inheriting the material before them: trimesh reads
+    one skeleton object per distinct content, and every part gets the colour it gets from
+    trimesh's reading of the whole file."""
+    (tmp_path / "parts.mtl").write_text(MTL)
+    uses = [[["red"], ["blue"], [], ["grey"]][k % 4] for k in range(1000)]
+    path = _material_file(tmp_path, "parts.mtl", uses)
+    data, _ = obj_objects(path)
+    skeleton, stands_for = obj_read.material_skeleton(data)
+    assert len(stands_for) == 1000 and len(set(stands_for.values())) == 3      # [] inherits blue
+    assert skeleton.count(b"\no rtta.o.") == 3
+    direct, via_trimesh = _both(path, monkeypatch)
+    np.testing.assert_array_equal(direct.colors, via_trimesh.colors)
+    assert len({tuple(c) for c in direct.colors.tolist()}) == 3

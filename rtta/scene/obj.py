@@ -52,7 +52,8 @@ def material_colors(decoded: list, data: bytes, path: Path, resolver) -> list | 
     material skeleton (obj_read.material_skeleton) through `resolver`; None where a material
     has a texture: the whole file then goes through trimesh, which reads its texture
     coordinates."""
-    loaded = trimesh_load(io.BytesIO(obj_read.material_skeleton(data)), "obj", path, resolver)
+    skeleton, stands_for = obj_read.material_skeleton(data)
+    loaded = trimesh_load(io.BytesIO(skeleton), "obj", path, resolver)
     color_of: dict[int, list[float] | None] = {}
     for node in loaded.graph.nodes_geometry:
         mesh = loaded.geometry.get(loaded.graph[node][1])
@@ -61,4 +62,5 @@ def material_colors(decoded: list, data: bytes, path: Path, resolver) -> list | 
         match = re.fullmatch(r"rtta\.o\.(\d+)", str(node))
         if match and mesh is not None:
             color_of[int(match.group(1))] = base_color(mesh)
-    return [(k, replace(geometry, color=color_of.get(k, geometry.color))) for k, geometry in decoded]
+    return [(k, replace(geometry, color=color_of.get(stands_for.get(k, -1), geometry.color)))
+            for k, geometry in decoded]

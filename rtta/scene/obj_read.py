@@ -79,22 +79,46 @@ def has_materials(data: bytes) -> bool:
     return _MATERIAL.search(data) is not None or _MATERIAL.match(b"\n" + data[:64]) is not None
 
 
-def material_skeleton(data: bytes) -> bytes:
-    """The file with what decides each object's material only: its `mtllib`, `usemtl`, `o`
-    and `g` lines in order, each run of faces one face over three dummy vertices in the run's
-    corner form (so trimesh makes the same visuals: a made-up material where faces have
-    texture coordinates). trimesh reads it with the file's resolver in time linear in the
-    objects, and the colours it gives each object are those it gives on the whole file."""
-    lines = [b"v 0 0 0", b"v 1 0 0", b"v 0 1 0", b"vt 0 0", b"vn 0 0 1"]
+def material_skeleton(data: bytes) -> tuple[bytes, dict[int, int]]:
+    """What decides each object's material, for trimesh to read with the file's resolver:
+    (an OBJ text, the object K whose skeleton object stands for each object). The text has the
+    file's `mtllib` lines, then one object per distinct content: its `usemtl` and `g` lines in
+    order, led by the material it inherits from the objects before it, each run of faces one
+    face over three dummy vertices in the run's corner form (so trimesh makes the same
+    visuals: a made-up material where faces have texture coordinates). Objects of the same
+    content get the same colour from trimesh, so 100,000 parts of 6 materials cost it 6."""
+    libraries, contents, material = [], {}, None
+    content: list[bytes] | None = None
     for m in _KEPT.finditer(b"\n" + data):
         line = m.group(0).strip()
-        if not line.startswith(b"f"):
-            lines.append(line)
-            continue
-        corner = line.split(b"\n", 1)[0].split()[1].split(b"/")
-        form = b"/".join([b"%d"] + [b"1" if part else b"" for part in corner[1:]])
-        lines.append(b"f " + b" ".join(form % i for i in (1, 2, 3)))
-    return b"\n".join(lines) + b"\n"
+        if line.startswith(b"mtllib"):
+            libraries.append(line)                 # trimesh reads the first one in the file
+        elif line.startswith(b"o "):
+            content = contents.setdefault(int(line[len(b"o rtta.o."):]), [])
+            if material is not None:
+                content.append(material)
+        elif line.startswith(b"f"):
+            corner = line.split(b"\n", 1)[0].split()[1].split(b"/")
+            form = b"/".join([b"%d"] + [b"1" if part else b"" for part in corner[1:]])
+            if content is not None:
+                content.append(b"f " + b" ".join(form % i for i in (1, 2, 3)))
+        else:                                      # usemtl, g
+            usemtl = line.startswith(b"usemtl")
+            material = line if usemtl else material
+            if content is not None and usemtl and content and content[-1].startswith(b"usemtl"):
+                content[-1] = line                 # a material no face used: as if not there
+            elif content is not None:
+                content.append(line)
+    lines = [*libraries, b"v 0 0 0", b"v 1 0 0", b"v 0 1 0", b"vt 0 0", b"vn 0 0 1"]
+    standing: dict[tuple, int] = {}
+    stands_for: dict[int, int] = {}
+    for k, content in contents.items():
+        key = tuple(content)
+        if key not in standing:
+            standing[key] = k
+            lines += [b"o rtta.o.%d" % k, *content]
+        stands_for[k] = standing[key]
+    return b"\n".join(lines) + b"\n", stands_for
 
 
 def _numbers(rows: list[bytes], dtype) -> np.ndarray:

@@ -192,6 +192,17 @@ def ramp(k: np.ndarray) -> np.ndarray:
     return np.arange(int(k.sum())) - np.repeat(np.cumsum(k) - k, k)
 
 
+def fans(starts: np.ndarray, sizes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Polygons of `sizes` corners from `starts` in a flat corner array, as triangle fans
+    (0, k, k + 1) around each one's first corner: (the polygon of each triangle [T], the
+    triangles' places in the corner array [T, 3]). OBJ and USD faces are convex polygons."""
+    per = np.asarray(sizes, np.int64) - 2
+    polygon = np.repeat(np.arange(len(per)), per)
+    k = ramp(per)
+    s = np.asarray(starts, np.int64)[polygon]
+    return polygon, np.stack([s, s + k + 1, s + k + 2], axis=1)
+
+
 def preprocess(meshes: Meshes, smooth: np.ndarray, angle: float) -> Meshes:
     """Index every mesh, smoothing the normals of those where `smooth` is set (the others
     keep meshes.normals), in passes of whole meshes of at most CHUNK_CORNERS corners."""

@@ -19,6 +19,7 @@ import warnings
 
 import numpy as np
 
+from .batch import fans
 from .gltf_read import NO_FACTOR, Decoded
 
 # Every pattern starts at the newline before its line (the text is searched with one newline
@@ -58,7 +59,9 @@ def decode(data: bytes, names: list[str]) -> list[tuple[int, Decoded]] | None:
             face_sizes.append([len(row.split()) for row in rows] if polygons else [3] * len(rows))
             face_object.append(int(k))
     del parts
-    if not face_rows or max(face_object) >= len(names):
+    # objects numbered in file order (rtta.scene.obj): the triangles come grouped by object
+    ascending = all(b > a for a, b in zip(face_object, face_object[1:], strict=False))
+    if not face_rows or not ascending or face_object[-1] >= len(names):
         return None
     try:
         v, vn = (_numbers(pattern.findall(data), np.float64).reshape(-1, 3) for pattern in (_V, _VN))
@@ -181,23 +184,15 @@ def _corners(face_rows: list[bytes], face_sizes: list[list[int]], face_object: l
         return None
     index = index.astype(np.int32) - 1       # int32 from here: half the memory of the corner arrays
     normal = None if normal is None else normal.astype(np.int32) - 1
-    # fans (0, k, k + 1) around each polygon's first corner
-    start = np.cumsum(sizes) - sizes
-    per = sizes - 2
-    poly = np.repeat(np.arange(len(sizes)), per)
-    k = np.arange(int(per.sum())) - np.repeat(np.cumsum(per) - per, per)
-    at = np.stack([start[poly], start[poly] + k + 1, start[poly] + k + 2], axis=1)
+    poly, at = fans(np.cumsum(sizes) - sizes, sizes)
     objects = np.repeat(np.asarray(face_object, np.int32), per_object)[poly]
     return index[at], None if normal is None else normal[at], objects, uv
 
 
 def _objects(names: list[str], v: np.ndarray, vn: np.ndarray, tri: np.ndarray, tri_n: np.ndarray | None,
              objects: np.ndarray, color: list[float] | None) -> list[tuple[int, Decoded]]:
-    """Per object its own vertices (each (vertex, normal) pair once, in file order) and faces."""
-    if (np.diff(objects) < 0).any():                   # objects come in file order: sorted already
-        order = np.argsort(objects, kind="stable")
-        tri, objects = tri[order], objects[order]
-        tri_n = None if tri_n is None else tri_n[order]
+    """Per object its own vertices (each (vertex, normal) pair once, in file order) and faces;
+    `objects` [T] is ascending (decode checks it)."""
     corner_object = np.repeat(objects, 3)
     keys = [tri.reshape(-1)] if tri_n is None else [tri_n.reshape(-1), tri.reshape(-1)]
     rank = np.lexsort((*keys, corner_object))          # by object, then vertex (then normal)

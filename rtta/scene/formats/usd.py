@@ -13,6 +13,7 @@ import numpy as np
 
 from ...errors import RttaError
 from ...imageio import signals_held
+from ..batch import fans
 from . import Assembly, check_archive, native_output, unit_name
 
 MAX_LAYERS = 256
@@ -165,12 +166,7 @@ def _mesh(mesh) -> tuple[np.ndarray, np.ndarray]:
         counts, starts = counts[keep], starts[keep]
     else:
         starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
-    tris = counts - 2
-    face = np.repeat(np.arange(len(counts)), tris)
-    k = np.arange(tris.sum()) - np.repeat(np.cumsum(tris) - tris, tris)
-    s = starts[face]
-    f = np.stack([index[s], index[s + k + 1], index[s + k + 2]], axis=1)
-    return v, f
+    return v, index[fans(starts, counts)[1]]
 
 
 def _name(prim) -> tuple[str, tuple[str, ...]]:

@@ -1,5 +1,6 @@
-"""Where the `transparent` composite's time goes, pass by pass (each timed with a finish),
-in per-pixel order and in object order, on one capture.
+"""Where the `transparent` composite's time goes, pass by pass (each timed with a finish): per-
+pixel order with the first surfaces fetched (where the driver can), with every surface a list
+node, and object order, in turns on one capture.
 python scripts/bench_pixel_order.py [SCENE] [--frames 7] [--size 1024x1024]"""
 
 from __future__ import annotations
@@ -16,13 +17,14 @@ from rtta.scene.camera import Camera
 from rtta.scene.loader import load_scene_or_demo
 
 
-def timed(ctx, times: dict, name: str, fn):
+def timed(ctx, times: dict, way: list, name, fn):
     def run(*args, **kwargs):
         ctx.finish()
         t0 = time.perf_counter()
         out = fn(*args, **kwargs)
         ctx.finish()
-        times.setdefault(name(args, kwargs) if callable(name) else name, []).append(time.perf_counter() - t0)
+        key = name(args, kwargs) if callable(name) else name
+        times.setdefault((way[0], key), []).append(time.perf_counter() - t0)
         return out
     return run
 
@@ -39,18 +41,30 @@ def main() -> None:
     r = Renderer(ctx, scene)
     r.capture(Camera.orbit(scene.center, scene.radius, 30.0, 20.0, 2.2),
               tuple(int(v) for v in a.size.split("x")), focus=focus, ids=False)
-    times: dict[str, list[float]] = {}
+    r.composite("transparent", composite.Style(focus=focus))
+    ways = {"lists": oit.PixelOrderPass(ctx, fetch=False)}
+    if oit.heads_fetched(ctx):
+        ways = {"fetched": oit.PixelOrderPass(ctx, fetch=True), **ways}
+    times: dict[tuple[str, str], list[float]] = {}
+    way = [""]
     draw_name = lambda args, kw: "+".join(k for k, v in kw.items() if v is True) or "draw"   # noqa: E731
-    composite.CompositePass._draw_run = timed(ctx, times, draw_name, composite.CompositePass._draw_run)
-    oit.PixelOrderPass.resolve = timed(ctx, times, "resolve", oit.PixelOrderPass.resolve)
-    for order in ("pixel", "object"):
-        for _ in range(a.frames):
+    composite.CompositePass._draw_run = timed(ctx, times, way, draw_name, composite.CompositePass._draw_run)
+    for method in ("begin", "collect_into", "resolve"):
+        setattr(oit.PixelOrderPass, method, timed(ctx, times, way, method, getattr(oit.PixelOrderPass, method)))
+    for _ in range(a.frames):
+        for name, order in [*((w, "pixel") for w in ways), ("object", "object")]:
+            way[0] = name
+            if order == "pixel":
+                r._composite._pixel_order = ways[name]
             t0 = time.perf_counter()
             r.composite("transparent", composite.Style(focus=focus, order=order))
             ctx.finish()
-            times.setdefault("composite", []).append(time.perf_counter() - t0)
-        print(f"{order:6s} " + ", ".join(f"{k} {1e3 * np.median(v):.2f}" for k, v in times.items()) + " ms")
-        times.clear()
+            times.setdefault((name, "composite"), []).append(time.perf_counter() - t0)
+    for name in [*ways, "object"]:
+        print(f"{name:8s} " + ", ".join(f"{k} {1e3 * np.median(v):.2f}" for (w, k), v in times.items() if w == name)
+              + " ms")
+    for p_ in ways.values():
+        p_.release()
 
 
 if __name__ == "__main__":

@@ -1,5 +1,5 @@
 #version 450
-// defines: MODE_SPRITE MODE_BLEND MODE_OUTLINE MODE_COLLECT MODE_HALO FOCUS_CLIP WITH_AO PROJECTOR LENS UPSAMPLE
+// defines: MODE_SPRITE MODE_BLEND MODE_OUTLINE MODE_COLLECT FIRST_FETCHED MODE_HALO FOCUS_CLIP WITH_AO PROJECTOR LENS UPSAMPLE
 // defines: SPRITE_OUTLINE OUTLINE_QUAD
 // Per-object compositing from the atlas:
 //   MODE_SPRITE  depth sprite: atlas colour, gl_FragDepth = atlas depth (focus objects, `sprites`)
@@ -15,12 +15,22 @@
 //   MODE_COLLECT as MODE_BLEND, but appended to the pixel's list (oit.glsl) for a per-pixel
 //                sorted blend (`--order pixel`); writes no colour, unless with MODE_BLEND:
 //                blended too, every fragment listed (oit.OrderMarks)
+//   FIRST_FETCHED with MODE_COLLECT: a pixel's first three surfaces kept in two colour
+//                attachments and its surface count in the stencil, read and written in draw
+//                order through framebuffer fetch; only later ones become nodes, linked with no
+//                atomics (oit.py); with MODE_BLEND the pixels that object order gets wrong
+//                are flagged in the stencil too
 //   FOCUS_CLIP   with MODE_COLLECT: surfaces behind the nearest focus surface are left out (ghosted)
 //   WITH_AO      shade with the atlas post-process (ambient occlusion, edges) of `ghosted-ao`
 //   PROJECTOR    paint with the projector at the world position reconstructed from the atlas depth
 //   LENS         cut away (discard) texels whose world position is inside the lens (parity test)
 //   UPSAMPLE     the objects' regions hold less than one texel per pixel: depth-aware upsampling
 //                (a variant, not a branch: on llvmpipe both sides of a branch cost)
+#ifdef FIRST_FETCHED
+#extension GL_EXT_shader_framebuffer_fetch : require
+#extension GL_ARM_shader_framebuffer_fetch_depth_stencil : require
+#extension GL_ARB_shader_stencil_export : require
+#endif
 #include "composite.glsl"
 #include "projector.glsl"
 #include "ldi.glsl"
@@ -28,6 +38,12 @@
 #include "oit.glsl"
 flat in uint g_node_base;   // the object's first node
 flat in int g_vp_width;     // its B_viewport's width
+#ifdef FIRST_FETCHED
+// a surface here is (~depth bits: larger is nearer, never 0; colour), an empty one 0; not
+// cleared: they hold this frame's values where the stencil's count is above 0
+layout(location = 1) inout uvec4 fetched_first;   // surfaces 0 and 1
+layout(location = 2) inout uvec4 fetched_more;    // surface 2, the list of the later ones (node + 1), their nearest
+#endif
 #endif
 
 layout(binding = 0) uniform sampler2DArray u_color;
@@ -255,13 +271,36 @@ void main() {
 #endif
     ivec2 origin = ivec2(g_map.zw);                 // B_viewport's first pixel
     uint i = g_node_base + uint((p.y - origin.y) * g_vp_width + (p.x - origin.x));
+#ifdef FIRST_FETCHED
+    uint near = ~floatBitsToUint(depth), colour = packUnorm4x8(vec4(rgb, a));
+    int last = gl_LastFragStencilARM, n = last & STENCIL_COUNT;      // surfaces before this one
+    // a pixel's first surface writes both attachments: from then on they hold this frame's
+    uvec4 first = n > 0 ? fetched_first : uvec4(0u);
+    uvec4 more = n > 0 ? fetched_more : uvec4(0u);
+    uint nearest = max(max(first.x, first.z), max(more.x, more.w));
+    // oit.OrderMarks' flag: this surface lies at or behind the nearest before it
+    gl_FragStencilRefARB = (last & STENCIL_FLAG) | (n > 0 && near <= nearest ? STENCIL_FLAG : 0)
+                         | min(n + 1, STENCIL_COUNT);
+    if (n == 0) first.xy = uvec2(near, colour);
+    else if (n == 1) first.zw = uvec2(near, colour);
+    else if (n == 2) more.xy = uvec2(near, colour);
+    else {
+        nodes[i] = uvec4(floatBitsToUint(depth), colour, more.z, 0u);
+        more.zw = uvec2(i + 1u, max(more.w, near));
+    }
+    fetched_first = first;
+    fetched_more = more;
+#else
     uint next = atomicExchange(heads[p.y * int(u_viewport.x) + p.x], i + 1u);   // 0: none
     nodes[i] = uvec4(floatBitsToUint(depth), packUnorm4x8(vec4(rgb, a)), next, 0u);
+#endif
 #endif
 #if defined(MODE_COLLECT) && !defined(MODE_BLEND)
     out_color = vec4(0.0);
 #else
+#ifndef FIRST_FETCHED
     gl_FragDepth = depth;
+#endif
     out_color = vec4(rgb * a, a);
 #endif
 #endif

@@ -8,3 +8,7 @@
 layout(std430, binding = 5) buffer Heads { uint heads[]; };
 layout(std430, binding = 6) buffer Nodes { uvec4 nodes[]; };
 const uint NO_NODE = 0u;    // links are node index + 1
+// FIRST_FETCHED (oit.OrderMarks with fetch): the stencil's low bits count a pixel's surfaces
+// (saturating), its high bit flags one that came at or behind the nearest before it
+const int STENCIL_COUNT = 127;
+const int STENCIL_FLAG = 128;

@@ -1,5 +1,5 @@
 #version 430
-// defines: OVER
+// defines: OVER FIRST_FETCHED
 // `--order pixel`: each pixel's list of object surfaces (oit.glsl) blended front to back in
 // the order of their depths (ties: by packed colour, so the blend depends on the surfaces
 // alone, not on the order their fragments arrived in). The K = 8 nearest surfaces are sorted
@@ -22,9 +22,19 @@
 // a loop bound of 8192 or more made llvmpipe (LLVM 15) run every later loop once
 #define MAX_LIST 4096
 uniform int u_width;
+#ifdef FIRST_FETCHED
+// the first three surfaces and the list of the later ones as composite.frag's FIRST_FETCHED left
+// them: this frame's, where the stencil test lets the shader run (a pixel's first surface
+// writes both), an empty one 0
+layout(binding = 0) uniform usampler2D u_first;
+layout(binding = 1) uniform usampler2D u_more;
+#endif
 #ifdef OVER
 uniform vec3 u_background;
-// drawn with a stencil test for the marked pixels: tested first (else llvmpipe tests after the shader)
+#endif
+#if defined(OVER) || defined(FIRST_FETCHED)
+// drawn with a stencil test for the marked (or covered) pixels: tested first (else llvmpipe
+// tests after the shader)
 layout(early_fragment_tests) in;
 #endif
 layout(location = 0) out vec4 out_color;
@@ -40,27 +50,42 @@ layout(location = 0) out vec4 out_color;
     uint tc = s ? c##j : c; c##j = s ? c : c##j; c = tc; }
 #define BLEND(j) { vec4 q = d##j < 1.5 ? unpackUnorm4x8(c##j) : vec4(0.0); acc += t * q.a * q.rgb; t *= 1.0 - q.a; }
 
+#define TAKE(g) SWAP(0) if (g >= 1) SWAP(1) if (g >= 2) SWAP(2) if (g >= 3) SWAP(3) \
+    if (g >= 4) SWAP(4) if (g >= 5) SWAP(5) if (g >= 6) SWAP(6) if (g >= 7) SWAP(7)
+
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy);
-    uint next = heads[p.y * u_width + p.x];
-    if (next == NO_NODE) discard;
     SLOT(0) SLOT(1) SLOT(2) SLOT(3) SLOT(4) SLOT(5) SLOT(6) SLOT(7)
     vec3 tail_c = vec3(0.0);
     float tail_w = 0.0, tail_t = 1.0;
+    float d;
+    uint c;
+#ifdef FIRST_FETCHED
+    uvec4 first = texelFetch(u_first, p, 0);
+    if (first.x == 0u) discard;
+    uvec4 more = first.z != 0u ? texelFetch(u_more, p, 0) : uvec4(0u);
+    uint next = more.z;
+    d = uintBitsToFloat(~first.x); c = first.y; TAKE(0)
+    if (first.z != 0u) { d = uintBitsToFloat(~first.z); c = first.w; TAKE(1) }
+    if (more.x != 0u) { d = uintBitsToFloat(~more.x); c = more.y; TAKE(2) }
+    for (int g = 3; next != NO_NODE && g < K; ++g) {
+#else
+    uint next = heads[p.y * u_width + p.x];
+    if (next == NO_NODE) discard;
     for (int g = 0; next != NO_NODE && g < K; ++g) {
+#endif
         uvec4 node = nodes[next - 1u];
-        float d = uintBitsToFloat(node.x);
-        uint c = node.y;
+        d = uintBitsToFloat(node.x);
+        c = node.y;
         next = node.z;
         // slots g.. are empty: node g is carried past the g filled ones and lands in slot g
         // (the loop unrolls, so each copy keeps only its own swaps: 36 for 8 nodes, not 64)
-        SWAP(0) if (g >= 1) SWAP(1) if (g >= 2) SWAP(2) if (g >= 3) SWAP(3)
-        if (g >= 4) SWAP(4) if (g >= 5) SWAP(5) if (g >= 6) SWAP(6) if (g >= 7) SWAP(7)
+        TAKE(g)
     }
     for (int g = 0; next != NO_NODE && g < MAX_LIST; ++g) {     // more than K: the farthest merged behind
         uvec4 node = nodes[next - 1u];
-        float d = uintBitsToFloat(node.x);
-        uint c = node.y;
+        d = uintBitsToFloat(node.x);
+        c = node.y;
         next = node.z;
         SWAP(0) SWAP(1) SWAP(2) SWAP(3) SWAP(4) SWAP(5) SWAP(6) SWAP(7)
         vec4 q = unpackUnorm4x8(c);

@@ -112,6 +112,11 @@ def clear_color_int(draw_buffer: int, value: int) -> None:
     _lib().glClearBufferiv(GL_COLOR, draw_buffer, (ctypes.c_int * 4)(value, value, value, value))
 
 
+def clear_color_uint(draw_buffer: int, value: int) -> None:
+    """Clear an unsigned-integer colour attachment (glClearBufferiv would be undefined there)."""
+    _lib().glClearBufferuiv(GL_COLOR, draw_buffer, (ctypes.c_uint * 4)(value, value, value, value))
+
+
 def set_clip_distances(count: int, enabled: bool) -> None:
     gl = _lib()
     for i in range(count):
@@ -284,20 +289,33 @@ GL_REPLACE = 0x1E01
 GL_INCR = 0x1E02
 
 
-class DepthStencil:
-    """A GL_DEPTH32F_STENCIL8 renderbuffer: moderngl makes no attachment with a stencil."""
+GL_STENCIL_INDEX8 = 0x8D48
+GL_STENCIL_ATTACHMENT = 0x8D20
+GL_STENCIL = 0x1802
 
-    def __init__(self, width: int, height: int) -> None:
+
+class DepthStencil:
+    """A GL_DEPTH32F_STENCIL8 renderbuffer, or with `stencil_only` a GL_STENCIL_INDEX8 one:
+    moderngl makes no attachment with a stencil."""
+
+    def __init__(self, width: int, height: int, stencil_only: bool = False) -> None:
         gl = _lib()
         rb = ctypes.c_uint(0)
         gl.glGenRenderbuffers(1, ctypes.byref(rb))
         self.glo, self.size = rb.value, (width, height)
+        self.stencil_only = stencil_only
         gl.glBindRenderbuffer(GL_RENDERBUFFER, self.glo)
-        gl.glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH32F_STENCIL8, width, height)
+        gl.glRenderbufferStorage(GL_RENDERBUFFER, GL_STENCIL_INDEX8 if stencil_only else GL_DEPTH32F_STENCIL8,
+                                 width, height)
         gl.glBindRenderbuffer(GL_RENDERBUFFER, 0)
 
+    @property
+    def nbytes(self) -> int:
+        return (1 if self.stencil_only else 8) * self.size[0] * self.size[1]
+
     def attach_to_bound_framebuffer(self) -> None:
-        _lib().glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER, self.glo)
+        point = GL_STENCIL_ATTACHMENT if self.stencil_only else GL_DEPTH_STENCIL_ATTACHMENT
+        _lib().glFramebufferRenderbuffer(GL_FRAMEBUFFER, point, GL_RENDERBUFFER, self.glo)
 
     def release(self) -> None:
         if self.glo:
@@ -308,6 +326,11 @@ class DepthStencil:
 def clear_depth_stencil(depth: float = 1.0, stencil: int = 0) -> None:
     """Clear depth and stencil of the bound framebuffer."""
     _lib().glClearBufferfi(GL_DEPTH_STENCIL, 0, ctypes.c_float(depth), ctypes.c_int(stencil))
+
+
+def clear_stencil(value: int = 0) -> None:
+    """Clear the stencil of the bound framebuffer."""
+    _lib().glClearBufferiv(GL_STENCIL, 0, (ctypes.c_int * 1)(value))
 
 
 def stencil_count_surfaces() -> None:
@@ -326,6 +349,16 @@ def stencil_above(value: int) -> None:
     gl.glEnable(GL_STENCIL_TEST)
     gl.glStencilFunc(GL_LESS, value, 0xFF)
     gl.glStencilOp(GL_KEEP, GL_KEEP, GL_KEEP)
+
+
+def stencil_from_shader() -> None:
+    """Stencil test on, always passing: each fragment writes the stencil its shader exports
+    (gl_FragStencilRefARB)."""
+    gl = _lib()
+    gl.glEnable(GL_STENCIL_TEST)
+    gl.glStencilMask(0xFF)
+    gl.glStencilFunc(GL_ALWAYS, 0, 0xFF)
+    gl.glStencilOp(GL_KEEP, GL_KEEP, GL_REPLACE)
 
 
 def stencil_off() -> None:

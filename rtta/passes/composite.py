@@ -237,28 +237,33 @@ class CompositePass:
             ids = ids[records.visible[ids]]
             if self._pixel_order.begin(records.viewport, ids, records):
                 clip = behind is not None and len(behind) > 0
+                fetch = self._pixel_order.fetch
                 if clip:
                     self._sprite_depth(behind, style, records, target, farthest=False, cut=False,
                                        outlined=behind_outlined).use(7)
-                    # collected surfaces write no depth: clipped by the focus depth instead
-                    self._draw(ids, style, records, collect=True, focus_clip=True, **{**how, "depth_test": False})
+                self._pixel_order.collect_into(target, mark=not clip)
+                try:   # clip: collected only, writing no depth (clipped by the focus depth instead);
+                    # else blended in object order and sorted where that is wrong (oit.OrderMarks)
+                    tested = not clip and not fetch
+                    self._draw(ids, style, records, collect=True, blend=not clip, focus_clip=clip,
+                               first_fetched=fetch, **{**how, "depth_test": tested, "depth_write": tested})
+                finally:
+                    self._pixel_order.end_collect()
+                if clip:
                     self._pixel_order.resolve(target.fbo)
-                else:       # only the background behind: blended in object order, sorted where that is wrong
-                    self._pixel_order.mark(target)
-                    try:
-                        self._draw(ids, style, records, collect=True, blend=True,
-                                   **{**how, "depth_test": True, "depth_write": True})
-                    finally:
-                        glraw.stencil_off()
-                    a = self._opacity[ids]
-                    a = a[a > 0]                   # invisible surfaces add no rounding
-                    self._pixel_order.resolve(target.fbo, over=BACKGROUND,
-                                              in_place=blended_in_place(a.min() if len(a) else 1.0))
+                else:
+                    self._pixel_order.resolve(target.fbo, over=BACKGROUND, in_place=self._in_place(ids))
                 target.fbo.use()
                 self.passes.append("resolve")
                 return
             self.fallbacks += 1
         self._draw(ids, style, records, blend=True, **how)
+
+    def _in_place(self, ids) -> int:
+        """oit.blended_in_place for the least opacity among `ids` (invisible surfaces add no rounding)."""
+        a = self._opacity[ids]
+        a = a[a > 0]
+        return blended_in_place(a.min() if len(a) else 1.0)
 
     def _draw(self, ids, style: Style, records: Records, **how) -> None:
         """Draw `ids` in order: one draw per run of objects captured at one texel per pixel
@@ -276,7 +281,8 @@ class CompositePass:
 
     def _draw_run(self, ids, style: Style, records: Records, *, sprite=False, blend=False, outline=False,
                   desaturate=0.0, depth_test=False, ao=False, cut=False, upsample=False, collect=False,
-                  halo=False, farthest=False, focus_clip=False, outlined=False, depth_write=False) -> None:
+                  halo=False, farthest=False, focus_clip=False, outlined=False, depth_write=False,
+                  first_fetched=False) -> None:
         self._upload(self.order, np.ascontiguousarray(ids, np.int32))
         self.order.bind_to_storage_buffer(3)
         projection = None if outline or halo else self._projection
@@ -284,6 +290,7 @@ class CompositePass:
         # upsampled pixels reach past the outline; small sprites do not repay the outline's cost
         hull = None if halo or upsample or self._hull is None or not worth_outlines(records, ids) else self._hull
         mode = {"MODE_SPRITE": sprite, "MODE_BLEND": blend, "MODE_OUTLINE": outline, "MODE_COLLECT": collect,
+                "FIRST_FETCHED": collect and first_fetched,
                 "MODE_HALO": halo, "FOCUS_CLIP": focus_clip,
                 "SPRITE_OUTLINE": outlined and sprite,
                 "OUTLINE_QUAD": ((outline or outlined) and int(style.outline_width) == 1 and records.border >= 1
@@ -292,7 +299,7 @@ class CompositePass:
                 "PROJECTOR": projection is not None, "LENS": lens is not None, "UPSAMPLE": upsample}
         on = [k for k, v in mode.items() if v]
         self.passes.append("+".join(k.removeprefix("MODE_").removeprefix("SPRITE_").lower()
-                                    for k in on if k != "OUTLINE_QUAD"))
+                                    for k in on if k not in ("OUTLINE_QUAD", "FIRST_FETCHED")))
         prog, vao = self._program(**{k: True for k in on})
         prog["u_viewport"].value = tuple(float(v) for v in records.viewport)
         if projection is not None or lens is not None:
@@ -326,13 +333,14 @@ class CompositePass:
         self.ctx.blend_func = moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA
         fbo = self.ctx.fbo
         fbo.depth_mask = bool(sprite or depth_write)
-        if collect and not blend:
+        masked = collect and not blend and not first_fetched      # else the collect framebuffer masks it
+        if masked:
             fbo.color_mask = (False,) * 4
         fbo.use()
         vao.render(moderngl.POINTS, vertices=len(ids))
         fbo.depth_mask = True
         self.ctx.depth_func = "<"
-        if collect and not blend:
+        if masked:
             fbo.color_mask = (True,) * 4
 
     def release(self) -> None:

@@ -18,6 +18,14 @@ marks in the stencil every pixel where a surface lies behind one blended before 
 the object order is the depth order and that blend is exact (within the 8-bit target's
 rounding: ROUNDING_BUDGET); only the marked pixels (13% of the demo's covered pixels, 27% of
 the engine's, 9-13% of 10,000 parts') are resolved, over the background.
+
+Where the driver reads the framebuffer in the shader, in draw order (FETCH_EXTENSIONS: Mesa's
+llvmpipe has them, NVIDIA's driver not), the same pass keeps each pixel's first three surfaces
+in two colour attachments and its count and mark in the stencil, all read and written by the
+shader itself: no atomics, no depth test, and nodes only for a pixel's fourth surface on
+(OrderMarks with `fetched`). On llvmpipe the atomic exchange and the node stores were 40% of
+the `transparent` composite: that pass took 19.6 ms against 27.9 on the demo at 1024², the
+resolve 4.1 against 7.4 (BENCHMARKS.md). Both ways give the same picture; the tests run both.
 """
 
 from __future__ import annotations
@@ -29,6 +37,10 @@ from ..atlas.parameterize import Records
 from ..gl import glraw, glsl
 from ..gl.targets import release_all
 
+# heads in a colour attachment, read and written in draw order by the shader (no atomics), and
+# the order marks kept by it too: where the driver has these (Mesa's llvmpipe does; NVIDIA not)
+FETCH_EXTENSIONS = ("GL_EXT_shader_framebuffer_fetch", "GL_ARM_shader_framebuffer_fetch_depth_stencil",
+                    "GL_ARB_shader_stencil_export")
 MAX_NODES = 1 << 23            # 8 Mi surfaces, 128 MiB of nodes
 # OrderMarks: a pixel whose surfaces all came in depth order keeps the object-order blend,
 # rounded to 8 bits at each surface; the error each rounding leaves is damped by (1 - a) for
@@ -63,6 +75,12 @@ def blended_in_place(min_opacity: float) -> int:
     return max(n, 1)
 
 
+def heads_fetched(ctx: moderngl.Context) -> bool:
+    """Whether `ctx` lets the collect read and write the list heads and the order marks as
+    framebuffer attachments, in draw order (FETCH_EXTENSIONS)."""
+    return all(e in ctx.extensions for e in FETCH_EXTENSIONS)
+
+
 def node_bases(records: Records, ids: np.ndarray) -> tuple[np.ndarray, int]:
     """(first node per object id [n] uint32, nodes in all): one node per pixel of each drawn
     object's B_viewport, objects one after the other."""
@@ -76,15 +94,20 @@ def node_bases(records: Records, ids: np.ndarray) -> tuple[np.ndarray, int]:
 
 class PixelOrderPass:
     """begin(viewport, ids, records) -> bool (False: over MAX_NODES, use object order), then
-    the caller draws the sprites with MODE_COLLECT, then resolve()."""
+    collect_into(target, mark), the caller's sprites drawn with MODE_COLLECT (and FIRST_FETCHED
+    where `fetch`), end_collect(), then resolve(). `fetch` (heads_fetched): each pixel's first
+    three surfaces and its count are framebuffer attachments (OrderMarks), only later surfaces
+    nodes; else every surface is a node, linked by an atomic exchange of the pixel's head."""
 
-    def __init__(self, ctx: moderngl.Context) -> None:
+    def __init__(self, ctx: moderngl.Context, fetch: bool | None = None) -> None:
         self.ctx = ctx
+        self.fetch = heads_fetched(ctx) if fetch is None else bool(fetch)
         self.heads = ctx.buffer(reserve=4)
         self.nodes = ctx.buffer(reserve=NODE_BYTES)
         self.bases = ctx.buffer(reserve=4)
         self.programs = {over: glsl.program(ctx, vertex_shader=glsl.load("oit_resolve.vert"),
-                                            fragment_shader=glsl.load("oit_resolve.frag", OVER=over))
+                                            fragment_shader=glsl.load("oit_resolve.frag", OVER=over,
+                                                                      FIRST_FETCHED=self.fetch))
                          for over in (False, True)}
         self.vaos = {k: ctx.vertex_array(p, []) for k, p in self.programs.items()}
         self.marks: OrderMarks | None = None      # made on first use
@@ -100,7 +123,7 @@ class PixelOrderPass:
         rects = records.viewport_rect[ids].reshape(-1, 4)
         lo, hi = (rects[:, :2].min(axis=0), rects[:, 2:].max(axis=0)) if len(rects) else ((0, 0), (0, 0))
         self._rect = (*(np.asarray(lo) / (w, h) * 2 - 1), *(np.asarray(hi) / (w, h) * 2 - 1))   # NDC
-        if self.heads.size < 4 * w * h:
+        if not self.fetch and self.heads.size < 4 * w * h:
             self.heads.orphan(4 * w * h)
         need = NODE_BYTES * max(capacity, 1)
         if self.nodes.size < need or self.nodes.size > 4 * need:     # shrink when far too big
@@ -108,36 +131,53 @@ class PixelOrderPass:
         if self.bases.size < bases.nbytes:
             self.bases.orphan(max(bases.nbytes, 2 * self.bases.size))
         self.bases.write(bases.tobytes())
-        self.heads.clear(size=4 * w * h)       # 0: no node (a pattern clear took 8 ms at 1024²)
-        self.heads.bind_to_storage_buffer(5)
+        if not self.fetch:
+            self.heads.clear(size=4 * w * h)       # 0: no node (a pattern clear took 8 ms at 1024²)
+            self.heads.bind_to_storage_buffer(5)
         self.nodes.bind_to_storage_buffer(6)
         self.bases.bind_to_storage_buffer(7)
         return True
 
-    def mark(self, target) -> moderngl.Framebuffer:
-        """Bind OrderMarks' framebuffer for the object-order blend that lists and marks (begin first)."""
+    def collect_into(self, target, mark: bool) -> None:
+        """Bind the framebuffer the sprites are collected into (begin first): with `mark`,
+        OrderMarks' for the object-order blend that lists and marks; else the target's, the
+        colour left alone."""
+        if not mark and not self.fetch:
+            target.fbo.use()
+            return
         if self.marks is None:
-            self.marks = OrderMarks(self.ctx)
-        return self.marks.begin(target)
+            self.marks = OrderMarks(self.ctx, fetched=self.fetch)
+        self.marks.begin(target, mark)
+
+    def end_collect(self) -> None:
+        glraw.stencil_off()
 
     def resolve(self, fbo, over: tuple[float, float, float] | None = None, in_place: int = 1) -> None:
         """Sort and blend every pixel's list over what `fbo` holds (the background); with
         `over`, over that colour, written as it is, on the pixels OrderMarks left to it only:
         out of order, or with more than `in_place` surfaces (blended_in_place)."""
         self.ctx.memory_barrier(moderngl.SHADER_STORAGE_BARRIER_BIT)
-        self.heads.bind_to_storage_buffer(5)
+        if self.fetch:
+            for unit, texture in enumerate(self.marks.first):
+                texture.use(unit)
+        else:
+            self.heads.bind_to_storage_buffer(5)
         self.nodes.bind_to_storage_buffer(6)
         program = self.programs[over is not None]
-        program["u_width"].value = self._width
+        if "u_width" in program:           # the heads as a texture need no width
+            program["u_width"].value = self._width
         program["u_rect"].value = tuple(float(v) for v in self._rect)
         if over is not None:       # the stencil test, before the shader (it has no side effects)
             program["u_background"].value = tuple(float(v) for v in over[:3])
             self.ctx.enable_only(moderngl.NOTHING)
             fbo = self.marks.fbo
-            glraw.stencil_above(min(int(in_place), STENCIL_OUT_OF_ORDER - 1))
+            glraw.stencil_above(min(int(in_place), self.marks.in_place_limit))
         else:
             self.ctx.enable_only(moderngl.BLEND)
             self.ctx.blend_func = moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA
+            if self.fetch:         # the counts are in OrderMarks' stencil: the covered pixels only
+                fbo = self.marks.fbo
+                glraw.stencil_above(0)
         fbo.depth_mask = False
         fbo.use()
         try:
@@ -159,44 +199,75 @@ class PixelOrderPass:
 
 class OrderMarks:
     """Which pixels the back-to-front object order blends exactly. begin(target) binds a
-    framebuffer over the target's colour with a depth-stencil of its own; the caller blends in
-    object order there, with a depth test and depth writes, listing every fragment as it goes
-    (MODE_BLEND + MODE_COLLECT: one sprite pass). The stencil counts the surfaces that pass
-    the depth test; a fragment that fails it (a surface behind one blended before it, or at
-    its very depth) sets 255. The resolve then runs only where the stencil is above
-    blended_in_place(): pixels out of order, or with many surfaces of low opacity. The shader's list writes make
-    the depth and stencil tests come after it, so every fragment is listed, failing or not; on a
-    GPU too (GL runs such a shader whatever the tests give), where they keep the draw order."""
+    framebuffer over the target's colour with a stencil of its own; the caller blends in
+    object order there, listing every fragment as it goes (MODE_BLEND + MODE_COLLECT: one
+    sprite pass). The stencil counts the surfaces blended in depth order and records one at or
+    behind the nearest before it. The resolve then runs (`fbo`, the stencil test first) only
+    where the stencil is above blended_in_place(): out of order, or many surfaces of low opacity.
+    Without `fetched`, the depth test (with depth writes) decides: a surface that fails it sets
+    255 (STENCIL_OUT_OF_ORDER). The shader's list writes make the depth and stencil tests come
+    after it, so every fragment is listed, failing or not; on a GPU too (GL runs such a shader
+    whatever the tests give), where they keep the draw order.
+    With `fetched` (heads_fetched), the shader reads and writes the stencil itself (a count in
+    the low 7 bits, saturating, and a flag of 128), and a pixel's first three surfaces are two
+    colour attachments it reads and writes (`first`), with no depth test: every fragment is
+    blended, those out of order too, as their pixels are resolved anyway; with mark=False
+    (surfaces collected only) the colour is left alone and the stencil keeps the counts."""
 
-    def __init__(self, ctx: moderngl.Context) -> None:
+    def __init__(self, ctx: moderngl.Context, fetched: bool = False) -> None:
         self.ctx = ctx
+        self.fetched = fetched
+        # stencil_above's bound: with the count in 7 bits, a bound of 127 or more hides the flag
+        self.in_place_limit = 126 if fetched else STENCIL_OUT_OF_ORDER - 1
         self._key = None
-        self.depth_stencil = self.fbo = None
+        self.stencil = self.fbo = self.collect_fbo = None
+        self.first: list[moderngl.Texture] = []
 
-    def begin(self, target) -> moderngl.Framebuffer:
+    def begin(self, target, mark: bool = True) -> moderngl.Framebuffer:
         # the texture object itself, not its GL name: a target reallocated at the same size may
         # get the name of the texture it released, and a stale framebuffer would draw into that
         key = (target.color, target.size)
         if self._key is None or key[0] is not self._key[0] or key[1] != self._key[1]:
-            self.release()
-            self.depth_stencil = glraw.DepthStencil(*target.size)
-            self.fbo = self.ctx.framebuffer(color_attachments=[target.color])
-            self.fbo.use()
-            self.depth_stencil.attach_to_bound_framebuffer()
+            self._allocate(target)
             self._key = key
         self.fbo.viewport = (0, 0, *target.viewport)
+        if self.fetched:
+            self.collect_fbo.viewport = self.fbo.viewport
+            on = (True,) * 4
+            self.collect_fbo.color_mask = (on if mark else (False,) * 4, on, on)
+            self.collect_fbo.depth_mask = False
+            self.collect_fbo.use()
+            glraw.clear_stencil(0)           # no surface yet: `first` holds last frame's
+            glraw.stencil_from_shader()
+            return self.collect_fbo
         self.fbo.depth_mask = True
         self.fbo.use()
         glraw.clear_depth_stencil(1.0, 0)
         glraw.stencil_count_surfaces()
         return self.fbo
 
+    def _allocate(self, target) -> None:
+        self.release()
+        self.stencil = glraw.DepthStencil(*target.size, stencil_only=self.fetched)
+        self.fbo = self.ctx.framebuffer(color_attachments=[target.color])
+        self.fbo.use()
+        self.stencil.attach_to_bound_framebuffer()
+        if self.fetched:
+            self.first = [self.ctx.texture(target.size, 4, dtype="u4") for _ in range(2)]
+            for t in self.first:
+                t.filter = moderngl.NEAREST, moderngl.NEAREST
+            self.collect_fbo = self.ctx.framebuffer(color_attachments=[target.color, *self.first])
+            self.collect_fbo.use()
+            self.stencil.attach_to_bound_framebuffer()
+
     @property
     def nbytes(self) -> int:
-        return 8 * self.depth_stencil.size[0] * self.depth_stencil.size[1] if self.depth_stencil else 0
+        return (self.stencil.nbytes if self.stencil else 0) + sum(t.width * t.height * 16 for t in self.first)
 
     def release(self) -> None:
         glraw.stencil_off()
-        release_all(self.ctx, [p for p in (self.fbo, self.depth_stencil) if p is not None])
-        self.depth_stencil = self.fbo = None
+        parts = (self.collect_fbo, self.fbo, *self.first, self.stencil)
+        release_all(self.ctx, [p for p in parts if p is not None])
+        self.stencil = self.fbo = self.collect_fbo = None
+        self.first = []
         self._key = None

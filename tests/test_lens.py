@@ -85,6 +85,9 @@ def test_lens_arguments_fail_cleanly(tmp_path, capsys):
     scene = _scene()
     center, radius = default_placement(scene, {1})
     assert np.allclose(center, 0.0) and radius == pytest.approx(0.6 * np.sqrt(3) * 0.9, rel=0.05)
+    whole, whole_radius = default_placement(scene, set())
+    diagonal = float(np.linalg.norm(scene.aabb_max.max(axis=0) - scene.aabb_min.min(axis=0)))
+    assert whole_radius == pytest.approx(0.25 * diagonal)
     with pytest.raises(RttaError, match="radius must be positive"):
         Lens.shape("sphere", center, 0.0)
     out = tmp_path / "x.png"
@@ -104,6 +107,22 @@ def test_snapshot_with_a_lens_differs_where_the_context_is_cut(tmp_path, gl):
     assert main([*base, "--lens", "sphere", "--out", str(paths[1])]) == 0
     a, b = (np.asarray(Image.open(p)).astype(int) for p in paths)
     assert (np.abs(a - b).max(-1) > 3).mean() > 0.01
+
+
+def test_a_lens_with_nothing_in_focus_cuts_into_the_middle(tmp_path, gl):
+    """Everything is context with nothing in focus: the default lens cuts into the scene's
+    middle instead of cutting all of it away (a blank picture, as a lens sized to the whole
+    scene gave)."""
+    from PIL import Image
+
+    paths = [tmp_path / "a.png", tmp_path / "b.png"]
+    base = ["snapshot", "--mode", "ghosted", "--size", "160x120"]
+    assert main([*base, "--out", str(paths[0])]) == 0
+    assert main([*base, "--lens", "sphere", "--out", str(paths[1])]) == 0
+    a, b = (np.asarray(Image.open(p))[..., :3].astype(int) for p in paths)
+    drawn = [(np.abs(im - im[0, 0]).max(-1) > 3).mean() for im in (a, b)]
+    assert drawn[1] > 0.25 * drawn[0], f"the lens cut away most of the scene: {drawn}"
+    assert (np.abs(a - b).max(-1) > 3).mean() > 0.01, "the lens cut nothing"
 
 
 def test_ldi_command_classifies_points_and_prints_the_table(tmp_path, capsys, gl):

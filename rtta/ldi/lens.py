@@ -63,12 +63,18 @@ class Lens:
         return m
 
 
+NO_FOCUS_SHARE = 0.25     # of the scene's bounds diagonal: a lens on the whole scene would cut it all
+
+
 def default_placement(scene: Scene, focus) -> tuple[np.ndarray, float]:
     """Centre and radius that reveal the focus set: its bounds centre, radius 0.6 x its
-    bounds diagonal (the scene's when nothing is in focus)."""
+    bounds diagonal. With nothing in focus, everything is context and such a lens would cut
+    the whole scene away (a blank picture): the scene's centre, radius NO_FOCUS_SHARE x its
+    diagonal, a cut into its middle."""
     ids = sorted(focus) or list(range(scene.count))
+    share = 0.6 if len(focus) else NO_FOCUS_SHARE
     lo, hi = scene.aabb_min[ids].min(axis=0), scene.aabb_max[ids].max(axis=0)
-    return (lo + hi) / 2, max(0.6 * float(np.linalg.norm(hi - lo)), 1e-6 * scene.radius)
+    return (lo + hi) / 2, max(share * float(np.linalg.norm(hi - lo)), 1e-6 * scene.radius)
 
 
 class LensPass:

@@ -43,7 +43,7 @@ def main() -> None:
               tuple(int(v) for v in a.size.split("x")), focus=focus, ids=False)
     r.composite("transparent", composite.Style(focus=focus))
     ways = {"lists": oit.PixelOrderPass(ctx, fetch=False)}
-    if oit.heads_fetched(ctx):
+    if oit.first_fetched(ctx):
         ways = {"fetched": oit.PixelOrderPass(ctx, fetch=True), **ways}
     times: dict[tuple[str, str], list[float]] = {}
     way = [""]

@@ -24,9 +24,9 @@ def list_path(request, monkeypatch, gl) -> bool:
     attachments read through framebuffer fetch (llvmpipe, Mesa), or every one a node linked
     by an atomic exchange (NVIDIA and drivers without the fetch)."""
     fetched = request.param == "fetched"
-    if fetched and not oit.heads_fetched(gl):
+    if fetched and not oit.first_fetched(gl):
         pytest.skip("this driver has no framebuffer fetch of colour and stencil")
-    monkeypatch.setattr(oit, "heads_fetched", lambda ctx: fetched)
+    monkeypatch.setattr(oit, "first_fetched", lambda ctx: fetched)
     return fetched
 
 

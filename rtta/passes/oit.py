@@ -24,8 +24,9 @@ llvmpipe has them, NVIDIA's driver not), the same pass keeps each pixel's first 
 in two colour attachments and its count and mark in the stencil, all read and written by the
 shader itself: no atomics, no depth test, and nodes only for a pixel's fourth surface on
 (OrderMarks with `fetched`). On llvmpipe the atomic exchange and the node stores were 40% of
-the `transparent` composite: that pass took 19.6 ms against 27.9 on the demo at 1024², the
-resolve 4.1 against 7.4 (BENCHMARKS.md). Both ways give the same picture; the tests run both.
+the `transparent` composite: with the first surfaces fetched, the demo's list pass takes 23.5 ms
+against 29.1 at 1024², the resolve 4.7 against 8.5 (BENCHMARKS.md). Both ways give the same
+picture; the tests run both.
 """
 
 from __future__ import annotations
@@ -37,8 +38,9 @@ from ..atlas.parameterize import Records
 from ..gl import glraw, glsl
 from ..gl.targets import release_all
 
-# heads in a colour attachment, read and written in draw order by the shader (no atomics), and
-# the order marks kept by it too: where the driver has these (Mesa's llvmpipe does; NVIDIA not)
+# each pixel's first surfaces in colour attachments and its count and order mark in the stencil,
+# read and written in draw order by the shader (no atomics): where the driver has these (Mesa's
+# llvmpipe does; NVIDIA's driver not)
 FETCH_EXTENSIONS = ("GL_EXT_shader_framebuffer_fetch", "GL_ARM_shader_framebuffer_fetch_depth_stencil",
                     "GL_ARB_shader_stencil_export")
 MAX_NODES = 1 << 23            # 8 Mi surfaces, 128 MiB of nodes
@@ -75,9 +77,9 @@ def blended_in_place(min_opacity: float) -> int:
     return max(n, 1)
 
 
-def heads_fetched(ctx: moderngl.Context) -> bool:
-    """Whether `ctx` lets the collect read and write the list heads and the order marks as
-    framebuffer attachments, in draw order (FETCH_EXTENSIONS)."""
+def first_fetched(ctx: moderngl.Context) -> bool:
+    """Whether `ctx` lets the collect read and write each pixel's first surfaces, its count and
+    its order mark as framebuffer attachments, in draw order (FETCH_EXTENSIONS)."""
     return all(e in ctx.extensions for e in FETCH_EXTENSIONS)
 
 
@@ -95,13 +97,13 @@ def node_bases(records: Records, ids: np.ndarray) -> tuple[np.ndarray, int]:
 class PixelOrderPass:
     """begin(viewport, ids, records) -> bool (False: over MAX_NODES, use object order), then
     collect_into(target, mark), the caller's sprites drawn with MODE_COLLECT (and FIRST_FETCHED
-    where `fetch`), end_collect(), then resolve(). `fetch` (heads_fetched): each pixel's first
+    where `fetch`), end_collect(), then resolve(). `fetch` (first_fetched): each pixel's first
     three surfaces and its count are framebuffer attachments (OrderMarks), only later surfaces
     nodes; else every surface is a node, linked by an atomic exchange of the pixel's head."""
 
     def __init__(self, ctx: moderngl.Context, fetch: bool | None = None) -> None:
         self.ctx = ctx
-        self.fetch = heads_fetched(ctx) if fetch is None else bool(fetch)
+        self.fetch = first_fetched(ctx) if fetch is None else bool(fetch)
         self.heads = ctx.buffer(reserve=4)
         self.nodes = ctx.buffer(reserve=NODE_BYTES)
         self.bases = ctx.buffer(reserve=4)
@@ -208,7 +210,7 @@ class OrderMarks:
     255 (STENCIL_OUT_OF_ORDER). The shader's list writes make the depth and stencil tests come
     after it, so every fragment is listed, failing or not; on a GPU too (GL runs such a shader
     whatever the tests give), where they keep the draw order.
-    With `fetched` (heads_fetched), the shader reads and writes the stencil itself (a count in
+    With `fetched` (first_fetched), the shader reads and writes the stencil itself (a count in
     the low 7 bits, saturating, and a flag of 128), and a pixel's first three surfaces are two
     colour attachments it reads and writes (`first`), with no depth test: every fragment is
     blended, those out of order too, as their pixels are resolved anyway; with mark=False

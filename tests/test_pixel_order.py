@@ -104,6 +104,26 @@ def test_pixel_order_overflow_keeps_nearest(make_renderer, monkeypatch):
         r.composite("transparent", Style(order="depth"))
 
 
+def test_a_target_too_large_for_the_fetched_surfaces_keeps_the_lists(make_renderer, monkeypatch, list_path):
+    """The fetched first surfaces take 33 bytes per target pixel: over FETCH_MAX_BYTES the
+    frame keeps the lists (and releases the other way's targets), with the same picture; the
+    next frame within the bound fetches again."""
+    scene = _nested_scene()
+    r = make_renderer(scene)
+    r.capture(Camera.orbit(scene.center, scene.radius, 10, 15, 2.0), VP)
+    first = r.composite("transparent", Style(order="pixel")).read()[0].copy()
+    assert r._composite._pixel_order.fetch == list_path
+    monkeypatch.setattr(oit, "FETCH_MAX_BYTES", VP[0] * VP[1] * oit.FETCHED_BYTES_PER_PIXEL - 1)
+    large = r.composite("transparent", Style(order="pixel")).read()[0].copy()
+    pixel_order = r._composite._pixel_order
+    assert not pixel_order.fetch and list(pixel_order._marks) == [False]
+    assert np.abs(large.astype(int) - first).max() <= 1
+    monkeypatch.undo()
+    monkeypatch.setattr(oit, "first_fetched", lambda ctx: list_path)
+    again = r.composite("transparent", Style(order="pixel")).read()[0]
+    assert pixel_order.fetch == list_path and np.array_equal(again, first)
+
+
 def test_more_surfaces_than_kept_merge_behind(make_renderer):
     """12 nested spheres, more than the K = 8 surfaces the resolve sorts: the stated fallback.
     The 8 nearest surfaces are blended in exact depth order, the others merged into one layer

@@ -44,6 +44,10 @@ from ..gl.targets import release_all
 FETCH_EXTENSIONS = ("GL_EXT_shader_framebuffer_fetch", "GL_ARM_shader_framebuffer_fetch_depth_stencil",
                     "GL_ARB_shader_stencil_export")
 MAX_NODES = 1 << 23            # 8 Mi surfaces, 128 MiB of nodes
+# the fetched first surfaces take 33 bytes per pixel of the target (two RGBA32UI and a stencil),
+# the lists 12 (heads and a depth-stencil): a larger target keeps the lists (4K: 274 MiB, fetched)
+FETCHED_BYTES_PER_PIXEL = 33
+FETCH_MAX_BYTES = 384 * 2**20
 # OrderMarks: a pixel whose surfaces all came in depth order keeps the object-order blend,
 # rounded to 8 bits at each surface; the error each rounding leaves is damped by (1 - a) for
 # every surface blended over it, so n surfaces of opacity a or more leave at most
@@ -97,30 +101,34 @@ def node_bases(records: Records, ids: np.ndarray) -> tuple[np.ndarray, int]:
 class PixelOrderPass:
     """begin(viewport, ids, records) -> bool (False: over MAX_NODES, use object order), then
     collect_into(target, mark), the caller's sprites drawn with MODE_COLLECT (and FIRST_FETCHED
-    where `fetch`), end_collect(), then resolve(). `fetch` (first_fetched): each pixel's first
-    three surfaces and its count are framebuffer attachments (OrderMarks), only later surfaces
-    nodes; else every surface is a node, linked by an atomic exchange of the pixel's head."""
+    where `fetch`), end_collect(), then resolve(). `fetch` (first_fetched, and a target within
+    FETCH_MAX_BYTES; set by begin): each pixel's first three surfaces and its count are
+    framebuffer attachments (OrderMarks), only later surfaces nodes; else every surface is a
+    node, linked by an atomic exchange of the pixel's head. `fetch=False` keeps the lists."""
 
     def __init__(self, ctx: moderngl.Context, fetch: bool | None = None) -> None:
         self.ctx = ctx
-        self.fetch = first_fetched(ctx) if fetch is None else bool(fetch)
+        self.can_fetch = first_fetched(ctx) if fetch is None else bool(fetch)
+        self.fetch = self.can_fetch        # this frame's way (begin: FETCH_MAX_BYTES)
         self.heads = ctx.buffer(reserve=4)
         self.nodes = ctx.buffer(reserve=NODE_BYTES)
         self.bases = ctx.buffer(reserve=4)
-        self.programs = {over: glsl.program(ctx, vertex_shader=glsl.load("oit_resolve.vert"),
-                                            fragment_shader=glsl.load("oit_resolve.frag", OVER=over,
-                                                                      FIRST_FETCHED=self.fetch))
-                         for over in (False, True)}
-        self.vaos = {k: ctx.vertex_array(p, []) for k, p in self.programs.items()}
-        self.marks: OrderMarks | None = None      # made on first use
+        self.programs: dict[tuple[bool, bool], moderngl.Program] = {}     # (over, fetch), made on first use
+        self.vaos: dict[tuple[bool, bool], moderngl.VertexArray] = {}
+        self._marks: dict[bool, OrderMarks] = {}    # by fetch; one kept at a time
         self._width = 1
         self._rect = (-1.0, -1.0, 1.0, 1.0)
+
+    @property
+    def marks(self) -> OrderMarks | None:
+        return self._marks.get(self.fetch)
 
     def begin(self, viewport: tuple[int, int], ids: np.ndarray, records: Records) -> bool:
         bases, capacity = node_bases(records, ids)
         if capacity > MAX_NODES:
             return False
         w, h = int(viewport[0]), int(viewport[1])
+        self.fetch = self.can_fetch and w * h * FETCHED_BYTES_PER_PIXEL <= FETCH_MAX_BYTES
         self._width = w
         rects = records.viewport_rect[ids].reshape(-1, 4)
         lo, hi = (rects[:, :2].min(axis=0), rects[:, 2:].max(axis=0)) if len(rects) else ((0, 0), (0, 0))
@@ -148,7 +156,9 @@ class PixelOrderPass:
             target.fbo.use()
             return
         if self.marks is None:
-            self.marks = OrderMarks(self.ctx, fetched=self.fetch)
+            for other in self._marks.values():      # the other way's targets: released
+                other.release()
+            self._marks = {self.fetch: OrderMarks(self.ctx, fetched=self.fetch)}
         self.marks.begin(target, mark)
 
     def end_collect(self) -> None:
@@ -165,7 +175,13 @@ class PixelOrderPass:
         else:
             self.heads.bind_to_storage_buffer(5)
         self.nodes.bind_to_storage_buffer(6)
-        program = self.programs[over is not None]
+        key = (over is not None, self.fetch)
+        if key not in self.programs:
+            self.programs[key] = glsl.program(self.ctx, vertex_shader=glsl.load("oit_resolve.vert"),
+                                              fragment_shader=glsl.load("oit_resolve.frag", OVER=key[0],
+                                                                        FIRST_FETCHED=key[1]))
+            self.vaos[key] = self.ctx.vertex_array(self.programs[key], [])
+        program = self.programs[key]
         if "u_width" in program:           # the heads as a texture need no width
             program["u_width"].value = self._width
         program["u_rect"].value = tuple(float(v) for v in self._rect)
@@ -183,18 +199,18 @@ class PixelOrderPass:
         fbo.depth_mask = False
         fbo.use()
         try:
-            self.vaos[over is not None].render(moderngl.TRIANGLES, vertices=6)
+            self.vaos[key].render(moderngl.TRIANGLES, vertices=6)
         finally:
             fbo.depth_mask = True
             glraw.stencil_off()
 
     @property
     def nbytes(self) -> int:
-        return self.heads.size + self.nodes.size + self.bases.size + (self.marks.nbytes if self.marks else 0)
+        return self.heads.size + self.nodes.size + self.bases.size + sum(m.nbytes for m in self._marks.values())
 
     def release(self) -> None:
-        if self.marks is not None:
-            self.marks.release()
+        for marks in self._marks.values():
+            marks.release()
         for obj in (*self.vaos.values(), *self.programs.values(), self.heads, self.nodes, self.bases):
             obj.release()
 

@@ -124,6 +124,20 @@ def test_a_target_too_large_for_the_fetched_surfaces_keeps_the_lists(make_render
     assert pixel_order.fetch == list_path and np.array_equal(again, first)
 
 
+def test_a_view_too_large_for_the_lists_blends_in_object_order(make_renderer, monkeypatch):
+    """The lists' per-pixel targets (12 bytes a pixel) over LISTS_MAX_BYTES: object order,
+    counted, and said with the view's size (not as too many surfaces)."""
+    scene = _nested_scene()
+    r = make_renderer(scene)
+    r.capture(Camera.orbit(scene.center, scene.radius, 10, 15, 2.0), VP)
+    by_object = r.composite("transparent", Style(order="object")).read()[0].copy()
+    monkeypatch.setattr(oit, "FETCH_MAX_BYTES", 0)
+    monkeypatch.setattr(oit, "LISTS_MAX_BYTES", VP[0] * VP[1] * oit.LIST_BYTES_PER_PIXEL - 1)
+    with pytest.warns(UserWarning, match=f"per-pixel targets for this {VP[0]}x{VP[1]} view"):
+        got = r.composite("transparent", Style(order="pixel")).read()[0]
+    assert r._composite.fallbacks == 1 and np.array_equal(got, by_object)
+
+
 def test_more_surfaces_than_kept_merge_behind(make_renderer):
     """12 nested spheres, more than the K = 8 surfaces the resolve sorts: the stated fallback.
     The 8 nearest surfaces are blended in exact depth order, the others merged into one layer

@@ -259,6 +259,11 @@ class CompositePass:
             self.fallbacks += 1
         self._draw(ids, style, records, blend=True, **how)
 
+    @property
+    def pixel_order_refusal(self) -> str | None:
+        """Why the last fallback to object order happened (oit.PixelOrderPass.refusal)."""
+        return self._pixel_order.refusal if self._pixel_order is not None else None
+
     def _in_place(self, ids) -> int:
         """oit.blended_in_place for the least opacity among `ids` (invisible surfaces add no rounding)."""
         a = self._opacity[ids]

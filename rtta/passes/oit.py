@@ -48,6 +48,8 @@ MAX_NODES = 1 << 23            # 8 Mi surfaces, 128 MiB of nodes
 # the lists 12 (heads and a depth-stencil): a larger target keeps the lists (4K: 274 MiB, fetched)
 FETCHED_BYTES_PER_PIXEL = 33
 FETCH_MAX_BYTES = 384 * 2**20
+LIST_BYTES_PER_PIXEL = 12
+LISTS_MAX_BYTES = 768 * 2**20    # 64 Mpx (8K: 398 MiB); beyond, object order (refusal 'target')
 # OrderMarks: a pixel whose surfaces all came in depth order keeps the object-order blend,
 # rounded to 8 bits at each surface; the error each rounding leaves is damped by (1 - a) for
 # every surface blended over it, so n surfaces of opacity a or more leave at most
@@ -116,6 +118,7 @@ class PixelOrderPass:
         self.programs: dict[tuple[bool, bool], moderngl.Program] = {}     # (over, fetch), made on first use
         self.vaos: dict[tuple[bool, bool], moderngl.VertexArray] = {}
         self._marks: dict[bool, OrderMarks] = {}    # by fetch; one kept at a time
+        self.refusal: str | None = None       # why begin() last returned False
         self._width = 1
         self._rect = (-1.0, -1.0, 1.0, 1.0)
 
@@ -124,11 +127,16 @@ class PixelOrderPass:
         return self._marks.get(self.fetch)
 
     def begin(self, viewport: tuple[int, int], ids: np.ndarray, records: Records) -> bool:
+        """Ready the buffers for `ids` in this viewport; False (the caller blends in object
+        order) where the surfaces would pass MAX_NODES (`refusal` 'surfaces') or the per-pixel
+        targets LISTS_MAX_BYTES ('target')."""
         bases, capacity = node_bases(records, ids)
-        if capacity > MAX_NODES:
-            return False
         w, h = int(viewport[0]), int(viewport[1])
         self.fetch = self.can_fetch and w * h * FETCHED_BYTES_PER_PIXEL <= FETCH_MAX_BYTES
+        self.refusal = ("surfaces" if capacity > MAX_NODES else
+                        "target" if not self.fetch and w * h * LIST_BYTES_PER_PIXEL > LISTS_MAX_BYTES else None)
+        if self.refusal:
+            return False
         self._width = w
         rects = records.viewport_rect[ids].reshape(-1, 4)
         lo, hi = (rects[:, :2].min(axis=0), rects[:, 2:].max(axis=0)) if len(rects) else ((0, 0), (0, 0))

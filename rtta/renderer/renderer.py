@@ -217,8 +217,14 @@ class Renderer:
                                    eye=np.linalg.inv(view)[:3, 3])
             self._throttle.flush()
         if self._composite.fallbacks > fallbacks:
-            self._warn(f"per-pixel order would need more than {oit.MAX_NODES:,} surfaces in this view: "
-                       "blended in object order (a smaller viewport or fewer objects keep it per pixel)")
+            if self._composite.pixel_order_refusal == "target":
+                w, h = records.viewport
+                need = w * h * oit.LIST_BYTES_PER_PIXEL / 2**20
+                self._warn(f"per-pixel order would need {need:,.0f} MiB of per-pixel targets for this {w}x{h} "
+                           "view: blended in object order (a smaller viewport keeps it per pixel)")
+            else:
+                self._warn(f"per-pixel order would need more than {oit.MAX_NODES:,} surfaces in this view: "
+                           "blended in object order (a smaller viewport or fewer objects keep it per pixel)")
         return self.target
 
     def needs_normals(self, mode: str) -> bool:

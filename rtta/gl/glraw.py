@@ -112,11 +112,6 @@ def clear_color_int(draw_buffer: int, value: int) -> None:
     _lib().glClearBufferiv(GL_COLOR, draw_buffer, (ctypes.c_int * 4)(value, value, value, value))
 
 
-def clear_color_uint(draw_buffer: int, value: int) -> None:
-    """Clear an unsigned-integer colour attachment (glClearBufferiv would be undefined there)."""
-    _lib().glClearBufferuiv(GL_COLOR, draw_buffer, (ctypes.c_uint * 4)(value, value, value, value))
-
-
 def set_clip_distances(count: int, enabled: bool) -> None:
     gl = _lib()
     for i in range(count):

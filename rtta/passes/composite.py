@@ -224,7 +224,7 @@ class CompositePass:
                behind_outlined: bool = False, **how) -> None:
         """Blend `ids` (back to front) over the target: object by object, or per pixel in the
         order of their surfaces (style.order 'pixel', or 'auto' in `transparent`; object order
-        when over MAX_NODES).
+        where PixelOrderPass.begin refuses: over MAX_NODES, or a view too large for its targets).
         `behind`: opaque objects already drawn (the ghosted focus); surfaces behind them are
         hidden, by the depth test in object order and by their depth per pixel in pixel order;
         `behind_outlined`: their outlines were drawn with them (at depth 0: nothing covers them).

@@ -59,6 +59,7 @@ LISTS_MAX_BYTES = 768 * 2**20    # 64 Mpx (8K: 398 MiB); beyond, object order (r
 # every in-order pixel in place: 2/255 at most; opacity 0.1 with 4 in place: 3/255.
 ROUNDING_BUDGET = 2.5
 STENCIL_OUT_OF_ORDER = 255
+STENCIL_COUNT = 127              # with `fetched` marks: the count's bits (oit.glsl), the flag 128 above them
 NODE_BYTES = 16
 ORDERS = ("auto", "object", "pixel")   # auto: pixel in `transparent`, object for the ghosted context
 
@@ -101,7 +102,7 @@ def node_bases(records: Records, ids: np.ndarray) -> tuple[np.ndarray, int]:
 
 
 class PixelOrderPass:
-    """begin(viewport, ids, records) -> bool (False: over MAX_NODES, use object order), then
+    """begin(viewport, ids, records) -> bool (False: use object order, `refusal` says why), then
     collect_into(target, mark), the caller's sprites drawn with MODE_COLLECT (and FIRST_FETCHED
     where `fetch`), end_collect(), then resolve(). `fetch` (first_fetched, and a target within
     FETCH_MAX_BYTES; set by begin): each pixel's first three surfaces and its count are
@@ -244,7 +245,7 @@ class OrderMarks:
         self.ctx = ctx
         self.fetched = fetched
         # stencil_above's bound: with the count in 7 bits, a bound of 127 or more hides the flag
-        self.in_place_limit = 126 if fetched else STENCIL_OUT_OF_ORDER - 1
+        self.in_place_limit = STENCIL_COUNT - 1 if fetched else STENCIL_OUT_OF_ORDER - 1
         self._key = None
         self.stencil = self.fbo = self.collect_fbo = None
         self.first: list[moderngl.Texture] = []

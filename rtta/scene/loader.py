@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import gc
 import io
-import re
 import warnings
 from dataclasses import replace
 from pathlib import Path
@@ -21,7 +20,7 @@ from .files import MAX_FILE_BYTES, SafeResolver, max_objects, regular_file
 from .gltf import prepare
 from .gltf_read import Decoded
 from .model import SUPPORTED, Scene, from_batch
-from .obj import material_colors, obj_objects
+from .obj import material_colors, obj_objects, object_number
 from .precheck import BYTES_PER_TRIANGLE, BYTES_PER_VERTEX, check_size, memory_limit, precheck
 from .preprocess import DEFAULT_SMOOTH_ANGLE
 from .textures import TextureTable
@@ -189,8 +188,9 @@ def _items(path: Path, suffix: str) -> tuple[list[str], list[Path], list[tuple]]
     for node, tree in zip(nodes, trees, strict=True):
         transform, geom_name = loaded.graph[node]
         name, key = str(node), order.get(geom_name, len(order))
-        if names is not None and re.fullmatch(r"rtta\.o\.\d+", name) and int(name[7:]) < len(names):
-            name, key = names[int(name[7:])], int(name[7:])
+        k = object_number(name) if names is not None else None
+        if k is not None and k < len(names):
+            name, key = names[k], k
         items.append((key, name, loaded.geometry.get(geom_name), np.asarray(transform, np.float64), tree))
     items.sort(key=lambda item: item[0])                  # file order
     return notes + resolver.warnings, resolver.inputs, [item[1:] for item in items]

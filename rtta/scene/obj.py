@@ -47,6 +47,12 @@ def _line(keyword: bytes) -> bytes:
     return rb"\n[ \t]*" + keyword + rb"(?:[ \t]+([^\r\n]*)|(?=[\r\n]|$))"
 
 
+def object_number(name: str) -> int | None:
+    """K of an object obj_objects named `rtta.o.K` (trimesh's node name for it), else None."""
+    match = re.fullmatch(r"rtta\.o\.(\d+)", name)
+    return int(match.group(1)) if match else None
+
+
 def material_colors(decoded: list, data: bytes, path: Path, resolver) -> list | None:
     """obj_read's objects coloured as trimesh colours them, from its reading of the file's
     material skeleton (obj_read.material_skeleton) through `resolver`; None where a material
@@ -59,8 +65,8 @@ def material_colors(decoded: list, data: bytes, path: Path, resolver) -> list | 
         mesh = loaded.geometry.get(loaded.graph[node][1])
         if getattr(getattr(getattr(mesh, "visual", None), "material", None), "image", None) is not None:
             return None
-        match = re.fullmatch(r"rtta\.o\.(\d+)", str(node))
-        if match and mesh is not None:
-            color_of[int(match.group(1))] = base_color(mesh)
+        k = object_number(str(node))
+        if k is not None and mesh is not None:
+            color_of[k] = base_color(mesh)
     return [(k, replace(geometry, color=color_of.get(stands_for.get(k, -1), geometry.color)))
             for k, geometry in decoded]

@@ -79,13 +79,13 @@ wanted tests && step 200 tests python3 -m pytest -q --tb=short -p no:cacheprovid
     $(for t in $GL_TESTS; do echo "$TESTS/test_$t.py"; done)
 wanted tiny && step 60 tiny python3 "$ROOT/scripts/probe_tiny.py"
 wanted profile && step 120 profile bash -c "python3 '$ROOT/scripts/profile_frame.py' --frames 200 --top 25 &&
-    python3 -c \"from rtta.scene.assembly import write_assembly; write_assembly('/tmp/asm10k.glb', 10000)\" &&
+    python3 -c \"from rtta.scene.generators.assembly import write_assembly; write_assembly('/tmp/asm10k.glb', 10000)\" &&
     python3 '$ROOT/scripts/profile_frame.py' /tmp/asm10k.glb --mode ghosted --size 1280x720 --frames 40 --top 25"
 wanted profile100k && step 150 profile100k bash -c "
-    python3 -c \"from rtta.scene.assembly import write_assembly; write_assembly('/tmp/asm100k.glb', 100000)\" &&
+    python3 -c \"from rtta.scene.generators.assembly import write_assembly; write_assembly('/tmp/asm100k.glb', 100000)\" &&
     python3 '$ROOT/scripts/profile_frame.py' /tmp/asm100k.glb --mode ghosted --size 1280x720 --frames ${PROFILE_FRAMES:-10} --top 30"
 wanted timers && step 150 timers bash -c "
-    python3 -c \"from rtta.scene.assembly import write_assembly as w; w('/tmp/asm10k.glb', 10000); w('/tmp/asm100k.glb', 100000)\" &&
+    python3 -c \"from rtta.scene.generators.assembly import write_assembly as w; w('/tmp/asm10k.glb', 10000); w('/tmp/asm100k.glb', 100000)\" &&
     for f in /tmp/asm10k.glb /tmp/asm100k.glb; do for opt in '' --sync '--sync --no-hull'; do
         python3 '$ROOT/scripts/gpu_timers.py' \$f \$opt; done; done"
 # The viewer in pyglet's headless window: the demo, then 10,000 parts with and without fast navigation.

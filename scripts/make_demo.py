@@ -2,7 +2,7 @@
 
 from pathlib import Path
 
-from rtta.scene.demo import DEMO_NAME, write_demo
+from rtta.scene.generators.demo import DEMO_NAME, write_demo
 
 if __name__ == "__main__":
     out = write_demo(Path(__file__).resolve().parent.parent / "assets" / DEMO_NAME)

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from rtta.bench.compare import crease_limit, depth_mismatch, depth_tolerance, near_edges
 from rtta.gl.readback import front_most, map_back
-from rtta.tools.compare import crease_limit, depth_mismatch, depth_tolerance, near_edges
 
 
 def assert_depth_close(depth, reference, where, ids, what: str) -> None:

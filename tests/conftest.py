@@ -15,7 +15,7 @@ def pytest_addoption(parser):
 @pytest.fixture(scope="session")
 def ctx():
     """The process's one headless context (the CLI called in-process uses it too)."""
-    from rtta.tools.memory import steady_heap
+    from rtta.memory import steady_heap
 
     steady_heap()       # as the CLI and the viewer do
     return shared_context()
@@ -48,7 +48,7 @@ def make_renderer(gl):
 
 @pytest.fixture(scope="session")
 def demo_scene():
-    from rtta.scene.demo import demo_path
+    from rtta.scene.generators.demo import demo_path
     from rtta.scene.loader import load_scene
 
     return load_scene(demo_path())

@@ -10,9 +10,9 @@ import numpy as np
 import trimesh
 from PIL import Image
 
+from rtta.bench.compare import near_edges
 from rtta.renderer.export import world_matrices
 from rtta.scene.camera import Camera
-from rtta.tools.compare import near_edges
 
 
 def nested_glb(path: Path, copies: int = 3) -> Path:

@@ -13,14 +13,14 @@ import pytest
 from PIL import Image
 
 import rtta
+from rtta.bench.compare import near_edges
+from rtta.bench.reliability import gl_census
 from rtta.cli.main import main
 from rtta.renderer import api
 from rtta.renderer.snapshot import SNAPSHOT_MODES, over_background
 from rtta.scene.camera import Camera
-from rtta.scene.demo import demo_path
-from rtta.scene.generate import random_scene
-from rtta.tools.compare import near_edges
-from rtta.tools.reliability import gl_census
+from rtta.scene.generators.demo import demo_path
+from rtta.scene.generators.generate import random_scene
 
 RTTA = str(Path(sys.executable).with_name("rtta"))
 ORBIT, SIZE = (60.0, 20.0, 2.0), (160, 120)

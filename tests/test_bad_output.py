@@ -263,9 +263,9 @@ def test_an_interrupted_export_leaves_the_old_or_the_new_whole(tmp_path):
 
 @pytest.fixture
 def rtta_handlers():
-    """rtta's signal handlers for the test (rtta.imageio), then the previous ones and a clean
+    """rtta's signal handlers for the test (rtta.outputs), then the previous ones and a clean
     state for the tests after."""
-    from rtta import imageio as outputs
+    from rtta import outputs
 
     old = outputs.install_signal_handlers()
     try:
@@ -319,9 +319,9 @@ def test_a_signal_waits_while_a_program_is_made(gl, rtta_handlers):
 
 _LATE_SIGNAL = """
 import os, signal, sys, time
-from rtta import imageio
-imageio.install_signal_handlers()
-with imageio.committing(final=True):
+from rtta import outputs
+outputs.install_signal_handlers()
+with outputs.committing(final=True):
     pass
 class Late:
     def __del__(self):          # runs while the interpreter shuts down

@@ -8,7 +8,7 @@ import pytest
 import trimesh
 
 from rtta.scene import batch
-from rtta.scene.assembly import write_assembly
+from rtta.scene.generators.assembly import write_assembly
 from rtta.scene.loader import load_scene
 from rtta.scene.model import from_meshes
 from rtta.scene.preprocess import index_vertices, smooth_normals

@@ -5,7 +5,7 @@ import math
 import os
 
 import rtta
-from rtta.tools import bench
+from rtta.bench import render as bench
 
 
 def test_capture_bench_quick(gl, tmp_path, capsys):
@@ -54,7 +54,7 @@ def test_composite_bench_quick(gl, tmp_path, capsys):
 
 
 def test_ldi_bench_quick(gl, tmp_path, capsys):
-    from rtta.tools.bench_ldi import run_ldi
+    from rtta.bench.ldi import run_ldi
 
     out = tmp_path / "ldi.json"
     assert run_ldi(quick=True, json_path=str(out)) == 0
@@ -68,7 +68,7 @@ def test_ldi_bench_quick(gl, tmp_path, capsys):
 
 
 def test_material_bench_quick(gl, tmp_path, capsys):
-    from rtta.tools.bench_material import run_material
+    from rtta.bench.material import run_material
 
     out = tmp_path / "material.json"
     assert run_material(40, quick=True, json_path=str(out), viewport=(256, 192), max_vertices=96) == 0
@@ -86,8 +86,8 @@ def test_material_bench_quick(gl, tmp_path, capsys):
 def test_reliability_bench_scene_choice(gl, tmp_path, capsys):
     """--scenes runs only the named scenes (here the textured one, a few frames); an unknown
     name is one error line naming the choices, exit 2."""
+    from rtta.bench.reliability_table import run_reliability
     from rtta.cli.main import main
-    from rtta.tools.bench_reliability import run_reliability
 
     out = tmp_path / "rel.json"
     assert run_reliability(3, 40, json_path=str(out), ctx=gl, only=["textured-64"]) == 0
@@ -102,7 +102,7 @@ def test_reliability_bench_scene_choice(gl, tmp_path, capsys):
 
 def test_dataset_bench_quick(gl, tmp_path, capsys):
     """Both methods write the same annotations (no amodal pixel differs off the silhouette band)."""
-    from rtta.tools.bench_dataset import run_bench
+    from rtta.bench.dataset import run_bench
 
     out = tmp_path / "dataset.json"
     assert run_bench((0, 0), quick=True, json_path=str(out), ctx=gl) == 0
@@ -117,7 +117,7 @@ def test_dataset_bench_quick(gl, tmp_path, capsys):
 
 
 def test_scale_bench_quick(gl, tmp_path, capsys):
-    from rtta.tools.bench_scale import run_scale
+    from rtta.bench.scale import run_scale
 
     out = tmp_path / "scale.json"
     assert run_scale((256, 144), quick=True, sizes="300", json_path=str(out), viewer=False, ctx=gl) == 0

@@ -10,12 +10,12 @@ import pytest
 import trimesh
 from checks import assert_depth_close, check_frame
 
+from rtta.bench.report_runs import _two_spheres, sprites_error
 from rtta.cli.main import main
 from rtta.renderer.renderer import Settings
 from rtta.scene.camera import MAX_FAR_NEAR, Camera
-from rtta.scene.generate import random_scene
+from rtta.scene.generators.generate import random_scene
 from rtta.scene.model import from_meshes
-from rtta.tools.report_runs import _two_spheres, sprites_error
 
 
 def _rotated_box(extents, angle, axis, shift=(0.0, 0.0, 0.0)):

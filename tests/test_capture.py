@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 from checks import assert_depth_close, check_frame
 
+from rtta.bench.compare import near_edges, near_silhouettes
 from rtta.scene.camera import DEFAULT_ORBIT, Camera
-from rtta.scene.generate import random_scene
-from rtta.tools.compare import near_edges, near_silhouettes
+from rtta.scene.generators.generate import random_scene
 
 PATHS = ("vs", "gs")
 
@@ -80,7 +80,7 @@ def test_culled_objects_are_not_packed(make_renderer):
 def test_twenty_thousand_part_assembly(make_renderer, tmp_path):
     """The batched loader's output at 20,000 parts (a generated GLB): STD against the
     front-most atlas everywhere, and id/depth against RTT for a sample of objects."""
-    from rtta.scene.assembly import write_assembly
+    from rtta.scene.generators.assembly import write_assembly
     from rtta.scene.loader import load_scene
 
     scene = load_scene(write_assembly(tmp_path / "assembly.glb", 20_000, seed=2))

@@ -8,8 +8,8 @@ import json
 import numpy as np
 import pytest
 
+from rtta.dataset import coco
 from rtta.errors import RttaError
-from rtta.tools import coco
 
 mask = pytest.importorskip("pycocotools.mask")
 
@@ -104,7 +104,7 @@ def test_view_files_for_scenes_beyond_16_bit_ids(tmp_path):
     (uint32, id + 1). A failed write leaves no folder in place and no temporary."""
     from PIL import Image
 
-    from rtta.tools.dataset_view import View, view_files, write_view
+    from rtta.dataset.view import View, view_files, write_view
 
     ids = np.array([[-1, 0], [70000, 65533]], np.int32)
     view = View(rgb=np.zeros((2, 2, 3), np.uint8), depth=np.array([[0, 1.5], [2.0, 3.0]], np.float32), ids=ids,

@@ -10,7 +10,7 @@ from checks import assert_depth_close
 from rtta.passes.composite import BACKGROUND, MODES, Style
 from rtta.renderer.snapshot import over_background
 from rtta.scene.camera import DEFAULT_ORBIT, Camera
-from rtta.scene.generate import random_scene
+from rtta.scene.generators.generate import random_scene
 from rtta.scene.model import from_meshes
 
 VP = (240, 180)

@@ -8,7 +8,7 @@ import pytest
 from dataset_checks import read_json
 
 from rtta.cli.main import main
-from rtta.scene.demo import demo_path
+from rtta.scene.generators.demo import demo_path
 
 pytest.importorskip("pycocotools")
 SMALL = ["--size", "120x90", "--no-progress", "--views", "2"]
@@ -118,10 +118,10 @@ def test_merge_never_replaces_an_input_or_a_users_file(tmp_path, capsys):
 
 def test_shards_starting_together_see_each_others_marker_on_its_way(tmp_path):
     """Two shards into a new folder: the second finds the first's dataset.json temporary
-    (imageio.atomic_write's) before the marker and must not take it for a foreign file; a
+    (outputs.atomic_write's) before the marker and must not take it for a foreign file; a
     file that only looks like one (a folder of that name) still counts."""
+    from rtta.dataset.options import prepare_out
     from rtta.errors import RttaError
-    from rtta.tools.dataset import prepare_out
 
     out = tmp_path / "d"
     out.mkdir()
@@ -140,7 +140,7 @@ def test_a_marker_that_lands_while_the_folder_is_read(tmp_path, monkeypatch):
     import json
     from pathlib import Path
 
-    from rtta.tools.dataset import prepare_out
+    from rtta.dataset.options import prepare_out
 
     out = tmp_path / "d"
     out.mkdir()

@@ -12,11 +12,11 @@ import pytest
 from dataset_checks import camera_of, check_image, nested_glb, read_json
 from PIL import Image
 
-from rtta.scene.demo import demo_path
-from rtta.scene.generate import random_scene
+from rtta.dataset.options import Options, Run
+from rtta.dataset.run import run
+from rtta.scene.generators.demo import demo_path
+from rtta.scene.generators.generate import random_scene
 from rtta.scene.loader import load_scene
-from rtta.tools.dataset import Options, Run
-from rtta.tools.dataset_run import run
 
 pytest.importorskip("pycocotools")
 
@@ -79,7 +79,7 @@ def test_camera_k_and_depth_against_numpy(tmp_path, nested):
     scene = load_scene(nested)
     cams = tmp_path / "cams.json"
     cams.write_text('[{"orbit": [0, 0, 2.5], "fov": 30}, {"eye": [3, 0.5, 9], "target": [3, 0, 0], "fov": 50}]')
-    from rtta.tools.dataset import parse_cameras
+    from rtta.dataset.options import parse_cameras
 
     out = make(tmp_path / "ds", [str(nested)], size=(240, 180), cameras=parse_cameras(str(cams)))
     doc = read_json(out / "annotations.json")
@@ -110,10 +110,10 @@ def test_scaled_down_regions_map_back_through_t(make_renderer):
     """An atlas too small for the view scales regions down; the gather then follows T's nearest
     texel per pixel instead of a shift: it equals rtta.gl.readback.map_back (the export's and
     the core tests' mapping) on every pixel, and still finds every object."""
+    from rtta.dataset.alone import alone_rtta
     from rtta.gl.readback import map_back
     from rtta.renderer.renderer import Settings
     from rtta.scene.camera import Camera
-    from rtta.tools.dataset_alone import alone_rtta
 
     scene = load_scene(demo_path())
     camera = Camera.orbit(scene.center, scene.radius, 35, 25, 1.6)

@@ -18,9 +18,9 @@ from dataset_checks import nested_glb, read_json
 from PIL import Image
 
 from rtta.cli.main import main
+from rtta.dataset.options import Options, Run
+from rtta.dataset.run import run
 from rtta.scene.model import from_meshes
-from rtta.tools.dataset import Options, Run
-from rtta.tools.dataset_run import run
 
 pytest.importorskip("pycocotools")
 RTTA = str(Path(sys.executable).with_name("rtta"))
@@ -30,7 +30,7 @@ SMALL = ["--size", "160x120", "--no-progress"]
 @pytest.fixture(scope="module")
 def scenes(tmp_path_factory):
     """Two scene files (the demo's copy and a nested scene), so that shards split across scenes."""
-    from rtta.scene.demo import demo_path
+    from rtta.scene.generators.demo import demo_path
 
     folder = tmp_path_factory.mktemp("scenes")
     (folder / "brake.glb").write_bytes(demo_path().read_bytes())
@@ -139,7 +139,7 @@ def test_dask_cluster_runs_the_shards(scenes, reference, tmp_path):
     """The recipe of the README: shards as tasks of a dask.distributed cluster (a LocalCluster of
     two worker processes here; a scheduler address on a real one), then merge."""
     distributed = pytest.importorskip("distributed")
-    from rtta.tools.dataset_dask import run_shards
+    from rtta.dataset.cluster import run_shards
 
     out = tmp_path / "d"
     cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None)

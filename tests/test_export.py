@@ -12,7 +12,7 @@ import pytest
 from PIL import Image
 
 from rtta.cli.main import main
-from rtta.scene.demo import demo_path
+from rtta.scene.generators.demo import demo_path
 from rtta.scene.loader import load_scene
 
 RTTA = str(Path(sys.executable).with_name("rtta"))

@@ -7,10 +7,10 @@ import pytest
 import trimesh
 from checks import check_frame
 
+from rtta.bench.compare import near_edges
 from rtta.scene.camera import Camera
-from rtta.scene.generate import random_scene
+from rtta.scene.generators.generate import random_scene
 from rtta.scene.model import from_meshes
-from rtta.tools.compare import near_edges
 
 PATHS = ("vs", "gs")
 

@@ -63,7 +63,7 @@ def test_step_in_inches_keeps_inches(tmp_path):
 def test_step_length_unit_is_the_one_most_unit_contexts_name():
     """A context per part (as assemblies have): each names its length unit; a unit that only
     defines another (the millimetre an inch is converted from) or a missing entity counts not."""
-    from rtta.scene.formats.step import length_unit
+    from rtta.scene.readers.step import length_unit
 
     def context(k: int, unit_ref: int) -> str:
         return f"#{k}=(GEOMETRIC_REPRESENTATION_CONTEXT(3)GLOBAL_UNIT_ASSIGNED_CONTEXT((#{unit_ref},#2,#3))" \
@@ -143,7 +143,7 @@ def test_ifc_tree_paths_shared_across_elements_match_each_walked_alone(ifc_file)
 
     import ifcopenshell
 
-    from rtta.scene.formats.ifc import tree_path
+    from rtta.scene.readers.ifc import tree_path
 
     model = ifcopenshell.open(str(ifc_file[0]))
     for damaged in (False, True):

@@ -46,7 +46,7 @@ def test_usd_instances_and_meters_per_unit(tmp_path):
     s = load_scene(path)
     fingers = [s.index("finger"), s.index("finger_2")]
     assert np.allclose(s.aabb_max[fingers[1]] - s.aabb_max[fingers[0]], [14, 0, 0])
-    from rtta.scene.formats import usd
+    from rtta.scene.readers import usd
 
     asm = usd.read(path)                    # the prototype's mesh is read once for both instances
     a, b = (i for i, n in enumerate(asm.names) if n.startswith("finger"))
@@ -109,7 +109,7 @@ def test_bad_files_one_line_exit_2_nothing_written(tmp_path, capsys):
 def test_usd_errors_are_one_short_line():
     """usd-core's exception text: the cause, without C++ places and namespaces, the layer's
     path as line and column; an exception whose text is not UTF-8 still gives a reason."""
-    from rtta.scene.formats import usd
+    from rtta.scene.readers import usd
 
     text = ("\n\tError in 'pxrInternal_v0_26_11__pxrReserved__::Sdf_TextFileFormatParser::_RaiseErrorPEGTL' "
             "at line 48 in file /opt/USD/pxr/usd/sdf/textParserHelpers.h : '/tmp/a b/c.usda:29:17: Expected } at "

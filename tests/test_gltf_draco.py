@@ -1,4 +1,4 @@
-"""glTF's KHR_draco_mesh_compression (rtta.scene.draco): compressed primitives load as the
+"""glTF's KHR_draco_mesh_compression (rtta.scene.readers.draco): compressed primitives load as the
 meshes they encode, by both glTF readers; damaged or inconsistent Draco data gives one
 error line naming the file; without DracoPy the error says how to add it."""
 
@@ -14,7 +14,7 @@ import trimesh
 from test_gltf_read import _load
 
 from rtta.cli.main import main
-from rtta.scene import draco
+from rtta.scene.readers import draco
 
 DracoPy = pytest.importorskip("DracoPy")      # in the `draco` extra, which the test extra installs
 

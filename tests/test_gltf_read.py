@@ -1,4 +1,4 @@
-"""The direct glTF reader (rtta.scene.gltf_read) gives the scene trimesh's path gives.
+"""The direct glTF reader (rtta.scene.readers.gltf_read) gives the scene trimesh's path gives.
 
 Each file is loaded twice, once as it is and once with the direct reader switched off, and
 the two scenes must be equal: names, tree paths, vertices, faces, normals, colours, texture
@@ -21,10 +21,10 @@ from hypothesis import strategies as st
 from test_gltf_fuzz import BASE, BINARY, PATHS, VALUES, _apply
 
 from rtta.errors import RttaError
-from rtta.scene import gltf
-from rtta.scene.assembly import write_assembly
-from rtta.scene.gltf_read import plain
+from rtta.scene.generators.assembly import write_assembly
 from rtta.scene.loader import load_scene
+from rtta.scene.readers import gltf
+from rtta.scene.readers.gltf_read import plain
 
 
 def _load(path, direct: bool, monkeypatch, smooth: bool = False):

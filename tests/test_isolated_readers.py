@@ -14,8 +14,8 @@ import pytest
 from assemblies import write_step
 
 from rtta.errors import RttaError
-from rtta.scene.formats import isolated
 from rtta.scene.loader import load_scene
+from rtta.scene.readers import isolated
 
 RTTA = str(Path(sys.executable).with_name("rtta"))
 
@@ -23,7 +23,7 @@ READERS = '''
 import os, signal, time
 from pathlib import Path
 from rtta.errors import RttaError
-from rtta.scene.formats import Assembly
+from rtta.scene.readers import Assembly
 
 def crash(path):
     os.kill(os.getpid(), signal.SIGSEGV)
@@ -103,10 +103,10 @@ def test_step_is_read_in_a_child_and_the_cli_says_a_crash_in_one_line(tmp_path, 
     seen = []
     real = isolated.read
     monkeypatch.setattr(isolated, "read", lambda module, p, lib: seen.append(module) or real(module, p, lib))
-    assert load_scene(path).count > 0 and seen == ["rtta.scene.formats.step"]
+    assert load_scene(path).count > 0 and seen == ["rtta.scene.readers.step"]
     # the CLI, with a reader that crashes in place of OpenCASCADE's
     (tmp_path / "sitecustomize.py").write_text(
-        "import rtta.scene.formats.step as s, os, signal\n"
+        "import rtta.scene.readers.step as s, os, signal\n"
         "s.read = lambda path: os.kill(os.getpid(), signal.SIGSEGV)\n")
     env = dict(os.environ, PYTHONPATH=str(tmp_path))
     res = subprocess.run([RTTA, "snapshot", str(path), "--size", "64x48", "--out", str(tmp_path / "o.png")],

@@ -46,8 +46,8 @@ def test_no_file_over_400_lines():
 
 def test_the_top_of_rtta_stays_short():
     entries = [p.name for p in (ROOT / "rtta").iterdir() if p.name != "__pycache__"]
-    assert len(entries) <= 12, sorted(entries)
-    for package in ("scene", "atlas", "gl", "passes", "ldi", "renderer", "tools", "cli"):
+    assert len(entries) <= 14, sorted(entries)   # the layers, and errors, outputs, memory
+    for package in ("scene", "atlas", "gl", "passes", "ldi", "renderer", "dataset", "bench", "cli"):
         doc = (ROOT / "rtta" / package / "__init__.py").read_text(encoding="utf-8")
         said = doc.split('"""')[1].lower()
         assert doc.startswith('"""') and "import" in said, f"rtta/{package}: say what it may import"

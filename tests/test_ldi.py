@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 import trimesh
 
+from rtta.bench.compare import SNAP_PX
 from rtta.errors import RttaError
 from rtta.ldi.gpu import ParityTest
 from rtta.ldi.pack import compress, decompress
 from rtta.ldi.peel import NIL, Peeler, build, classify, closed_mesh, crop_bounds, look_rotation, to_texture
-from rtta.scene import shapes
-from rtta.tools.compare import SNAP_PX
+from rtta.scene.generators import shapes
 
 COW = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "cow.glb"
 MESHES = ["sphere", "torus", "torus-knot", "vase", "cow"]

@@ -11,13 +11,13 @@ import numpy as np
 import pytest
 import trimesh
 
+from rtta.bench.compare import near_edges
 from rtta.cli.main import main
 from rtta.errors import RttaError
 from rtta.ldi.lens import Lens, default_placement
 from rtta.passes.composite import Style
 from rtta.scene.camera import Camera
 from rtta.scene.model import from_meshes
-from rtta.tools.compare import near_edges
 
 VP = (160, 120)
 
@@ -154,10 +154,10 @@ def test_ldi_command_classifies_points_and_prints_the_table(tmp_path, capsys, gl
 
 def test_ldi_and_lens_release_every_gl_object(gl):
     """Peelers, parity tests and renderers with a lens leave the GL census as it was."""
+    from rtta.bench.reliability import gl_census
     from rtta.ldi.gpu import ParityTest
     from rtta.ldi.peel import build, closed_mesh
     from rtta.renderer.renderer import Renderer
-    from rtta.tools.reliability import gl_census
 
     mesh = trimesh.creation.icosphere(subdivisions=2)
     v, f = closed_mesh(mesh.vertices, mesh.faces)

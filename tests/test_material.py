@@ -13,9 +13,9 @@ from rtta.gl.targets import LayeredTarget
 from rtta.passes.batching import ChunkedStdPass, SeparatePass
 from rtta.passes.bvh import build_bvh, visible_leaves
 from rtta.scene.camera import Camera
+from rtta.scene.generators.textured import REPEATS, TEXTURE_KINDS, textured_box, textured_scene
 from rtta.scene.material_atlas import DEFAULT_LEVELS, build_atlas, pack_slots
 from rtta.scene.preprocess import index_vertices, smooth_normals
-from rtta.scene.textured import REPEATS, TEXTURE_KINDS, textured_box, textured_scene
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 VP = (384, 384)

@@ -1,4 +1,4 @@
-"""Plain OBJ files read without trimesh (rtta.scene.obj_read): the same scene as trimesh's
+"""Plain OBJ files read without trimesh (rtta.scene.readers.obj_read): the same scene as trimesh's
 reading (per object: name, triangles, file normals), and every other file left to trimesh."""
 
 from __future__ import annotations
@@ -6,9 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rtta.scene import obj_read
 from rtta.scene.loader import load_scene
-from rtta.scene.obj import obj_objects
+from rtta.scene.readers import obj_read
+from rtta.scene.readers.obj import obj_objects
 
 BOX_V = [(x, y, z) for x in (0, 1) for y in (0, 1) for z in (0, 2)]
 BOX_QUADS = [(1, 2, 4, 3), (5, 7, 8, 6), (1, 5, 6, 2), (3, 4, 8, 7), (1, 3, 7, 5), (2, 6, 8, 4)]
@@ -80,7 +80,7 @@ def test_plain_files_read_as_trimesh_reads_them(tmp_path, monkeypatch, corner, q
 
 
 def test_groups_as_objects_and_crlf(tmp_path, monkeypatch):
-    """No `o` lines but groups: the groups are the objects (rtta.scene.obj), CRLF line ends."""
+    """No `o` lines but groups: the groups are the objects (rtta.scene.readers.obj), CRLF line ends."""
     lines = []
     for k in range(3):
         lines += [line.replace(f"o part{k}", f"g piece{k}") for line in _box(k, 8 * k, "{v}//{n}")]

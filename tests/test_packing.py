@@ -11,7 +11,7 @@ from rtta.atlas import scratch
 from rtta.atlas.packing import overlaps, pack_shelves
 from rtta.atlas.parameterize import parameterize
 from rtta.scene.camera import Camera
-from rtta.scene.generate import random_scene
+from rtta.scene.generators.generate import random_scene
 
 sizes = st.integers(1, 64)
 

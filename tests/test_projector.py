@@ -8,12 +8,12 @@ import numpy as np
 import pytest
 import trimesh
 
+from rtta.bench.compare import near_edges
 from rtta.errors import RttaError
 from rtta.passes.projector import Projector, default_image, load_image
 from rtta.renderer.snapshot import over_background
 from rtta.scene.camera import Camera
 from rtta.scene.model import from_meshes
-from rtta.tools.compare import near_edges
 
 VP = (200, 150)
 

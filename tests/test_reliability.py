@@ -6,11 +6,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from rtta.bench.reliability import drift, gl_census, random_camera, random_viewport, soak, sweep
+from rtta.memory import mapped_block_bytes, steady_heap
 from rtta.scene.camera import Camera
-from rtta.scene.generate import random_scene
-from rtta.scene.textured import textured_scene
-from rtta.tools.memory import mapped_block_bytes, steady_heap
-from rtta.tools.reliability import drift, gl_census, random_camera, random_viewport, soak, sweep
+from rtta.scene.generators.generate import random_scene
+from rtta.scene.generators.textured import textured_scene
 
 
 def test_census_sees_a_leak_and_its_release(gl):

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from rtta.bench.report import BEGIN, END, SECTIONS
 from rtta.cli.main import main
-from rtta.tools.report import BEGIN, END, SECTIONS
 
 
 def _tables(text: str) -> list[list[list[str]]]:
@@ -89,7 +89,7 @@ def test_plots_are_drawn(quick_report):
 
 
 def test_a_second_run_replaces_the_block(tmp_path, quick_report):
-    from rtta.tools.report import write_block
+    from rtta.bench.report import write_block
 
     md = tmp_path / "B.md"
     md.write_text(quick_report[0].read_text() + "\ntail text\n")

@@ -5,7 +5,7 @@ import pytest
 
 from rtta.gl.targets import SHRINK_AFTER_FRAMES, LayeredTarget
 from rtta.scene.camera import Camera
-from rtta.scene.generate import random_scene
+from rtta.scene.generators.generate import random_scene
 
 
 def test_hysteresis(gl):

@@ -16,7 +16,7 @@ from pathlib import Path
 from pyglet.window import key, mouse
 
 from rtta.gl import glraw
-from rtta.imageio import save_png
+from rtta.outputs import save_png
 from rtta.scene.loader import load_scene_or_demo
 from viewer.app import Viewer
 from viewer.run import create_window
@@ -162,7 +162,7 @@ frames(2, shot="error")
 # thread, the window drawing meanwhile; then a broken one the same way
 import time  # noqa: E402
 
-from rtta.scene.assembly import write_assembly  # noqa: E402
+from rtta.scene.generators.assembly import write_assembly  # noqa: E402
 
 big = write_assembly(OUT / "later.glb", 10_000)
 later = {}

@@ -1,7 +1,7 @@
 """Drives the real viewer on a large generated assembly, for tests/test_viewer.py.
 
 Run as `python tests/viewer_scale_driver.py OUT_DIR PARTS` with DISPLAY set (Xvfb). Writes
-a PARTS-part GLB (rtta.scene.assembly), opens it, then drags, turns the wheel, types into
+a PARTS-part GLB (rtta.scene.generators.assembly), opens it, then drags, turns the wheel, types into
 the filter box, presses all / none / invert, click-picks an object on the composite and
 draws one frame with an unclipped list far past moderngl-window's 65,536-vertex buffers.
 Writes `result.json` (what happened, frame times, GL errors) and window screenshots.
@@ -19,8 +19,8 @@ from imgui_bundle import imgui
 from pyglet.window import key, mouse
 
 from rtta.gl import glraw
-from rtta.imageio import save_png
-from rtta.scene.assembly import write_assembly
+from rtta.outputs import save_png
+from rtta.scene.generators.assembly import write_assembly
 from rtta.scene.loader import load_scene
 from viewer import panels
 from viewer.app import Viewer

@@ -14,7 +14,7 @@ from assemblies import write_ifc
 from pyglet.window import mouse
 
 from rtta.gl import glraw
-from rtta.imageio import save_png
+from rtta.outputs import save_png
 from rtta.scene.loader import load_scene
 from rtta.scene.model import Scene
 from viewer.app import Viewer

@@ -40,7 +40,7 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     from rtta.cli.main import load_options, parse_size
     from rtta.errors import RttaError, printable
-    from rtta.tools.memory import steady_heap
+    from rtta.memory import steady_heap
 
     try:
         args = build_parser().parse_args(argv)
@@ -114,9 +114,9 @@ def _import_native() -> None:
     BaseException`, so a Ctrl-C while it imported was swallowed and the viewer opened anyway,
     and one inside a native module's start can crash the process. A signal that came in is
     raised once they are in."""
-    from rtta import imageio
+    from rtta import outputs
 
-    with imageio.signals_held():
+    with outputs.signals_held():
         import moderngl_window  # noqa: F401
         import trimesh  # noqa: F401
         from imgui_bundle import imgui  # noqa: F401
@@ -124,15 +124,15 @@ def _import_native() -> None:
 
 def cli() -> None:
     """The command: rtta's signal handlers for the whole run (SIGINT, SIGTERM, SIGHUP raise
-    KeyboardInterrupt, held while native code that must not be cut runs: rtta.imageio), and
+    KeyboardInterrupt, held while native code that must not be cut runs: rtta.outputs), and
     Ctrl-C, while starting or drawing, closes the viewer quietly."""
-    from rtta import imageio
+    from rtta import outputs
 
-    old = imageio.install_signal_handlers()
+    old = outputs.install_signal_handlers()
     try:
         code = main()
     except KeyboardInterrupt:
         code = 130
     finally:
-        imageio.restore_signal_handlers(old)
+        outputs.restore_signal_handlers(old)
     sys.exit(code)

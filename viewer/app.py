@@ -18,8 +18,8 @@ import numpy as np
 from imgui_bundle import imgui, implot
 
 from rtta.errors import RttaError, printable
-from rtta.imageio import check_file, save_png
 from rtta.ldi.lens import Lens, default_placement
+from rtta.outputs import check_file, save_png
 from rtta.passes.projector import Projector, default_image
 from rtta.renderer.navigation import FrameBudget, left_out
 from rtta.renderer.renderer import Renderer

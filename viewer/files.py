@@ -10,8 +10,8 @@ from pathlib import Path
 
 from imgui_bundle import imgui
 
-from rtta.scene.formats import SUFFIXES as ASSEMBLIES
 from rtta.scene.model import SUPPORTED
+from rtta.scene.readers import SUFFIXES as ASSEMBLIES
 
 POPUP = "Open scene"
 

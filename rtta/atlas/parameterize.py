@@ -23,7 +23,7 @@ Thinning = Callable[[np.ndarray, np.ndarray], "np.ndarray | None"]
 
 EPS_PX = 1e-3        # slack against CPU/GPU rounding when snapping bounds to pixels
 CHUNK = 16_384    # boxes per pass of project_bounds: its rows (128 KB) stay in the CPU's cache and
-                  # below the fixed mmap threshold of tools.memory.steady_heap (no page faults)
+                  # below the fixed mmap threshold of rtta.memory.steady_heap (no page faults)
 
 
 def project_bounds(corners: np.ndarray, vpm: np.ndarray, reuse: bool = False):

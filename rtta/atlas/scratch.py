@@ -2,7 +2,7 @@
 
 At 10^5 objects every [n] array of Algorithm 1 is 0.8 MB. Allocated afresh each frame, each
 is a new mapping of the process (the CLI fixes glibc's mmap threshold at 256 KB,
-tools.memory): measured in a long viewer-like process, 12,300 page faults and half of a
+rtta.memory): measured in a long viewer-like process, 12,300 page faults and half of a
 40 ms call. Temporaries taken from here are touched once and then stay (27 MB in all at
 10^5 objects). What a call returns (the records) callers keep: `result_block` hands out a
 block of memory again only once no array of an earlier result refers to it.

@@ -14,17 +14,17 @@ from pathlib import Path
 
 import numpy as np
 
+from ..dataset.alone import alone_rtt, alone_rtta
+from ..dataset.coco import encode_flat
+from ..dataset.objects import object_meta
+from ..dataset.options import Options, camera_for, part_path, settings
+from ..dataset.run import Writer, produce_view
+from ..dataset.view import render_rtt, render_rtta
 from ..gl.context import shared_context
 from ..renderer.renderer import Renderer
-from ..scene.generate import random_scene, table1_scene
-from .bench import shared_data
-from .coco import encode_flat
+from ..scene.generators.generate import random_scene, table1_scene
 from .compare import near_edges
-from .dataset import Options, camera_for, part_path, settings
-from .dataset_alone import alone_rtt, alone_rtta
-from .dataset_objects import object_meta
-from .dataset_run import Writer, produce_view
-from .dataset_view import render_rtt, render_rtta
+from .render import shared_data
 
 METHODS = {"rtta": render_rtta, "rtt": render_rtt}
 STAGES = {"rtta": alone_rtta, "rtt": alone_rtt}
@@ -34,7 +34,7 @@ PER_ROUND = 2      # views a method renders in a row (so that writing overlaps t
 def bench_scenes(quick: bool) -> list[tuple[str, object]]:
     """(name, loader): the demo, the engine (when ../shared/data has it), the paper's 580-object
     Table 1 scene and a 2,000-part scene; --quick: the demo and 200 parts."""
-    from ..scene.demo import demo_path
+    from ..scene.generators.demo import demo_path
     from ..scene.loader import load_scene
 
     out = [("demo", lambda: load_scene(demo_path()))]

@@ -10,7 +10,7 @@ import time
 from pathlib import Path
 
 from ..errors import RttaError
-from ..scene import formats
+from ..scene import readers
 from ..scene.loader import load_scene
 from ..scene.model import SUPPORTED
 from .tables import print_table
@@ -54,7 +54,7 @@ def _files(paths: list[str]) -> list[Path]:
         return [Path(p) for p in paths]
     if not SHARED.is_dir():
         raise RttaError(f"no files given and {SHARED} does not exist")
-    known = SUPPORTED + formats.SUFFIXES
+    known = SUPPORTED + readers.SUFFIXES
     return sorted(p for p in SHARED.iterdir() if p.suffix.lower() in known)
 
 
@@ -70,7 +70,7 @@ def _best(fn, runs: int = REPEATS) -> tuple[float, object]:
 
 def run_formats(paths: list[str], json_path: str | None = None) -> int:
     rows = []
-    with formats.native_output():
+    with readers.native_output():
         for path in _files(paths):
             lib, _ = _best(lambda p=path: library_load(p))
             ours, scene = _best(lambda p=path: load_scene(p))

@@ -16,7 +16,7 @@ GPU_REPEATS = 9      # the GPU paths take ~15 ms: more repeats steady the best o
 
 
 def _cow() -> Path:
-    from .bench import shared_data
+    from .render import shared_data
 
     return shared_data() / "cow.glb"
 
@@ -25,7 +25,7 @@ def bench_meshes(quick: bool):
     """(name, trimesh) of the benchmark shapes; the cow when ../shared/data has it."""
     import trimesh
 
-    from ..scene import shapes
+    from ..scene.generators import shapes
 
     out = [(k, shapes.SHAPES[k]()) for k in ("sphere", "torus", "torus-knot", "vase")]
     if _cow().is_file() and not quick:

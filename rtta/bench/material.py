@@ -16,9 +16,9 @@ from ..gl.targets import LayeredTarget
 from ..passes.batching import ChunkedStdPass, SeparatePass
 from ..renderer.renderer import Renderer
 from ..scene.camera import Camera
+from ..scene.generators.textured import textured_scene
 from ..scene.material_atlas import original_nbytes
-from ..scene.textured import textured_scene
-from .bench import _gl_timed, _median_ms
+from .render import _gl_timed, _median_ms
 from .tables import print_table
 
 COLUMNS = ["view", "method", "draw calls", "frame ms"]

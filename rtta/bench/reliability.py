@@ -16,13 +16,13 @@ import numpy as np
 
 from ..gl.glraw import _lib
 from ..gl.readback import to_atlas
+from ..memory import rss_bytes
 from ..passes.composite import MODES, Style
 from ..renderer.renderer import Renderer
 from ..renderer.snapshot import over_background
 from ..scene.camera import Camera
 from ..scene.model import Scene
 from .compare import crease_limit, depth_mismatch, depth_tolerance, near_silhouettes
-from .memory import rss_bytes
 
 COLOR_TOL = 3            # of 255: the core's sprites-vs-STD tolerance
 COLOR_FRACTION = 0.995   # of pixels within COLOR_TOL; depth: rtta.compare.depth_mismatch

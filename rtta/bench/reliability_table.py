@@ -14,7 +14,7 @@ from pathlib import Path
 from ..errors import RttaError
 from ..gl.context import create_headless_context
 from ..renderer.renderer import Renderer
-from ..scene.generate import random_scene
+from ..scene.generators.generate import random_scene
 from .reliability import drift, soak, sweep
 
 
@@ -38,8 +38,8 @@ def _scenes(quick: bool) -> dict:
     """Name -> a function making the scene: the demo, a large generated scene, and a
     textured one (material atlas, REPEAT emulation and mip levels under the same extreme
     cameras). Only the scenes asked for are made."""
+    from ..scene.generators.textured import textured_scene
     from ..scene.loader import load_scene_or_demo
-    from ..scene.textured import textured_scene
 
     return {"demo": lambda: load_scene_or_demo(None),
             "random-2000": lambda: random_scene(200 if quick else 2000, seed=3, spread=40.0),

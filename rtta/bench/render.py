@@ -18,7 +18,7 @@ from ..atlas.parameterize import parameterize
 from ..gl.context import create_headless_context
 from ..renderer.renderer import Renderer
 from ..scene.camera import Camera
-from ..scene.generate import TABLE1, random_scene, table1_scene
+from ..scene.generators.generate import TABLE1, random_scene, table1_scene
 
 
 def shared_data() -> Path:
@@ -173,7 +173,7 @@ def composite_row(ctx, name, scene, viewport, frames: int, settings=None) -> dic
 def composite_scenes(specs: list[str] | None, quick: bool) -> list[tuple[str, object]]:
     """Scenes by name: 'demo', 'table1-N' (a Table 1 row), 'random-N' (N boxes), or a file;
     none given: the demo and the Table 1 rows."""
-    from ..scene.demo import demo_path
+    from ..scene.generators.demo import demo_path
     from ..scene.loader import load_scene
 
     if not specs:

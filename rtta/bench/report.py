@@ -16,10 +16,10 @@ import time
 from pathlib import Path
 
 from ..errors import RttaError
-from ..imageio import atomic_write
+from ..outputs import atomic_write
 from . import report_importance as importance
 from . import report_runs as runs
-from .bench_reliability import _progress
+from .reliability_table import _progress
 
 BEGIN = "<!-- rtta bench report: begin (generated; edit report.py, not this block) -->"
 END = "<!-- rtta bench report: end -->"

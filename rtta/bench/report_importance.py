@@ -13,7 +13,7 @@ import numpy as np
 from ..passes.composite import Style
 from ..passes.oit import resolved_order
 from ..renderer.renderer import Renderer, Settings
-from .bench import _gl_timed, _interleaved_ms
+from .render import _gl_timed, _interleaved_ms
 
 SCALES = (1.0, 0.5, 0.25)
 TOLERANCE = 8            # /255: a pixel is off beyond it

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..imageio import atomic_write
+from ..outputs import atomic_write
 
 SCALE_COLORS = {0.25: "tab:red", 0.5: "tab:orange", 1.0: "tab:green", 2.0: "tab:blue"}
 BORDER_MARKERS = {0: "o", 1: "s", 2: "^", 4: "D"}

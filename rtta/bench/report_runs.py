@@ -10,10 +10,10 @@ import numpy as np
 
 from ..renderer.renderer import Renderer, Settings
 from ..scene.camera import Camera
-from ..scene.generate import TABLE1, random_scene, table1_scene
+from ..scene.generators.generate import TABLE1, random_scene, table1_scene
 from ..scene.model import Scene, from_meshes, oriented_corners
-from .bench import _gl_timed, _median_ms, _rectpack, _rpack, shared_data
 from .reliability import COLOR_TOL, sprites_and_std
+from .render import _gl_timed, _median_ms, _rectpack, _rpack, shared_data
 
 
 def sprites_error(r: Renderer, camera: Camera, viewport: tuple[int, int]) -> dict:
@@ -157,7 +157,7 @@ def _other_packers(n, sizes, area, covered, viewport) -> list[dict]:
 def capture_cost(ctx, viewport, quick: bool, tick) -> list[dict]:
     """Section 3: STD, RTT, RTTA-GS and RTTA-VS per frame against object count (fixed
     vertex total) and against vertex count (fixed object count)."""
-    from .bench import capture_row
+    from .render import capture_row
 
     frames = 3 if quick else 7
     by_objects = (1, 5, 20) if quick else (1, 2, 5, 10, 20, 50, 100, 300, 1000)
@@ -257,7 +257,7 @@ def _stability_row(ctx, scene: Scene, sweep: str, value: float, cams, viewport) 
 
 def ldi_meshes(quick: bool):
     """(name, trimesh) of section 5: the LDI benchmark's shapes (two with --quick)."""
-    from .bench_ldi import bench_meshes
+    from .ldi import bench_meshes
 
     return bench_meshes(quick)[: 2 if quick else None]
 
@@ -265,7 +265,7 @@ def ldi_meshes(quick: bool):
 def ldi_error(ctx, meshes, quick: bool, tick) -> list[dict]:
     """Section 5: LDI parity-test error against trimesh.contains, by resolution, with peel
     and test times."""
-    from .bench_ldi import error_by_resolution
+    from .ldi import error_by_resolution
 
     points = 20_000 if quick else 100_000
     resolutions = (64, 256) if quick else (64, 128, 256, 512, 1024)

@@ -1,6 +1,6 @@
 """`rtta bench scale`: large assemblies, from the file to the viewer's frame rate.
 
-For generated assemblies of 1k, 10k and 100k parts (rtta.scene.assembly, written as GLB
+For generated assemblies of 1k, 10k and 100k parts (rtta.scene.generators.assembly, written as GLB
 by the bench) and the real engine when ../shared/data has it: rtta's load time against
 `trimesh.load` of the same file and their peak RSS (each in a fresh process, so the peaks
 are the loads' own), parameterize + pack ms, STD, capture and ghosted frame ms (in turns
@@ -24,10 +24,10 @@ from ..atlas.parameterize import parameterize
 from ..errors import RttaError
 from ..gl.context import create_headless_context
 from ..renderer.renderer import Renderer
-from ..scene.assembly import write_assembly
 from ..scene.camera import Camera
+from ..scene.generators.assembly import write_assembly
 from ..scene.loader import load_scene
-from .bench import _gl_timed, _interleaved_ms, _median_ms, shared_data
+from .render import _gl_timed, _interleaved_ms, _median_ms, shared_data
 
 SIZES = (1_000, 10_000, 100_000)
 QUICK_SIZES = (1_000,)
@@ -41,7 +41,7 @@ if which == "trimesh":
     trimesh.load(path, force="scene", process=False)
 else:
     from rtta.scene.loader import load_scene
-    from rtta.tools.memory import steady_heap
+    from rtta.memory import steady_heap
     steady_heap()
     t = time.perf_counter()
     load_scene(path)

@@ -83,8 +83,8 @@ def _shard(text: str) -> tuple[int, int]:
 def cmd_dataset(args: argparse.Namespace) -> int:
     if args.scenes[:1] == ["merge"]:
         return _merge(args)
-    from ..tools.dataset import Options, Run, parse_cameras
-    from ..tools.dataset_run import run
+    from ..dataset.options import Options, Run, parse_cameras
+    from ..dataset.run import run
 
     _, load_options, parse_size = args.common
     load = load_options(args)
@@ -115,8 +115,8 @@ def _interrupted(*_) -> None:
 
 def _merge(args: argparse.Namespace) -> int:
     """rtta dataset merge INPUT... --out FILE: folders give their shard files (or annotations.json)."""
-    from ..imageio import atomic_write
-    from ..tools import coco
+    from ..dataset import coco
+    from ..outputs import atomic_write
 
     inputs: list[Path] = []
     for arg in args.scenes[1:]:
@@ -148,7 +148,7 @@ def _merge(args: argparse.Namespace) -> int:
 
 def _ours(path: Path) -> bool:
     """Whether `path` is an annotations file rtta wrote (the only kind merge replaces)."""
-    from ..tools import coco
+    from ..dataset import coco
 
     try:
         return path.is_file() and str(coco.read_document(path).get("info", {})).find("rtta") >= 0
@@ -157,7 +157,7 @@ def _ours(path: Path) -> bool:
 
 
 def cmd_bench_dataset(args: argparse.Namespace) -> int:
-    from ..tools.bench_dataset import run_bench
+    from ..bench.dataset import run_bench
 
     parse_size = args.common[2]
     if args.views < 1:

@@ -15,7 +15,7 @@ import sys
 import warnings
 from collections.abc import Callable
 
-from .. import imageio as outputs
+from .. import outputs
 from ..errors import RttaError, printable
 
 

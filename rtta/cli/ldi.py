@@ -11,8 +11,8 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import RttaError, printable
-from ..imageio import check_file
 from ..ldi.stats import STATS_COLUMNS, stats_row
+from ..outputs import check_file
 from .guard import say
 
 
@@ -31,7 +31,7 @@ def load_mesh(spec: str) -> tuple[str, np.ndarray, np.ndarray, list[str]]:
     from ..ldi.peel import closed_mesh
 
     if spec.startswith("shape:"):
-        from ..scene.shapes import SHAPES
+        from ..scene.generators.shapes import SHAPES
 
         kind = spec.removeprefix("shape:")
         if kind not in SHAPES:
@@ -86,7 +86,7 @@ def read_points(path: str) -> np.ndarray:
 
 def write_npy(path: str, array: np.ndarray) -> None:
     """Write atomically: the old file stays until the new one is complete."""
-    from ..imageio import atomic_write
+    from ..outputs import atomic_write
 
     def save(tmp: str) -> None:
         with open(tmp, "wb") as fh:          # a file object: np.save would add ".npy" to a bare name
@@ -119,7 +119,7 @@ def cmd_ldi(args: argparse.Namespace) -> int:
     ldi = build(ctx, (vertices - center) / extent, faces, args.resolution)
     packed = compress(ldi)
     if args.stats:
-        from ..tools.tables import print_table
+        from ..bench.tables import print_table
 
         print_table(STATS_COLUMNS, [stats_row(name, vertices, ldi, packed)])
     if points is not None:

@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from ..errors import RttaError, printable
-from ..imageio import check_file, check_folder, check_into_folder, os_error
+from ..outputs import check_file, check_folder, check_into_folder, os_error
 from ..scene.preprocess import DEFAULT_SMOOTH_ANGLE
 from .guard import OneLineParser, run_command, say
 
@@ -287,14 +287,14 @@ def cmd_info(args) -> int:
 
 
 def cmd_bench(args) -> int:
-    from ..tools import bench
+    from ..bench import render as bench
 
     if args.bench == "capture":
         return bench.run_capture(parse_size(args.size), quick=args.quick, json_path=args.json)
     if args.bench == "composite":
         return bench.run_composite(parse_size(args.size), quick=args.quick, json_path=args.json, scenes=args.scene)
     if args.bench == "reliability":
-        from ..tools.bench_reliability import run_reliability
+        from ..bench.reliability_table import run_reliability
 
         sweep, soak = (200, 500) if args.quick else (args.sweep, args.soak)
         if sweep < 1 or soak < 2:
@@ -302,19 +302,19 @@ def cmd_bench(args) -> int:
         only = args.scenes.split(",") if args.scenes else None
         return run_reliability(sweep, soak, quick=args.quick, json_path=args.json, only=only)
     if args.bench == "ldi":
-        from ..tools.bench_ldi import run_ldi
+        from ..bench.ldi import run_ldi
 
         if args.points < 1:
             raise RttaError("--points must be at least 1")
         return run_ldi(quick=args.quick, points=args.points, json_path=args.json)
     if args.bench == "material":
-        from ..tools.bench_material import run_material
+        from ..bench.material import run_material
 
         if args.objects < 1 or args.max_vertices < 3:
             raise RttaError("--objects must be at least 1 and --max-vertices at least 3")
         return run_material(args.objects, quick=args.quick, json_path=args.json, max_vertices=args.max_vertices)
     if args.bench == "formats":
-        from ..tools.bench_formats import run_formats
+        from ..bench.formats import run_formats
 
         return run_formats(args.files, json_path=args.json)
     if args.bench == "dataset":
@@ -322,19 +322,19 @@ def cmd_bench(args) -> int:
 
         return cmd_bench_dataset(args)
     if args.bench == "scale":
-        from ..tools.bench_scale import run_scale
+        from ..bench.scale import run_scale
 
         return run_scale(parse_size(args.size), quick=args.quick, sizes=args.parts,
                          json_path=args.json, viewer=not args.no_viewer, normals=args.normals)
     if args.bench == "report":
-        from ..tools.report import run_report
+        from ..bench.report import run_report
 
         return run_report(quick=args.quick, markdown=args.markdown, plots=args.plots)
     return bench.run_packing(quick=args.quick, json_path=args.json)
 
 
 def main(argv: list[str] | None = None) -> int:
-    from ..tools.memory import steady_heap
+    from ..memory import steady_heap
     from .dataset import cmd_dataset
     from .ldi import cmd_ldi
 

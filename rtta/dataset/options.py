@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import RttaError
-from ..imageio import atomic_write
+from ..outputs import atomic_write
 from ..scene.camera import Camera
 from ..scene.model import SUPPORTED
 from . import coco
@@ -63,7 +63,7 @@ class Run:
 def expand_scenes(args: list[str]) -> list[str]:
     """Scene files from files, folders (every supported file inside, sorted) and globs
     (sorted); none: the demo. A plain file is taken as named (a missing one fails at loading)."""
-    from ..scene.demo import demo_path
+    from ..scene.generators.demo import demo_path
 
     found: list[str] = []
     for arg in args or [str(demo_path())]:
@@ -206,7 +206,7 @@ def prepare_out(out: Path, s: dict) -> None:
 
 
 def _marker_temporary(entry: Path) -> bool:
-    """Another shard's dataset.json on its way into place (imageio.atomic_write's temporary):
+    """Another shard's dataset.json on its way into place (outputs.atomic_write's temporary):
     shards started together into a new folder see it before the marker, and it is no
     foreign file."""
     return entry.name.startswith(".dataset.json.") and entry.name.endswith(".json") and entry.is_file()

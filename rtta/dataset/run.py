@@ -12,12 +12,12 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 from ..errors import RttaError, printable
-from ..imageio import atomic_write
+from ..outputs import atomic_write
 from . import coco
-from . import dataset as ds
-from .dataset import Options, Run, complete, part_path, view_dir
-from .dataset_objects import object_meta
-from .dataset_view import MAX_PNG_ID, annotate, camera_entry, depth_scale, render_rtta, view_files, write_view
+from . import options as ds
+from .objects import object_meta
+from .options import Options, Run, complete, part_path, view_dir
+from .view import MAX_PNG_ID, annotate, camera_entry, depth_scale, render_rtta, view_files, write_view
 
 
 class Worker:

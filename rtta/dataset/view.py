@@ -20,8 +20,8 @@ from PIL import Image
 from ..renderer.export import replace_dir, world_matrices
 from ..renderer.renderer import Renderer
 from ..scene.camera import Camera
+from .alone import Alone, alone_rtt, alone_rtta
 from .coco import encode_flat
-from .dataset_alone import Alone, alone_rtt, alone_rtta
 
 PNG_LEVEL = 1          # zlib level of every PNG written: 3-4x faster than Pillow's 6, files ~20% larger
 MAX_PNG_ID = 65534     # visible_id.png holds id + 1 in 16 bits; larger scenes get visible_id.npy

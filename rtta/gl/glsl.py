@@ -11,7 +11,7 @@ from functools import cache
 from importlib import resources
 from typing import TYPE_CHECKING
 
-from ..imageio import signals_held
+from ..outputs import signals_held
 
 if TYPE_CHECKING:
     import moderngl
@@ -66,7 +66,7 @@ def stage_sources(stages: dict[str, str | None], **defines: object) -> dict[str,
 
 
 def program(ctx: moderngl.Context, **sources: str | None) -> moderngl.Program:
-    """`ctx.program(**sources)` with signals held (rtta.imageio.signals_held), raised once the
+    """`ctx.program(**sources)` with signals held (rtta.outputs.signals_held), raised once the
     program is made: moderngl builds a program's members through Python calls, and an
     interrupt raised among them crashed the process (SIGSEGV inside Context.program; 3 of 3
     runs of 200 interrupted frames on llvmpipe, none in 800 with the hold)."""

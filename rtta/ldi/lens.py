@@ -35,7 +35,7 @@ class Lens:
 
     @classmethod
     def shape(cls, kind: str, center, radius: float) -> Lens:
-        from ..scene import shapes
+        from ..scene.generators import shapes
 
         if kind not in SHAPES:
             raise RttaError(f"unknown lens shape {kind!r}; shapes: {', '.join(SHAPES)}, or an object name")

@@ -145,7 +145,7 @@ class _Session:
         if not 0.0 <= smooth_angle <= 180.0:
             raise RttaError(f"--smooth-angle must be between 0 and 180 degrees, got {smooth_angle:g}")
         if scene is None:
-            from ..scene.demo import demo_path
+            from ..scene.generators.demo import demo_path
 
             scene = demo_path()
         path = Path(scene)

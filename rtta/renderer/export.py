@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ..atlas.parameterize import Records
-from ..imageio import check_folder, os_error, remove_tree, replace_dir, staging_dir, to_image
+from ..outputs import check_folder, os_error, remove_tree, replace_dir, staging_dir, to_image
 from ..scene.camera import Camera
 from .renderer import Renderer
 

@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import RttaError
-from ..imageio import save_png
 from ..ldi.lens import SHAPES, Lens, default_placement
+from ..outputs import save_png
 from ..passes.composite import BACKGROUND, MODES, Style
 from ..passes.projector import Projector, default_image, load_image
 from ..scene.camera import Camera, parse_orbit
@@ -120,6 +120,6 @@ def render_modes(renderer: Renderer, camera: Camera, viewport: tuple[int, int], 
 
 
 def write_pngs(images: dict, paths: dict) -> list[Path]:
-    """Each image to its path atomically; the last one ends the command (see rtta.imageio)."""
+    """Each image to its path atomically; the last one ends the command (see rtta.outputs)."""
     modes = list(images)
     return [save_png(paths[mode], images[mode], final=k == len(modes) - 1) for k, mode in enumerate(modes)]

@@ -1,13 +1,14 @@
 """Scene layer: what is drawn, before any GL.
 
-Loading files (what may be read: `files`; declared sizes: `precheck`; glTF checked, its
-node graph walked and rewritten for trimesh: `gltf_check`, `gltf`, `gltf_rewrite`; trimesh;
+Loading files (what may be read: `files`; declared sizes: `precheck`; every format's
+reader in `readers/`: glTF checked, its node graph walked and rewritten for trimesh, OBJ,
+Draco, and the assemblies with their part tree: STEP, IFC, COLLADA, USD, 3DXML;
 preprocessing of vertices and normals, textures and the material atlas they are packed
-into; assemblies with their part tree in `formats/`: STEP, IFC, COLLADA, USD, 3DXML), the
+into), the
 batched `Scene` (one vertex/index buffer, a per-vertex object id; each object's path in the
 tree, the unit and up axis), names, groups and globs resolved to objects (`select`), the
-orbit `Camera`, generated
-scenes and the demo. The bottom layer: it imports only `rtta.errors` and `rtta.imageio`.
+orbit `Camera`; generated scenes and the demo in `generators/`. The bottom layer: it
+imports only `rtta.errors` and `rtta.outputs`.
 """
 
 from .camera import Camera

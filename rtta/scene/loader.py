@@ -15,16 +15,17 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import RttaError
-from . import batch, formats, obj_read
+from . import batch, readers
 from .files import MAX_FILE_BYTES, SafeResolver, max_objects, regular_file
-from .gltf import prepare
-from .gltf_read import Decoded
 from .model import SUPPORTED, Scene, from_batch
-from .obj import material_colors, obj_objects, object_number
 from .precheck import BYTES_PER_TRIANGLE, BYTES_PER_VERTEX, check_size, memory_limit, precheck
 from .preprocess import DEFAULT_SMOOTH_ANGLE
+from .readers import obj_read
+from .readers.gltf import prepare
+from .readers.gltf_read import Decoded
+from .readers.obj import material_colors, obj_objects, object_number
+from .readers.trimesh_io import base_color, trimesh_load
 from .textures import TextureTable
-from .trimesh_io import base_color, trimesh_load
 
 F32_MAX = float(np.finfo(np.float32).max)
 MAX_COORDINATE = 1e15    # float64 keeps ~0.1 units of precision there; float32 offsets stay finite
@@ -47,17 +48,17 @@ def load_scene(path: str | Path, smooth_angle: float = DEFAULT_SMOOTH_ANGLE, smo
 def _load(path: Path, smooth_angle: float, smooth: bool) -> Scene:
     size = regular_file(path, "scene file")
     suffix = path.suffix.lower()
-    if suffix not in SUPPORTED + formats.SUFFIXES:
+    if suffix not in SUPPORTED + readers.SUFFIXES:
         raise RttaError(f"unsupported file type '{suffix[:16] or '(none)'}'; "
-                        f"supported: {', '.join(SUPPORTED + formats.SUFFIXES)}", path)
+                        f"supported: {', '.join(SUPPORTED + readers.SUFFIXES)}", path)
     if size == 0:
         raise RttaError("file is empty", path)
     if size > MAX_FILE_BYTES:
         raise RttaError(f"file is larger than the {MAX_FILE_BYTES >> 30} GiB limit", path)
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")
-        if suffix in formats.SUFFIXES:
-            scene = formats.load(path, 180.0 if smooth else smooth_angle)
+        if suffix in readers.SUFFIXES:
+            scene = readers.load(path, 180.0 if smooth else smooth_angle)
             scene.inputs = [str(path.resolve())]
             return scene
         notes, inputs, read = _read(path, suffix, smooth)
@@ -154,7 +155,7 @@ class _Records:
 
 def _items(path: Path, suffix: str) -> tuple[list[str], list[Path], list[tuple]]:
     """(warnings, files read besides `path`, [(name, trimesh geometry, 4x4 world transform,
-    path in the file's tree)]) in file order. glTF's graph is walked by rtta.scene.gltf; the
+    path in the file's tree)]) in file order. glTF's graph is walked by rtta.scene.readers.gltf; the
     other formats' by trimesh."""
     if suffix in (".gltf", ".glb"):
         prepared = prepare(path)
@@ -184,7 +185,7 @@ def _items(path: Path, suffix: str) -> tuple[list[str], list[Path], list[tuple]]
     items = []
     order = {name: i for i, name in enumerate(loaded.geometry)}
     nodes = list(loaded.graph.nodes_geometry)
-    trees = formats.graph_paths(loaded, nodes) or [()] * len(nodes)
+    trees = readers.graph_paths(loaded, nodes) or [()] * len(nodes)
     for node, tree in zip(nodes, trees, strict=True):
         transform, geom_name = loaded.graph[node]
         name, key = str(node), order.get(geom_name, len(order))
@@ -354,6 +355,6 @@ def _file_has_normals(mesh) -> bool:
 
 def load_scene_or_demo(path: str | None, **options) -> Scene:
     """The scene at `path`, or the built-in demo assembly when no path is given."""
-    from .demo import demo_path
+    from .generators.demo import demo_path
 
     return load_scene(path or str(demo_path()), **options)

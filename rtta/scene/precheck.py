@@ -1,7 +1,7 @@
 """Checks made on a scene file before trimesh reads it: how much memory its declared sizes
 need (binary STL, PLY and OFF headers; the uncompressed size of every member of a 3MF,
 which is a zip archive) and, for 3MF, that its component graph has no cycle and does not
-multiply into more objects than can be drawn. glTF is checked in rtta.scene.gltf.
+multiply into more objects than can be drawn. glTF is checked in rtta.scene.readers.gltf.
 
 `precheck(path)` raises RttaError for what cannot be loaded and returns warnings for what can.
 """

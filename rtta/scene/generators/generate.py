@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import trimesh
 
-from .model import Scene, from_meshes
+from ..model import Scene, from_meshes
 
 
 def _sphere(subdiv_target: int) -> trimesh.Trimesh:

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .model import Scene, from_meshes
+from ..model import Scene, from_meshes
 
 # (name, width, height, kind): what the acceptance asks the atlas to handle
 TEXTURE_KINDS = (("checker", 64, 64, "rgb"), ("stripes_npot", 48, 80, "rgb"), ("odd_npot", 37, 21, "rgb"),

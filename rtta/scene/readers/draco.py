@@ -16,8 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import RttaError
-from .files import memory_limit
+from ...errors import RttaError
+from ..files import memory_limit
 from .gltf_check import TYPE_WIDTH
 from .gltf_read import append_accessor, view_bytes
 
@@ -68,13 +68,13 @@ def _extension(doc: dict, m: int, p: int, path: Path) -> dict | None:
 
 def _decode(blobs: list[bytes], path: Path) -> list[dict]:
     """The blobs decoded by read() in a child process."""
-    from .formats import isolated
+    from . import isolated
 
     with tempfile.TemporaryDirectory(prefix="rtta-draco-") as tmp:
         job = Path(tmp) / "draco.pickle"
         job.write_bytes(pickle.dumps(blobs, protocol=5))
         try:
-            return isolated.read("rtta.scene.draco", job, "Draco")
+            return isolated.read("rtta.scene.readers.draco", job, "Draco")
         except RttaError as exc:             # named the job: name the user's file
             raise RttaError(exc.message, path) from None
 

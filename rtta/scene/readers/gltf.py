@@ -2,10 +2,10 @@
 file order (never with trimesh's random suffixes), cycles and absurd depths are errors
 rather than hangs, and nothing is dropped without a word.
 
-`prepare(path)` checks the document (rtta.scene.gltf_check), its buffers and base-colour
+`prepare(path)` checks the document (rtta.scene.readers.gltf_check), its buffers and base-colour
 images, walks the graph of the chosen scene (iteratively: no recursion, however deep),
 and keeps the drawn (mesh, primitive) pairs. A plain file's primitives are then read
-directly (rtta.scene.gltf_read); any other is rewritten for trimesh as one single-primitive
+directly (rtta.scene.readers.gltf_read); any other is rewritten for trimesh as one single-primitive
 mesh per pair, one node each and no hierarchy, so trimesh only decodes geometry and
 textures. The world transform and the name of every object come from the walk.
 """
@@ -23,13 +23,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import RttaError
+from ...errors import RttaError
+from ..files import MAX_OBJECTS_LARGE, TextureBudget, image_problem, local_file, max_objects, memory_limit, read_limited
+from ..precheck import check_size
 from . import draco
-from .files import MAX_OBJECTS_LARGE, TextureBudget, image_problem, local_file, max_objects, memory_limit, read_limited
 from .gltf_check import COMPONENT_BYTES, TYPE_WIDTH, check, read_document
 from .gltf_read import Decoded, decode, densify_sparse, extension, transform_texcoords, view_bytes
 from .gltf_rewrite import fan_indices, geometry_name, rewrite
-from .precheck import check_size
 
 MAX_DEPTH = 1000            # levels of the node graph
 BUFFER_COPIES = 4           # the file, the rewritten blob, trimesh's slices of it, the GLB it reads
@@ -56,13 +56,13 @@ class Prepared:
     images: dict[int, bytes] = field(default_factory=dict)      # usable base-colour images
 
     def decoded(self) -> dict[str, Decoded] | None:
-        """Every drawn primitive read directly (rtta.scene.gltf_read), keyed like
+        """Every drawn primitive read directly (rtta.scene.readers.gltf_read), keyed like
         Instance.geometry; None when the file needs trimesh."""
         found = decode(self.doc, self.pairs, self.buffers)
         return None if found is None else {geometry_name(m, p): d for (m, p), d in found.items()}
 
     def for_trimesh(self) -> bytes:
-        """The rewritten, self-contained GLB trimesh reads (rtta.scene.gltf_rewrite)."""
+        """The rewritten, self-contained GLB trimesh reads (rtta.scene.readers.gltf_rewrite)."""
         new, blob = rewrite(self.doc, self.pairs, self.buffers, self.images)
         text = json.dumps(new, allow_nan=False).encode()
         text += b" " * (-len(text) % 4)

@@ -14,7 +14,7 @@ import math
 import struct
 from pathlib import Path
 
-from ..errors import RttaError
+from ...errors import RttaError
 
 COMPONENT_BYTES = {5120: 1, 5121: 1, 5122: 2, 5123: 2, 5125: 4, 5126: 4}
 TYPE_WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}

@@ -7,7 +7,7 @@ are most of the load time and a large share of the peak memory. `decode` reads e
 drawn (mesh, primitive) of a plain file into arrays; any other file (textures, vertex
 colours, strips, quantized accessors, compression) returns None and goes through
 trimesh as before. The arrays equal what trimesh gives (tests/test_gltf_read.py); the
-document has been checked (rtta.scene.gltf_check), so every byte range lies in its buffer.
+document has been checked (rtta.scene.readers.gltf_check), so every byte range lies in its buffer.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The glTF document trimesh reads (rtta.scene.gltf writes it): self-contained and flat,
+"""The glTF document trimesh reads (rtta.scene.readers.gltf writes it): self-contained and flat,
 so trimesh decodes geometry and textures and nothing else. Every buffer, the triangle-list
 indices of fans and every usable image lie in one binary chunk; one mesh of one primitive
 per drawn (mesh, primitive), one node each, no hierarchy, no cameras, skins or animations;
@@ -14,7 +14,7 @@ from .gltf_read import accessor_array
 
 def geometry_name(mesh: int, primitive: int) -> str:
     """The name of a drawn (mesh, primitive) in the rewritten document: trimesh's geometry
-    key, and the key of the direct reader's records (rtta.scene.gltf)."""
+    key, and the key of the direct reader's records (rtta.scene.readers.gltf)."""
     return f"rtta.{mesh}.{primitive}"
 
 

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import RttaError
-from ...imageio import signals_held
+from ...outputs import signals_held
 from . import Assembly, unit_name
 
 LEFT_OUT = ("IfcOpeningElement", "IfcSpace")

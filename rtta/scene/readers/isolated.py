@@ -63,7 +63,7 @@ def time_limit(path: Path) -> float:
 
 
 def read(module: str, path: Path, library: str):
-    """What `module`.read(path) gives (module: a dotted name, e.g. rtta.scene.formats.step),
+    """What `module`.read(path) gives (module: a dotted name, e.g. rtta.scene.readers.step),
     read in a child process that gets this process's sys.path."""
     limit = time_limit(path)
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p))

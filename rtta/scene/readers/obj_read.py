@@ -4,7 +4,7 @@ trimesh splits an OBJ's objects by masking the file's whole vertex array once pe
 so its time grows with objects × vertices: 10,000 cylinders took 12.6 s split against 1.6 s
 unsplit, and 100,000 parts would take about 20 minutes. `decode` reads a plain file
 (`v` positions, `vn` normals, `vt` checked but not used, triangle and polygon faces, `o` objects as
-rtta.scene.obj names them, `s`, `usemtl` and `mtllib`, comments) in whole-file passes; any
+rtta.scene.readers.obj names them, `s`, `usemtl` and `mtllib`, comments) in whole-file passes; any
 other file (vertex colours, lines or points, relative indices, anything it cannot parse)
 returns None and goes through trimesh as before, with its messages for damaged files. The
 colours of a file with materials come from trimesh reading its material_skeleton.
@@ -19,7 +19,7 @@ import warnings
 
 import numpy as np
 
-from .batch import fans
+from ..batch import fans
 from .gltf_read import NO_FACTOR, Decoded
 
 # Every pattern starts at the newline before its line (the text is searched with one newline
@@ -32,7 +32,7 @@ _KEPT = re.compile(rb"\n[ \t]*(?:(?:usemtl|mtllib|o|g)[ \t][^\r\n]*|f[ \t][^\r\n
 # a v or vn line of other than 3 numbers (w, vertex colours, a damaged row); a continued line
 _ODD = re.compile(rb"\n[ \t]*vn?[ \t](?![ \t]*[^ \t\r\n]+[ \t]+[^ \t\r\n]+[ \t]+[^ \t\r\n]+[ \t]*\r?(?:\n|$))")
 _CONTINUED = re.compile(rb"\\[ \t]*\r?(?:\n|$)")
-_OBJECT = re.compile(rb"\no rtta\.o\.(\d+)(?=\r?(?:\n|$))")      # as rtta.scene.obj writes them
+_OBJECT = re.compile(rb"\no rtta\.o\.(\d+)(?=\r?(?:\n|$))")      # as rtta.scene.readers.obj writes them
 _POLYGON = re.compile(rb"\n[ \t]*f[ \t](?![ \t]*[^ \t\r\n]+[ \t]+[^ \t\r\n]+[ \t]+[^ \t\r\n]+[ \t]*\r?(?:\n|$))")
 _FACE = re.compile(rb"\n[ \t]*f[ \t]+([^\r\n]*)")
 _V = re.compile(rb"\n[ \t]*v[ \t]+([^\r\n]*)")
@@ -42,7 +42,7 @@ _VT = re.compile(rb"\n[ \t]*vt[ \t]+([^\r\n]*)")
 
 def decode(data: bytes, names: list[str]) -> list[tuple[int, Decoded]] | None:
     """(object number K, geometry) per object with faces, in file order, for a plain OBJ whose
-    objects are `o rtta.o.K` lines (rtta.scene.obj.obj_objects, K indexes `names`); None for
+    objects are `o rtta.o.K` lines (rtta.scene.readers.obj.obj_objects, K indexes `names`); None for
     any other file."""
     data = b"\n" + data                      # each line after a newline (the patterns above)
     if _OTHER.search(data) or _ODD.search(data) or _CONTINUED.search(data):
@@ -59,7 +59,7 @@ def decode(data: bytes, names: list[str]) -> list[tuple[int, Decoded]] | None:
             face_sizes.append([len(row.split()) for row in rows] if polygons else [3] * len(rows))
             face_object.append(int(k))
     del parts
-    # objects numbered in file order (rtta.scene.obj): the triangles come grouped by object
+    # objects numbered in file order (rtta.scene.readers.obj): the triangles come grouped by object
     ascending = all(b > a for a, b in zip(face_object, face_object[1:], strict=False))
     if not face_rows or not ascending or face_object[-1] >= len(names):
         return None

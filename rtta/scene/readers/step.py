@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import RttaError
-from ...imageio import signals_held
+from ...outputs import signals_held
 from . import Assembly, native_output, srgb_from_linear
 
 UNITS_M = {"mm": 1e-3, "cm": 1e-2, "m": 1.0, "km": 1e3, "in": 0.0254, "ft": 0.3048, "um": 1e-6}

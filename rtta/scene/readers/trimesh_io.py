@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import RttaError
+from ...errors import RttaError
 
 
 def trimesh_load(source, file_type: str, path: Path, resolver):

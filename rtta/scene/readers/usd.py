@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import RttaError
-from ...imageio import signals_held
+from ...outputs import signals_held
 from ..batch import fans
 from . import Assembly, check_archive, native_output, unit_name
 

@@ -21,9 +21,23 @@ from .scene.model import Scene, from_meshes
 
 __all__ = [
     # one call each (notebooks, scripts)
-    "snapshot", "capture", "Capture",
+    "snapshot",
+    "capture",
+    "Capture",
     # the renderer and what it takes and gives
-    "Camera", "Capabilities", "CapturePass", "Records", "Renderer", "RttPass", "RttaError", "Scene",
-    "Settings", "StdPass", "create_headless_context", "from_meshes", "load_scene", "parameterize",
+    "Camera",
+    "Capabilities",
+    "CapturePass",
+    "Records",
+    "Renderer",
+    "RttPass",
+    "RttaError",
+    "Scene",
+    "Settings",
+    "StdPass",
+    "create_headless_context",
+    "from_meshes",
+    "load_scene",
+    "parameterize",
 ]
 __version__ = "0.1.0"

@@ -29,7 +29,7 @@ def printable(text: object) -> str:
         o = ord(ch)
         if ch in _ESCAPED:
             out.append(_ESCAPED[ch])
-        elif 0xDC80 <= o <= 0xDCFF:                    # os.fsdecode's stand-in for a non-UTF-8 byte
+        elif 0xDC80 <= o <= 0xDCFF:  # os.fsdecode's stand-in for a non-UTF-8 byte
             out.append(f"\\x{o - 0xDC00:02x}")
         elif unicodedata.category(ch) in ("Cc", "Cf", "Cs", "Co", "Zl", "Zp"):
             out.append(f"\\x{o:02x}" if o < 0x100 else f"\\u{o:04x}" if o < 0x10000 else f"\\U{o:08x}")

@@ -29,10 +29,12 @@ from PIL import Image
 
 from .errors import RttaError
 
-NAME_MAX = 255                 # bytes in one path component (Linux, macOS)
+NAME_MAX = 255  # bytes in one path component (Linux, macOS)
 PATH_MAX = 4096
-EXPORT_FILE = re.compile(r"^(records\.json|atlas_color_\d+\.png|atlas_(depth|id)\.npy|std_color\.png|"
-                         r"std_(depth|id)\.npy)$")
+EXPORT_FILE = re.compile(
+    r"^(records\.json|atlas_color_\d+\.png|atlas_(depth|id)\.npy|std_color\.png|"
+    r"std_(depth|id)\.npy)$"
+)
 SIGNALS = tuple(s for s in (getattr(signal, n, None) for n in ("SIGINT", "SIGTERM", "SIGHUP")) if s is not None)
 
 
@@ -45,19 +47,19 @@ class Interrupted(KeyboardInterrupt):
 
 
 class _State:
-    depth = 0              # inside committing() or quiet_signals(): a signal waits
-    finished = False       # the output that ends the command is in place: signals are not raised any more
-    raised = False         # Interrupted has been raised once: later signals only wait (cleanup runs)
-    requested: int | None = None       # the first signal while not finished
+    depth = 0  # inside committing() or quiet_signals(): a signal waits
+    finished = False  # the output that ends the command is in place: signals are not raised any more
+    raised = False  # Interrupted has been raised once: later signals only wait (cleanup runs)
+    requested: int | None = None  # the first signal while not finished
 
 
 def _handler(signum, frame) -> None:
     if _State.finished:
-        return                             # the run's output is in place: finish and say so
+        return  # the run's output is in place: finish and say so
     if _State.requested is None:
         _State.requested = signum
     if _State.depth or _State.raised:
-        return                             # raised at the next commit, or already unwinding
+        return  # raised at the next commit, or already unwinding
     _State.raised = True
     raise Interrupted(signum)
 
@@ -72,7 +74,7 @@ def install_signal_handlers() -> dict:
             if signal.getsignal(sig) is signal.SIG_IGN:
                 continue
             old[sig] = signal.signal(sig, _handler)
-        except (ValueError, OSError):      # not the main thread, or not allowed: leave it
+        except (ValueError, OSError):  # not the main thread, or not allowed: leave it
             pass
     return old
 
@@ -85,7 +87,7 @@ def _ignore_signals() -> None:
         try:
             if signal.getsignal(sig) is _handler:
                 signal.signal(sig, signal.SIG_IGN)
-        except (ValueError, OSError):      # not the main thread: the handler stays and returns
+        except (ValueError, OSError):  # not the main thread: the handler stays and returns
             pass
 
 
@@ -124,7 +126,7 @@ def committing(final: bool = False) -> Iterator[None]:
         _ignore_signals()
     elif _State.requested is not None and not _State.raised:
         _State.raised = True
-        raise Interrupted(_State.requested)       # it came during the rename: stop now, the file is whole
+        raise Interrupted(_State.requested)  # it came during the rename: stop now, the file is whole
 
 
 @contextmanager
@@ -176,7 +178,7 @@ def _check_name(path: Path, what: str) -> None:
 def _resolved(path: Path) -> Path:
     try:
         return path.resolve()
-    except (OSError, RuntimeError) as exc:          # a symlink loop
+    except (OSError, RuntimeError) as exc:  # a symlink loop
         raise RttaError(f"cannot resolve the path ({exc})", path) from None
 
 
@@ -206,8 +208,9 @@ def _parent_dir(path: Path) -> Path:
     return parent
 
 
-def check_file(path: str | Path, inputs: Iterable[str | Path] | None = (), *, suffix: str | None = None,
-               what: str = "--out") -> Path:
+def check_file(
+    path: str | Path, inputs: Iterable[str | Path] | None = (), *, suffix: str | None = None, what: str = "--out"
+) -> Path:
     """RttaError unless `path` may be (re)written as a file: a name the file system takes,
     the wanted suffix, an existing folder as parent, not a folder, FIFO, device or mount
     point itself, and not any input of this run (also through links)."""
@@ -263,8 +266,9 @@ def check_folder(path: str | Path, inputs: Iterable[str | Path] | None = (), *, 
     if not names:
         return path
     if "records.json" not in names:
-        raise RttaError(f"is a folder that rtta export did not write (no records.json); {what} will not "
-                        "replace it", path)
+        raise RttaError(
+            f"is a folder that rtta export did not write (no records.json); {what} will not replace it", path
+        )
     foreign = [n for n in names if not EXPORT_FILE.match(n) or not (path / n).is_file()]
     if foreign:
         listed = ", ".join(foreign[:3]) + (" ..." if len(foreign) > 3 else "")
@@ -272,8 +276,14 @@ def check_folder(path: str | Path, inputs: Iterable[str | Path] | None = (), *, 
     return path
 
 
-def check_into_folder(folder: str | Path, names: Iterable[str], inputs: Iterable[str | Path] | None = (), *,
-                      suffix: str | None = None, what: str = "--all-modes") -> list[Path]:
+def check_into_folder(
+    folder: str | Path,
+    names: Iterable[str],
+    inputs: Iterable[str | Path] | None = (),
+    *,
+    suffix: str | None = None,
+    what: str = "--all-modes",
+) -> list[Path]:
     """The files `names` inside `folder` (made if missing), each checked like check_file."""
     folder = Path(folder)
     _check_name(folder, what)
@@ -281,7 +291,7 @@ def check_into_folder(folder: str | Path, names: Iterable[str], inputs: Iterable
         raise RttaError(f"exists and is not a folder; {what} takes a folder", folder)
     if not folder.exists():
         _parent_dir(folder)
-        for n in names:                      # a folder still to be made holds no input
+        for n in names:  # a folder still to be made holds no input
             _check_name(folder / n, what)
         return [folder / n for n in names]
     return [check_file(folder / n, inputs, suffix=suffix, what=what) for n in names]
@@ -328,8 +338,9 @@ def to_image(rgba_gl: np.ndarray) -> Image.Image:
     return Image.fromarray(np.ascontiguousarray(rgba_gl[::-1]))
 
 
-def atomic_write(path: str | Path, write: Callable[[str], None], *, overwrite: bool = True,
-                 final: bool = False) -> Path:
+def atomic_write(
+    path: str | Path, write: Callable[[str], None], *, overwrite: bool = True, final: bool = False
+) -> Path:
     """Let `write(tmp)` fill a temporary file beside `path`, then move it into place: an old
     file stays whole until the new one is complete. With overwrite=False an existing file is
     a FileExistsError, checked atomically (hard link), so a file that appears meanwhile is
@@ -348,7 +359,7 @@ def atomic_write(path: str | Path, write: Callable[[str], None], *, overwrite: b
     try:
         umask = os.umask(0)
         os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)          # mkstemp makes 0600; a saved file gets the user's usual mode
+        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; a saved file gets the user's usual mode
         write(tmp)
         with committing(final):
             if overwrite:
@@ -367,5 +378,4 @@ def atomic_write(path: str | Path, write: Callable[[str], None], *, overwrite: b
 
 def save_png(path: str | Path, rgba_gl: np.ndarray, *, overwrite: bool = True, final: bool = False) -> Path:
     """Write a GL-convention array as PNG, atomically (see atomic_write)."""
-    return atomic_write(path, lambda tmp: to_image(rgba_gl).save(tmp, format="PNG"), overwrite=overwrite,
-                        final=final)
+    return atomic_write(path, lambda tmp: to_image(rgba_gl).save(tmp, format="PNG"), overwrite=overwrite, final=final)

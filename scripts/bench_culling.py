@@ -30,9 +30,11 @@ def main() -> None:
     rounds = int(args[2] or 9)
     start = time.perf_counter()
     closed = int(scene.closed.sum())
-    print(f"renderer: {ctx.info['GL_RENDERER']}; {scene.count:,} objects, {len(scene.indices) // 3:,} triangles, "
-          f"{closed:,} closed (found in {(time.perf_counter() - start) * 1e3:.0f} ms); viewport "
-          f"{viewport[0]}x{viewport[1]}, camera 30,20,2.2, focus objects 0 and n/2, {rounds} rounds")
+    print(
+        f"renderer: {ctx.info['GL_RENDERER']}; {scene.count:,} objects, {len(scene.indices) // 3:,} triangles, "
+        f"{closed:,} closed (found in {(time.perf_counter() - start) * 1e3:.0f} ms); viewport "
+        f"{viewport[0]}x{viewport[1]}, camera 30,20,2.2, focus objects 0 and n/2, {rounds} rounds"
+    )
     cam = Camera.orbit(scene.center, scene.radius, 30, 20, 2.2)
     focus = {0, scene.count // 2}
     kinds = {"double-sided": Renderer(ctx, scene, Settings(cull_closed=False)), "culled": Renderer(ctx, scene)}
@@ -41,9 +43,12 @@ def main() -> None:
         r.capture(cam, viewport, focus=focus, normals=r.needs_normals(mode), ids=False)
         r.composite(mode, Style(focus=focus))
 
-    stages = {"std": lambda r: r.std(cam, viewport),
-              "capture": lambda r: r.capture(cam, viewport, normals=False, ids=False),
-              "ghosted": lambda r: frame(r, "ghosted"), "ghosted-ao": lambda r: frame(r, "ghosted-ao")}
+    stages = {
+        "std": lambda r: r.std(cam, viewport),
+        "capture": lambda r: r.capture(cam, viewport, normals=False, ids=False),
+        "ghosted": lambda r: frame(r, "ghosted"),
+        "ghosted-ao": lambda r: frame(r, "ghosted-ao"),
+    }
     times = {(k, s): [] for k in kinds for s in stages}
     for _ in range(rounds):
         for kind, r in kinds.items():
@@ -60,8 +65,10 @@ def main() -> None:
         print(f"{stage:12s} {np.median(a):16.1f} {np.median(b):10.1f} {np.median(b / a):22.3f}")
     for kind in kinds:
         std = np.array(times[(kind, "std")])
-        print(f"{kind}, x its STD: " + ", ".join(f"{s} {np.median(np.array(times[(kind, s)]) / std):.2f}"
-                                                 for s in stages if s != "std"))
+        print(
+            f"{kind}, x its STD: "
+            + ", ".join(f"{s} {np.median(np.array(times[(kind, s)]) / std):.2f}" for s in stages if s != "std")
+        )
     for r in kinds.values():
         r.release()
 

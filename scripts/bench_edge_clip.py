@@ -22,7 +22,7 @@ from rtta.scene.loader import load_scene_or_demo
 
 Records = importlib.import_module("rtta.atlas.parameterize").Records
 EDGE = Records.meets_edge
-EVERY = property(lambda self: np.ones(len(self.visible), bool))    # every region clipped, as before
+EVERY = property(lambda self: np.ones(len(self.visible), bool))  # every region clipped, as before
 
 
 def main() -> None:
@@ -50,12 +50,16 @@ def main() -> None:
         edges.append(int((records.visible & records.meets_edge).sum()))
     Records.meets_edge = EDGE
     std, every = np.array(times["std"]), np.array(times["every region clipped"])
-    print(f"{ctx.info['GL_RENDERER']}; {scene.count} objects; {viewport[0]}x{viewport[1]}; regions on the edge "
-          f"per camera: {edges[:len(cameras)]}; ms, medians of {rounds}")
+    print(
+        f"{ctx.info['GL_RENDERER']}; {scene.count} objects; {viewport[0]}x{viewport[1]}; regions on the edge "
+        f"per camera: {edges[: len(cameras)]}; ms, medians of {rounds}"
+    )
     for kind, t in times.items():
         t = np.array(t)
-        print(f"{kind:22s} {np.median(t) * 1e3:7.1f}  x STD {np.median(t / std):.2f}  "
-              f"x every-clipped {np.median(t / every):.3f}")
+        print(
+            f"{kind:22s} {np.median(t) * 1e3:7.1f}  x STD {np.median(t / std):.2f}  "
+            f"x every-clipped {np.median(t / every):.3f}"
+        )
     r.release()
 
 

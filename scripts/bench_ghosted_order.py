@@ -34,8 +34,10 @@ def main() -> None:
             ctx.finish()
             times[order].append(time.perf_counter() - start)
     obj, pix = np.array(times["object"]), np.array(times["pixel"])
-    print(f"{ctx.info['GL_RENDERER']}; {scene.count} objects; ghosted composite ms: object "
-          f"{np.median(obj) * 1e3:.1f}, pixel {np.median(pix) * 1e3:.1f}, ratio {np.median(pix / obj):.2f}")
+    print(
+        f"{ctx.info['GL_RENDERER']}; {scene.count} objects; ghosted composite ms: object "
+        f"{np.median(obj) * 1e3:.1f}, pixel {np.median(pix) * 1e3:.1f}, ratio {np.median(pix / obj):.2f}"
+    )
     renderer.release()
 
 

@@ -24,7 +24,7 @@ RENDER = CompositePass.render
 
 
 def _rectangles(self, **kw):
-    return RENDER(self, **{**kw, "eye": None})      # no eye: B_viewport rectangles
+    return RENDER(self, **{**kw, "eye": None})  # no eye: B_viewport rectangles
 
 
 def main() -> None:
@@ -37,15 +37,17 @@ def main() -> None:
     r = Renderer(ctx, scene)
     focus = {0, scene.count // 2}
     r.capture(Camera.orbit(scene.center, scene.radius, 30, 20, 2.2), viewport, focus=focus)
-    print(f"{ctx.info['GL_RENDERER']}; {scene.count} objects; {viewport[0]}x{viewport[1]}; "
-          f"composite ms, medians of {rounds}")
+    print(
+        f"{ctx.info['GL_RENDERER']}; {scene.count} objects; {viewport[0]}x{viewport[1]}; "
+        f"composite ms, medians of {rounds}"
+    )
     for mode in modes:
         times: dict[str, list[float]] = {"rectangles": [], "outlines": []}
         images = {}
         for _ in range(rounds):
             for kind in times:
                 CompositePass.render = _rectangles if kind == "rectangles" else RENDER
-                r.composite(mode, Style(focus=focus))       # untimed: the same state for both
+                r.composite(mode, Style(focus=focus))  # untimed: the same state for both
                 ctx.finish()
                 start = time.perf_counter()
                 images[kind] = r.composite(mode, Style(focus=focus)).read()[0]
@@ -54,8 +56,10 @@ def main() -> None:
         CompositePass.render = RENDER
         a, b = np.array(times["rectangles"]), np.array(times["outlines"])
         differ = int(np.any(images["rectangles"] != images["outlines"], axis=-1).sum())
-        print(f"{mode:12s} rectangles {np.median(a) * 1e3:6.1f}  outlines {np.median(b) * 1e3:6.1f}  "
-              f"ratio {np.median(b / a):.3f}  pixels that differ {differ}")
+        print(
+            f"{mode:12s} rectangles {np.median(a) * 1e3:6.1f}  outlines {np.median(b) * 1e3:6.1f}  "
+            f"ratio {np.median(b / a):.3f}  pixels that differ {differ}"
+        )
     r.release()
 
 

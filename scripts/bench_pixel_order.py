@@ -26,6 +26,7 @@ def timed(ctx, times: dict, way: list, name, fn):
         key = name(args, kwargs) if callable(name) else name
         times.setdefault((way[0], key), []).append(time.perf_counter() - t0)
         return out
+
     return run
 
 
@@ -39,15 +40,19 @@ def main() -> None:
     scene = load_scene_or_demo(a.scene)
     focus = {0, scene.count // 2}
     r = Renderer(ctx, scene)
-    r.capture(Camera.orbit(scene.center, scene.radius, 30.0, 20.0, 2.2),
-              tuple(int(v) for v in a.size.split("x")), focus=focus, ids=False)
+    r.capture(
+        Camera.orbit(scene.center, scene.radius, 30.0, 20.0, 2.2),
+        tuple(int(v) for v in a.size.split("x")),
+        focus=focus,
+        ids=False,
+    )
     r.composite("transparent", composite.Style(focus=focus))
     ways = {"lists": oit.PixelOrderPass(ctx, fetch=False)}
     if oit.first_fetched(ctx):
         ways = {"fetched": oit.PixelOrderPass(ctx, fetch=True), **ways}
     times: dict[tuple[str, str], list[float]] = {}
     way = [""]
-    draw_name = lambda args, kw: "+".join(k for k, v in kw.items() if v is True) or "draw"   # noqa: E731
+    draw_name = lambda args, kw: "+".join(k for k, v in kw.items() if v is True) or "draw"  # noqa: E731
     composite.CompositePass._draw_run = timed(ctx, times, way, draw_name, composite.CompositePass._draw_run)
     for method in ("begin", "collect_into", "resolve"):
         setattr(oit.PixelOrderPass, method, timed(ctx, times, way, method, getattr(oit.PixelOrderPass, method)))
@@ -61,8 +66,11 @@ def main() -> None:
             ctx.finish()
             times.setdefault((name, "composite"), []).append(time.perf_counter() - t0)
     for name in [*ways, "object"]:
-        print(f"{name:8s} " + ", ".join(f"{k} {1e3 * np.median(v):.2f}" for (w, k), v in times.items() if w == name)
-              + " ms")
+        print(
+            f"{name:8s} "
+            + ", ".join(f"{k} {1e3 * np.median(v):.2f}" for (w, k), v in times.items() if w == name)
+            + " ms"
+        )
     for p_ in ways.values():
         p_.release()
 

@@ -26,7 +26,7 @@ class Timers:
     """GPU and wall time per named call, the GPU's read back at the end (no stall per call)."""
 
     def __init__(self, sync=None) -> None:
-        self.sync = sync               # called before each timed call (ctx.finish: nothing queued overlaps it)
+        self.sync = sync  # called before each timed call (ctx.finish: nothing queued overlaps it)
         self.pending: list[tuple[str, int, float]] = []
         self.gpu: dict[str, list[float]] = {}
         self.wall: dict[str, list[float]] = {}
@@ -47,6 +47,7 @@ class Timers:
                 gl.glEndQuery(GL_TIME_ELAPSED)
                 key = name(args, kwargs) if callable(name) else name
                 self.pending.append((key, q.value, wall))
+
         return run
 
     def collect(self) -> None:
@@ -91,13 +92,16 @@ def main() -> None:
         r.std(cam, viewport)
         ctx.finish()
         timers.collect()
-        if i < 2:                                   # warm-up: programs made, buffers grown
+        if i < 2:  # warm-up: programs made, buffers grown
             timers.gpu.clear()
             timers.wall.clear()
         else:
             timers.wall.setdefault("frame (capture + composite)", []).append(frame)
-    print(f"{ctx.info['GL_RENDERER']}: {a.mode}, {scene.count} objects, {a.size}, medians of {a.frames} frames"
-          + (", synced" if a.sync else "") + (", no outline sprites" if a.no_hull else ""))
+    print(
+        f"{ctx.info['GL_RENDERER']}: {a.mode}, {scene.count} objects, {a.size}, medians of {a.frames} frames"
+        + (", synced" if a.sync else "")
+        + (", no outline sprites" if a.no_hull else "")
+    )
     print(f"{'call':40s} {'GPU ms':>8s} {'wall ms':>8s} {'calls':>6s}")
     for key in sorted(timers.wall, key=lambda k: -np.sum(timers.wall[k])):
         g = timers.gpu.get(key)

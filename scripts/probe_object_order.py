@@ -51,7 +51,7 @@ def main() -> None:
         visible = np.flatnonzero(records.visible)
         depths = {int(o): map_back(atlas, records, o)["depth"] for o in visible}
         view = cam.view(scene.origin)
-        z = -(scene.box_corners() @ view[2, :3] + view[2, 3])        # view depth of every corner [n, 8]
+        z = -(scene.box_corners() @ view[2, :3] + view[2, 3])  # view depth of every corner [n, 8]
         keys = {"centre": z.mean(1), "nearest corner": z.min(1), "farthest corner": z.max(1)}
         shares = []
         for name, key in keys.items():

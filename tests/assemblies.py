@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 # STEP: engine > (block), crank > (shaft), head > (valve, valve); millimetres; sRGB colours
-STEP_PARTS = {   # name: (group path, box min, box max in mm, colour or None)
+STEP_PARTS = {  # name: (group path, box min, box max in mm, colour or None)
     "block": (("engine",), (0, 0, 0), (100, 20, 10), (0.8, 0.2, 0.1)),
     "shaft": (("engine", "crank"), (5, -5, 20), (15, 5, 60), (0.2, 0.5, 0.9)),
     "valve": (("engine", "head"), (18, 3, 30), (22, 7, 45), None),
@@ -90,9 +90,14 @@ def write_ifc(path: Path, storeys: int = 2) -> dict:
     api = ifcopenshell.api
     f = api.project.create_file(version="IFC4")
     project = api.root.create_entity(f, ifc_class="IfcProject", name=IFC_TREE[0])
-    api.unit.assign_unit(f)                                   # millimetres
-    body = api.context.add_context(f, context_type="Model", context_identifier="Body", target_view="MODEL_VIEW",
-                                   parent=api.context.add_context(f, context_type="Model"))
+    api.unit.assign_unit(f)  # millimetres
+    body = api.context.add_context(
+        f,
+        context_type="Model",
+        context_identifier="Body",
+        target_view="MODEL_VIEW",
+        parent=api.context.add_context(f, context_type="Model"),
+    )
     site = api.root.create_entity(f, ifc_class="IfcSite", name=IFC_TREE[1])
     building = api.root.create_entity(f, ifc_class="IfcBuilding", name=IFC_TREE[2])
     api.aggregate.assign_object(f, relating_object=project, products=[site])
@@ -107,8 +112,9 @@ def write_ifc(path: Path, storeys: int = 2) -> dict:
         if slab is not None:
             rep = api.geometry.add_slab_representation(f, context=body, depth=0.2, polyline=slab)
         else:
-            rep = api.geometry.add_wall_representation(f, context=body, length=size[0], thickness=size[1],
-                                                       height=size[2])
+            rep = api.geometry.add_wall_representation(
+                f, context=body, length=size[0], thickness=size[1], height=size[2]
+            )
         api.geometry.assign_representation(f, product=e, representation=rep)
         if kind == "IfcSpace":
             api.aggregate.assign_object(f, relating_object=container, products=[e])
@@ -141,8 +147,22 @@ def write_ifc(path: Path, storeys: int = 2) -> dict:
 def _box_mesh(size):
     sx, sy, sz = size
     v = np.array([[x, y, z] for z in (0, sz) for y in (0, sy) for x in (0, sx)], float)
-    f = np.array([[0, 2, 1], [1, 2, 3], [4, 5, 6], [5, 7, 6], [0, 1, 4], [1, 5, 4],
-                  [2, 6, 3], [3, 6, 7], [0, 4, 2], [2, 4, 6], [1, 3, 5], [3, 7, 5]])
+    f = np.array(
+        [
+            [0, 2, 1],
+            [1, 2, 3],
+            [4, 5, 6],
+            [5, 7, 6],
+            [0, 1, 4],
+            [1, 5, 4],
+            [2, 6, 3],
+            [3, 6, 7],
+            [0, 4, 2],
+            [2, 4, 6],
+            [1, 3, 5],
+            [3, 7, 5],
+        ]
+    )
     return v, f
 
 
@@ -241,14 +261,18 @@ def write_3dxml(path: Path) -> dict:
         items.append(f'<Reference3D id="{rid}" name="{name}"/>')
     for name, (_, t, _) in TREE_PARTS.items():
         part = name.split("_")[0]
-        items.append(f'<Instance3D id="{next_id}" name="{name}.1"><IsAggregatedBy>{refs[parent[part]]}'
-                     f'</IsAggregatedBy><IsInstanceOf>{refs[part]}</IsInstanceOf><RelativeMatrix>'
-                     f'1 0 0 0 1 0 0 0 1 {t[0]} {t[1]} {t[2]}</RelativeMatrix></Instance3D>')
+        items.append(
+            f'<Instance3D id="{next_id}" name="{name}.1"><IsAggregatedBy>{refs[parent[part]]}'
+            f"</IsAggregatedBy><IsInstanceOf>{refs[part]}</IsInstanceOf><RelativeMatrix>"
+            f"1 0 0 0 1 0 0 0 1 {t[0]} {t[1]} {t[2]}</RelativeMatrix></Instance3D>"
+        )
         next_id += 1
     for group in ("arm", "hand"):
-        items.append(f'<Instance3D id="{next_id}" name="{group}.1"><IsAggregatedBy>{refs[parent[group]]}'
-                     f'</IsAggregatedBy><IsInstanceOf>{refs[group]}</IsInstanceOf><RelativeMatrix>'
-                     '1 0 0 0 1 0 0 0 1 0 0 0</RelativeMatrix></Instance3D>')
+        items.append(
+            f'<Instance3D id="{next_id}" name="{group}.1"><IsAggregatedBy>{refs[parent[group]]}'
+            f"</IsAggregatedBy><IsInstanceOf>{refs[group]}</IsInstanceOf><RelativeMatrix>"
+            "1 0 0 0 1 0 0 0 1 0 0 0</RelativeMatrix></Instance3D>"
+        )
         next_id += 1
     reps = {}
     for part in ("base", "link", "finger"):
@@ -259,16 +283,23 @@ def write_3dxml(path: Path) -> dict:
             f'<Rep><Faces><Face triangles="{" ".join(map(str, f.reshape(-1)))}"><SurfaceAttributes>'
             '<Color xsi:type="RGBAColorType" xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance" '
             'red="0.8" green="0.3" blue="0.1" alpha="1"/></SurfaceAttributes></Face></Faces><VertexBuffer>'
-            f'<Positions>{", ".join(" ".join(map(str, p)) for p in v)}</Positions>'
-            f'<Normals>{", ".join(" ".join(map(str, p)) for p in n)}</Normals></VertexBuffer></Rep>'
-            '</Root></XMLRepresentation>')
-        items.append(f'<ReferenceRep id="{next_id}" name="{part}_rep" format="TESSELLATED" '
-                     f'associatedFile="urn:3DXML:{part}.3DRep"/>')
-        items.append(f'<InstanceRep id="{next_id + 1}"><IsAggregatedBy>{refs[part]}</IsAggregatedBy>'
-                     f'<IsInstanceOf>{next_id}</IsInstanceOf></InstanceRep>')
+            f"<Positions>{', '.join(' '.join(map(str, p)) for p in v)}</Positions>"
+            f"<Normals>{', '.join(' '.join(map(str, p)) for p in n)}</Normals></VertexBuffer></Rep>"
+            "</Root></XMLRepresentation>"
+        )
+        items.append(
+            f'<ReferenceRep id="{next_id}" name="{part}_rep" format="TESSELLATED" '
+            f'associatedFile="urn:3DXML:{part}.3DRep"/>'
+        )
+        items.append(
+            f'<InstanceRep id="{next_id + 1}"><IsAggregatedBy>{refs[part]}</IsAggregatedBy>'
+            f"<IsInstanceOf>{next_id}</IsInstanceOf></InstanceRep>"
+        )
         next_id += 2
-    product = ('<?xml version="1.0"?><Model_3dxml xmlns="http://www.3ds.com/xsd/3DXML">'
-               f'<ProductStructure root="1">{"".join(items)}</ProductStructure></Model_3dxml>')
+    product = (
+        '<?xml version="1.0"?><Model_3dxml xmlns="http://www.3ds.com/xsd/3DXML">'
+        f'<ProductStructure root="1">{"".join(items)}</ProductStructure></Model_3dxml>'
+    )
     with zipfile.ZipFile(path, "w") as z:
         z.writestr("Manifest.xml", '<?xml version="1.0"?><Manifest><Root>plant.3dxml</Root></Manifest>')
         z.writestr("plant.3dxml", product)

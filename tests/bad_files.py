@@ -12,15 +12,19 @@ from pathlib import Path
 
 MODEL = "3D/3dmodel.model"
 NS = 'xmlns="http://schemas.microsoft.com/3dmanufacturing/core/2015/02"'
-TRIANGLE = ('<mesh><vertices><vertex x="0" y="0" z="0"/><vertex x="1" y="0" z="0"/><vertex x="0" y="1" z="0"/>'
-            '</vertices><triangles><triangle v1="0" v2="1" v3="2"/></triangles></mesh>')
+TRIANGLE = (
+    '<mesh><vertices><vertex x="0" y="0" z="0"/><vertex x="1" y="0" z="0"/><vertex x="0" y="1" z="0"/>'
+    '</vertices><triangles><triangle v1="0" v2="1" v3="2"/></triangles></mesh>'
+)
 
 
 def threemf(model: str | bytes, extra: dict[str, bytes] | None = None, level: int = 6) -> bytes:
     buf = io.BytesIO()
     with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED, compresslevel=level) as z:
-        z.writestr("[Content_Types].xml", '<?xml version="1.0"?><Types xmlns="http://schemas.openxmlformats.org/'
-                                          'package/2006/content-types"/>')
+        z.writestr(
+            "[Content_Types].xml",
+            '<?xml version="1.0"?><Types xmlns="http://schemas.openxmlformats.org/package/2006/content-types"/>',
+        )
         z.writestr(MODEL, model)
         for name, data in (extra or {}).items():
             z.writestr(name, data)
@@ -34,13 +38,15 @@ def threemf_bad_deflate() -> bytes:
         info = z.getinfo(MODEL)
     name_len, extra_len = struct.unpack_from("<HH", data, info.header_offset + 26)
     start = info.header_offset + 30 + name_len + extra_len
-    data[start:start + info.compress_size] = b"\xff" * info.compress_size     # reserved block type
+    data[start : start + info.compress_size] = b"\xff" * info.compress_size  # reserved block type
     return bytes(data)
 
 
 def _model(objects: str, items: str) -> str:
-    return f'<?xml version="1.0"?><model unit="millimeter" {NS}><resources>{objects}</resources>' \
-           f'<build>{items}</build></model>'
+    return (
+        f'<?xml version="1.0"?><model unit="millimeter" {NS}><resources>{objects}</resources>'
+        f"<build>{items}</build></model>"
+    )
 
 
 def threemf_bomb(megabytes: int) -> bytes:
@@ -56,35 +62,43 @@ def threemf_declares(gib: float) -> bytes:
     data = bytearray(threemf(_model(f'<object id="1" type="model">{TRIANGLE}</object>', '<item objectid="1"/>')))
     size = int(gib * 2**30) & 0xFFFFFFFF
     name = MODEL.encode()
-    for sig, offset in ((b"PK\x01\x02", 24), (b"PK\x03\x04", 22)):     # central and local headers
+    for sig, offset in ((b"PK\x01\x02", 24), (b"PK\x03\x04", 22)):  # central and local headers
         at = 0
         while (at := data.find(sig, at)) >= 0:
             name_len = struct.unpack_from("<H", data, at + (28 if sig == b"PK\x01\x02" else 26))[0]
             start = at + (46 if sig == b"PK\x01\x02" else 30)
-            if bytes(data[start:start + name_len]) == name:
+            if bytes(data[start : start + name_len]) == name:
                 struct.pack_into("<I", data, at + offset, size)
             at += 4
     return bytes(data)
 
 
 def threemf_cycle() -> bytes:
-    objects = ('<object id="1" type="model"><components><component objectid="2"/></components></object>'
-               '<object id="2" type="model"><components><component objectid="1"/></components></object>')
+    objects = (
+        '<object id="1" type="model"><components><component objectid="2"/></components></object>'
+        '<object id="2" type="model"><components><component objectid="1"/></components></object>'
+    )
     return threemf(_model(objects, '<item objectid="1"/>'))
 
 
 def threemf_explosion(levels: int = 30) -> bytes:
     """Object k holds object k+1 twice: 2**levels triangles from a few KiB."""
-    objects = "".join(f'<object id="{k}" type="model"><components><component objectid="{k + 1}"/>'
-                      f'<component objectid="{k + 1}"/></components></object>' for k in range(1, levels + 1))
+    objects = "".join(
+        f'<object id="{k}" type="model"><components><component objectid="{k + 1}"/>'
+        f'<component objectid="{k + 1}"/></components></object>'
+        for k in range(1, levels + 1)
+    )
     objects += f'<object id="{levels + 1}" type="model">{TRIANGLE}</object>'
     return threemf(_model(objects, '<item objectid="1"/>'))
 
 
 def threemf_entities() -> bytes:
     """Billion laughs in the model's DTD."""
-    dtd = '<!DOCTYPE model [<!ENTITY a "aaaaaaaaaa">' + "".join(
-        f'<!ENTITY {chr(98 + i)} "{("&" + chr(97 + i) + ";") * 10}">' for i in range(9)) + "]>"
+    dtd = (
+        '<!DOCTYPE model [<!ENTITY a "aaaaaaaaaa">'
+        + "".join(f'<!ENTITY {chr(98 + i)} "{("&" + chr(97 + i) + ";") * 10}">' for i in range(9))
+        + "]>"
+    )
     body = _model(f'<object id="1" type="model" name="&j;">{TRIANGLE}</object>', '<item objectid="1"/>')
     return threemf(body.replace("<model", dtd + "<model", 1))
 

@@ -14,8 +14,14 @@ import numpy as np
 
 # a unit box: 24 vertices (flat normals), 36 indices, outward winding
 _CORNERS = np.array([[x, y, z] for x in (-0.5, 0.5) for y in (-0.5, 0.5) for z in (-0.5, 0.5)], np.float32)
-_QUADS = [(0, 1, 3, 2, (-1, 0, 0)), (4, 6, 7, 5, (1, 0, 0)), (0, 4, 5, 1, (0, -1, 0)),
-          (2, 3, 7, 6, (0, 1, 0)), (0, 2, 6, 4, (0, 0, -1)), (1, 5, 7, 3, (0, 0, 1))]
+_QUADS = [
+    (0, 1, 3, 2, (-1, 0, 0)),
+    (4, 6, 7, 5, (1, 0, 0)),
+    (0, 4, 5, 1, (0, -1, 0)),
+    (2, 3, 7, 6, (0, 1, 0)),
+    (0, 2, 6, 4, (0, 0, -1)),
+    (1, 5, 7, 3, (0, 0, 1)),
+]
 
 
 def box_arrays() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -35,18 +41,27 @@ def box_doc(nodes: list[dict] | None = None, prims: int = 1) -> tuple[dict, byte
     pos, nrm, idx = box_arrays()
     binary = pos.tobytes() + nrm.tobytes() + idx.tobytes()
     doc = {
-        "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
         "nodes": nodes if nodes is not None else [{"mesh": 0, "name": "box"}],
-        "meshes": [{"name": "m", "primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1}, "indices": 2}
-                                                for _ in range(prims)]}],
+        "meshes": [
+            {
+                "name": "m",
+                "primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1}, "indices": 2} for _ in range(prims)],
+            }
+        ],
         "buffers": [{"byteLength": len(binary)}],
-        "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 288},
-                        {"buffer": 0, "byteOffset": 288, "byteLength": 288},
-                        {"buffer": 0, "byteOffset": 576, "byteLength": 72}],
-        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 24, "type": "VEC3",
-                       "min": [-0.5] * 3, "max": [0.5] * 3},
-                      {"bufferView": 1, "componentType": 5126, "count": 24, "type": "VEC3"},
-                      {"bufferView": 2, "componentType": 5123, "count": 36, "type": "SCALAR"}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 288},
+            {"buffer": 0, "byteOffset": 288, "byteLength": 288},
+            {"buffer": 0, "byteOffset": 576, "byteLength": 72},
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 24, "type": "VEC3", "min": [-0.5] * 3, "max": [0.5] * 3},
+            {"bufferView": 1, "componentType": 5126, "count": 24, "type": "VEC3"},
+            {"bufferView": 2, "componentType": 5123, "count": 36, "type": "SCALAR"},
+        ],
     }
     if nodes is not None and all("mesh" not in n for n in nodes):
         doc["scenes"] = [{"nodes": [0]}]
@@ -85,6 +100,7 @@ def _set(*path_value):
         for key in path[:-1]:
             target = target[key]
         target[path[-1]] = copy.deepcopy(value)
+
     return change
 
 
@@ -94,6 +110,7 @@ def _delete(*path):
         for key in path[:-1]:
             target = target[key]
         del target[path[-1]]
+
     return change
 
 
@@ -158,17 +175,28 @@ GLTF_ERRORS: list[tuple[str, Callable, str]] = [
     ("translation_2", _set("nodes", 0, "translation", [1, 2]), "translation"),
     ("rotation_inf", _set("nodes", 0, "rotation", [0, 0, 0, float("inf")]), "rotation"),
     ("scale_strings", _set("nodes", 0, "scale", ["1", "1", "1"]), "scale"),
-    ("matrix_and_trs", lambda d: d["nodes"][0].update(matrix=[1.0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1],
-                                                   translation=[1, 0, 0]), "matrix"),
+    (
+        "matrix_and_trs",
+        lambda d: d["nodes"][0].update(
+            matrix=[1.0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1], translation=[1, 0, 0]
+        ),
+        "matrix",
+    ),
     ("scale_1e300", _set("nodes", 0, "scale", [1e300, 1e300, 1e300]), "coordinates"),
     ("name_is_int", _set("nodes", 0, "name", 42), "name"),
     ("scene_out_of_range", _set("scene", 3), "scene is 3"),
     ("scene_nodes_string", _set("scenes", 0, "nodes", "0"), "nodes"),
     ("scenes_is_int", _set("scenes", 1), "'scenes' must be an array"),
-    ("material_color_strings", _set("materials", [{"pbrMetallicRoughness": {"baseColorFactor": "red"}}]),
-     "baseColorFactor"),
-    ("texture_index_out_of_range", _set("materials", [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 3}}}]),
-     "index"),
+    (
+        "material_color_strings",
+        _set("materials", [{"pbrMetallicRoughness": {"baseColorFactor": "red"}}]),
+        "baseColorFactor",
+    ),
+    (
+        "texture_index_out_of_range",
+        _set("materials", [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 3}}}]),
+        "index",
+    ),
     ("extensions_required_meshopt", _set("extensionsRequired", ["EXT_meshopt_compression"]), "meshopt"),
     ("extensions_required_int", _set("extensionsRequired", [1]), "extensionsRequired"),
 ]
@@ -177,8 +205,10 @@ GLTF_ERRORS: list[tuple[str, Callable, str]] = [
 def gltf_error_files() -> dict[str, tuple[bytes, str]]:
     """{file name: (GLB bytes, text the error must contain)}, the cases above plus graphs."""
     out = {f"gltf_{n}.glb": (_mutated(change), says) for n, change, says in GLTF_ERRORS}
-    out["gltf_nodes_each_others_child.glb"] = (_mutated(lambda d: None, nodes=[
-        {"mesh": 0, "children": [1], "name": "a"}, {"children": [0], "name": "b"}]), "cycle")
+    out["gltf_nodes_each_others_child.glb"] = (
+        _mutated(lambda d: None, nodes=[{"mesh": 0, "children": [1], "name": "a"}, {"children": [0], "name": "b"}]),
+        "cycle",
+    )
     out["gltf_chain_2000_deep.glb"] = (_mutated(lambda d: None, nodes=_chain(2000)), "deeper than")
     out["gltf_chain_10000_deep.glb"] = (_mutated(lambda d: None, nodes=_chain(10000)), "deeper than")
     out["gltf_dag_2_pow_40_paths.glb"] = (_mutated(lambda d: None, nodes=_binary_dag(40)), "node paths")
@@ -201,12 +231,22 @@ def gltf_loading_files() -> dict[str, tuple[bytes, str]]:
     doc, binary = box_doc([{"mesh": 0}, {"mesh": 0, "translation": [2, 0, 0]}])
     doc["scenes"] = [{"nodes": [0, 1]}]
     out["names_unnamed_nodes.glb"] = (glb(doc, binary), "")
-    for label, name in (("esc", "evil\x1b[2Jname"), ("bel", "ring\x07"), ("newline", "two\nlines"),
-                        ("rlo", "abc\u202edef"), ("nul", "nul\x00byte")):
+    for label, name in (
+        ("esc", "evil\x1b[2Jname"),
+        ("bel", "ring\x07"),
+        ("newline", "two\nlines"),
+        ("rlo", "abc\u202edef"),
+        ("nul", "nul\x00byte"),
+    ):
         doc, binary = box_doc([{"mesh": 0, "name": name}])
         out[f"names_control_{label}.glb"] = (glb(doc, binary), "")
-    doc, binary = box_doc([{"children": [2], "name": "left"},
-                           {"children": [2], "name": "right", "translation": [3, 0, 0]}, {"mesh": 0, "name": "shared"}])
+    doc, binary = box_doc(
+        [
+            {"children": [2], "name": "left"},
+            {"children": [2], "name": "right", "translation": [3, 0, 0]},
+            {"mesh": 0, "name": "shared"},
+        ]
+    )
     doc["scenes"] = [{"nodes": [0, 1]}]
     out["pictures_second_parent.glb"] = (glb(doc, binary), "more than one parent")
     doc, binary = box_doc()
@@ -221,8 +261,9 @@ def gltf_loading_files() -> dict[str, tuple[bytes, str]]:
     out["pictures_lines_beside_triangles.glb"] = (glb(doc, binary), "lines left out")
     doc, binary = box_doc([{"mesh": 0, "name": "tiny", "scale": [1e-40] * 3}])
     out["pictures_box_at_1e-40.glb"] = (glb(doc, binary), "may be blank; scale the model up")
-    doc, binary = box_doc([{"mesh": 0, "name": "far", "matrix": [1e-7, 0, 0, 0, 0, 1e-7, 0, 0, 0, 0, 1e-7, 0,
-                                                                1e7, 1e7, 1e7, 1]}])
+    doc, binary = box_doc(
+        [{"mesh": 0, "name": "far", "matrix": [1e-7, 0, 0, 0, 0, 1e-7, 0, 0, 0, 0, 1e-7, 0, 1e7, 1e7, 1e7, 1]}]
+    )
     out["pictures_small_box_at_1e7.glb"] = (glb(doc, binary), "cannot be placed")
     out["pictures_corrupt_embedded_texture.glb"] = (_textured(png()[:40]), "embedded")
     out["pictures_oversized_embedded_texture.glb"] = (_textured(_bomb_png()), "too large")
@@ -238,10 +279,14 @@ def _fan_file() -> bytes:
     start = len(binary)
     binary += square.tobytes() + fan.tobytes()
     doc["buffers"][0]["byteLength"] = len(binary)
-    doc["bufferViews"] += [{"buffer": 0, "byteOffset": start, "byteLength": 48},
-                           {"buffer": 0, "byteOffset": start + 48, "byteLength": 8}]
-    doc["accessors"] += [{"bufferView": 3, "componentType": 5126, "count": 4, "type": "VEC3"},
-                         {"bufferView": 4, "componentType": 5123, "count": 4, "type": "SCALAR"}]
+    doc["bufferViews"] += [
+        {"buffer": 0, "byteOffset": start, "byteLength": 48},
+        {"buffer": 0, "byteOffset": start + 48, "byteLength": 8},
+    ]
+    doc["accessors"] += [
+        {"bufferView": 3, "componentType": 5126, "count": 4, "type": "VEC3"},
+        {"bufferView": 4, "componentType": 5123, "count": 4, "type": "SCALAR"},
+    ]
     doc["meshes"][0]["primitives"][1] = {"attributes": {"POSITION": 3}, "indices": 4, "mode": 6}
     return glb(doc, binary)
 
@@ -256,8 +301,10 @@ def _textured(image: bytes, copies: int = 1) -> bytes:
     img_start = len(binary)
     binary += image + b"\0" * (-len(image) % 4)
     doc["buffers"][0]["byteLength"] = len(binary)
-    doc["bufferViews"] += [{"buffer": 0, "byteOffset": start, "byteLength": uv.nbytes},
-                           {"buffer": 0, "byteOffset": img_start, "byteLength": len(image)}]
+    doc["bufferViews"] += [
+        {"buffer": 0, "byteOffset": start, "byteLength": uv.nbytes},
+        {"buffer": 0, "byteOffset": img_start, "byteLength": len(image)},
+    ]
     doc["accessors"].append({"bufferView": 3, "componentType": 5126, "count": 24, "type": "VEC2"})
     for k, prim in enumerate(doc["meshes"][0]["primitives"]):
         prim["attributes"]["TEXCOORD_0"] = 3
@@ -275,6 +322,8 @@ def _bomb_png() -> bytes:
 
     def chunk(kind: bytes, data: bytes) -> bytes:
         return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+
     ihdr = struct.pack(">IIBBBBB", 30000, 30000, 8, 0, 0, 0, 0)
-    return b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr) + chunk(b"IDAT", zlib.compress(b"\0" * 30001)) + \
-        chunk(b"IEND", b"")
+    return (
+        b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr) + chunk(b"IDAT", zlib.compress(b"\0" * 30001)) + chunk(b"IEND", b"")
+    )

@@ -35,9 +35,9 @@ TRI = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"
 @dataclass
 class Case:
     name: str
-    path: Path           # what the CLI is given
-    error: bool          # True: exit 2 and one error line; False: exit 0
-    says: str            # text the error (or the warning) must contain
+    path: Path  # what the CLI is given
+    error: bool  # True: exit 2 and one error line; False: exit 0
+    says: str  # text the error (or the warning) must contain
     category: str = "format"
 
 
@@ -58,12 +58,12 @@ def _glb(mesh_names=("a",), positions=None, indices=None) -> bytes:
 def _renamed_glb(data: bytes, names: list[str]) -> bytes:
     """The GLB with its nodes renamed (trimesh keeps node names unique; files need not)."""
     length = struct.unpack_from("<I", data, 12)[0]
-    doc = json.loads(data[20:20 + length])
+    doc = json.loads(data[20 : 20 + length])
     for node, name in zip([n for n in doc["nodes"] if "mesh" in n], names, strict=True):
         node["name"] = name
     text = json.dumps(doc).encode()
     text += b" " * (-len(text) % 4)
-    rest = data[20 + length:]
+    rest = data[20 + length :]
     head = struct.pack("<4sIIII", b"glTF", 2, 20 + len(text) + len(rest), len(text), 0x4E4F534A)
     return head + text + rest
 
@@ -71,7 +71,7 @@ def _renamed_glb(data: bytes, names: list[str]) -> bytes:
 def _patch_glb(data: bytes, positions, indices) -> bytes:
     """Overwrite the first mesh's position (or index) accessor bytes in place."""
     length = struct.unpack_from("<I", data, 12)[0]
-    doc = json.loads(data[20:20 + length])
+    doc = json.loads(data[20 : 20 + length])
     binary_start = 20 + length + 8
     out = bytearray(data)
     prim = doc["meshes"][0]["primitives"][0]
@@ -84,31 +84,36 @@ def _patch_glb(data: bytes, positions, indices) -> bytes:
         dtype = np.float32 if acc["componentType"] == 5126 else {5125: np.uint32, 5123: np.uint16}[acc["componentType"]]
         width = {"VEC3": 3, "SCALAR": 1}[acc["type"]]
         raw = np.full(acc["count"] * width, values, dtype).tobytes()
-        out[start:start + len(raw)] = raw
+        out[start : start + len(raw)] = raw
     return bytes(out)
 
 
 def _gltf(buffer_uri: str, image_uri: str | None = None, name: str = "tri") -> str:
     """A .gltf with one triangle whose buffer (and optional texture) live at the URIs."""
     doc = {
-        "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
         "nodes": [{"mesh": 0, "name": name}],
         "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2}]}],
         "buffers": [{"uri": buffer_uri, "byteLength": 66}],
-        "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36},
-                        {"buffer": 0, "byteOffset": 36, "byteLength": 24},
-                        {"buffer": 0, "byteOffset": 60, "byteLength": 6}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 36},
+            {"buffer": 0, "byteOffset": 36, "byteLength": 24},
+            {"buffer": 0, "byteOffset": 60, "byteLength": 6},
+        ],
         "accessors": [
-            {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
-             "min": [0, 0, 0], "max": [1, 1, 0]},
+            {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]},
             {"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2"},
-            {"bufferView": 2, "componentType": 5123, "count": 3, "type": "SCALAR"}],
+            {"bufferView": 2, "componentType": 5123, "count": 3, "type": "SCALAR"},
+        ],
     }
     if image_uri is not None:
         doc["images"] = [{"uri": image_uri}]
         doc["textures"] = [{"source": 0}]
-        doc["materials"] = [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0},
-                                                      "baseColorFactor": [0.2, 0.6, 0.9, 1.0]}}]
+        doc["materials"] = [
+            {"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}, "baseColorFactor": [0.2, 0.6, 0.9, 1.0]}}
+        ]
         doc["meshes"][0]["primitives"][0]["material"] = 0
     return json.dumps(doc)
 
@@ -134,8 +139,9 @@ def _stl_header(count: int, body_triangles: int) -> bytes:
 
 def many_objects_obj(n: int) -> str:
     """An OBJ of `n` one-triangle objects."""
-    return "".join(f"o p{i}\nv {i} 0 0\nv {i + 1} 0 0\nv {i} 1 0\nf {3 * i + 1} {3 * i + 2} {3 * i + 3}\n"
-                   for i in range(n))
+    return "".join(
+        f"o p{i}\nv {i} 0 0\nv {i + 1} 0 0\nv {i} 1 0\nf {3 * i + 1} {3 * i + 2} {3 * i + 3}\n" for i in range(n)
+    )
 
 
 def many_nodes_glb(n: int) -> bytes:
@@ -180,15 +186,27 @@ def make_corpus(folder: str | Path) -> list[Case]:
     add("beyond_float32.obj", "v 0 0 0\nv 1e39 0 0\nv 0 1 0\nf 1 2 3\n", True, "up to 1e+39, beyond the")
     add("large_coordinates.obj", "v 0 0 0\nv 1e20 0 0\nv 0 1 0\nf 1 2 3\n", True, "up to 1e+20, beyond the")
     # one vertex far out flattens every triangle relative to the object's size: the range is the reason
-    add("far_vertex_flattens.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1e27 0 0\nf 1 2 3\nf 1 2 4\n", True,
-        "up to 1e+27, beyond the")
+    add(
+        "far_vertex_flattens.obj",
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1e27 0 0\nf 1 2 3\nf 1 2 4\n",
+        True,
+        "up to 1e+27, beyond the",
+    )
     add("zero_faces.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n", True, "no objects")
-    add("points.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-        "property float z\nend_header\n0 0 0\n1 0 0\n0 1 0\n", True, "no objects")
-    add("degenerate.obj", "v 0 0 0\nv 1 1 1\nv 2 2 2\nv 5 5 5\nf 1 2 3\nf 1 1 4\nf 2 3 4\n", True,
-        "degenerate")
-    add("obj_cut_inside_a_vertex.obj", "o a\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\no b\nv 0 0 1\nv 1 0 1\nv 0.5", True,
-        "vertices of 1 coordinate(s)")
+    add(
+        "points.ply",
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+        "property float z\nend_header\n0 0 0\n1 0 0\n0 1 0\n",
+        True,
+        "no objects",
+    )
+    add("degenerate.obj", "v 0 0 0\nv 1 1 1\nv 2 2 2\nv 5 5 5\nf 1 2 3\nf 1 1 4\nf 2 3 4\n", True, "degenerate")
+    add(
+        "obj_cut_inside_a_vertex.obj",
+        "o a\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\no b\nv 0 0 1\nv 1 0 1\nv 0.5",
+        True,
+        "vertices of 1 coordinate(s)",
+    )
     add("face_index_out_of_range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 30\n", True, "index")
     add("index_out_of_range.glb", _glb(("a",), indices=60000), True, "index")
     add("stl_truncated_body.stl", _stl_header(1000, 10), True, "STL")
@@ -196,8 +214,7 @@ def make_corpus(folder: str | Path) -> list[Case]:
     add("off_no_counts.off", "OFF\n", True, "OFF")
     add("garbage.3mf", b"PK\x03\x04" + b"\0" * 64, True, "3MF")
     add("3mf_bad_deflate.3mf", bf.threemf_bad_deflate(), True, "not a readable 3MF archive (Error -3")
-    add("3mf_without_model.3mf", bf.threemf("<model/>").replace(b"3D/3dmodel.model", b"3D/elsewhere.xml"),
-        True, "3MF")
+    add("3mf_without_model.3mf", bf.threemf("<model/>").replace(b"3D/3dmodel.model", b"3D/elsewhere.xml"), True, "3MF")
     add("invalid_json.gltf", '{"asset": {"version": "2.0"}, "nodes": [', True, "JSON")
     add("non_utf8.gltf", _gltf("secret.bin").replace('"tri"', '"caf\xe9"'), True, "UTF-8")
     add("is_a_directory.glb", None, True, "directory")
@@ -207,7 +224,7 @@ def make_corpus(folder: str | Path) -> list[Case]:
     add("newline_in_file_name.glb", b"not a model", True, "GLB", path="two\nlines.glb")
     add("non_utf8_file_name.glb", b"not a model", True, "GLB", path=os.fsdecode(b"caf\xe9.glb"))
     add("escape_in_file_name.glb", b"not a model", True, "GLB", path="evil\x1b[2J.glb")
-    if os.geteuid() != 0:        # root reads any file: the case cannot fail there
+    if os.geteuid() != 0:  # root reads any file: the case cannot fail there
         add("no_permission.glb", good, True, "permission")
         os.chmod(d / "no_permission.glb", 0)
 
@@ -217,13 +234,23 @@ def make_corpus(folder: str | Path) -> list[Case]:
 
     category = "limits"
     add("stl_claims_2g_triangles.stl", _stl_header(2**31 - 1, 2), True, "memory limit")
-    add("ply_claims_too_many.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 900000000\n"
+    add(
+        "ply_claims_too_many.ply",
+        "ply\nformat binary_little_endian 1.0\nelement vertex 900000000\n"
         "property float x\nproperty float y\nproperty float z\nelement face 900000000\n"
-        "property list uchar int vertex_indices\nend_header\n", True, "memory limit")
-    add("ply_ascii_claims_too_many.ply", "ply\nformat ascii 1.0\nelement vertex 2000000000\nproperty float x\n"
-        "property float y\nproperty float z\nend_header\n0 0 0\n", True, "memory limit")
+        "property list uchar int vertex_indices\nend_header\n",
+        True,
+        "memory limit",
+    )
+    add(
+        "ply_ascii_claims_too_many.ply",
+        "ply\nformat ascii 1.0\nelement vertex 2000000000\nproperty float x\n"
+        "property float y\nproperty float z\nend_header\n0 0 0\n",
+        True,
+        "memory limit",
+    )
     add("off_claims_too_many.off", "OFF\n1000000000 1000000000 0\n0 0 0\n", True, "memory limit")
-    big = trimesh.creation.icosphere(subdivisions=6)     # 81,920 triangles: over RTTA_MEMORY_LIMIT_MB=1
+    big = trimesh.creation.icosphere(subdivisions=6)  # 81,920 triangles: over RTTA_MEMORY_LIMIT_MB=1
     add("too_large_for_limit.glb", big.export(file_type="glb"), True, "memory limit")
     add("3mf_zip_bomb_16mb.3mf", bf.threemf_bomb(16), True, "memory limit")
     add("3mf_declares_3gib.3mf", bf.threemf_declares(3), True, "memory limit")
@@ -231,7 +258,7 @@ def make_corpus(folder: str | Path) -> list[Case]:
     add("3mf_2_pow_30_components.3mf", bf.threemf_explosion(30), True, "objects")
     add("3mf_entity_expansion.3mf", bf.threemf_entities(), True, "DTD")
     over = MAX_OBJECTS + 1
-    add("obj_10001_objects.obj", many_objects_obj(over), True, f"{over:,} objects")     # small files: 10,000
+    add("obj_10001_objects.obj", many_objects_obj(over), True, f"{over:,} objects")  # small files: 10,000
     add("gltf_10001_nodes.glb", many_nodes_glb(over), True, f"{over:,}")
     if bf.make_fifo(d / "fifo_scene.glb"):
         add("fifo_scene.glb", None, True, "not a regular file")
@@ -260,8 +287,13 @@ def make_corpus(folder: str | Path) -> list[Case]:
     add("missing_texture.gltf", _gltf("secret.bin", "no_such_texture.png"), False, "no_such_texture.png")
     add("unreadable_texture.gltf", _gltf("secret.bin", "broken.png"), False, "broken.png")
     (d / "broken.png").write_bytes(b"\x89PNG\r\n\x1a\nnot really a png")
-    add("texture_outside_folder.gltf", _gltf("secret.bin", "../broken.png"), False, "outside",
-        path="sub/texture_outside_folder.gltf")
+    add(
+        "texture_outside_folder.gltf",
+        _gltf("secret.bin", "../broken.png"),
+        False,
+        "outside",
+        path="sub/texture_outside_folder.gltf",
+    )
     (d / "sub" / "secret.bin").write_bytes(_gltf_buffer())
     add("texture_url.gltf", _gltf("secret.bin", "http://example.com/t.png"), False, "URL")
     obj, mtl = bf.obj_with_material("red.mtl", "no_such.png")
@@ -275,8 +307,7 @@ def make_corpus(folder: str | Path) -> list[Case]:
     category = "names"
     add("duplicate_names.glb", _renamed_glb(_glb(("a", "b", "c")), ["part"] * 3), False, "numbered")
     add("non_utf8_names.obj", "o caf\xe9\n" + TRI + "o na\xefve\nv 0 0 1\nv 1 0 1\nv 0 1 1\nf 4 5 6\n", False, "")
-    add("obj_same_name_twice.obj", "o part\n" + TRI + "o part\nv 0 0 1\nv 1 0 1\nv 0 1 1\nf 4 5 6\n", False,
-        "numbered")
+    add("obj_same_name_twice.obj", "o part\n" + TRI + "o part\nv 0 0 1\nv 1 0 1\nv 0 1 1\nf 4 5 6\n", False, "numbered")
     add("obj_unnamed_object.obj", "o\n" + TRI + "o second\nv 0 0 1\nv 1 0 1\nv 0 1 1\nf 4 5 6\n", False, "")
     add("obj_escape_in_name.obj", "o evil\x1b[31mred\x07\n" + TRI, False, "")
     add("3mf_named.3mf", bf.threemf_good(), False, "")

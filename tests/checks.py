@@ -26,8 +26,11 @@ def check_frame(renderer, camera, viewport, path: str, rtt_objects=None) -> dict
     for key in ("transform", "clip_ndc", "scale"):
         assert np.isfinite(getattr(records, key)).all(), key
     tw, th, td = records.atlas_size
-    atlas = renderer.atlas.read((tw, th), td) if td else {
-        "depth": np.ones((0, 1, 1), np.float32), "id": np.full((0, 1, 1), -1, np.int32)}
+    atlas = (
+        renderer.atlas.read((tw, th), td)
+        if td
+        else {"depth": np.ones((0, 1, 1), np.float32), "id": np.full((0, 1, 1), -1, np.int32)}
+    )
     atlas = {"depth": atlas["depth"], "id": atlas["id"]}
     std = renderer.std(camera, viewport).read(viewport, 1)
     std_id, std_depth = std["id"][0], std["depth"][0]

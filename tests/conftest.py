@@ -8,8 +8,12 @@ from rtta.gl.context import shared_context
 
 
 def pytest_addoption(parser):
-    parser.addoption("--regenerate-references", action="store_true", default=False,
-                     help="rewrite tests/references/*.png from this run instead of comparing")
+    parser.addoption(
+        "--regenerate-references",
+        action="store_true",
+        default=False,
+        help="rewrite tests/references/*.png from this run instead of comparing",
+    )
 
 
 @pytest.fixture(scope="session")
@@ -17,7 +21,7 @@ def ctx():
     """The process's one headless context (the CLI called in-process uses it too)."""
     from rtta.memory import steady_heap
 
-    steady_heap()       # as the CLI and the viewer do
+    steady_heap()  # as the CLI and the viewer do
     return shared_context()
 
 

@@ -19,12 +19,15 @@ def nested_glb(path: Path, copies: int = 3) -> Path:
     """`copies` closed boxes side by side, each holding a smaller box holding a sphere (both
     hidden from every outside view), and a rod through each outer box (partly hidden)."""
     scene = trimesh.Scene()
-    upright = trimesh.transformations.rotation_matrix(np.pi / 2, (1, 0, 0))      # the rod along y
+    upright = trimesh.transformations.rotation_matrix(np.pi / 2, (1, 0, 0))  # the rod along y
     for k in range(copies):
         at = np.array([3.0 * k, 0.0, 0.0])
-        parts = {"shell": trimesh.creation.box((2.0, 2.0, 2.0)), "inner": trimesh.creation.box((1.0, 1.2, 1.0)),
-                 "core": trimesh.creation.icosphere(2, radius=0.35),
-                 "rod": trimesh.creation.cylinder(radius=0.12, height=3.2, transform=upright)}
+        parts = {
+            "shell": trimesh.creation.box((2.0, 2.0, 2.0)),
+            "inner": trimesh.creation.box((1.0, 1.2, 1.0)),
+            "core": trimesh.creation.icosphere(2, radius=0.35),
+            "rod": trimesh.creation.cylinder(radius=0.12, height=3.2, transform=upright),
+        }
         for name, mesh in parts.items():
             mesh.apply_translation(at)
             scene.add_geometry(mesh, node_name=f"{name}_{k}", geom_name=f"{name}_{k}")
@@ -95,8 +98,12 @@ def check_image(renderer, coco, image: dict, root: Path) -> dict:
     assert [a["depth_order"] for a in ranked] == list(range(len(ranked)))
     depths = [nearest.get(a["object_id"], 1.0) for a in ranked]
     assert all(d1 <= d2 + 1e-4 for d1, d2 in zip(depths, depths[1:], strict=False)), "depth_order is not by depth"
-    return {"annotations": len(anns), "hidden": sum(a["area"] == 0 for a in anns.values()), "band_px": band_px,
-            "amodal_px": sum(a["amodal_area"] for a in anns.values())}
+    return {
+        "annotations": len(anns),
+        "hidden": sum(a["area"] == 0 for a in anns.values()),
+        "band_px": band_px,
+        "amodal_px": sum(a["amodal_area"] for a in anns.values()),
+    }
 
 
 def read_json(path: Path) -> dict:

@@ -25,10 +25,31 @@ from rtta.scene.generators.generate import random_scene
 RTTA = str(Path(sys.executable).with_name("rtta"))
 ORBIT, SIZE = (60.0, 20.0, 2.0), (160, 120)
 FOCUS = ["caliper", "piston_1"]
-CLI_VIEW = ["--camera", "60,20,2", "--size", "160x120", "--focus", *FOCUS, "--opacity", "rotor=0.4",
-            "--context-opacity", "0.2", "--edge-width", "2", "--ao-radius", "4"]
-API_VIEW = {"camera": ORBIT, "size": SIZE, "focus": FOCUS, "opacity": {"rotor": 0.4},
-            "context_opacity": 0.2, "edge_width": 2, "ao_radius": 4}
+CLI_VIEW = [
+    "--camera",
+    "60,20,2",
+    "--size",
+    "160x120",
+    "--focus",
+    *FOCUS,
+    "--opacity",
+    "rotor=0.4",
+    "--context-opacity",
+    "0.2",
+    "--edge-width",
+    "2",
+    "--ao-radius",
+    "4",
+]
+API_VIEW = {
+    "camera": ORBIT,
+    "size": SIZE,
+    "focus": FOCUS,
+    "opacity": {"rotor": 0.4},
+    "context_opacity": 0.2,
+    "edge_width": 2,
+    "ao_radius": 4,
+}
 
 
 @pytest.fixture(autouse=True, scope="module")
@@ -78,28 +99,52 @@ def test_scene_object_path_and_demo_agree(gl, demo_scene):
 
 def test_lens_and_projector_as_the_cli(gl, tmp_path):
     out = tmp_path / "lens.png"
-    argv = ["--camera", "60,20,2", "--size", "128x96", "--focus", "piston_1", "--lens", "sphere",
-            "--projector", "default,10,30,3", "--projector-fov", "40"]
+    argv = [
+        "--camera",
+        "60,20,2",
+        "--size",
+        "128x96",
+        "--focus",
+        "piston_1",
+        "--lens",
+        "sphere",
+        "--projector",
+        "default,10,30,3",
+        "--projector-fov",
+        "40",
+    ]
     assert main(["snapshot", "--mode", "ghosted", *argv, "--out", str(out)]) == 0
-    image = rtta.snapshot(mode="ghosted", camera=ORBIT, size=(128, 96), focus="piston_1", lens="sphere",
-                          projector="default,10,30,3", projector_fov=40)
+    image = rtta.snapshot(
+        mode="ghosted",
+        camera=ORBIT,
+        size=(128, 96),
+        focus="piston_1",
+        lens="sphere",
+        projector="default,10,30,3",
+        projector_fov=40,
+    )
     assert np.array_equal(image, _png(out))
     plain = rtta.snapshot(mode="ghosted", camera=ORBIT, size=(128, 96), focus="piston_1")
-    assert not np.array_equal(plain, image)         # a later call without them has neither
+    assert not np.array_equal(plain, image)  # a later call without them has neither
 
 
 def test_200_calls_keep_one_context_and_leak_no_gl_objects(gl, monkeypatch):
     other = random_scene(6, seed=3)
 
     def call(i: int) -> None:
-        elsewhere = i % 40 == 20                     # switch scenes now and then: the old renderer is freed
+        elsewhere = i % 40 == 20  # switch scenes now and then: the old renderer is freed
         mode = SNAPSHOT_MODES[i % len(SNAPSHOT_MODES)]
-        rtta.snapshot(other if elsewhere else None, mode, focus=[] if elsewhere else FOCUS,
-                      camera=(i * 7.0 % 360, 25, 2.2), size=(96, 64))
+        rtta.snapshot(
+            other if elsewhere else None,
+            mode,
+            focus=[] if elsewhere else FOCUS,
+            camera=(i * 7.0 % 360, 25, 2.2),
+            size=(96, 64),
+        )
         if i % 25 == 0:
             rtta.capture(camera=(i, 20, 2.0), size=(96, 64))
 
-    for i in range(160, 200):       # the loop's last stretch first: the passes it leaves made exist now
+    for i in range(160, 200):  # the loop's last stretch first: the passes it leaves made exist now
         call(i)
     assert gl.error == "GL_NO_ERROR"
     before = gl_census(gl)
@@ -159,7 +204,7 @@ def test_amodal_mask_of_a_hidden_object_is_its_id_region(gl, make_renderer, demo
     assert np.array_equal(mask, m["depth"] < 1.0) and np.array_equal(mask, m["color"][..., 3] == 255)
     region = cap.region(oid)
     assert region["id"].shape == tuple(cap.atlas_rect[oid, [3, 2]])
-    assert (region["id"] == oid).sum() == mask.sum()         # scale 1: every texel maps to one pixel
+    assert (region["id"] == oid).sum() == mask.sum()  # scale 1: every texel maps to one pixel
     r = make_renderer(demo_scene)
     alone = []
     r.rtt(cap.camera, cap.viewport, [oid], lambda _, target: alone.append(target.read(cap.viewport, 1)["id"][0]))

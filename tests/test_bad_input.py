@@ -47,10 +47,27 @@ def _commands(path: Path, out: Path) -> dict[str, list[str]]:
         "info": ["info", str(path)],
         "snapshot": ["snapshot", str(path), "--size", "64x48", "--out", str(out / "shot.png")],
         "export": ["export", str(path), "--size", "64x48", "--out", str(out / "export")],
-        "ldi": ["ldi", str(path), "--points", str(out / "points.npy"), "--out", str(out / "inside.npy"),
-                "--resolution", "64"],
-        "dataset": ["dataset", str(path), "--out", str(out / "dataset"), "--views", "1", "--size", "32x24",
-                    "--no-progress"],
+        "ldi": [
+            "ldi",
+            str(path),
+            "--points",
+            str(out / "points.npy"),
+            "--out",
+            str(out / "inside.npy"),
+            "--resolution",
+            "64",
+        ],
+        "dataset": [
+            "dataset",
+            str(path),
+            "--out",
+            str(out / "dataset"),
+            "--views",
+            "1",
+            "--size",
+            "32x24",
+            "--no-progress",
+        ],
     }
 
 
@@ -74,13 +91,16 @@ def test_corpus_is_large_enough(corpus):
 
 
 def _one_line_error(case, lines: list[str]) -> bool:
-    return (len(lines) == 1 and lines[0].startswith(f"rtta: error: {printable(case.path)}: ")
-            and case.says.lower() in lines[0].lower())
+    return (
+        len(lines) == 1
+        and lines[0].startswith(f"rtta: error: {printable(case.path)}: ")
+        and case.says.lower() in lines[0].lower()
+    )
 
 
 @pytest.mark.parametrize("command", ["info", "snapshot", "export", "ldi", "dataset"])
 def test_every_case_through_the_cli(corpus, command, tmp_path, capsys, monkeypatch, gl):
-    monkeypatch.setenv("RTTA_MEMORY_LIMIT_MB", "1")      # the too-large cases exceed it
+    monkeypatch.setenv("RTTA_MEMORY_LIMIT_MB", "1")  # the too-large cases exceed it
     folder, cases = corpus
     problems = []
     for i, case in enumerate(cases):
@@ -98,26 +118,28 @@ def test_every_case_through_the_cli(corpus, command, tmp_path, capsys, monkeypat
             problems.append(f"{where}: took {seconds:.1f} s")
         if _tree(folder) != corpus_before:
             problems.append(f"{where}: the input folder changed")
-        if command == "ldi" and code == 0:          # its result line: "<out>: N of M points inside ..."
+        if command == "ldi" and code == 0:  # its result line: "<out>: N of M points inside ..."
             lines = [line for line in lines if not line.endswith("layers)")]
         if "Traceback" in err or any(not line.startswith("rtta: ") for line in lines):
             problems.append(f"{where}: stray stderr {err!r}")
         if any(ord(ch) < 32 and ch != "\n" for ch in err + captured.out):
             problems.append(f"{where}: a control character reached the terminal")
-        if command == "dataset":          # its own new folder may appear; what was there stays
+        if command == "dataset":  # its own new folder may appear; what was there stays
             after = {k: v for k, v in _tree(out).items() if not k.startswith("dataset/")}
             if after != before:
                 problems.append(f"{where}: an existing file changed")
-            if case.error and (os.path.isdir(case.path) or "[" in case.path.name):     # a folder, or a glob
+            if case.error and (os.path.isdir(case.path) or "[" in case.path.name):  # a folder, or a glob
                 case = Case(case.name, case.path, True, "", case.category)
         if case.error:
             if code != 2 or not _one_line_error(case, lines):
                 problems.append(f"{where}: exit {code}, stderr {err!r}")
             if command != "dataset" and _tree(out) != before:
                 problems.append(f"{where}: an output was written or changed on error")
-        elif command == "ldi" and code == 2:      # loads, but is no closed mesh: refused the same way
-            if not (len(lines) - sum("warning" in line for line in lines) == 1
-                    and "not a closed mesh" in lines[-1]) or _tree(out) != before:
+        elif command == "ldi" and code == 2:  # loads, but is no closed mesh: refused the same way
+            if (
+                not (len(lines) - sum("warning" in line for line in lines) == 1 and "not a closed mesh" in lines[-1])
+                or _tree(out) != before
+            ):
                 problems.append(f"{where}: exit {code}, stderr {err!r}")
         else:
             if code != 0 or (case.says and not any(case.says in line and "warning" in line for line in lines)):
@@ -130,15 +152,28 @@ def test_every_case_through_the_cli(corpus, command, tmp_path, capsys, monkeypat
     assert not problems, "\n".join(problems)
 
 
-@pytest.mark.parametrize("name", ["truncated.glb", "buffer_outside_folder.gltf", "stl_claims_2g_triangles.stl",
-                                  "nan_vertices.obj", "gltf_nodes_each_others_child.glb", "escape_in_file_name.glb"])
+@pytest.mark.parametrize(
+    "name",
+    [
+        "truncated.glb",
+        "buffer_outside_folder.gltf",
+        "stl_claims_2g_triangles.stl",
+        "nan_vertices.obj",
+        "gltf_nodes_each_others_child.glb",
+        "escape_in_file_name.glb",
+    ],
+)
 def test_real_process_one_line_exit_2(corpus, name, tmp_path):
     """The installed `rtta` executable itself: exit status and stderr as a user sees them."""
     _, cases = corpus
     case = next(c for c in cases if c.name == name)
-    proc = subprocess.run([RTTA, "snapshot", str(case.path), "--out", str(tmp_path / "x.png")],
-                          capture_output=True, text=True, timeout=120, env={"RTTA_MEMORY_LIMIT_MB": "1",
-                                                                            "PATH": "/usr/bin:/bin"})
+    proc = subprocess.run(
+        [RTTA, "snapshot", str(case.path), "--out", str(tmp_path / "x.png")],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env={"RTTA_MEMORY_LIMIT_MB": "1", "PATH": "/usr/bin:/bin"},
+    )
     assert proc.returncode == 2, proc.stderr
     assert proc.stderr.count("\n") == 1 and proc.stderr.startswith("rtta: error: ")
     assert printable(case.path.name) in proc.stderr and "\x1b" not in proc.stderr
@@ -151,18 +186,30 @@ def test_hostile_sizes_stay_fast_and_small(corpus, tmp_path):
     graphs): refused in a real process within seconds, its peak memory far under twice a
     256 MiB limit."""
     _, cases = corpus
-    hostile = [c for c in cases if (c.category == "limits" and c.name != "too_large_for_limit.glb")  # 1 MiB's
-               or c.name.startswith(("gltf_chain", "gltf_dag", "gltf_bufferless"))]
-    (tmp_path / "at_limit.obj").write_text(many_objects_obj(10_000))          # many objects: loads in seconds
+    hostile = [
+        c
+        for c in cases
+        if (c.category == "limits" and c.name != "too_large_for_limit.glb")  # 1 MiB's
+        or c.name.startswith(("gltf_chain", "gltf_dag", "gltf_bufferless"))
+    ]
+    (tmp_path / "at_limit.obj").write_text(many_objects_obj(10_000))  # many objects: loads in seconds
     (tmp_path / "at_limit.glb").write_bytes(many_nodes_glb(10_000))
     names = [str(c.path) for c in hostile] + [str(tmp_path / "at_limit.obj"), str(tmp_path / "at_limit.glb")]
-    script = ("import sys, time\nfrom rtta.cli.main import main\nfor p in sys.argv[1:]:\n"
-              "    t = time.perf_counter(); code = main(['info', p])\n"
-              "    print(p, code, round(time.perf_counter() - t, 2), file=sys.stderr)\n"
-              # VmHWM, not getrusage: its maximum survives exec and holds pytest's own peak
-              "print([ln for ln in open('/proc/self/status') if ln.startswith('VmHWM:')][0].split()[1])\n")
-    proc = subprocess.run([sys.executable, "-c", script, *names], capture_output=True, text=True, timeout=300,
-                          env={"RTTA_MEMORY_LIMIT_MB": "256", "PATH": "/usr/bin:/bin"}, cwd=tmp_path)
+    script = (
+        "import sys, time\nfrom rtta.cli.main import main\nfor p in sys.argv[1:]:\n"
+        "    t = time.perf_counter(); code = main(['info', p])\n"
+        "    print(p, code, round(time.perf_counter() - t, 2), file=sys.stderr)\n"
+        # VmHWM, not getrusage: its maximum survives exec and holds pytest's own peak
+        "print([ln for ln in open('/proc/self/status') if ln.startswith('VmHWM:')][0].split()[1])\n"
+    )
+    proc = subprocess.run(
+        [sys.executable, "-c", script, *names],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env={"RTTA_MEMORY_LIMIT_MB": "256", "PATH": "/usr/bin:/bin"},
+        cwd=tmp_path,
+    )
     timings = [line.rsplit(" ", 2) for line in proc.stderr.splitlines() if not line.startswith("rtta: ")]
     assert len(timings) == len(names), proc.stderr[-2000:]
     slow = [t for t in timings if float(t[2]) > 10]
@@ -185,22 +232,28 @@ def test_loaded_scenes_are_what_the_file_says(corpus):
 
     dup = load("duplicate_names.glb")
     assert dup.names == ["part", "part_2", "part_3"] and "part -> part_2" in dup.warnings[0]
-    for name in ("duplicate_names.glb", "names_two_primitives.glb", "names_control_esc.glb", "obj_same_name_twice.obj",
-                 "pictures_second_parent.glb", "3mf_named.3mf"):
-        assert load(name).names == load(name).names, name           # the same names on every load
+    for name in (
+        "duplicate_names.glb",
+        "names_two_primitives.glb",
+        "names_control_esc.glb",
+        "obj_same_name_twice.obj",
+        "pictures_second_parent.glb",
+        "3mf_named.3mf",
+    ):
+        assert load(name).names == load(name).names, name  # the same names on every load
     assert load("names_two_primitives.glb").names == ["box", "box_2"]
     assert load("obj_same_name_twice.obj").names == ["part", "part_2"]
     assert load("obj_unnamed_object.obj").count == 2
-    assert load("names_control_newline.glb").names == ["two\nlines"]       # kept; escaped where printed
+    assert load("names_control_newline.glb").names == ["two\nlines"]  # kept; escaped where printed
     objs = load("non_utf8_names.obj")
     assert objs.count == 2 and all(name.startswith(("caf", "na")) for name in objs.names)
     tex = load("missing_texture.gltf")
     assert len(tex.warnings) == 1 and "no_such_texture.png" in tex.warnings[0]
-    assert tex.colors[0][:3] == pytest.approx([0.2, 0.6, 0.9], abs=1 / 255)   # its material colour (8-bit)
+    assert tex.colors[0][:3] == pytest.approx([0.2, 0.6, 0.9], abs=1 / 255)  # its material colour (8-bit)
     shared = load("pictures_second_parent.glb")
     assert shared.count == 2 and shared.aabb_min[1][0] - shared.aabb_min[0][0] == pytest.approx(3.0)
     fan = load("pictures_fan_beside_triangles.glb")
-    assert fan.count == 2 and fan.index_ranges[1][1] == 6                    # the fan's two triangles
+    assert fan.count == 2 and fan.index_ranges[1][1] == 6  # the fan's two triangles
     assert load("pictures_nan_base_color.glb").colors[0][0] == pytest.approx(1.0)
     assert load("pictures_lines_beside_triangles.glb").count == 1
     for name in ("pictures_corrupt_embedded_texture.glb", "pictures_oversized_embedded_texture.glb"):
@@ -214,14 +267,14 @@ def test_info_prints_hostile_names_escaped(corpus, capsys):
             assert main(["info", str(case.path)]) == 0
             out = capsys.readouterr().out
             assert not any(ord(ch) < 32 and ch != "\n" for ch in out) and "\u202e" not in out
-            assert len(out.splitlines()) == 3, out                 # the summary, unit and axes, one object
+            assert len(out.splitlines()) == 3, out  # the summary, unit and axes, one object
 
 
 def test_closed_pipe_is_not_a_traceback():
     """`rtta info | head`: a reader that leaves early ends the command quietly (exit 1, the
     usual status for a broken pipe), not with a BrokenPipeError traceback."""
     proc = subprocess.Popen([RTTA, "info"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-    proc.stdout.close()                 # gone before the first line is written
+    proc.stdout.close()  # gone before the first line is written
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == 1 and b"Traceback" not in err and err == b"", err.decode()
 
@@ -250,8 +303,10 @@ def test_reference_warnings_name_the_file_once(corpus):
 
     _, cases = corpus
     by_name = {c.name: c for c in cases}
-    notes = {name: load_scene(by_name[name].path).warnings
-             for name in ("fifo_texture.gltf", "fifo_mtllib.obj", "obj_mtllib_absolute.obj", "obj_mtllib_outside.obj")}
+    notes = {
+        name: load_scene(by_name[name].path).warnings
+        for name in ("fifo_texture.gltf", "fifo_mtllib.obj", "obj_mtllib_absolute.obj", "obj_mtllib_outside.obj")
+    }
     for name, warnings in notes.items():
         assert warnings, name
         for note in warnings:

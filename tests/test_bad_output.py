@@ -25,19 +25,32 @@ from rtta.cli.main import main
 
 RTTA = str(Path(sys.executable).with_name("rtta"))
 DEMO_ARGS = ["--size", "48x36"]
-GRID = Path(__file__).resolve().parents[1] / "assets" / "projector_grid.png"    # an image that exists
+GRID = Path(__file__).resolve().parents[1] / "assets" / "projector_grid.png"  # an image that exists
 
 
 def _run(args, cwd=None, env=None, **kw) -> subprocess.CompletedProcess:
-    return subprocess.run([RTTA, *map(str, args)], cwd=cwd, capture_output=True, text=True, timeout=120,
-                          env={**os.environ, **(env or {})}, **kw)
+    return subprocess.run(
+        [RTTA, *map(str, args)],
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env={**os.environ, **(env or {})},
+        **kw,
+    )
 
 
 def _one_line(proc_or_err: subprocess.CompletedProcess | str, needle: str = "") -> bool:
     err = proc_or_err if isinstance(proc_or_err, str) else proc_or_err.stderr
     lines = [line for line in err.splitlines() if line.strip()]
-    return (len(lines) == 1 and lines[0].startswith("rtta: error: ") and needle.lower() in lines[0].lower()
-            and "Traceback" not in err and "usage:" not in err and "Warning" not in err)
+    return (
+        len(lines) == 1
+        and lines[0].startswith("rtta: error: ")
+        and needle.lower() in lines[0].lower()
+        and "Traceback" not in err
+        and "usage:" not in err
+        and "Warning" not in err
+    )
 
 
 def _snapshot(tree: Path) -> dict[str, bytes]:
@@ -60,8 +73,12 @@ def model(tmp_path) -> Path:
 # ---- data loss ---------------------------------------------------------------------------
 def test_export_never_replaces_a_folder_holding_the_scene(model, tmp_path):
     before = _snapshot(tmp_path)
-    for args, cwd in ((["export", model / "a.glb", "--out", model], None), (["export", "a.glb", "--out", "."], model),
-                      (["export", "model/a.glb", "--out", "."], tmp_path), (["export", "a.glb", "--out", ".."], model)):
+    for args, cwd in (
+        (["export", model / "a.glb", "--out", model], None),
+        (["export", "a.glb", "--out", "."], model),
+        (["export", "model/a.glb", "--out", "."], tmp_path),
+        (["export", "a.glb", "--out", ".."], model),
+    ):
         proc = _run([*args, *DEMO_ARGS], cwd=cwd)
         assert proc.returncode == 2 and _one_line(proc), (args, proc.stderr)
     assert _snapshot(tmp_path) == before
@@ -77,14 +94,16 @@ def test_outputs_never_replace_an_input(model, tmp_path):
     shutil.copy(model / "tex.png", shots / "std.png")
     before = _snapshot(tmp_path)
     cube, points = model / "cube.stl", model / "points.npy"
-    for args in (["ldi", cube, "--points", points, "--out", points],
-                 ["ldi", cube, "--points", points, "--out", cube],
-                 ["ldi", cube, "--points", tmp_path / "hard.npy", "--out", points],
-                 ["ldi", cube, "--points", points, "--out", tmp_path / "hard.npy"],
-                 ["snapshot", "--projector", model / "tex.png", "--out", model / "tex.png", *DEMO_ARGS],
-                 ["snapshot", "--projector", f"{model / 'tex.png'},30,20,2", "--out", model / "tex.png", *DEMO_ARGS],
-                 ["snapshot", "--projector", model / "tex.png", "--out", tmp_path / "soft.png", *DEMO_ARGS],
-                 ["snapshot", "--projector", shots / "std.png", "--all-modes", shots, *DEMO_ARGS]):
+    for args in (
+        ["ldi", cube, "--points", points, "--out", points],
+        ["ldi", cube, "--points", points, "--out", cube],
+        ["ldi", cube, "--points", tmp_path / "hard.npy", "--out", points],
+        ["ldi", cube, "--points", points, "--out", tmp_path / "hard.npy"],
+        ["snapshot", "--projector", model / "tex.png", "--out", model / "tex.png", *DEMO_ARGS],
+        ["snapshot", "--projector", f"{model / 'tex.png'},30,20,2", "--out", model / "tex.png", *DEMO_ARGS],
+        ["snapshot", "--projector", model / "tex.png", "--out", tmp_path / "soft.png", *DEMO_ARGS],
+        ["snapshot", "--projector", shots / "std.png", "--all-modes", shots, *DEMO_ARGS],
+    ):
         proc = _run(args)
         assert proc.returncode == 2 and _one_line(proc), (args, proc.stderr)
     assert _snapshot(tmp_path) == before
@@ -102,18 +121,21 @@ def test_an_output_over_a_referenced_file_is_refused(tmp_path):
     assert (tmp_path / "data.npy").read_bytes() == binary
 
 
-@pytest.mark.parametrize("args,needle", [
-    (["snapshot", "--out", "folder.png"], "is a folder"),
-    (["snapshot", "--out", "/proc/rtta-test.png"], "/proc"),
-    (["snapshot", "--out", "full.png"], "not a regular file"),
-    (["snapshot", "--out", "n" * 300 + ".png"], "longer than 255"),
-    (["snapshot", "--out", "nowhere/a.png"], "parent directory does not exist"),
-    (["snapshot", "--all-modes", "file.txt"], "not a folder"),
-    (["export", "--out", "/dev/shm"], "mount point"),
-    (["export", "--out", "/proc"], "mount point"),
-    (["ldi", "shape:box", "--points", "p.npy", "--out", "folder.png"], ".npy"),
-    (["ldi", "shape:box", "--points", "p.npy", "--out", "dir.npy"], "is a folder"),
-])
+@pytest.mark.parametrize(
+    "args,needle",
+    [
+        (["snapshot", "--out", "folder.png"], "is a folder"),
+        (["snapshot", "--out", "/proc/rtta-test.png"], "/proc"),
+        (["snapshot", "--out", "full.png"], "not a regular file"),
+        (["snapshot", "--out", "n" * 300 + ".png"], "longer than 255"),
+        (["snapshot", "--out", "nowhere/a.png"], "parent directory does not exist"),
+        (["snapshot", "--all-modes", "file.txt"], "not a folder"),
+        (["export", "--out", "/dev/shm"], "mount point"),
+        (["export", "--out", "/proc"], "mount point"),
+        (["ldi", "shape:box", "--points", "p.npy", "--out", "folder.png"], ".npy"),
+        (["ldi", "shape:box", "--points", "p.npy", "--out", "dir.npy"], "is a folder"),
+    ],
+)
 def test_outputs_that_cannot_be_written_are_one_line(tmp_path, args, needle):
     (tmp_path / "folder.png").mkdir()
     (tmp_path / "dir.npy").mkdir()
@@ -136,8 +158,10 @@ def test_a_full_disk_is_one_line_and_keeps_the_old_output(tmp_path):
     assert main(["export", "--out", str(tmp_path / "out"), *DEMO_ARGS]) == 0
     (tmp_path / "shot.png").write_bytes(b"old")
     before = _snapshot(tmp_path)
-    for args in (["snapshot", "--out", "shot.png", "--size", "320x240"],
-                 ["export", "--out", "out", "--size", "320x240"]):
+    for args in (
+        ["snapshot", "--out", "shot.png", "--size", "320x240"],
+        ["export", "--out", "out", "--size", "320x240"],
+    ):
         proc = _run(args, cwd=tmp_path, preexec_fn=_small_files)
         assert proc.returncode == 2 and _one_line(proc, "too large"), proc.stderr
         assert _snapshot(tmp_path) == before and not list(tmp_path.glob(".*"))
@@ -150,27 +174,49 @@ def test_stdout_that_cannot_be_written_is_one_line():
 
 
 # ---- messages ---------------------------------------------------------------------------
-@pytest.mark.parametrize("argv", [
-    [], ["--nope"], ["render"], ["snapshot", "--fov", "abc", "--out", "a.png"], ["export"], ["export", "--size"],
-    ["snapshot", "--capture-path", "xx", "--out", "a.png"], ["export", "--border", "1.5", "--out", "o"],
-    ["bench"], ["bench", "nope"], ["ldi"], ["ldi", "shape:box", "--resolution", "many"],
-])
+@pytest.mark.parametrize(
+    "argv",
+    [
+        [],
+        ["--nope"],
+        ["render"],
+        ["snapshot", "--fov", "abc", "--out", "a.png"],
+        ["export"],
+        ["export", "--size"],
+        ["snapshot", "--capture-path", "xx", "--out", "a.png"],
+        ["export", "--border", "1.5", "--out", "o"],
+        ["bench"],
+        ["bench", "nope"],
+        ["ldi"],
+        ["ldi", "shape:box", "--resolution", "many"],
+    ],
+)
 def test_bad_flags_are_one_line_without_usage(argv, capsys):
     assert main(argv) == 2
     captured = capsys.readouterr()
     assert _one_line(captured.err) and captured.out == "", captured.err
 
 
-@pytest.mark.parametrize("flags,needle", [
-    (["--camera", ""], "--camera"), (["--camera", "0,0,1e300"], "--camera"), (["--camera", "nan,0,2"], "--camera"),
-    (["--camera", "1e300,0,2"], "--camera"), (["--fov", "nan"], "--fov"), (["--fov", "0"], "--fov"),
-    (["--lens", "sphere", "--lens-at", "1e300,0,0"], "--lens-at"), (["--lens", "sphere,1e300"], "--lens radius"),
-    (["--lens", ""], "--lens"), (["--region-scale", "nan"], "--region-scale"), (["--size", "0x0"], "--size"),
-    (["--projector", "default,0,0,1e300"], "--projector 'default,0,0,1e300': AZ and EL"),
-    (["--projector", f"{GRID},nan,0,2"], f"--projector '{GRID},nan,0,2': AZ and EL"),
-    (["--projector-fov", "nan", "--projector", "default"], "fov"),
-    (["--size", "4096x4096", "--region-scale", "4"], "memory limit"),
-])
+@pytest.mark.parametrize(
+    "flags,needle",
+    [
+        (["--camera", ""], "--camera"),
+        (["--camera", "0,0,1e300"], "--camera"),
+        (["--camera", "nan,0,2"], "--camera"),
+        (["--camera", "1e300,0,2"], "--camera"),
+        (["--fov", "nan"], "--fov"),
+        (["--fov", "0"], "--fov"),
+        (["--lens", "sphere", "--lens-at", "1e300,0,0"], "--lens-at"),
+        (["--lens", "sphere,1e300"], "--lens radius"),
+        (["--lens", ""], "--lens"),
+        (["--region-scale", "nan"], "--region-scale"),
+        (["--size", "0x0"], "--size"),
+        (["--projector", "default,0,0,1e300"], "--projector 'default,0,0,1e300': AZ and EL"),
+        (["--projector", f"{GRID},nan,0,2"], f"--projector '{GRID},nan,0,2': AZ and EL"),
+        (["--projector-fov", "nan", "--projector", "default"], "fov"),
+        (["--size", "4096x4096", "--region-scale", "4"], "memory limit"),
+    ],
+)
 def test_bad_values_are_one_line_without_warnings(flags, needle, tmp_path, capsys, gl):
     code = main(["snapshot", *DEMO_ARGS, *flags, "--out", str(tmp_path / "a.png")])
     captured = capsys.readouterr()
@@ -193,11 +239,13 @@ def test_points_and_projector_files_are_checked_before_reading(tmp_path, capsys)
     (tmp_path / "bomb.png").write_bytes(_bomb_png())
     from PIL import Image
 
-    Image.new("L", (10000, 10000)).save(tmp_path / "big.png")          # over PIL's warning threshold
-    for argv, needle in ((["ldi", "shape:box", "--points", "huge.npy", "--out", "o.npy"], "1,000,000,000,000"),
-                         (["ldi", "shape:box", "--points", "fifo.npy", "--out", "o.npy"], "not a regular file"),
-                         (["snapshot", "--projector", "bomb.png", "--out", "o.png"], "too large"),
-                         (["snapshot", "--projector", "big.png", "--out", "o.png"], "too large")):
+    Image.new("L", (10000, 10000)).save(tmp_path / "big.png")  # over PIL's warning threshold
+    for argv, needle in (
+        (["ldi", "shape:box", "--points", "huge.npy", "--out", "o.npy"], "1,000,000,000,000"),
+        (["ldi", "shape:box", "--points", "fifo.npy", "--out", "o.npy"], "not a regular file"),
+        (["snapshot", "--projector", "bomb.png", "--out", "o.png"], "too large"),
+        (["snapshot", "--projector", "big.png", "--out", "o.png"], "too large"),
+    ):
         t0 = time.perf_counter()
         proc = _run([*argv, *DEMO_ARGS] if argv[0] == "snapshot" else argv, cwd=tmp_path)
         assert proc.returncode == 2 and _one_line(proc, needle), (argv, proc.stderr)
@@ -216,8 +264,21 @@ def test_closed_meshes_at_any_scale_are_closed(tmp_path, capsys):
         mesh.vertices *= scale
         mesh.export(tmp_path / "s.stl")
         np.save(tmp_path / "p.npy", points * scale)
-        assert main(["ldi", str(tmp_path / "s.stl"), "--points", str(tmp_path / "p.npy"),
-                     "--out", str(tmp_path / "in.npy"), "--resolution", "128"]) == 0, capsys.readouterr().err
+        assert (
+            main(
+                [
+                    "ldi",
+                    str(tmp_path / "s.stl"),
+                    "--points",
+                    str(tmp_path / "p.npy"),
+                    "--out",
+                    str(tmp_path / "in.npy"),
+                    "--resolution",
+                    "128",
+                ]
+            )
+            == 0
+        ), capsys.readouterr().err
         inside = np.load(tmp_path / "in.npy")
         assert (inside == truth)[~near].all(), scale
 
@@ -225,8 +286,12 @@ def test_closed_meshes_at_any_scale_are_closed(tmp_path, capsys):
 def test_viewer_flags_are_one_line():
     from viewer import main as view_main
 
-    proc = subprocess.run([sys.executable, "-c", "import sys, viewer; sys.exit(viewer.main(['--size']))"],
-                          capture_output=True, text=True, timeout=120)
+    proc = subprocess.run(
+        [sys.executable, "-c", "import sys, viewer; sys.exit(viewer.main(['--size']))"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert proc.returncode == 2 and proc.stderr.count("\n") == 1 and "usage" not in proc.stderr, proc.stderr
     assert view_main is not None
 
@@ -241,15 +306,19 @@ def test_an_interrupted_export_leaves_the_old_or_the_new_whole(tmp_path):
     rng = random.Random(26)
     outcomes = set()
     for sig in (signal.SIGINT, signal.SIGTERM) * 4:
-        proc = subprocess.Popen([RTTA, "export", "--out", str(out), "--size", "480x360"], stderr=subprocess.PIPE,
-                                stdout=subprocess.PIPE, text=True)
+        proc = subprocess.Popen(
+            [RTTA, "export", "--out", str(out), "--size", "480x360"],
+            stderr=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            text=True,
+        )
         time.sleep(rng.uniform(0.1, 2.5))
         proc.send_signal(sig)
         _, err = proc.communicate(timeout=120)
         if proc.returncode == 0:
             assert "interrupted" not in err and json.loads((out / "records.json").read_text())["viewport"] == [480, 360]
             outcomes.add("new")
-        else:          # 130 once rtta runs; during Python's own start-up the signal's default
+        else:  # 130 once rtta runs; during Python's own start-up the signal's default
             assert proc.returncode in (130, -sig, 1), (proc.returncode, err)
             if proc.returncode == 130:
                 assert err == "rtta: interrupted\n", err
@@ -258,7 +327,7 @@ def test_an_interrupted_export_leaves_the_old_or_the_new_whole(tmp_path):
         assert [p.name for p in tmp_path.iterdir()] == ["out"], list(tmp_path.iterdir())
         if proc.returncode == 0:
             old = _snapshot(out)
-    assert outcomes                       # (both kinds happen on a typical run; either is correct)
+    assert outcomes  # (both kinds happen on a typical run; either is correct)
 
 
 @pytest.fixture
@@ -272,7 +341,7 @@ def rtta_handlers():
         yield outputs
     finally:
         outputs.restore_signal_handlers(old)
-        outputs.install_signal_handlers()              # resets the state for the tests after
+        outputs.install_signal_handlers()  # resets the state for the tests after
         outputs.restore_signal_handlers(old)
 
 
@@ -285,7 +354,7 @@ def test_a_signal_waits_while_native_libraries_import(rtta_handlers):
     with pytest.raises(outputs.Interrupted):
         with outputs.signals_held():
             os.kill(os.getpid(), signal.SIGINT)
-            for _ in range(1000):                      # bytecodes, where Python runs the handler
+            for _ in range(1000):  # bytecodes, where Python runs the handler
                 pass
             reached.append("end of block")
     assert reached == ["end of block"]
@@ -300,10 +369,10 @@ def test_a_signal_waits_while_a_program_is_made(gl, rtta_handlers):
     outputs = rtta_handlers
     made = []
 
-    class Ctx:                      # the real context, with the signal arriving mid-call
+    class Ctx:  # the real context, with the signal arriving mid-call
         def program(self, **sources):
             os.kill(os.getpid(), signal.SIGINT)
-            for _ in range(1000):                      # bytecodes, where Python runs the handler
+            for _ in range(1000):  # bytecodes, where Python runs the handler
                 pass
             made.append(gl.program(**sources))
             return made[-1]

@@ -23,8 +23,13 @@ def _canon(v, f, n, uv) -> np.ndarray:
 
 def _parts(count: int, seed: int = 1):
     rng = np.random.default_rng(seed)
-    shapes = [trimesh.creation.icosphere(1), trimesh.creation.box(), trimesh.creation.cylinder(0.5, 1, sections=16),
-              trimesh.creation.torus(1, 0.3), trimesh.creation.cone(0.5, 1, sections=40)]   # its apex: 40 corners
+    shapes = [
+        trimesh.creation.icosphere(1),
+        trimesh.creation.box(),
+        trimesh.creation.cylinder(0.5, 1, sections=16),
+        trimesh.creation.torus(1, 0.3),
+        trimesh.creation.cone(0.5, 1, sections=40),
+    ]  # its apex: 40 corners
     parts = []
     for i in range(count):
         m = shapes[i % len(shapes)]
@@ -36,28 +41,32 @@ def _parts(count: int, seed: int = 1):
 
 @pytest.mark.parametrize(("chunk", "pairs", "threads"), [(10**7, batch.PAIR_BLOCK, 1), (300, 1, 3)])
 def test_batched_preprocessing_matches_each_mesh_alone(monkeypatch, chunk, pairs, threads):
-    monkeypatch.setattr(batch, "CHUNK_CORNERS", chunk)      # one pass, or many small ones
-    monkeypatch.setattr(batch, "PAIR_BLOCK", pairs)         # corner pairs: big blocks, or one position each
-    monkeypatch.setattr(batch, "THREADS", threads)          # passes one after another, or three at once
+    monkeypatch.setattr(batch, "CHUNK_CORNERS", chunk)  # one pass, or many small ones
+    monkeypatch.setattr(batch, "PAIR_BLOCK", pairs)  # corner pairs: big blocks, or one position each
+    monkeypatch.setattr(batch, "THREADS", threads)  # passes one after another, or three at once
     parts = _parts(25)
     smooth = np.arange(len(parts)) % 2 == 0
-    meshes = batch.Meshes(*(np.concatenate([p[k] for p in parts]) for k in (0, 1)),
-                          np.array([len(p[0]) for p in parts]), np.array([len(p[1]) for p in parts]),
-                          *(np.concatenate([p[k] for p in parts]) for k in (2, 3)))
+    meshes = batch.Meshes(
+        *(np.concatenate([p[k] for p in parts]) for k in (0, 1)),
+        np.array([len(p[0]) for p in parts]),
+        np.array([len(p[1]) for p in parts]),
+        *(np.concatenate([p[k] for p in parts]) for k in (2, 3)),
+    )
     out = batch.preprocess(meshes, smooth, 30.0)
     for i, (v, f, n, uv) in enumerate(parts):
         ref = smooth_normals(v, f, uv, 30.0) if smooth[i] else index_vertices(v, f, n, uv)
         vs = slice(out.vstart[i], out.vstart[i] + out.vcount[i])
-        got_f = out.faces[out.fstart[i]:out.fstart[i] + out.fcount[i]]
+        got_f = out.faces[out.fstart[i] : out.fstart[i] + out.fcount[i]]
         assert out.vcount[i] == len(ref[0]) and out.fcount[i] == len(ref[1])
-        np.testing.assert_allclose(_canon(out.vertices[vs], got_f, out.normals[vs], out.uvs[vs]), _canon(*ref),
-                                   atol=1e-6)
+        np.testing.assert_allclose(
+            _canon(out.vertices[vs], got_f, out.normals[vs], out.uvs[vs]), _canon(*ref), atol=1e-6
+        )
 
 
 def test_unique_rows_is_exact_and_in_first_appearance_order():
     rng = np.random.default_rng(0)
     a = rng.integers(0, 3, (500, 2)).astype(np.float64)
-    a[7] = [-0.0, 0.0]                                     # bitwise distinct from (0, 0)
+    a[7] = [-0.0, 0.0]  # bitwise distinct from (0, 0)
     first, inverse = batch.unique_rows(a)
     ref = {tuple(r.view(np.uint64)) for r in a}
     assert len(first) == len(ref) and (np.diff(first) > 0).all()
@@ -71,7 +80,7 @@ def test_loader_batches_a_generated_assembly(tmp_path):
     first, count = s.index_ranges.T
     assert first[0] == 0 and (first[1:] == first[:-1] + count[:-1]).all() and first[-1] + count[-1] == len(s.indices)
     for oid in (0, 123, 299):
-        assert (s.object_ids[s.indices[first[oid]:first[oid] + count[oid]]] == oid).all()
+        assert (s.object_ids[s.indices[first[oid] : first[oid] + count[oid]]] == oid).all()
     np.testing.assert_allclose(np.linalg.norm(s.normals, axis=1), 1.0, atol=1e-3)
     # the same scene through trimesh and the per-object reference path, object by object
     loaded = trimesh.load(str(path), force="scene", process=False)
@@ -82,7 +91,7 @@ def test_loader_batches_a_generated_assembly(tmp_path):
         world = np.asarray(mesh.vertices) @ np.asarray(m)[:3, :3].T + np.asarray(m)[:3, 3]
         ref = smooth_normals(world, np.asarray(mesh.faces), None, 30.0)
         lo, n = first[oid], count[oid]
-        ids = s.indices[lo:lo + n].reshape(-1, 3)
+        ids = s.indices[lo : lo + n].reshape(-1, 3)
         got = _canon((s.positions + s.origin).astype(np.float64), ids, s.normals, np.zeros((len(s.positions), 2)))
         want = _canon(ref[0], ref[1], ref[2], np.zeros((len(ref[0]), 2)))
         np.testing.assert_allclose(got[:, :9], want[:, :9], atol=1e-5)
@@ -102,9 +111,12 @@ def test_instancing_in_place_equals_the_copy():
     """instance(consume=True) transforms meshes placed once each in place; the result equals
     the copying path's, and a mesh placed twice (or out of order) still gets copies."""
     parts = _parts(6)
-    meshes = batch.Meshes(*(np.concatenate([p[k] for p in parts]) for k in (0, 1)),
-                          np.array([len(p[0]) for p in parts]), np.array([len(p[1]) for p in parts]),
-                          *(np.concatenate([p[k] for p in parts]) for k in (2, 3)))
+    meshes = batch.Meshes(
+        *(np.concatenate([p[k] for p in parts]) for k in (0, 1)),
+        np.array([len(p[0]) for p in parts]),
+        np.array([len(p[1]) for p in parts]),
+        *(np.concatenate([p[k] for p in parts]) for k in (2, 3)),
+    )
     meshes.faces = meshes.faces.astype(np.int32)
     rng = np.random.default_rng(4)
     transforms = np.tile(np.eye(4), (6, 1, 1))
@@ -112,16 +124,25 @@ def test_instancing_in_place_equals_the_copy():
     transforms[:, :3, 3] = rng.normal(size=(6, 3))
 
     def copy():
-        return batch.Meshes(*(None if a is None else a.copy() for a in (meshes.vertices, meshes.faces)),
-                            meshes.vcount, meshes.fcount, meshes.normals.copy(), meshes.uvs.copy())
+        return batch.Meshes(
+            *(None if a is None else a.copy() for a in (meshes.vertices, meshes.faces)),
+            meshes.vcount,
+            meshes.fcount,
+            meshes.normals.copy(),
+            meshes.uvs.copy(),
+        )
 
     for mesh_of, shared in ((np.arange(6), True), (np.array([0, 1, 1, 3, 4, 5]), False)):
         want = batch.instance(copy(), mesh_of, transforms)
         source = copy()
         got = batch.instance(source, mesh_of, transforms, consume=True)
         assert (got.vertices is source.vertices) == shared
-        for a, b in ((got.vertices, want.vertices), (got.normals, want.normals), (got.faces, want.faces),
-                     (got.uvs, want.uvs)):
+        for a, b in (
+            (got.vertices, want.vertices),
+            (got.normals, want.normals),
+            (got.faces, want.faces),
+            (got.uvs, want.uvs),
+        ):
             np.testing.assert_array_equal(a, b)
 
 

@@ -44,8 +44,14 @@ def test_composite_bench_quick(gl, tmp_path, capsys):
     assert data["renderer"] == gl.info["GL_RENDERER"]
     assert [s["name"] for s in data["scenes"]] == ["demo", "table1-5", "table1-21"]
     for s in data["scenes"]:
-        assert set(s["modes"]) == {"sprites", "transparent", "ghosted", "ghosted-ao", "ghosted-ao full",
-                                   "transparent object"}
+        assert set(s["modes"]) == {
+            "sprites",
+            "transparent",
+            "ghosted",
+            "ghosted-ao",
+            "ghosted-ao full",
+            "transparent object",
+        }
         assert all(v > 0 for v in s["modes"].values()) and s["std_ms"] > 0 and s["recomposite_ms"] > 0
         assert s["pixel_over_object"] > 0 and 0 <= s["ao_error"]["over_8"] <= 1
     assert "recomposite" in capsys.readouterr().out
@@ -62,7 +68,7 @@ def test_ldi_bench_quick(gl, tmp_path, capsys):
     assert [r["mesh"] for r in data["table"]] == ["sphere", "torus", "torus-knot", "vase"]
     assert all(s["agree"] > 0.99 and s["compressed_equal"] for s in data["throughput"])
     errors = {(e["mesh"], e["resolution"]): e["error"] for e in data["resolution"]}
-    assert all(errors[(m, 256)] < errors[(m, 64)] for m in ("sphere", "torus"))   # finer is better
+    assert all(errors[(m, 256)] < errors[(m, 64)] for m in ("sphere", "torus"))  # finer is better
     printed = capsys.readouterr().out
     assert "t_peel ms" in printed and "speed-up" in printed and gl.info["GL_RENDERER"] in printed
 

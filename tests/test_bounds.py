@@ -31,8 +31,8 @@ def test_obb_contains_every_vertex():
     obb = both[1]
     for i in range(scene.count):
         c = obb[i]
-        axes = np.stack([c[1 << k] - c[0] for k in range(3)])       # box edges from corner 0
-        local = (scene.positions[scene.object_ids == i] - c[0]) @ axes.T / np.maximum((axes ** 2).sum(1), 1e-30)
+        axes = np.stack([c[1 << k] - c[0] for k in range(3)])  # box edges from corner 0
+        local = (scene.positions[scene.object_ids == i] - c[0]) @ axes.T / np.maximum((axes**2).sum(1), 1e-30)
         assert (local >= -1e-6).all() and (local <= 1 + 1e-6).all(), i
 
 
@@ -66,8 +66,9 @@ def test_obb_capture_equals_rtt_and_std(make_renderer, demo_scene, scene_name):
 
 
 def test_obb_regions_are_smaller(make_renderer):
-    parts = [(f"bar{i}", *_rotated_box([3.0, 0.3, 0.3], 0.3 + 0.4 * i, [0, 0.5, 1], (i * 2.0, 0, 0)), None)
-             for i in range(6)]
+    parts = [
+        (f"bar{i}", *_rotated_box([3.0, 0.3, 0.3], 0.3 + 0.4 * i, [0, 0.5, 1], (i * 2.0, 0, 0)), None) for i in range(6)
+    ]
     scene = from_meshes(parts)
     cam = Camera.orbit(scene.center, scene.radius, 20, 30, 2.0)
     area = {}
@@ -136,7 +137,7 @@ def test_extreme_depth_range_degrades_with_a_message(make_renderer, demo_scene):
         warnings.simplefilter("always")
         err = sprites_error(r, cam, (256, 192))
         sprites_error(r, cam, (256, 192))
-    assert len([w for w in caught if "near plane raised" in str(w.message)]) == 1     # said once
+    assert len([w for w in caught if "near plane raised" in str(w.message)]) == 1  # said once
     assert r.warnings == [msg]
     assert err["finite"] and err["holes"] == 0 and err["color_off"] < 0.005
 
@@ -149,8 +150,24 @@ def test_collapsed_objects_are_named():
 
 def test_cli_region_scale_and_bounds(tmp_path, capsys):
     out = tmp_path / "s.png"
-    assert main(["snapshot", "--mode", "sprites", "--size", "160x120", "--bounds", "obb", "--region-scale", "0.5",
-                 "--out", str(out)]) == 0
+    assert (
+        main(
+            [
+                "snapshot",
+                "--mode",
+                "sprites",
+                "--size",
+                "160x120",
+                "--bounds",
+                "obb",
+                "--region-scale",
+                "0.5",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     assert out.stat().st_size > 1000
     assert main(["snapshot", "--region-scale", "9", "--out", str(tmp_path / "t.png")]) == 2
     err = capsys.readouterr().err.strip().splitlines()

@@ -59,8 +59,9 @@ def test_paths_produce_identical_atlases(make_renderer, demo_scene):
     for layer in range(a["id"].shape[0]):
         inner = ~near_edges(a["id"][layer])
         assert np.array_equal(a["id"][layer][inner], b["id"][layer][inner])
-        assert_depth_close(a["depth"][layer], b["depth"][layer], inner & (a["id"][layer] >= 0),
-                           a["id"][layer], f"layer {layer}")
+        assert_depth_close(
+            a["depth"][layer], b["depth"][layer], inner & (a["id"][layer] >= 0), a["id"][layer], f"layer {layer}"
+        )
         smooth = inner & ~near_silhouettes(a["id"][layer], a["depth"][layer], b["depth"][layer])
         assert np.abs(a["color"][layer].astype(int) - b["color"][layer].astype(int))[smooth].max() <= 3
 
@@ -86,7 +87,7 @@ def test_twenty_thousand_part_assembly(make_renderer, tmp_path):
     scene = load_scene(write_assembly(tmp_path / "assembly.glb", 20_000, seed=2))
     assert scene.count == 20_000
     r = make_renderer(scene)
-    cam = Camera.orbit(scene.center, scene.radius, 30, 20, 2.0)       # all in view: few culled to check
+    cam = Camera.orbit(scene.center, scene.radius, 30, 20, 2.0)  # all in view: few culled to check
     sample = np.random.default_rng(0).choice(scene.count, 40, replace=False)
     out = check_frame(r, cam, (400, 300), "vs", rtt_objects=sample)
     assert out["visible"] > 15_000
@@ -99,13 +100,13 @@ def test_culled_and_hidden_objects_are_not_drawn(make_renderer, gl, path):
     equals RTT per object."""
     scene = random_scene(60, seed=4, spread=20.0)
     r = make_renderer(scene)
-    cam = Camera.orbit(scene.center, scene.radius, 0, 0, 0.05)        # inside the scene: many culled
+    cam = Camera.orbit(scene.center, scene.radius, 0, 0, 0.05)  # inside the scene: many culled
     r.hidden = {3, 17, 18, 19, 40}
     query = gl.query(primitives=True)
     with query:
         rec = r.capture(cam, (200, 150), path=path)
     runs = np.r_[False, rec.visible, False].astype(int)
     assert 1 < np.count_nonzero(np.diff(runs) == 1) and not rec.visible[[3, 17, 18, 19, 40]].any()
-    triangles = scene.index_ranges[rec.visible, 1].sum() // 3    # (gs: counted after the geometry shader)
+    triangles = scene.index_ranges[rec.visible, 1].sum() // 3  # (gs: counted after the geometry shader)
     assert query.primitives == triangles, (query.primitives, triangles, scene.indices.size // 3)
     check_frame(r, cam, (200, 150), path)

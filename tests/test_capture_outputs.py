@@ -19,8 +19,10 @@ FOCUS = {1, 5}
 
 
 def _cams(scene):
-    return (Camera.orbit(scene.center, scene.radius, *DEFAULT_ORBIT),
-            Camera.orbit(scene.center, scene.radius, 140.0, -25.0, 1.8))
+    return (
+        Camera.orbit(scene.center, scene.radius, *DEFAULT_ORBIT),
+        Camera.orbit(scene.center, scene.radius, 140.0, -25.0, 1.8),
+    )
 
 
 def _atlas(r, normals: bool):
@@ -45,7 +47,7 @@ def test_capture_without_normals_gives_the_same_images(make_renderer, demo_scene
     frames = r.capture_pass().frames
     for mode, want in images.items():
         assert np.array_equal(r.composite(mode, Style(focus=FOCUS)).read()[0], want), mode
-    assert r.capture_pass().frames == frames          # none of them captured again
+    assert r.capture_pass().frames == frames  # none of them captured again
 
 
 def test_a_mode_that_reads_normals_captures_them(make_renderer, demo_scene):
@@ -59,7 +61,7 @@ def test_a_mode_that_reads_normals_captures_them(make_renderer, demo_scene):
     fresh.capture(second, VP, focus=FOCUS)
     tw, th, td = r.last[0].atlas_size
     assert td >= 1
-    stale = r.atlas.normal.read()                      # what the guard in read() keeps callers from
+    stale = r.atlas.normal.read()  # what the guard in read() keeps callers from
     frames = r.capture_pass().frames
     got = r.composite("ghosted-ao", Style(focus=FOCUS)).read()[0]
     want = fresh.composite("ghosted-ao", Style(focus=FOCUS)).read()[0]
@@ -95,7 +97,7 @@ def test_capture_without_ids_gives_the_same_images_and_picks(make_renderer, demo
         hits = []
         for oid, depth in objects_at(full, rec, x, y):
             t = r.atlas.texels(np.array([[*_texel(rec, oid, x, y)]]))
-            assert t["id"][0] == oid                    # the depth rule agrees with the id image
+            assert t["id"][0] == oid  # the depth rule agrees with the id image
             hits.append((oid, depth))
         by_id.append(hits)
     r.capture(cam, VP, focus=FOCUS, ids=False)

@@ -33,17 +33,23 @@ CASES = {
     "box": (_box(), True),
     "box, split vertices": (_split(*_box()), True),
     "icosphere": ((trimesh.creation.icosphere(2).vertices, trimesh.creation.icosphere(2).faces), True),
-    "cylinder": ((trimesh.creation.cylinder(0.5, 2, sections=12).vertices,
-                  trimesh.creation.cylinder(0.5, 2, sections=12).faces), True),
+    "cylinder": (
+        (trimesh.creation.cylinder(0.5, 2, sections=12).vertices, trimesh.creation.cylinder(0.5, 2, sections=12).faces),
+        True,
+    ),
     "two boxes in one object": ((np.r_[_box()[0], _box((3, 0, 0))[0]], np.r_[_box()[1], _box()[1] + 8]), True),
     "box and a degenerate triangle": ((_box()[0], np.r_[_box()[1], [[0, 0, 1]]]), True),
     "inside-out box": ((_box()[0], _box()[1][:, ::-1]), False),
     "box without a face": ((_box()[0], _box()[1][:-2]), False),
     "box with one face turned": (_flipped_first(*_box()), False),
-    "box and a loose triangle": ((np.r_[_box()[0], [[5, 0, 0], [6, 0, 0], [5, 1, 0]]], np.r_[_box()[1], [[8, 9, 10]]]),
-                                 False),
-    "square sheet": ((np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float), np.array([[0, 1, 2], [0, 2, 3]])),
-                     False),
+    "box and a loose triangle": (
+        (np.r_[_box()[0], [[5, 0, 0], [6, 0, 0], [5, 1, 0]]], np.r_[_box()[1], [[8, 9, 10]]]),
+        False,
+    ),
+    "square sheet": (
+        (np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float), np.array([[0, 1, 2], [0, 2, 3]])),
+        False,
+    ),
 }
 
 
@@ -59,14 +65,14 @@ def test_objects_out_of_order_in_the_index_buffer():
     box_v, box_f = _box()
     sheet_v = np.array([[0, 0, 5], [1, 0, 5], [0, 1, 5]], np.float32)
     positions = np.r_[box_v, sheet_v].astype(np.float32)
-    indices = np.r_[[8, 9, 10], box_f.reshape(-1)].astype(np.uint32)       # the sheet's triangle first
-    ranges = np.array([[3, 36], [0, 3]])                                  # object 0: the box, 1: the sheet
+    indices = np.r_[[8, 9, 10], box_f.reshape(-1)].astype(np.uint32)  # the sheet's triangle first
+    ranges = np.array([[3, 36], [0, 3]])  # object 0: the box, 1: the sheet
     centers = np.array([[0, 0, 0], [0.3, 0.3, 5]], float)
     assert closed_objects(positions, indices, ranges, centers).tolist() == [True, False]
 
 
 def test_beyond_near():
-    cam = Camera.orbit(np.zeros(3), 1.0, 0.0, 0.0, 10.0)     # on +z, looking at the origin
+    cam = Camera.orbit(np.zeros(3), 1.0, 0.0, 0.0, 10.0)  # on +z, looking at the origin
     view, proj = cam.view(np.zeros(3)), cam.projection(1.0)
     near = proj[2, 3] / (proj[2, 2] - 1.0)
     eye = np.linalg.inv(view)[:3, 3]
@@ -99,7 +105,7 @@ def test_culling_leaves_std_and_the_atlas_as_double_sided(make_renderer, demo_sc
     size = (200, 150)
     culled = _pictures(make_renderer, demo_scene, cam, size, monkeypatch, True)
     both = _pictures(make_renderer, demo_scene, cam, size, monkeypatch, False)
-    for got, want, tolerance in zip(culled, both, (3, 3, 1e-6), strict=True):     # std, atlas colour, depth
+    for got, want, tolerance in zip(culled, both, (3, 3, 1e-6), strict=True):  # std, atlas colour, depth
         assert got.shape == want.shape
         assert (np.abs(got - want) > tolerance).mean() < 1e-4
 
@@ -128,7 +134,7 @@ def test_open_and_inside_out_objects_are_seen_from_behind(make_renderer):
     scene = from_meshes([("sheet", *sheet, None), ("inside out", *inside_out, None)])
     assert scene.closed.tolist() == [False, False]
     r = make_renderer(scene)
-    cam = Camera.orbit(scene.center, scene.radius, 180, 0, 2.5)      # from -z: the sheet's back
+    cam = Camera.orbit(scene.center, scene.radius, 180, 0, 2.5)  # from -z: the sheet's back
     records = r.capture(cam, (160, 120))
     assert records.visible.all()
     depth = r.std(cam, (160, 120)).read((160, 120), 1)["depth"][0]

@@ -21,7 +21,7 @@ def _random_crops(rng, h, w, n):
         cw, ch = int(rng.integers(0, w - x + 1)), int(rng.integers(0, h - y + 1))
         crop = rng.random((ch, cw)) < rng.random()
         full = np.zeros((h, w), np.uint8)
-        full[y:y + ch, x:x + cw] = crop
+        full[y : y + ch, x : x + cw] = crop
         crops.append(crop)
         rects.append((x, y, cw, ch))
         fulls.append(full)
@@ -43,8 +43,10 @@ def test_crops_encode_exactly_as_pycocotools_encodes_the_full_mask():
             assert area == full.sum() and np.array_equal(box, mask.toBbox(ref))
             checked += 1
     full = np.ones((4, 3), bool)
-    assert coco.encode_crops([full], np.array([[0, 0, 3, 4]]), 4, 3)[0][0]["counts"] == \
-        mask.encode(np.asfortranarray(full.astype(np.uint8)))["counts"].decode()
+    assert (
+        coco.encode_crops([full], np.array([[0, 0, 3, 4]]), 4, 3)[0][0]["counts"]
+        == mask.encode(np.asfortranarray(full.astype(np.uint8)))["counts"].decode()
+    )
     assert checked > 2000
 
 
@@ -67,7 +69,7 @@ def test_assemble_orders_and_numbers():
     doc = coco.assemble({"x": 1}, [{"objects": [{"category": "z"}]}], views)
     assert [im["id"] for im in doc["images"]] == [1, 3]
     assert [(a["id"], a["image_id"], a["object_id"]) for a in doc["annotations"]] == [(1, 1, 5), (2, 3, 0), (3, 3, 2)]
-    assert [c["name"] for c in doc["categories"]] == ["c0", "c2", "c5", "z"]          # sorted, unused ones kept
+    assert [c["name"] for c in doc["categories"]] == ["c0", "c2", "c5", "z"]  # sorted, unused ones kept
     names = {c["id"]: c["name"] for c in doc["categories"]}
     assert all(names[a["category_id"]] == f"c{a['object_id']}" and "category" not in a for a in doc["annotations"])
     assert coco.dumps(doc) == coco.dumps(json.loads(coco.dumps(doc)))
@@ -81,7 +83,7 @@ def test_merge_keeps_shard_ids_and_renumbers_collisions(tmp_path):
     (a / "s0.json").write_text(coco.dumps(coco.assemble({"run": 1}, [], [_view(1, [0, 1])])))
     (a / "s1.json").write_text(coco.dumps(coco.assemble({"run": 1}, [], [_view(2, [1])])))
     merged = coco.merge([a / "s0.json", a / "s1.json"], a / "all.json")
-    assert merged == json.loads(coco.dumps(whole))                       # shards of one run: as one run
+    assert merged == json.loads(coco.dumps(whole))  # shards of one run: as one run
     # another run whose image ids collide: renumbered, files relative to the output
     (b / "other.json").write_text(coco.dumps(coco.assemble({"run": 2}, [], [_view(1, [7], "d")])))
     joined = coco.merge([a / "s0.json", b / "other.json"], tmp_path / "out" / "x.json")
@@ -107,9 +109,16 @@ def test_view_files_for_scenes_beyond_16_bit_ids(tmp_path):
     from rtta.dataset.view import View, view_files, write_view
 
     ids = np.array([[-1, 0], [70000, 65533]], np.int32)
-    view = View(rgb=np.zeros((2, 2, 3), np.uint8), depth=np.array([[0, 1.5], [2.0, 3.0]], np.float32), ids=ids,
-                oids=np.zeros(0, np.int64), rects=np.zeros((0, 4), np.int64), amodal=np.zeros(0, bool),
-                visible=np.zeros(0, bool), nearest=np.zeros(0))
+    view = View(
+        rgb=np.zeros((2, 2, 3), np.uint8),
+        depth=np.array([[0, 1.5], [2.0, 3.0]], np.float32),
+        ids=ids,
+        oids=np.zeros(0, np.int64),
+        rects=np.zeros((0, 4), np.int64),
+        amodal=np.zeros(0, bool),
+        visible=np.zeros(0, bool),
+        nearest=np.zeros(0),
+    )
     write_view(view, tmp_path / "big", "png", 3.0 / 65535, big=True)
     assert np.array_equal(np.load(tmp_path / "big/visible_id.npy"), ids.astype(np.int64) + 1)
     assert view_files("v", "png", True)["visible_id_file"] == "v/visible_id.npy"
@@ -119,7 +128,7 @@ def test_view_files_for_scenes_beyond_16_bit_ids(tmp_path):
     assert stored.dtype == np.uint16 and stored.tolist() == [[0, 1], [4, 65534]]
     steps = np.asarray(Image.open(tmp_path / "small/depth.png")).astype(float)
     assert np.allclose(steps * 3.0 / 65535, view.depth, atol=3.0 / 65535)
-    bad = View(**{**view.__dict__, "rgb": np.zeros((2, 2, 7), np.uint8)})      # PIL cannot write it
+    bad = View(**{**view.__dict__, "rgb": np.zeros((2, 2, 7), np.uint8)})  # PIL cannot write it
     with pytest.raises(TypeError):
         write_view(bad, tmp_path / "bad", "png", 1.0)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["big", "small"]

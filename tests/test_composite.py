@@ -25,7 +25,7 @@ def _assert_matches_std(rgba, depth, std_rgba, std_depth, std_id):
     close = np.abs(rgba[..., :3].astype(int) - std_rgba[..., :3].astype(int)).max(-1) <= 3
     assert close.mean() >= 0.995, f"only {close.mean():.4f} of pixels within 3/255"
     cov = std_id >= 0
-    if depth is not None:      # the core's tolerance: 1e-5 plus the depth slope over sub-pixel snapping
+    if depth is not None:  # the core's tolerance: 1e-5 plus the depth slope over sub-pixel snapping
         assert_depth_close(depth, std_depth, cov, std_id, "sprites against STD")
         assert (depth[~cov] == 1.0).all()
 
@@ -60,7 +60,7 @@ def _separated_scene(n=12, seed=0):
     scene = from_meshes(parts)
     lo, hi = scene.aabb_min, scene.aabb_max
     overlap = (lo[:, None] < hi[None]).all(-1) & (lo[None] < hi[:, None]).all(-1)
-    assert overlap.sum() == n    # only each box with itself
+    assert overlap.sum() == n  # only each box with itself
     return scene
 
 
@@ -84,8 +84,9 @@ def test_one_object_alpha_blend_over_background(make_renderer, alpha):
     std = r.std(cam, VP).read(VP, 1)
     cov = std["id"][0] >= 0
     src = std["color"][0][..., :3].astype(np.float64)
-    expected = np.where(cov[..., None], alpha * src + (1 - alpha) * np.array(BACKGROUND[:3]) * 255,
-                        np.array(BACKGROUND[:3]) * 255)
+    expected = np.where(
+        cov[..., None], alpha * src + (1 - alpha) * np.array(BACKGROUND[:3]) * 255, np.array(BACKGROUND[:3]) * 255
+    )
     assert np.abs(rgba[..., :3] - expected).max() <= 3.0
 
 
@@ -93,8 +94,12 @@ def _hidden_pair():
     """A small box entirely behind a large one, seen from +Z."""
     big = trimesh.creation.box(extents=(4, 4, 0.5))
     small = trimesh.creation.box(extents=(1, 1, 1))
-    return from_meshes([("wall", np.asarray(big.vertices), np.asarray(big.faces), None),
-                        ("hidden", np.asarray(small.vertices) + [0, 0, -3], np.asarray(small.faces), None)])
+    return from_meshes(
+        [
+            ("wall", np.asarray(big.vertices), np.asarray(big.faces), None),
+            ("hidden", np.asarray(small.vertices) + [0, 0, -3], np.asarray(small.faces), None),
+        ]
+    )
 
 
 @pytest.mark.parametrize("mode", ["ghosted", "ghosted-ao"])
@@ -102,7 +107,7 @@ def test_ghosted_shows_a_hidden_focus_object(make_renderer, mode):
     scene = _hidden_pair()
     r = make_renderer(scene)
     cam = Camera.orbit(scene.center, scene.radius, 0, 0, 2.5)
-    assert not (r.std(cam, VP).read(VP, 1)["id"][0] == 1).any()      # hidden in STD
+    assert not (r.std(cam, VP).read(VP, 1)["id"][0] == 1).any()  # hidden in STD
     records = r.capture(cam, VP)
     plain, _ = r.composite(mode, Style()).read()
     plain = plain.copy()
@@ -112,8 +117,8 @@ def test_ghosted_shows_a_hidden_focus_object(make_renderer, mode):
     region = (slice(y0, y1), slice(x0, x1))
     changed = np.abs(focused[region].astype(int) - plain[region].astype(int)).max(-1) > 10
     assert changed.mean() > 0.5
-    outline = (np.abs(focused[..., :3].astype(int) - np.array(style.outline_color[:3]) * 255).max(-1) <= 3)
-    assert outline[region].sum() >= 2 * ((x1 - x0) + (y1 - y0)) * 0.8        # its silhouette is drawn
+    outline = np.abs(focused[..., :3].astype(int) - np.array(style.outline_color[:3]) * 255).max(-1) <= 3
+    assert outline[region].sum() >= 2 * ((x1 - x0) + (y1 - y0)) * 0.8  # its silhouette is drawn
     assert not outline[~_in_rect(focused.shape, records.viewport_rect[1])].any()
 
 
@@ -138,23 +143,28 @@ def test_only_needed_passes_run(make_renderer, demo_scene):
     r = make_renderer(demo_scene)
     cam = Camera.orbit(demo_scene.center, demo_scene.radius, *DEFAULT_ORBIT)
     r.capture(cam, VP)
-    expected = {"sprites": ["sprite"], "transparent": ["blend+collect", "resolve"],
-                "ghosted": ["sprite+outline", "blend"]}
+    expected = {
+        "sprites": ["sprite"],
+        "transparent": ["blend+collect", "resolve"],
+        "ghosted": ["sprite+outline", "blend"],
+    }
     for mode, passes in expected.items():
         r.composite(mode, Style(focus={1}))
-        highlight = ["outline"] if mode != "ghosted" else []     # sprites/transparent: highlight outlines
+        highlight = ["outline"] if mode != "ghosted" else []  # sprites/transparent: highlight outlines
         assert r._composite.passes == passes + highlight and r._post is None
         if highlight:
             r.composite(mode, Style())
             assert r._composite.passes == passes
-    r.composite("ghosted", Style(focus={1}, outline_width=0))   # no outline: no outline pass or variant
+    r.composite("ghosted", Style(focus={1}, outline_width=0))  # no outline: no outline pass or variant
     assert r._composite.passes == ["sprite", "blend"]
     r.composite("ghosted-ao", Style(focus={1}))
     assert r._composite.passes == ["sprite+outline+with_ao", "blend+with_ao"] and r._post is not None
 
 
-@pytest.mark.parametrize("mode, order, halo", [("ghosted", "object", 0), ("ghosted", "pixel", 0),
-                                               ("ghosted-ao", "object", 3), ("ghosted", "pixel", 3)])
+@pytest.mark.parametrize(
+    "mode, order, halo",
+    [("ghosted", "object", 0), ("ghosted", "pixel", 0), ("ghosted-ao", "object", 3), ("ghosted", "pixel", 3)],
+)
 def test_ghosted_outlines_stay_on_top(make_renderer, demo_scene, mode, order, halo):
     """The ghosted focus outlines are drawn in the focus sprites' pass at depth 0: the context
     (blended by object or collected per pixel) and halos composited after never cover them,
@@ -172,7 +182,7 @@ def test_ghosted_outlines_stay_on_top(make_renderer, demo_scene, mode, order, ha
     for oid in focus:
         x0, y0, x1, y1 = rec.viewport_rect[oid].astype(int)
         sil = _silhouettes(rec, covered, oid, 1)
-        expected[y0:y1, x0:x1] |= sil[1:1 + y1 - y0, 1:1 + x1 - x0]
+        expected[y0:y1, x0:x1] |= sil[1 : 1 + y1 - y0, 1 : 1 + x1 - x0]
     assert expected.sum() > 200
     assert np.array_equal(drawn, expected), f"{(drawn != expected).sum()} pixels differ"
     assert (depth[expected] == 0.0).all()
@@ -180,14 +190,15 @@ def test_ghosted_outlines_stay_on_top(make_renderer, demo_scene, mode, order, ha
 
 def test_borders_are_marked_empty(make_renderer, demo_scene):
     from rtta.renderer.renderer import Settings
+
     r = make_renderer(demo_scene, Settings(border=2))
     cam = Camera.orbit(demo_scene.center, demo_scene.radius, *DEFAULT_ORBIT)
     rec = r.capture(cam, VP)
     atlas = r.atlas.read(rec.atlas_size[:2], rec.atlas_size[2])
     for oid in np.flatnonzero(rec.visible):
         x, y, w, h = rec.atlas_rect[oid]
-        ids = atlas["id"][rec.layer[oid], y:y + h, x:x + w]
-        alpha = atlas["color"][rec.layer[oid], y:y + h, x:x + w, 3]
+        ids = atlas["id"][rec.layer[oid], y : y + h, x : x + w]
+        alpha = atlas["color"][rec.layer[oid], y : y + h, x : x + w, 3]
         ring = np.ones(ids.shape, bool)
         ring[2:-2, 2:-2] = False
         assert (ids[ring] == -1).all() and (alpha[ring] == 0).all()
@@ -207,7 +218,7 @@ def test_stale_atlas_texels_never_show(make_renderer, demo_scene):
     allocations = r.atlas.allocations
     r.capture(now, VP)
     fresh.capture(now, VP)
-    assert r.atlas.allocations == allocations       # the same textures, history and all
+    assert r.atlas.allocations == allocations  # the same textures, history and all
     w, h = r.atlas.size
     raw = np.frombuffer(r.atlas.color.read(), np.uint8).reshape(-1, h, w, 4)
     assert raw[r.atlas.depth.read() >= 1.0].any(), "no stale texel: the test would prove nothing"
@@ -225,18 +236,20 @@ def _silhouettes(records, covered: np.ndarray, oid: int, width: int) -> np.ndarr
     """The object's texels in its B_atlas with a texel within `width` (square window) that
     is outside B_atlas or empty: what the outline pass draws, in numpy."""
     x, y, w, h = records.atlas_rect[oid]
-    own = np.zeros((h + 2 * width, w + 2 * width), bool)       # outside B_atlas: not the object's
-    own[width:-width, width:-width] = covered[records.layer[oid], y:y + h, x:x + w]
+    own = np.zeros((h + 2 * width, w + 2 * width), bool)  # outside B_atlas: not the object's
+    own[width:-width, width:-width] = covered[records.layer[oid], y : y + h, x : x + w]
     near_other = np.zeros((h, w), bool)
     for dy in range(-width, width + 1):
         for dx in range(-width, width + 1):
-            near_other |= ~own[width + dy:width + dy + h, width + dx:width + dx + w]
+            near_other |= ~own[width + dy : width + dy + h, width + dx : width + dx + w]
     return own[width:-width, width:-width] & near_other
 
 
 @pytest.mark.parametrize("mode", ["sprites", "ghosted"])
-@pytest.mark.parametrize("border, width, distance", [(0, 1, 2.2), (0, 1, 0.6), (0, 3, 0.6), (1, 3, 2.2),
-                                                     (1, 1, 2.2), (1, 1, 0.6), (2, 1, 0.6)])
+@pytest.mark.parametrize(
+    "border, width, distance",
+    [(0, 1, 2.2), (0, 1, 0.6), (0, 3, 0.6), (1, 3, 2.2), (1, 1, 2.2), (1, 1, 0.6), (2, 1, 0.6)],
+)
 def test_outlines_match_numpy_silhouettes(make_renderer, demo_scene, border, width, distance, mode):
     """Every object in focus: the outline pixels are exactly the silhouette texels of each
     object's own atlas region mapped back through T^-1. With border 0 the regions touch, so
@@ -246,6 +259,7 @@ def test_outlines_match_numpy_silhouettes(make_renderer, demo_scene, border, wid
     `sprites` draws outlines in a pass of their own, `ghosted` in the focus sprites' pass;
     width 1 with a border takes the quad-derivative silhouette (OUTLINE_QUAD) in both."""
     from rtta.renderer.renderer import Settings
+
     r = make_renderer(demo_scene, Settings(border=border))
     cam = Camera.orbit(demo_scene.center, demo_scene.radius, 30, 20, distance)
     rec = r.capture(cam, VP)
@@ -259,7 +273,7 @@ def test_outlines_match_numpy_silhouettes(make_renderer, demo_scene, border, wid
         x0, y0, x1, y1 = rec.viewport_rect[oid].astype(int)
         sil = _silhouettes(rec, covered, oid, width)
         # pixel (x0 + i, y0 + j) shows texel (border + i, border + j) of B_atlas at scale 1
-        expected[y0:y1, x0:x1] |= sil[border:border + y1 - y0, border:border + x1 - x0]
+        expected[y0:y1, x0:x1] |= sil[border : border + y1 - y0, border : border + x1 - x0]
     assert expected.sum() > 500
     assert np.array_equal(drawn, expected), f"{(drawn != expected).sum()} pixels differ"
 
@@ -275,7 +289,7 @@ def test_back_to_front_is_farthest_first_ties_by_id():
     rng = np.random.default_rng(5)
     n = 5000
     records = SimpleNamespace(visible=rng.random(n) > 0.2)
-    for depth in (rng.random(n), np.round(rng.random(n), 2)):          # no ties; many ties
+    for depth in (rng.random(n), np.round(rng.random(n), 2)):  # no ties; many ties
         ids = rng.permutation(n)[: n // 2]
         got = back_to_front(records, depth, ids)
         vis = np.sort(ids[records.visible[ids]])
@@ -284,5 +298,5 @@ def test_back_to_front_is_farthest_first_ties_by_id():
     records.viewport_rect = np.hstack([lo, lo + rng.integers(1, 90, (n, 2))])
     r = records.viewport_rect
     area = (r[:, 2] - r[:, 0]) * (r[:, 3] - r[:, 1])
-    for ids in (np.arange(10), np.arange(n), rng.permutation(n)[:4000]):   # rows gathered; areas of all
+    for ids in (np.arange(10), np.arange(n), rng.permutation(n)[:4000]):  # rows gathered; areas of all
         assert worth_outlines(records, ids) == (area[ids].mean() >= HULL_MIN_AREA)

@@ -36,18 +36,20 @@ def test_unreadable_scene_stops_the_run(three, capsys, ctx):
     _one_error(capsys, "b_broken.glb: GLB file is truncated")
     assert not (out / "annotations.json").exists() and not (out / "images/c_last").exists()
     parts = sorted(p.name for p in (out / "parts/a_good").iterdir())
-    assert parts == ["00000.json", "00001.json"]          # what was done before stays done, whole
+    assert parts == ["00000.json", "00001.json"]  # what was done before stays done, whole
     assert main(["dataset", *scenes, "--out", str(out), "--keep-going", *SMALL]) == 2
     _one_error(capsys, "b_broken.glb: GLB file is truncated")
     doc = read_json(out / "annotations.json")
     assert sorted({im["scene"] for im in doc["images"]}) == ["a_good", "c_last"] and len(doc["images"]) == 4
-    assert {im["id"] for im in doc["images"]} == {1, 2, 5, 6}       # ids do not depend on what failed
+    assert {im["id"] for im in doc["images"]} == {1, 2, 5, 6}  # ids do not depend on what failed
 
 
 def test_missing_scene_with_keep_going(three, capsys):
     out = three / "out"
-    assert main(["dataset", str(three / "a_good.glb"), str(three / "nope.glb"), "--out", str(out),
-                 "--keep-going", *SMALL]) == 2
+    assert (
+        main(["dataset", str(three / "a_good.glb"), str(three / "nope.glb"), "--out", str(out), "--keep-going", *SMALL])
+        == 2
+    )
     _one_error(capsys, "nope.glb: no such file")
     assert len(read_json(out / "annotations.json")["images"]) == 2
 
@@ -72,22 +74,25 @@ def test_other_settings_do_not_resume(tmp_path, capsys):
     assert main(["dataset", "--out", str(out), *SMALL, "--seed", "5"]) == 2
     _one_error(capsys, "other settings (seed)")
     assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == before
-    assert main(["dataset", "--out", str(out), *SMALL]) == 0          # the same settings resume: nothing to do
+    assert main(["dataset", "--out", str(out), *SMALL]) == 0  # the same settings resume: nothing to do
     assert "0 views rendered, 2 already complete" in capsys.readouterr().out
 
 
-@pytest.mark.parametrize("args,needle", [
-    (["--size", "12by4"], "--size expects WxH"),
-    (["--shard", "2/2"], "--shard expects I/N"),
-    (["--fov", "0,200"], "--fov expects LO,HI"),
-    (["--elevation", "80,10"], "--elevation expects LO,HI"),
-    (["--views", "0"], "--views must be"),
-    (["--cameras", "cams.json"], "cams.json: camera 1: expected"),
-    (["--cameras", "nothing.json"], "nothing.json: cannot read cameras"),
-    (["--category-by", "ifc-class"], "no object is named by an IFC class"),
-    (["*.nothing"], "*.nothing: matches no file"),
-    (["empty_folder"], "empty_folder: folder holds no scene file"),
-])
+@pytest.mark.parametrize(
+    "args,needle",
+    [
+        (["--size", "12by4"], "--size expects WxH"),
+        (["--shard", "2/2"], "--shard expects I/N"),
+        (["--fov", "0,200"], "--fov expects LO,HI"),
+        (["--elevation", "80,10"], "--elevation expects LO,HI"),
+        (["--views", "0"], "--views must be"),
+        (["--cameras", "cams.json"], "cams.json: camera 1: expected"),
+        (["--cameras", "nothing.json"], "nothing.json: cannot read cameras"),
+        (["--category-by", "ifc-class"], "no object is named by an IFC class"),
+        (["*.nothing"], "*.nothing: matches no file"),
+        (["empty_folder"], "empty_folder: folder holds no scene file"),
+    ],
+)
 def test_bad_arguments(tmp_path, capsys, monkeypatch, args, needle):
     monkeypatch.chdir(tmp_path)
     (tmp_path / "cams.json").write_text('[{"orbit": [0, 10, 2]}, {"orbit": [0, 10]}]')
@@ -125,7 +130,7 @@ def test_shards_starting_together_see_each_others_marker_on_its_way(tmp_path):
 
     out = tmp_path / "d"
     out.mkdir()
-    (out / ".dataset.json.k2j9x_.json").write_text("{")          # the other shard, mid-write
+    (out / ".dataset.json.k2j9x_.json").write_text("{")  # the other shard, mid-write
     prepare_out(out, {"views": 3})
     assert (out / "dataset.json").is_file()
     other = tmp_path / "e"
@@ -151,7 +156,7 @@ def test_a_marker_that_lands_while_the_folder_is_read(tmp_path, monkeypatch):
         if self == out and not landed:
             landed.append(True)
             monkeypatch.setattr(Path, "iterdir", real)
-            prepare_out(out, settings)                   # the other shard, just then
+            prepare_out(out, settings)  # the other shard, just then
             (out / "parts").mkdir()
         return real(self)
 

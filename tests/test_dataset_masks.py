@@ -30,7 +30,7 @@ def make(out, scenes, views=2, size=(200, 150), given=None, **options):
 def load_coco(out):
     from pycocotools.coco import COCO
 
-    with contextlib.redirect_stdout(io.StringIO()):       # COCO prints its progress
+    with contextlib.redirect_stdout(io.StringIO()):  # COCO prints its progress
         return COCO(str(out / "annotations.json"))
 
 
@@ -42,10 +42,18 @@ def nested(tmp_path_factory):
 CASES = {
     "demo": lambda nested: (str(demo_path()), lambda: load_scene(demo_path()), None, {}),
     "nested": lambda nested: (str(nested), lambda: load_scene(nested), None, {}),
-    "demo-inside-fov150": lambda nested: (str(demo_path()), lambda: load_scene(demo_path()), None,
-                                          {"views": 1, "distance": (0.4, 0.4), "fov": (150.0, 150.0)}),
-    "random-2000": lambda nested: ("random-2000", lambda: random_scene(2000, seed=3, spread=40.0), True,
-                                   {"views": 1, "distance": (1.2, 1.6)}),
+    "demo-inside-fov150": lambda nested: (
+        str(demo_path()),
+        lambda: load_scene(demo_path()),
+        None,
+        {"views": 1, "distance": (0.4, 0.4), "fov": (150.0, 150.0)},
+    ),
+    "random-2000": lambda nested: (
+        "random-2000",
+        lambda: random_scene(2000, seed=3, spread=40.0),
+        True,
+        {"views": 1, "distance": (1.2, 1.6)},
+    ),
 }
 
 
@@ -64,7 +72,7 @@ def test_annotations_equal_objects_rendered_alone(name, nested, tmp_path, make_r
     # the acceptance allows differences within a pixel of the silhouettes; here there are none at all
     # (0 of 2,400-30,000 amodal pixels per view): a mapping off by one texel would differ on ~1 in 10
     assert totals["band_px"] <= 0.01 * totals["amodal_px"], totals
-    if name == "nested":       # the boxes and spheres inside the shells: amodal only
+    if name == "nested":  # the boxes and spheres inside the shells: amodal only
         assert totals["hidden"] >= 2 * 2 * 3, totals
         hidden = [a for a in coco.dataset["annotations"] if a["object_name"].startswith(("inner", "core"))]
         assert hidden and all(a["area"] == 0 and a["occlusion_rate"] == 1.0 and a["amodal_area"] > 0 for a in hidden)
@@ -100,7 +108,7 @@ def test_camera_k_and_depth_against_numpy(tmp_path, nested):
     steps = np.asarray(Image.open(out / first["depth_file"])).astype(np.float64)
     depth = steps * first["depth_scale"]
     h, w = depth.shape
-    face = depth[h // 2 - 3:h // 2 + 3, w // 2 - 3:w // 2 + 3]          # the middle shell's front face, z = 1
+    face = depth[h // 2 - 3 : h // 2 + 3, w // 2 - 3 : w // 2 + 3]  # the middle shell's front face, z = 1
     expected = camera.eye[2] - 1.0
     assert np.abs(face - expected).max() <= first["depth_scale"], (face.min(), face.max(), expected)
     assert (depth[0, 0] == 0) and first["depth_scale"] == pytest.approx(first["camera"]["far"] / 65535)
@@ -125,9 +133,9 @@ def test_scaled_down_regions_map_back_through_t(make_renderer):
     tw, th, td = records.atlas_size
     atlas = small.atlas.read((tw, th), td, ("depth",))
     for i, (oid, (x, y, w, h)) in enumerate(zip(scaled.oids, scaled.rects, strict=True)):
-        a, b = scaled.lay["offsets"][i:i + 2]
+        a, b = scaled.lay["offsets"][i : i + 2]
         crop = scaled.mask[a:b].reshape(w, h + 2)[:, 1:-1].T
-        mapped = map_back(atlas, records, int(oid))["depth"][::-1][y:y + h, x:x + w] < 1.0
+        mapped = map_back(atlas, records, int(oid))["depth"][::-1][y : y + h, x : x + w] < 1.0
         assert np.array_equal(crop, mapped), oid
     starts = exact.lay["offsets"][:-1]
     both = np.add.reduceat(exact.mask & scaled.mask, starts)

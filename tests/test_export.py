@@ -103,7 +103,7 @@ def test_existing_output_is_replaced_whole(tmp_path):
     assert main(["export", "--out", str(out), "--size", "64x48"]) == 0
     assert not (out / "atlas_color_7.png").exists()
     assert json.loads((out / "records.json").read_text())["viewport"] == [64, 48]
-    assert [p.name for p in tmp_path.iterdir()] == ["out"]          # no temporary folders left
+    assert [p.name for p in tmp_path.iterdir()] == ["out"]  # no temporary folders left
     (out / "notes.txt").write_text("mine")
     mine = tmp_path / "mine"
     mine.mkdir()
@@ -118,17 +118,20 @@ def _run(args, cwd):
     return subprocess.run([RTTA, *args], cwd=cwd, capture_output=True, text=True, timeout=120)
 
 
-@pytest.mark.parametrize("args,needle", [
-    (["export", "missing.glb", "--out", "o"], "missing.glb: no such file"),
-    (["export", "bad.glb", "--out", "o"], "bad.glb: GLB file is truncated"),
-    (["export", "--out", "o", "--size", "12by4"], "--size expects WxH"),
-    (["export", "--out", "o", "--camera", "1,2"], "--camera expects AZ,EL,DIST"),
-    (["export", "--out", "o", "--border", "-1"], "--border must be"),
-    (["export", "--out", "o", "--atlas-max", "0x0"], "--atlas-max"),
-])
+@pytest.mark.parametrize(
+    "args,needle",
+    [
+        (["export", "missing.glb", "--out", "o"], "missing.glb: no such file"),
+        (["export", "bad.glb", "--out", "o"], "bad.glb: GLB file is truncated"),
+        (["export", "--out", "o", "--size", "12by4"], "--size expects WxH"),
+        (["export", "--out", "o", "--camera", "1,2"], "--camera expects AZ,EL,DIST"),
+        (["export", "--out", "o", "--border", "-1"], "--border must be"),
+        (["export", "--out", "o", "--atlas-max", "0x0"], "--atlas-max"),
+    ],
+)
 def test_bad_input_exits_2_with_one_line(tmp_path, args, needle):
     (tmp_path / "bad.glb").write_bytes(b"glTF garbage")
-    (tmp_path / "o").mkdir()                                  # an earlier export: may be replaced, not on error
+    (tmp_path / "o").mkdir()  # an earlier export: may be replaced, not on error
     (tmp_path / "o" / "records.json").write_text("{}")
     (tmp_path / "o" / "std_color.png").write_text("mine")
     res = _run(args, tmp_path)
@@ -154,13 +157,16 @@ def test_snapshot_all_modes(tmp_path):
     assert Image.open(tmp_path / "shots" / "ghosted.png").size == (96, 72)
 
 
-@pytest.mark.parametrize("args,needle", [
-    (["snapshot", "--out", "a.png", "--focus", "pad_iner"], "did you mean pad_inner"),
-    (["snapshot", "--out", "a.png", "--mode", "xray"], "--mode must be one of"),
-    (["snapshot", "--out", "a.png", "--opacity", "rotor=2"], "--opacity expects NAME=A"),
-    (["snapshot", "--out", "a.jpg"], "--out must name a .png"),
-    (["snapshot", "--out", "nowhere/a.png"], "parent directory does not exist"),
-])
+@pytest.mark.parametrize(
+    "args,needle",
+    [
+        (["snapshot", "--out", "a.png", "--focus", "pad_iner"], "did you mean pad_inner"),
+        (["snapshot", "--out", "a.png", "--mode", "xray"], "--mode must be one of"),
+        (["snapshot", "--out", "a.png", "--opacity", "rotor=2"], "--opacity expects NAME=A"),
+        (["snapshot", "--out", "a.jpg"], "--out must name a .png"),
+        (["snapshot", "--out", "nowhere/a.png"], "parent directory does not exist"),
+    ],
+)
 def test_snapshot_bad_input(tmp_path, args, needle):
     res = _run(args, tmp_path)
     assert res.returncode == 2 and needle in res.stderr and "Traceback" not in res.stderr

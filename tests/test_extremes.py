@@ -33,11 +33,11 @@ def test_camera_inside_an_object(make_renderer, path):
         parts.append((f"crate{i}", *_box(rng.uniform(0.5, 2), rng.uniform(-6, 6, 3)), None))
     scene = from_meshes(parts)
     r = make_renderer(scene)
-    target = (scene.aabb_min[1] + scene.aabb_max[1]) / 2      # look at a crate from inside the room
+    target = (scene.aabb_min[1] + scene.aabb_max[1]) / 2  # look at a crate from inside the room
     cam = _look([0.3, 0.2, 0.1], target, scene.center, scene.radius)
     out = check_frame(r, cam, (200, 150), path)
     rec = r.parameterize(cam, (200, 150))
-    assert rec.visible[0] and list(rec.viewport_rect[0]) == [0, 0, 200, 150]   # surrounds the camera
+    assert rec.visible[0] and list(rec.viewport_rect[0]) == [0, 0, 200, 150]  # surrounds the camera
     assert out["visible"] >= 2
 
 
@@ -45,7 +45,7 @@ def test_camera_inside_an_object(make_renderer, path):
 def test_objects_crossing_the_near_plane(make_renderer, demo_scene, path):
     r = make_renderer(demo_scene)
     cam = Camera.orbit(demo_scene.center, demo_scene.radius, 30, 15, 1.2)
-    cam.near = float(np.linalg.norm(cam.eye - demo_scene.center)) * 0.9   # cuts through the assembly
+    cam.near = float(np.linalg.norm(cam.eye - demo_scene.center)) * 0.9  # cuts through the assembly
     rec = r.parameterize(cam, (240, 180))
     corners = demo_scene.box_corners()
     view = cam.view(demo_scene.origin)
@@ -85,8 +85,11 @@ def test_scene_far_from_the_origin(make_renderer):
 
 @pytest.mark.parametrize("path", PATHS)
 def test_tiny_and_huge_objects_in_one_scene(make_renderer, path):
-    parts = [("huge", *_box(1e4, np.zeros(3)), None), ("tiny", *_box(1e-4, np.array([6e3, 0, 0])), None),
-             ("mid", *_box(1.0, np.array([6e3, 0, 2.0])), None)]
+    parts = [
+        ("huge", *_box(1e4, np.zeros(3)), None),
+        ("tiny", *_box(1e-4, np.array([6e3, 0, 0])), None),
+        ("mid", *_box(1.0, np.array([6e3, 0, 2.0])), None),
+    ]
     scene = from_meshes(parts)
     r = make_renderer(scene)
     check_frame(r, Camera.orbit(scene.center, scene.radius, 60, 10, 1.5), (200, 200), path)

@@ -15,8 +15,13 @@ from rtta.errors import RttaError
 from rtta.scene.loader import load_scene
 from rtta.scene.select import resolve_names
 
-WRITERS = {".dae": (write_collada, "cm"), ".zae": (write_zae, "cm"), ".usda": (write_usd, "cm"),
-           ".usdc": (write_usd, "cm"), ".3dxml": (write_3dxml, "mm")}
+WRITERS = {
+    ".dae": (write_collada, "cm"),
+    ".zae": (write_zae, "cm"),
+    ".usda": (write_usd, "cm"),
+    ".usdc": (write_usd, "cm"),
+    ".3dxml": (write_3dxml, "mm"),
+}
 
 
 @pytest.mark.parametrize("suffix", list(WRITERS))
@@ -42,16 +47,16 @@ def test_usd_instances_and_meters_per_unit(tmp_path):
     path = tmp_path / "plant.usda"
     write_usd(path)
     stage = Usd.Stage.Open(str(path))
-    assert stage.GetPrimAtPath("/plant/arm/hand/finger").IsInstance()      # written as instances
+    assert stage.GetPrimAtPath("/plant/arm/hand/finger").IsInstance()  # written as instances
     s = load_scene(path)
     fingers = [s.index("finger"), s.index("finger_2")]
     assert np.allclose(s.aabb_max[fingers[1]] - s.aabb_max[fingers[0]], [14, 0, 0])
     from rtta.scene.readers import usd
 
-    asm = usd.read(path)                    # the prototype's mesh is read once for both instances
+    asm = usd.read(path)  # the prototype's mesh is read once for both instances
     a, b = (i for i, n in enumerate(asm.names) if n.startswith("finger"))
     assert np.shares_memory(asm.faces[a], asm.faces[b]) and asm.colors[a] == asm.colors[b]
-    assert not np.shares_memory(asm.vertices[a], asm.vertices[b])     # each placed by its own transform
+    assert not np.shares_memory(asm.vertices[a], asm.vertices[b])  # each placed by its own transform
     package = tmp_path / "plant.usdz"
     assert UsdUtils.CreateNewUsdzPackage(str(path), str(package))
     z = load_scene(package)
@@ -69,21 +74,25 @@ def _bad_cases(tmp_path):
     hostile.writestr("../../evil.xml", "<a/>")
     hostile.close()
     future = bytearray((tmp_path / "hostile.3dxml").read_bytes())
-    entry = future.index(b"PK\x01\x02")              # central directory: version needed to extract 10.6
-    future[entry + 6:entry + 8] = (106).to_bytes(2, "little")
+    entry = future.index(b"PK\x01\x02")  # central directory: version needed to extract 10.6
+    future[entry + 6 : entry + 8] = (106).to_bytes(2, "little")
     return {
         "future_zip.3dxml": (bytes(future), "not a readable zip archive (zip file version 10.6)"),
         "future_zip.zae": (bytes(future), "not a readable zip archive (zip file version 10.6)"),
         "cut.dae": (dae[: len(dae) // 2], "cannot read COLLADA file"),
         "empty.usda": (b"", "file is empty"),
         "cut.usdc": (usdc[: len(usdc) // 2], "cannot read USD file"),
-        "junk.usda": (b"#usda 1.0\ndef Mesh \"m\" { point3f[] points = [(0, 0, \n",
-                      "cannot read USD file (line 3, column 1: syntax error at"),
-        "ref.usda": (f'#usda 1.0\n(\n    subLayers = [@{outside}@]\n)\n'.encode(), "outside the scene's folder"),
-        "url.usda": (b'#usda 1.0\n(\n    subLayers = [@http://example.com/a.usda@]\n)\n', "is a URL"),
+        "junk.usda": (
+            b'#usda 1.0\ndef Mesh "m" { point3f[] points = [(0, 0, \n',
+            "cannot read USD file (line 3, column 1: syntax error at",
+        ),
+        "ref.usda": (f"#usda 1.0\n(\n    subLayers = [@{outside}@]\n)\n".encode(), "outside the scene's folder"),
+        "url.usda": (b"#usda 1.0\n(\n    subLayers = [@http://example.com/a.usda@]\n)\n", "is a URL"),
         "latin1.usda": (b'#usda 1.0\n(\n    doc = "caf\xe9"\n)\n', "not UTF-8 text at line 3"),
-        "sub_latin1.usda": (b'#usda 1.0\n(\n    subLayers = [@./latin1.usda@]\n)\n',
-                            "layer 'latin1.usda' it refers to is not UTF-8 text at line 3"),
+        "sub_latin1.usda": (
+            b"#usda 1.0\n(\n    subLayers = [@./latin1.usda@]\n)\n",
+            "layer 'latin1.usda' it refers to is not UTF-8 text at line 3",
+        ),
         "cut_char.usda": (b'#usda 1.0\n(\n    doc = "caf\xc3', "not UTF-8 text: it ends inside a character"),
         "text.3dxml": (b"not a zip", "not a readable zip archive"),
         "hostile.3dxml": (None, "points outside the archive"),
@@ -111,10 +120,12 @@ def test_usd_errors_are_one_short_line():
     path as line and column; an exception whose text is not UTF-8 still gives a reason."""
     from rtta.scene.readers import usd
 
-    text = ("\n\tError in 'pxrInternal_v0_26_11__pxrReserved__::Sdf_TextFileFormatParser::_RaiseErrorPEGTL' "
-            "at line 48 in file /opt/USD/pxr/usd/sdf/textParserHelpers.h : '/tmp/a b/c.usda:29:17: Expected } at "
-            "'uniform token[]' in </p>\n'\n\tError in 'pxrInternal_v0_26_11__pxrReserved__::UsdStage::Open' at "
-            "line 1287 in file /opt/USD/pxr/usd/usd/stage.cpp : 'Failed to open layer @/tmp/a b/c.usda@'")
+    text = (
+        "\n\tError in 'pxrInternal_v0_26_11__pxrReserved__::Sdf_TextFileFormatParser::_RaiseErrorPEGTL' "
+        "at line 48 in file /opt/USD/pxr/usd/sdf/textParserHelpers.h : '/tmp/a b/c.usda:29:17: Expected } at "
+        "'uniform token[]' in </p>\n'\n\tError in 'pxrInternal_v0_26_11__pxrReserved__::UsdStage::Open' at "
+        "line 1287 in file /opt/USD/pxr/usd/usd/stage.cpp : 'Failed to open layer @/tmp/a b/c.usda@'"
+    )
     assert usd._short(text) == "line 29, column 17: Expected } at 'uniform token[]' in </p>"
     assert usd._short("plain words\nmore") == "plain words"
 

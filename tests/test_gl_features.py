@@ -49,12 +49,14 @@ def test_missing_layer_extension_falls_back_to_the_geometry_shader(mesa, tmp_pat
     a = np.asarray(Image.open(tmp_path / "gs.png"), np.int16)
     b = np.asarray(Image.open(tmp_path / "vs.png"), np.int16)
     assert (np.abs(a - b).max(-1) <= 3).mean() >= 0.995
-    assert (a[..., :3] != a[0, 0, :3]).any(-1).mean() > 0.1       # the assembly is drawn, not just background
+    assert (a[..., :3] != a[0, 0, :3]).any(-1).mean() > 0.1  # the assembly is drawn, not just background
 
 
 def test_asking_for_the_missing_path_is_an_error(mesa, tmp_path):
-    proc = _rtta(["snapshot", "--size", "64x48", "--capture-path", "vs", "--out", str(tmp_path / "x.png")],
-                 MESA_EXTENSION_OVERRIDE=f"-{LAYER_EXTENSION}")
+    proc = _rtta(
+        ["snapshot", "--size", "64x48", "--capture-path", "vs", "--out", str(tmp_path / "x.png")],
+        MESA_EXTENSION_OVERRIDE=f"-{LAYER_EXTENSION}",
+    )
     assert proc.returncode == 2 and LAYER_EXTENSION in proc.stderr and proc.stderr.count("\n") == 1
 
 

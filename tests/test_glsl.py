@@ -9,7 +9,7 @@ def test_defines_are_injected_after_version():
     src = glsl.load("scene.vert", CAPTURE_VS=True)
     lines = src.splitlines()
     assert lines[0] == "#version 430" and lines[1] == "#define CAPTURE_VS 1"
-    assert "struct Record" in src          # records.glsl was included
+    assert "struct Record" in src  # records.glsl was included
     assert "#include" not in src
 
 
@@ -19,11 +19,15 @@ def test_unknown_define_is_rejected():
 
 
 def test_every_shader_compiles(gl):
-    for stages in ({"vertex_shader": glsl.load("scene.vert"), "fragment_shader": glsl.load("scene.frag")},
-                   {"vertex_shader": glsl.load("scene.vert", CAPTURE_VS=True),
-                    "fragment_shader": glsl.load("scene.frag")},
-                   {"vertex_shader": glsl.load("scene.vert", CAPTURE_GS=True),
-                    "geometry_shader": glsl.load("capture.geom"), "fragment_shader": glsl.load("scene.frag")}):
+    for stages in (
+        {"vertex_shader": glsl.load("scene.vert"), "fragment_shader": glsl.load("scene.frag")},
+        {"vertex_shader": glsl.load("scene.vert", CAPTURE_VS=True), "fragment_shader": glsl.load("scene.frag")},
+        {
+            "vertex_shader": glsl.load("scene.vert", CAPTURE_GS=True),
+            "geometry_shader": glsl.load("capture.geom"),
+            "fragment_shader": glsl.load("scene.frag"),
+        },
+    ):
         gl.program(**stages).release()
 
 
@@ -47,9 +51,9 @@ def test_scene_pass_routes_defines_by_declaration_and_rejects_unknown(gl):
 
     with pytest.raises(ValueError, match="BOGUS"):
         ScenePass(gl, BOGUS=True)
-    p = ScenePass(gl, SEPARATE=True)          # declared by scene.frag only: scene.vert must not get it
+    p = ScenePass(gl, SEPARATE=True)  # declared by scene.frag only: scene.vert must not get it
     try:
-        assert "u_textured" not in p.program   # untextured variant: SEPARATE's uniforms are #ifdef TEXTURED
+        assert "u_textured" not in p.program  # untextured variant: SEPARATE's uniforms are #ifdef TEXTURED
         assert "u_textured" in p.program_for(True)
     finally:
         p.release()

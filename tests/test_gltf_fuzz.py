@@ -18,8 +18,9 @@ from rtta.cli.main import main
 from rtta.errors import RttaError
 from rtta.scene.loader import load_scene
 
-BASE, BINARY = box_doc([{"mesh": 0, "name": "box", "children": [1]}, {"mesh": 0, "name": "child",
-                                                                        "translation": [1.5, 0, 0]}])
+BASE, BINARY = box_doc(
+    [{"mesh": 0, "name": "box", "children": [1]}, {"mesh": 0, "name": "child", "translation": [1.5, 0, 0]}]
+)
 BASE["materials"] = [{"name": "red", "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.1, 0.1, 1.0]}}]
 BASE["meshes"][0]["primitives"][0].update(material=0, mode=4)
 BASE["bufferViews"][0]["byteStride"] = 12
@@ -38,29 +39,58 @@ def _paths(value, prefix=()) -> list[tuple]:
     return out
 
 
-OPTIONAL = [("scene",), ("nodes", 0, "matrix"), ("nodes", 0, "rotation"), ("nodes", 0, "scale"),
-            ("nodes", 1, "children"), ("accessors", 0, "byteOffset"), ("accessors", 1, "sparse"),
-            ("meshes", 0, "primitives", 0, "attributes", "TEXCOORD_0"),
-            ("meshes", 0, "primitives", 0, "attributes", "COLOR_0"), ("buffers", 0, "uri"), ("images",),
-            ("textures",), ("materials", 0, "pbrMetallicRoughness", "baseColorTexture"), ("extensionsRequired",),
-            ("extensionsUsed",), ("samplers",), ("cameras",), ("nodes", 0, "camera"),
-            # extensions rtta reads: Draco, texture transforms and sets, spec-gloss, WebP
-            ("meshes", 0, "primitives", 0, "extensions"), ("meshes", 0, "primitives", 0, "attributes", "TEXCOORD_1"),
-            ("materials", 0, "extensions"), ("materials", 0, "extensions", "KHR_materials_pbrSpecularGlossiness"),
-            ("materials", 0, "pbrMetallicRoughness", "baseColorTexture", "extensions"),
-            ("materials", 0, "pbrMetallicRoughness", "baseColorTexture", "texCoord"),
-            ("textures", 0, "extensions"), ("textures", 0, "extensions", "EXT_texture_webp")]
+OPTIONAL = [
+    ("scene",),
+    ("nodes", 0, "matrix"),
+    ("nodes", 0, "rotation"),
+    ("nodes", 0, "scale"),
+    ("nodes", 1, "children"),
+    ("accessors", 0, "byteOffset"),
+    ("accessors", 1, "sparse"),
+    ("meshes", 0, "primitives", 0, "attributes", "TEXCOORD_0"),
+    ("meshes", 0, "primitives", 0, "attributes", "COLOR_0"),
+    ("buffers", 0, "uri"),
+    ("images",),
+    ("textures",),
+    ("materials", 0, "pbrMetallicRoughness", "baseColorTexture"),
+    ("extensionsRequired",),
+    ("extensionsUsed",),
+    ("samplers",),
+    ("cameras",),
+    ("nodes", 0, "camera"),
+    # extensions rtta reads: Draco, texture transforms and sets, spec-gloss, WebP
+    ("meshes", 0, "primitives", 0, "extensions"),
+    ("meshes", 0, "primitives", 0, "attributes", "TEXCOORD_1"),
+    ("materials", 0, "extensions"),
+    ("materials", 0, "extensions", "KHR_materials_pbrSpecularGlossiness"),
+    ("materials", 0, "pbrMetallicRoughness", "baseColorTexture", "extensions"),
+    ("materials", 0, "pbrMetallicRoughness", "baseColorTexture", "texCoord"),
+    ("textures", 0, "extensions"),
+    ("textures", 0, "extensions", "EXT_texture_webp"),
+]
 PATHS = _paths(BASE) + OPTIONAL
 
-NUMBERS = st.one_of(st.integers(-(2**70), 2**70), st.sampled_from([-1, 0, 1, 2, 3, 7, 24, 36, 255, 2**31, 2**32 + 1,
-                                                                   10**15, 1e400, -1e400, 10**400, -(10**400)]),
-                    st.floats(allow_nan=True, allow_infinity=True))
-LEAVES = st.one_of(st.none(), st.booleans(), NUMBERS, st.text(max_size=6), st.sampled_from(["VEC3", "SCALAR", "MAT4",
-                                                                                             "data:,", "../x.bin"]))
-VALUES = st.one_of(LEAVES, st.lists(LEAVES, max_size=17), st.lists(NUMBERS, min_size=3, max_size=4),
-                   st.dictionaries(st.sampled_from(["index", "count", "uri", "POSITION", "buffer", "nodes", "mesh"]),
-                                   LEAVES, max_size=3),
-                   st.just(DELETE))
+NUMBERS = st.one_of(
+    st.integers(-(2**70), 2**70),
+    st.sampled_from([-1, 0, 1, 2, 3, 7, 24, 36, 255, 2**31, 2**32 + 1, 10**15, 1e400, -1e400, 10**400, -(10**400)]),
+    st.floats(allow_nan=True, allow_infinity=True),
+)
+LEAVES = st.one_of(
+    st.none(),
+    st.booleans(),
+    NUMBERS,
+    st.text(max_size=6),
+    st.sampled_from(["VEC3", "SCALAR", "MAT4", "data:,", "../x.bin"]),
+)
+VALUES = st.one_of(
+    LEAVES,
+    st.lists(LEAVES, max_size=17),
+    st.lists(NUMBERS, min_size=3, max_size=4),
+    st.dictionaries(
+        st.sampled_from(["index", "count", "uri", "POSITION", "buffer", "nodes", "mesh"]), LEAVES, max_size=3
+    ),
+    st.just(DELETE),
+)
 
 
 def _apply(doc: dict, path: tuple, value) -> None:
@@ -88,8 +118,12 @@ def folder(tmp_path_factory):
     return tmp_path_factory.mktemp("fuzz")
 
 
-@settings(max_examples=300, deadline=None, derandomize=True,
-          suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@settings(
+    max_examples=300,
+    deadline=None,
+    derandomize=True,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
+)
 @given(st.lists(st.tuples(st.sampled_from(PATHS), VALUES), min_size=1, max_size=3))
 def test_malformed_gltf_loads_or_is_one_line(folder, mutations):
     doc = copy.deepcopy(BASE)

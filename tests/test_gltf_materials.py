@@ -15,8 +15,10 @@ def _box_with(material: dict, tmp_path, image: bytes | None = None, texture: dic
     doc["materials"] = [material]
     if image is not None:
         uv = np.zeros((24, 2), np.float32)
-        doc["bufferViews"] += [{"buffer": 0, "byteOffset": len(binary), "byteLength": uv.nbytes},
-                               {"buffer": 0, "byteOffset": len(binary) + uv.nbytes, "byteLength": len(image)}]
+        doc["bufferViews"] += [
+            {"buffer": 0, "byteOffset": len(binary), "byteLength": uv.nbytes},
+            {"buffer": 0, "byteOffset": len(binary) + uv.nbytes, "byteLength": len(image)},
+        ]
         binary += uv.tobytes() + image + b"\0" * (-len(image) % 4)
         doc["buffers"][0]["byteLength"] = len(binary)
         doc["accessors"].append({"bufferView": 3, "componentType": 5126, "count": 24, "type": "VEC2"})
@@ -30,8 +32,10 @@ def _box_with(material: dict, tmp_path, image: bytes | None = None, texture: dic
 
 def test_specular_glossiness_diffuse_is_the_base_colour(tmp_path):
     spec_gloss = {"diffuseFactor": [0.9, 0.1, 0.1, 1.0], "specularFactor": [0.2, 0.2, 0.2]}
-    material = {"pbrMetallicRoughness": {"baseColorFactor": [0.1, 0.9, 0.1, 1.0]},
-                "extensions": {"KHR_materials_pbrSpecularGlossiness": spec_gloss}}
+    material = {
+        "pbrMetallicRoughness": {"baseColorFactor": [0.1, 0.9, 0.1, 1.0]},
+        "extensions": {"KHR_materials_pbrSpecularGlossiness": spec_gloss},
+    }
     scene = _box_with(material, tmp_path)
     red = _box_with({"pbrMetallicRoughness": {"baseColorFactor": [0.9, 0.1, 0.1, 1.0]}}, tmp_path)
     np.testing.assert_array_equal(scene.colors, red.colors)
@@ -62,8 +66,11 @@ def test_a_webp_only_texture_is_read(tmp_path):
 def test_nan_in_fields_rtta_does_not_read_is_no_traceback(tmp_path):
     """Python's JSON reader takes NaN; a NaN in a texture's extensions, or a `normalized` that
     is not a boolean, once reached the document rewritten for trimesh and failed there."""
-    material = {"pbrMetallicRoughness": {"baseColorTexture": {"index": 0, "extensions": {"X_any": float("nan")},
-                                                              "texCoord": float("nan")}}}
+    material = {
+        "pbrMetallicRoughness": {
+            "baseColorTexture": {"index": 0, "extensions": {"X_any": float("nan")}, "texCoord": float("nan")}
+        }
+    }
     assert _box_with(material, tmp_path, png((4, 4))).textured
     doc, binary = box_doc()
     doc["accessors"][1]["normalized"] = float("nan")

@@ -63,8 +63,10 @@ def _strided(doc: dict, binary: bytes) -> tuple[dict, bytes]:
     pos = np.frombuffer(binary[:288], np.float32).reshape(24, 3)
     nrm = np.frombuffer(binary[288:576], np.float32).reshape(24, 3)
     binary = np.hstack([pos, nrm]).tobytes() + binary[576:]
-    doc["bufferViews"] = [{"buffer": 0, "byteOffset": 0, "byteLength": 576, "byteStride": 24},
-                          {"buffer": 0, "byteOffset": 576, "byteLength": 72}]
+    doc["bufferViews"] = [
+        {"buffer": 0, "byteOffset": 0, "byteLength": 576, "byteStride": 24},
+        {"buffer": 0, "byteOffset": 576, "byteLength": 72},
+    ]
     doc["accessors"][0]["bufferView"] = 0
     doc["accessors"][1].update(bufferView=0, byteOffset=12)
     doc["accessors"][2]["bufferView"] = 1
@@ -73,16 +75,17 @@ def _strided(doc: dict, binary: bytes) -> tuple[dict, bytes]:
 
 def _plain_files() -> dict[str, bytes]:
     out = {}
-    nodes = [{"mesh": 0, "name": "a", "children": [1, 2]}, {"mesh": 0, "name": "mirror", "scale": [-1, 1, 1],
-                                                           "translation": [2, 0, 0]},
-             {"mesh": 0, "name": "shear", "matrix": [1, 0, 0, 0, 0.5, 1, 0, 0, 0, 0, 2, 0, 0, 3, 0, 1]}]
+    nodes = [
+        {"mesh": 0, "name": "a", "children": [1, 2]},
+        {"mesh": 0, "name": "mirror", "scale": [-1, 1, 1], "translation": [2, 0, 0]},
+        {"mesh": 0, "name": "shear", "matrix": [1, 0, 0, 0, 0.5, 1, 0, 0, 0, 0, 2, 0, 0, 3, 0, 1]},
+    ]
     doc, binary = box_doc(nodes, prims=2)
-    doc["materials"] = [{"pbrMetallicRoughness": {"baseColorFactor": [0.3, 0.62, 0.11, 0.5]}},
-                        {"name": "no factor"}]
+    doc["materials"] = [{"pbrMetallicRoughness": {"baseColorFactor": [0.3, 0.62, 0.11, 0.5]}}, {"name": "no factor"}]
     doc["meshes"][0]["primitives"][0]["material"] = 0
     doc["meshes"][0]["primitives"][1]["material"] = 1
     out["materials_and_mirrors.glb"] = glb(doc, binary)
-    del doc["meshes"][0]["primitives"][1]["attributes"]["NORMAL"]        # smoothed, in world space where sheared
+    del doc["meshes"][0]["primitives"][1]["attributes"]["NORMAL"]  # smoothed, in world space where sheared
     out["one_primitive_smoothed.glb"] = glb(doc, binary)
     doc, binary = _strided(*box_doc())
     out["strided.glb"] = glb(doc, binary)
@@ -98,12 +101,16 @@ def _plain_files() -> dict[str, bytes]:
     pos = np.frombuffer(binary[:288], np.float32).reshape(24, 3)[idx]
     nrm = np.frombuffer(binary[288:576], np.float32).reshape(24, 3)[idx]
     nrm = nrm.copy()
-    nrm[0] = np.nan                                         # unusable normals: smoothed instead
+    nrm[0] = np.nan  # unusable normals: smoothed instead
     binary = pos.tobytes() + nrm.tobytes()
-    doc["bufferViews"] = [{"buffer": 0, "byteOffset": 0, "byteLength": 432},
-                          {"buffer": 0, "byteOffset": 432, "byteLength": 432}]
-    doc["accessors"] = [{"bufferView": 0, "componentType": 5126, "count": 36, "type": "VEC3"},
-                        {"bufferView": 1, "componentType": 5126, "count": 36, "type": "VEC3"}]
+    doc["bufferViews"] = [
+        {"buffer": 0, "byteOffset": 0, "byteLength": 432},
+        {"buffer": 0, "byteOffset": 432, "byteLength": 432},
+    ]
+    doc["accessors"] = [
+        {"bufferView": 0, "componentType": 5126, "count": 36, "type": "VEC3"},
+        {"bufferView": 1, "componentType": 5126, "count": 36, "type": "VEC3"},
+    ]
     del doc["meshes"][0]["primitives"][0]["indices"]
     doc["buffers"][0]["byteLength"] = len(binary)
     out["no_indices_nan_normals.glb"] = glb(doc, binary)
@@ -149,8 +156,12 @@ def test_textured_and_coloured_files_go_through_trimesh(folder):
     assert not _direct(path)
 
 
-@settings(max_examples=150, deadline=None, derandomize=True,
-          suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@settings(
+    max_examples=150,
+    deadline=None,
+    derandomize=True,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
+)
 @given(st.lists(st.tuples(st.sampled_from(PATHS), VALUES), min_size=1, max_size=3))
 def test_malformed_files_load_alike(folder, monkeypatch, mutations):
     doc = copy.deepcopy(BASE)

@@ -11,7 +11,7 @@ import pytest
 from bad_gltf import box_arrays, box_doc, glb
 from test_gltf_read import _load
 
-MOVED = np.array([0, 5, 23])                 # box vertices the substitutions move
+MOVED = np.array([0, 5, 23])  # box vertices the substitutions move
 SHIFT = np.array([0.75, 0.0, 0.25], np.float32)
 
 
@@ -24,13 +24,18 @@ def _sparse_file(index_type: int = 5123, bufferless: bool = False) -> tuple[dict
     values = pos[at] + (0 if bufferless else SHIFT)
     indices = at.astype({5121: np.uint8, 5123: np.uint16, 5125: np.uint32}[index_type]).tobytes()
     indices += b"\0" * (-len(indices) % 4)
-    doc["bufferViews"] += [{"buffer": 0, "byteOffset": len(binary), "byteLength": len(indices)},
-                           {"buffer": 0, "byteOffset": len(binary) + len(indices), "byteLength": values.nbytes}]
+    doc["bufferViews"] += [
+        {"buffer": 0, "byteOffset": len(binary), "byteLength": len(indices)},
+        {"buffer": 0, "byteOffset": len(binary) + len(indices), "byteLength": values.nbytes},
+    ]
     binary += indices + values.astype(np.float32).tobytes()
     doc["buffers"][0]["byteLength"] = len(binary)
     acc = doc["accessors"][0]
-    acc["sparse"] = {"count": len(at), "indices": {"bufferView": 3, "componentType": index_type},
-                     "values": {"bufferView": 4}}
+    acc["sparse"] = {
+        "count": len(at),
+        "indices": {"bufferView": 3, "componentType": index_type},
+        "values": {"bufferView": 4},
+    }
     acc.pop("min"), acc.pop("max")
     if bufferless:
         del acc["bufferView"]
@@ -78,14 +83,17 @@ def _broken(change) -> bytes:
     return glb(doc, binary)
 
 
-@pytest.mark.parametrize("change, says", [
-    (lambda s: s["indices"].update(bufferView=4), "sparse indices up to"),           # floats read as indices
-    (lambda s: s.update(count=25), "sparse.count is 25, more than the accessor's 24 values"),
-    (lambda s: s["values"].update(byteOffset=8), "sparse.values needs bytes 8 to 44 of bufferView 4"),
-    (lambda s: s["indices"].update(componentType=5126), "not an index type"),
-    (lambda s: s.pop("values"), "sparse.values has no 'bufferView'"),
-    (lambda s: s.update(indices=[]), "sparse.indices must be an object"),
-])
+@pytest.mark.parametrize(
+    "change, says",
+    [
+        (lambda s: s["indices"].update(bufferView=4), "sparse indices up to"),  # floats read as indices
+        (lambda s: s.update(count=25), "sparse.count is 25, more than the accessor's 24 values"),
+        (lambda s: s["values"].update(byteOffset=8), "sparse.values needs bytes 8 to 44 of bufferView 4"),
+        (lambda s: s["indices"].update(componentType=5126), "not an index type"),
+        (lambda s: s.pop("values"), "sparse.values has no 'bufferView'"),
+        (lambda s: s.update(indices=[]), "sparse.indices must be an object"),
+    ],
+)
 def test_broken_sparse_parts_are_refused(tmp_path, monkeypatch, change, says):
     path = tmp_path / "broken.glb"
     path.write_bytes(_broken(change))

@@ -24,22 +24,38 @@ def _textured_quad(transform: dict | None) -> bytes:
     texture = {"index": 0}
     if transform is not None:
         texture["extensions"] = {"KHR_texture_transform": transform}
-    doc = {"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0, "name": "q"}],
-           "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2, "material": 0}]}],
-           "materials": [{"pbrMetallicRoughness": {"baseColorTexture": texture}}],
-           "textures": [{"source": 0}], "images": [{"bufferView": 3, "mimeType": "image/png"}],
-           "buffers": [{"byteLength": len(binary)}],
-           "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48},
-                           {"buffer": 0, "byteOffset": 48, "byteLength": 32},
-                           {"buffer": 0, "byteOffset": 80, "byteLength": 12},
-                           {"buffer": 0, "byteOffset": start, "byteLength": len(image)}],
-           "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3"},
-                         {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
-                         {"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"}]}
+    doc = {
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0, "name": "q"}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2, "material": 0}]}],
+        "materials": [{"pbrMetallicRoughness": {"baseColorTexture": texture}}],
+        "textures": [{"source": 0}],
+        "images": [{"bufferView": 3, "mimeType": "image/png"}],
+        "buffers": [{"byteLength": len(binary)}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 48},
+            {"buffer": 0, "byteOffset": 48, "byteLength": 32},
+            {"buffer": 0, "byteOffset": 80, "byteLength": 12},
+            {"buffer": 0, "byteOffset": start, "byteLength": len(image)},
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3"},
+            {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
+            {"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"},
+        ],
+    }
     text = json.dumps(doc).encode()
     text += b" " * (-len(text) % 4)
-    return (struct.pack("<4sIII", b"glTF", 2, 28 + len(text) + len(binary), len(text)) + b"JSON" + text
-            + struct.pack("<I", len(binary)) + b"BIN\0" + binary)
+    return (
+        struct.pack("<4sIII", b"glTF", 2, 28 + len(text) + len(binary), len(text))
+        + b"JSON"
+        + text
+        + struct.pack("<I", len(binary))
+        + b"BIN\0"
+        + binary
+    )
 
 
 def _uvs(tmp_path, transform):
@@ -47,7 +63,7 @@ def _uvs(tmp_path, transform):
     path.write_bytes(_textured_quad(copy.deepcopy(transform)))
     scene = load_scene(path)
     assert scene.textured
-    return scene, scene.uvs[np.argsort(scene.positions[:, 0] * 2 + scene.positions[:, 1])]   # by position
+    return scene, scene.uvs[np.argsort(scene.positions[:, 0] * 2 + scene.positions[:, 1])]  # by position
 
 
 def test_texture_transform_is_applied(tmp_path):
@@ -75,8 +91,8 @@ def test_a_texture_on_the_second_coordinate_set_reads_that_set(tmp_path):
     _, plain = _uvs(tmp_path, None)
     data = _textured_quad(None)
     n = struct.unpack_from("<I", data, 12)[0]
-    doc = json.loads(data[20:20 + n])
-    binary = data[28 + n:]
+    doc = json.loads(data[20 : 20 + n])
+    binary = data[28 + n :]
     uv = np.frombuffer(binary[48:80], np.float32).reshape(4, 2) + 0.5
     doc["bufferViews"].append({"buffer": 0, "byteOffset": len(binary), "byteLength": 32})
     doc["accessors"].append({"bufferView": 4, "componentType": 5126, "count": 4, "type": "VEC2"})
@@ -88,8 +104,14 @@ def test_a_texture_on_the_second_coordinate_set_reads_that_set(tmp_path):
     text = json.dumps(doc).encode()
     text += b" " * (-len(text) % 4)
     path = tmp_path / "second.glb"
-    path.write_bytes(struct.pack("<4sIII", b"glTF", 2, 28 + len(text) + len(binary), len(text)) + b"JSON" + text
-                     + struct.pack("<I", len(binary)) + b"BIN\0" + binary)
+    path.write_bytes(
+        struct.pack("<4sIII", b"glTF", 2, 28 + len(text) + len(binary), len(text))
+        + b"JSON"
+        + text
+        + struct.pack("<I", len(binary))
+        + b"BIN\0"
+        + binary
+    )
     scene = load_scene(path)
     got = scene.uvs[np.argsort(scene.positions[:, 0] * 2 + scene.positions[:, 1])]
-    np.testing.assert_allclose(got, plain + [0.5, -0.5], atol=1e-6)      # v is flipped on loading
+    np.testing.assert_allclose(got, plain + [0.5, -0.5], atol=1e-6)  # v is flipped on loading

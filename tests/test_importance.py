@@ -15,8 +15,14 @@ from rtta.scene.camera import Camera
 from rtta.scene.model import from_meshes
 
 VP = (240, 180)
-COLORS = [(0.75, 0.1, 0.1, 1.0), (0.1, 0.55, 0.15, 1.0), (0.15, 0.2, 0.75, 1.0), (0.6, 0.45, 0.05, 1.0),
-          (0.5, 0.1, 0.55, 1.0), (0.05, 0.45, 0.5, 1.0)]
+COLORS = [
+    (0.75, 0.1, 0.1, 1.0),
+    (0.1, 0.55, 0.15, 1.0),
+    (0.15, 0.2, 0.75, 1.0),
+    (0.6, 0.45, 0.05, 1.0),
+    (0.5, 0.1, 0.55, 1.0),
+    (0.05, 0.45, 0.5, 1.0),
+]
 
 
 def _grid_scene(rows=3, cols=4):
@@ -84,7 +90,7 @@ def _neighbourhood(a: np.ndarray, fn, fill, r: int = 1) -> np.ndarray:
     p = np.pad(a, [(r, r), (r, r)] + [(0, 0)] * (a.ndim - 2), constant_values=fill)
     h, w = a.shape[:2]
     k = 2 * r + 1
-    stack = np.stack([p[dy:dy + h, dx:dx + w] for dy in range(k) for dx in range(k)])
+    stack = np.stack([p[dy : dy + h, dx : dx + w] for dy in range(k) for dx in range(k)])
     return fn(stack, axis=0)
 
 
@@ -121,7 +127,7 @@ def test_upsampling_never_bleeds(make_renderer, border, scale):
     rgb, depth = images[scale][0][..., :3].astype(int), images[scale][1]
     on1, on = depth1 < 1.0, depth < 1.0
     assert on1.sum() > 3000 and on.sum() > 3000
-    reach, texel = int(np.ceil(0.5 / scale)), int(np.ceil(1.0 / scale))    # 1 and 2 pixels at 0.5
+    reach, texel = int(np.ceil(0.5 / scale)), int(np.ceil(1.0 / scale))  # 1 and 2 pixels at 0.5
     near_object = _neighbourhood(on1, np.any, False, reach)
     near_empty = _neighbourhood(~on1, np.any, True, reach)
     assert not (on & ~near_object).any(), "covered farther than one pixel from the silhouette"
@@ -191,12 +197,45 @@ def test_cli_importance_flags(tmp_path, capsys):
     from rtta.cli.main import main
 
     out = tmp_path / "g.png"
-    assert main(["snapshot", "--mode", "ghosted-ao", "--size", "160x120", "--focus", "piston_1",
-                 "--context-scale", "0.5", "--ao-objects", "focus", "--edge-objects", "all",
-                 "--out", str(out)]) == 0
+    assert (
+        main(
+            [
+                "snapshot",
+                "--mode",
+                "ghosted-ao",
+                "--size",
+                "160x120",
+                "--focus",
+                "piston_1",
+                "--context-scale",
+                "0.5",
+                "--ao-objects",
+                "focus",
+                "--edge-objects",
+                "all",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     assert out.is_file()
-    assert main(["snapshot", "--mode", "transparent", "--size", "160x120", "--order", "pixel",
-                 "--out", str(tmp_path / "t.png")]) == 0
+    assert (
+        main(
+            [
+                "snapshot",
+                "--mode",
+                "transparent",
+                "--size",
+                "160x120",
+                "--order",
+                "pixel",
+                "--out",
+                str(tmp_path / "t.png"),
+            ]
+        )
+        == 0
+    )
     capsys.readouterr()
     assert main(["snapshot", "--context-scale", "0.1", "--out", str(tmp_path / "x.png")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
@@ -211,8 +250,10 @@ def test_halo_where_context_lies_behind(make_renderer):
 
     plate = trimesh.creation.box(extents=(2.0, 1.2, 0.1))
     cube = trimesh.creation.box(extents=(0.5, 0.5, 0.5))
-    parts = [("plate", np.asarray(plate.vertices) + (0.6, 0, -1.0), np.asarray(plate.faces), None),
-             ("cube", np.asarray(cube.vertices), np.asarray(cube.faces), None)]
+    parts = [
+        ("plate", np.asarray(plate.vertices) + (0.6, 0, -1.0), np.asarray(plate.faces), None),
+        ("cube", np.asarray(cube.vertices), np.asarray(cube.faces), None),
+    ]
     scene = from_meshes(parts, [(0.7, 0.7, 0.7, 1), (0.2, 0.4, 0.8, 1)])
     r = make_renderer(scene)
     cam = Camera.orbit(scene.center, scene.radius, 0, 0, 2.2)

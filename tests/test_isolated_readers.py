@@ -19,7 +19,7 @@ from rtta.scene.readers import isolated
 
 RTTA = str(Path(sys.executable).with_name("rtta"))
 
-READERS = '''
+READERS = """
 import os, signal, time
 from pathlib import Path
 from rtta.errors import RttaError
@@ -43,7 +43,7 @@ def give(path):
     out = Assembly(unit="mm")
     out.add("part", [[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]], [1, 0, 0, 1], ("top",))
     return out
-'''
+"""
 
 
 @pytest.fixture
@@ -70,7 +70,7 @@ def test_a_hang_is_stopped_at_the_limit_and_the_child_killed(reader, monkeypatch
     assert time.perf_counter() - t < 30
     pid = int(reader.with_suffix(".pid").read_text())
     with pytest.raises(ProcessLookupError):
-        os.kill(pid, 0)                   # killed and reaped: no such process
+        os.kill(pid, 0)  # killed and reaped: no such process
 
 
 def test_what_the_reader_says_comes_back(reader):
@@ -106,13 +106,19 @@ def test_step_is_read_in_a_child_and_the_cli_says_a_crash_in_one_line(tmp_path, 
     assert load_scene(path).count > 0 and seen == ["rtta.scene.readers.step"]
     # the CLI, with a reader that crashes in place of OpenCASCADE's
     (tmp_path / "sitecustomize.py").write_text(
-        "import rtta.scene.readers.step as s, os, signal\n"
-        "s.read = lambda path: os.kill(os.getpid(), signal.SIGSEGV)\n")
+        "import rtta.scene.readers.step as s, os, signal\ns.read = lambda path: os.kill(os.getpid(), signal.SIGSEGV)\n"
+    )
     env = dict(os.environ, PYTHONPATH=str(tmp_path))
-    res = subprocess.run([RTTA, "snapshot", str(path), "--size", "64x48", "--out", str(tmp_path / "o.png")],
-                         capture_output=True, text=True, timeout=120, env=env)
+    res = subprocess.run(
+        [RTTA, "snapshot", str(path), "--size", "64x48", "--out", str(tmp_path / "o.png")],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=env,
+    )
     lines = [x for x in res.stderr.splitlines() if x.strip()]
     assert res.returncode == 2 and len(lines) == 1, res.stderr
-    assert lines[0] == (f"rtta: error: {path}: the OpenCASCADE (cascadio) reader crashed on this file (SIGSEGV); "
-                        "it is probably damaged")
+    assert lines[0] == (
+        f"rtta: error: {path}: the OpenCASCADE (cascadio) reader crashed on this file (SIGSEGV); it is probably damaged"
+    )
     assert not (tmp_path / "o.png").exists()

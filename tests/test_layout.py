@@ -30,7 +30,7 @@ def test_import_contracts_are_kept():
     run = subprocess.run([exe, "--no-cache"], cwd=ROOT, capture_output=True, text=True, timeout=120)
     assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-2000:]
     kept = re.findall(r"^(.*) KEPT$", run.stdout, re.MULTILINE)
-    assert len(kept) >= 4, run.stdout          # rtta layers, forbidden viewer, viewer layers, acyclic
+    assert len(kept) >= 4, run.stdout  # rtta layers, forbidden viewer, viewer layers, acyclic
 
 
 def test_no_file_over_400_lines():
@@ -46,7 +46,7 @@ def test_no_file_over_400_lines():
 
 def test_the_top_of_rtta_stays_short():
     entries = [p.name for p in (ROOT / "rtta").iterdir() if p.name != "__pycache__"]
-    assert len(entries) <= 14, sorted(entries)   # the layers, and errors, outputs, memory
+    assert len(entries) <= 14, sorted(entries)  # the layers, and errors, outputs, memory
     for package in ("scene", "atlas", "gl", "passes", "ldi", "renderer", "dataset", "bench", "cli"):
         doc = (ROOT / "rtta" / package / "__init__.py").read_text(encoding="utf-8")
         said = doc.split('"""')[1].lower()
@@ -64,8 +64,11 @@ def test_viewer_is_in_the_base_install():
     requires = metadata.requires("rtta") or []
     base = {re.split(r"[<>=!~ \[;]", r, maxsplit=1)[0].lower() for r in requires if "extra ==" not in r}
     assert {"moderngl-window", "pyglet", "imgui-bundle"} <= base, sorted(base)
-    scripts = {ep.name: ep.value for ep in metadata.entry_points(group="console_scripts")
-               if ep.dist is not None and ep.dist.name == "rtta"}
+    scripts = {
+        ep.name: ep.value
+        for ep in metadata.entry_points(group="console_scripts")
+        if ep.dist is not None and ep.dist.name == "rtta"
+    }
     assert scripts.get("rtta-view") == "viewer:cli" and scripts.get("rtta") == "rtta.cli.main:main"
     import imgui_bundle  # noqa: F401  (installed with rtta itself)
     import moderngl_window  # noqa: F401

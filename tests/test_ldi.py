@@ -34,7 +34,7 @@ def _ray_depths(vertices, faces, matrix, texels: np.ndarray, n: int) -> list[tup
     (numpy, float64): what peeling must find; and with each, its triangle's depth slope per
     texel (|dz/dx| + |dz/dy|), for the tolerance."""
     tv = vertices @ matrix[:3, :3].T + matrix[:3, 3]
-    tri = tv[faces]                                          # [F, 3, 3] in texture space
+    tri = tv[faces]  # [F, 3, 3] in texture space
     out = []
     for i, j in texels:
         s, t = (i + 0.5) / n, (j + 0.5) / n
@@ -79,7 +79,7 @@ def test_peeled_layers_are_the_ray_intersections(gl):
     for (i, j), (want, slope) in zip(texels, _ray_depths(v, f, matrix, texels, n), strict=True):
         got = layers[:, j, i]
         got = got[got < NIL]
-        if len(want) != len(got):          # a ray through an edge or vertex: rasterization rules decide
+        if len(want) != len(got):  # a ray through an edge or vertex: rasterization rules decide
             skipped += 1
             continue
         assert (np.abs(got - want) <= 5e-5 + slope * SNAP_PX).all(), (i, j, got, want, slope)
@@ -108,14 +108,14 @@ def test_parity_test_agrees_with_trimesh_contains(gl, name):
     finally:
         test.release()
     assert np.array_equal(plain, packed)
-    assert (classify(ldi, points) == plain).mean() > 0.9999     # float32 texel rounding may differ
+    assert (classify(ldi, points) == plain).mean() > 0.9999  # float32 texel rounding may differ
     agree = (plain == reference).mean()
     assert agree >= 0.995, f"{name}: {agree:.5f}"
     wrong = points[plain != reference]
     if len(wrong):
         _, distance, _ = trimesh.proximity.closest_point(mesh, wrong)
         assert distance.max() <= np.linalg.norm(ldi.texel_size), (distance.max(), ldi.texel_size)
-    assert 0.05 < plain.mean() < 0.95       # not a degenerate all-in or all-out answer
+    assert 0.05 < plain.mean() < 0.95  # not a degenerate all-in or all-out answer
 
 
 @pytest.mark.parametrize("name", MESHES)
@@ -168,8 +168,8 @@ def test_crop_is_the_bounding_box_of_layer_zero(gl):
     rows, cols = np.flatnonzero(covered.any(axis=1)), np.flatnonzero(covered.any(axis=0))
     assert (s0, t0, s0 + w - 1, t0 + h - 1) == (cols[0], rows[0], cols[-1], rows[-1])
     outside = np.ones((n, n), bool)
-    outside[t0:t0 + h, s0:s0 + w] = False
-    assert not (layers[:, outside] < NIL).any()          # cropping drops no surface of any layer
+    outside[t0 : t0 + h, s0 : s0 + w] = False
+    assert not (layers[:, outside] < NIL).any()  # cropping drops no surface of any layer
     assert crop_bounds(np.full((4, 4), NIL, np.float32)) == (0, 0, 0, 0)
 
 

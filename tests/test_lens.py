@@ -45,25 +45,28 @@ def test_lens_cuts_the_context_where_numpy_says(make_renderer, mode):
     r = make_renderer(scene)
     cam = Camera.orbit(scene.center, scene.radius, 20.0, 15.0, 2.6)
     world, covered, ids = _world(r, cam)
-    center, radius = np.array([0.0, 0.0, 1.0]), 0.8           # on the box's front face
+    center, radius = np.array([0.0, 0.0, 1.0]), 0.8  # on the box's front face
     style = Style(focus={1}, context_opacity=0.6)
     r.capture(cam, VP)
     images = {}
-    for name, lens, opacity in (("lens", Lens.shape("sphere", center, radius), 0.6), ("none", None, 0.6),
-                                ("no-context", None, 0.0)):
+    for name, lens, opacity in (
+        ("lens", Lens.shape("sphere", center, radius), 0.6),
+        ("none", None, 0.6),
+        ("no-context", None, 0.0),
+    ):
         r.lens = lens
         style.context_opacity = opacity
         images[name] = r.composite(mode, style).read()[0][..., :3].astype(int)
     dist = np.linalg.norm(world - (center - scene.origin), axis=-1)
-    ball = np.abs(images["no-context"] - images["no-context"][0, 0]).max(-1) > 3    # focus and its outline
+    ball = np.abs(images["no-context"] - images["no-context"][0, 0]).max(-1) > 3  # focus and its outline
     stable = covered & ~near_edges(ids) & ~near_edges(near_edges(ball))
-    texel = 2.5 * radius / 256 * 2                            # the lens LDI's resolution, with margin
+    texel = 2.5 * radius / 256 * 2  # the lens LDI's resolution, with margin
     inside = stable & (dist < radius - texel)
     outside = stable & (dist > radius + texel)
     assert inside.sum() > 500 and outside.sum() > 500
     assert np.abs(images["lens"] - images["no-context"])[inside].max() <= 3
     assert np.abs(images["lens"] - images["none"])[outside].max() <= 3
-    assert (np.abs(images["lens"] - images["none"]).max(-1) > 3)[inside].mean() > 0.5   # the cut shows
+    assert (np.abs(images["lens"] - images["none"]).max(-1) > 3)[inside].mean() > 0.5  # the cut shows
 
 
 def test_lens_leaves_other_modes_and_the_lens_object_alone(make_renderer):
@@ -72,9 +75,9 @@ def test_lens_leaves_other_modes_and_the_lens_object_alone(make_renderer):
     cam = Camera.orbit(scene.center, scene.radius, 20.0, 15.0, 2.6)
     r.capture(cam, VP)
     plain = r.composite("transparent").read()[0]
-    r.lens = Lens.shape("sphere", scene.center, 5.0)        # swallows everything
+    r.lens = Lens.shape("sphere", scene.center, 5.0)  # swallows everything
     assert np.array_equal(r.composite("transparent").read()[0], plain)
-    r.lens = Lens.of_object(scene, 0)                      # the box as the lens: the box stays
+    r.lens = Lens.of_object(scene, 0)  # the box as the lens: the box stays
     style = Style(focus={1})
     with_lens = r.composite("ghosted", style).read()[0]
     r.lens = None
@@ -91,8 +94,11 @@ def test_lens_arguments_fail_cleanly(tmp_path, capsys):
     with pytest.raises(RttaError, match="radius must be positive"):
         Lens.shape("sphere", center, 0.0)
     out = tmp_path / "x.png"
-    for args, says in ((["--lens", "cone"], "cone"), (["--lens", "sphere,abc"], "radius must be a number"),
-                       (["--lens", "sphere", "--lens-at", "1,2"], "--lens-at must be X,Y,Z")):
+    for args, says in (
+        (["--lens", "cone"], "cone"),
+        (["--lens", "sphere,abc"], "radius must be a number"),
+        (["--lens", "sphere", "--lens-at", "1,2"], "--lens-at must be X,Y,Z"),
+    ):
         assert main(["snapshot", "--mode", "ghosted", "--size", "64x48", "--out", str(out), *args]) == 2
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and says in err and not out.exists()
@@ -130,14 +136,30 @@ def test_ldi_command_classifies_points_and_prints_the_table(tmp_path, capsys, gl
     points = rng.uniform(-1.2, 1.2, (5000, 3))
     np.save(tmp_path / "p.npy", points)
     out = tmp_path / "in.npy"
-    assert main(["ldi", "shape:sphere", "--points", str(tmp_path / "p.npy"), "--out", str(out),
-                 "--resolution", "256"]) == 0
+    assert (
+        main(["ldi", "shape:sphere", "--points", str(tmp_path / "p.npy"), "--out", str(out), "--resolution", "256"])
+        == 0
+    )
     inside = np.load(out)
     truth = np.linalg.norm(points, axis=1) < 1.0
     assert inside.dtype == bool and inside.shape == (5000,)
     assert (inside == truth).mean() > 0.99
-    assert main(["ldi", "shape:sphere", "--points", str(tmp_path / "p.npy"), "--out", str(out),
-                 "--resolution", "256", "--compressed"]) == 0
+    assert (
+        main(
+            [
+                "ldi",
+                "shape:sphere",
+                "--points",
+                str(tmp_path / "p.npy"),
+                "--out",
+                str(out),
+                "--resolution",
+                "256",
+                "--compressed",
+            ]
+        )
+        == 0
+    )
     assert np.array_equal(np.load(out), inside)
     capsys.readouterr()
     assert main(["ldi", "shape:torus", "--stats"]) == 0
@@ -167,7 +189,7 @@ def test_ldi_and_lens_release_every_gl_object(gl):
     def work():
         test = ParityTest(gl, build(gl, v, f, 64))
         test.classify(np.zeros((10, 3)))
-        test.classify(np.zeros((5000, 3)), compressed=True)       # grows its targets
+        test.classify(np.zeros((5000, 3)), compressed=True)  # grows its targets
         test.release()
         r = Renderer(gl, scene)
         r.lens = Lens.shape("box", scene.center, 0.5)
@@ -175,7 +197,7 @@ def test_ldi_and_lens_release_every_gl_object(gl):
         r.composite("ghosted", Style(focus={1}))
         r.release()
 
-    work()                              # first use: shader caches filled
+    work()  # first use: shader caches filled
     before = gl_census(gl)
     for _ in range(3):
         work()

@@ -24,6 +24,7 @@ TOL = 3
 
 # --- the atlas on the CPU -------------------------------------------------------------
 
+
 def test_slots_never_overlap_and_stay_on_their_power_of_two_lines():
     rng = np.random.default_rng(3)
     unit = 1 << DEFAULT_LEVELS
@@ -33,21 +34,23 @@ def test_slots_never_overlap_and_stay_on_their_power_of_two_lines():
     for (w, h), (layer, x, y) in zip(slots, places, strict=True):
         assert x % unit == 0 and y % unit == 0 and x + w <= 256 and y + h <= 256
         grid = used.setdefault(layer, np.zeros((256, 256), bool))
-        assert not grid[y:y + h, x:x + w].any(), "two slots overlap"
-        grid[y:y + h, x:x + w] = True
+        assert not grid[y : y + h, x : x + w].any(), "two slots overlap"
+        grid[y : y + h, x : x + w] = True
     assert len(used) >= 2, "60 slots of up to 224 texels cannot fit one 256 layer"
 
 
 def test_atlas_holds_each_texture_with_its_wrapped_border():
-    textures = [np.random.default_rng(i).integers(0, 256, (h, w, 4), dtype=np.uint8)
-                for i, (w, h) in enumerate([(37, 21), (64, 64), (1, 1), (48, 80)])]
+    textures = [
+        np.random.default_rng(i).integers(0, 256, (h, w, 4), dtype=np.uint8)
+        for i, (w, h) in enumerate([(37, 21), (64, 64), (1, 1), (48, 80)])
+    ]
     atlas = build_atlas(textures)
     b = 1 << atlas.levels
     for tex, (layer, x, y, w, h) in zip(textures, atlas.rects, strict=True):
         img = atlas.image[layer]
-        assert (img[y:y + h, x:x + w] == tex).all()
-        assert (img[y:y + h, x - 1] == tex[:, -1]).all() and (img[y:y + h, x + w] == tex[:, 0]).all()
-        assert (img[y - b:y, x:x + w] == tex[np.arange(-b, 0) % h]).all()
+        assert (img[y : y + h, x : x + w] == tex).all()
+        assert (img[y : y + h, x - 1] == tex[:, -1]).all() and (img[y : y + h, x + w] == tex[:, 0]).all()
+        assert (img[y - b : y, x : x + w] == tex[np.arange(-b, 0) % h]).all()
         assert x % b == 0 and y % b == 0
 
 
@@ -59,6 +62,7 @@ def test_scene_stores_a_texture_used_by_several_objects_once():
 
 
 # --- preprocessing --------------------------------------------------------------------
+
 
 def test_index_vertices_merges_identical_vertices_only():
     v, f, uv = textured_box(1.0)
@@ -75,10 +79,10 @@ def test_smoothing_keeps_hard_edges_and_smooths_curves():
 
     box = trimesh.creation.box()
     bv, bf, bn, _ = smooth_normals(box.vertices, box.faces, angle=30)
-    assert len(bv) == 24                                      # 6 faces x 4 corners: edges stay hard
+    assert len(bv) == 24  # 6 faces x 4 corners: edges stay hard
     assert np.allclose(np.abs(bn).max(axis=1), 1.0, atol=1e-6)
     sphere = trimesh.creation.icosphere(3)
-    flat_v = sphere.vertices[sphere.faces.reshape(-1)]       # unindexed, as OBJ files come
+    flat_v = sphere.vertices[sphere.faces.reshape(-1)]  # unindexed, as OBJ files come
     sv, sf, sn, _ = smooth_normals(flat_v, np.arange(len(flat_v)).reshape(-1, 3), angle=30)
     assert len(sv) == len(sphere.vertices)
     radial = sv / np.linalg.norm(sv, axis=1, keepdims=True)
@@ -100,8 +104,9 @@ def test_smooth_angle_flags_reach_the_loader(tmp_path, capsys):
     assert scenes["0"].vertex_count == 3 * faces
     assert scenes["30"].vertex_count < faces
     with_normals = tmp_path / "faceted.obj"
-    trimesh.Trimesh(scenes["0"].positions, scenes["0"].indices.reshape(-1, 3),
-                    vertex_normals=scenes["0"].normals, process=False).export(with_normals)
+    trimesh.Trimesh(
+        scenes["0"].positions, scenes["0"].indices.reshape(-1, 3), vertex_normals=scenes["0"].normals, process=False
+    ).export(with_normals)
     kept = _load(build_parser().parse_args(["info", str(with_normals)]))
     redone = _load(build_parser().parse_args(["info", str(with_normals), "--smooth"]))
     assert kept.vertex_count == 3 * faces and redone.vertex_count < faces
@@ -134,6 +139,7 @@ def test_oversized_texture_is_named_in_one_warning(tmp_path):
 
 
 # --- the atlas against the separate textures ---------------------------------------------
+
 
 def _both(r, sep, target, cam):
     batched = r.std(cam, VP).read(VP, 1)
@@ -170,9 +176,16 @@ def test_atlas_matches_separate_textures(make_renderer, gl, view):
         assert (ids == separate["id"][0]).mean() > 0.999
         diff = np.abs(batched["color"][0][..., :3].astype(int) - separate["color"][0][..., :3].astype(int)).max(-1)
         covered = ids >= 0
-        odd = np.isin(ids, [o for o in range(scene.count) if scene.texture_ids[o] >= 0 and
-                            any(s % (1 << DEFAULT_LEVELS) for s in scene.textures[scene.texture_ids[o]].shape[:2])
-                            and scene.textures[scene.texture_ids[o]].shape[:2] != (1, 1)])
+        odd = np.isin(
+            ids,
+            [
+                o
+                for o in range(scene.count)
+                if scene.texture_ids[o] >= 0
+                and any(s % (1 << DEFAULT_LEVELS) for s in scene.textures[scene.texture_ids[o]].shape[:2])
+                and scene.textures[scene.texture_ids[o]].shape[:2] != (1, 1)
+            ],
+        )
         assert covered.mean() > 0.3
         if view == "magnified":
             assert (diff <= TOL).mean() >= 0.99, f"{(diff > TOL).mean():.4f} of pixels off"
@@ -180,7 +193,7 @@ def test_atlas_matches_separate_textures(make_renderer, gl, view):
         else:
             records = r.parameterize(cam, VP)
             lods = _lod_estimates(scene, records)
-            assert ((lods >= 1) & (lods <= 3)).sum() >= 3 and np.nanmax(lods) >= 2.5, lods   # levels 1 to 3 in use
+            assert ((lods >= 1) & (lods <= 3)).sum() >= 3 and np.nanmax(lods) >= 2.5, lods  # levels 1 to 3 in use
             # the acceptance's measure (all pixels), leaving out odd-sized textures: GL builds a
             # separate odd texture's levels by resampling, the atlas box-filters the wrapped texture
             assert (diff[~odd] <= TOL).mean() >= 0.99, f"{(diff[~odd] > TOL).mean():.4f} of pixels off"
@@ -216,13 +229,14 @@ def test_untextured_scene_skips_the_material_atlas(make_renderer, demo_scene):
 
 # --- BVH geometry grouping ---------------------------------------------------------------
 
+
 def test_bvh_leaves_partition_the_triangles_within_the_vertex_limit():
     scene = textured_scene(40)
     tris = scene.indices.reshape(-1, 3)
     bvh = build_bvh(scene.positions, tris, max_vertices=60)
     assert sorted(map(tuple, bvh.indices.reshape(-1, 3))) == sorted(map(tuple, tris))
     for first, count in bvh.leaves:
-        assert np.unique(bvh.indices[first:first + count]).size <= 60
+        assert np.unique(bvh.indices[first : first + count]).size <= 60
     assert len(bvh.leaves) >= 16
 
 
@@ -242,8 +256,11 @@ def test_chunked_std_equals_std_and_culls(make_renderer, gl):
             assert np.abs(out["color"][0].astype(int) - ref["color"][0].astype(int)).max() <= 1
             leaves = len(chunked.bvh(r.gpu).leaves)
             assert (chunked.visible == leaves) == all_visible, (chunked.visible, leaves)
-        away = Camera(eye=scene.center + [0, 0, 3 * scene.radius], target=scene.center + [0, 0, 6 * scene.radius],
-                      up=np.array([0.0, 1.0, 0.0]))
+        away = Camera(
+            eye=scene.center + [0, 0, 3 * scene.radius],
+            target=scene.center + [0, 0, 6 * scene.radius],
+            up=np.array([0.0, 1.0, 0.0]),
+        )
         view, proj = r.matrices(away, VP)
         assert len(visible_leaves(chunked.bvh(r.gpu), proj @ view)) == 0
     finally:
@@ -252,6 +269,7 @@ def test_chunked_std_equals_std_and_culls(make_renderer, gl):
 
 
 # --- real textured files (../shared/data, present in the workspace) ---------------------------
+
 
 @pytest.mark.parametrize("name", ["textured_gallery.glb", "flight_helmet.glb"])
 def test_real_textured_files_load_and_composite(make_renderer, name):

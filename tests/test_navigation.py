@@ -30,12 +30,12 @@ def test_the_smallest_parts_are_left_out_down_to_the_share(keep):
     tri = np.random.default_rng(1).integers(12, 400, 2000)
     out = left_out(rec.visible, rec.viewport_rect, tri, keep)
     kept = rec.visible & ~out
-    assert not (out & ~rec.visible).any()                 # culled or hidden: never "left out"
-    assert _area(rec)[out].max() <= _area(rec)[kept].min()     # the smallest go first
+    assert not (out & ~rec.visible).any()  # culled or hidden: never "left out"
+    assert _area(rec)[out].max() <= _area(rec)[kept].min()  # the smallest go first
     total = tri[rec.visible].sum()
-    assert tri[kept].sum() >= keep * total                # no more left out than the share allows
+    assert tri[kept].sum() >= keep * total  # no more left out than the share allows
     smallest_kept = np.flatnonzero(kept)[np.argmin(_area(rec)[kept])]
-    assert tri[kept].sum() - tri[smallest_kept] <= keep * total    # and no fewer
+    assert tri[kept].sum() - tri[smallest_kept] <= keep * total  # and no fewer
 
 
 def test_the_focus_is_never_left_out():
@@ -61,7 +61,7 @@ def test_nothing_is_left_out_at_full_share_or_in_small_scenes():
 def test_the_budget_follows_the_frame_time():
     b = FrameBudget(target_ms=100.0)
     b.update(400.0)
-    assert b.keep == pytest.approx(0.6)                   # one slow frame: at most 0.6x
+    assert b.keep == pytest.approx(0.6)  # one slow frame: at most 0.6x
     for _ in range(20):
         b.update(1000.0)
     assert b.keep == b.min_keep
@@ -69,13 +69,13 @@ def test_the_budget_follows_the_frame_time():
         b.update(bad)
         assert b.keep == b.min_keep
     for _ in range(20):
-        b.update(20.0)                                    # fast frames: back to every part
+        b.update(20.0)  # fast frames: back to every part
     assert b.keep == 1.0
     b.keep = 0.5
     b.update(AIM * 100.0)
-    assert b.keep == pytest.approx(0.5)                   # on its aim: unchanged
+    assert b.keep == pytest.approx(0.5)  # on its aim: unchanged
     b.update(100.0)
-    assert 0.45 < b.keep < 0.5                            # at the target: a little under it, for the scatter
+    assert 0.45 < b.keep < 0.5  # at the target: a little under it, for the scatter
 
 
 def _boxes(n: int, seed: int = 3) -> np.ndarray:
@@ -107,11 +107,12 @@ def test_frames_in_motion_leave_out_the_share_asked_and_the_same_parts():
         def thin(visible, rect, seen=seen):
             seen["visible"] = visible.copy()
             return left_out(visible, rect, tri, keep)
+
         rec = parameterize(corners, vpm, vp, thin=thin)
         out = seen["visible"] & ~rec.visible
-        assert not rec.viewport_rect[out].any() and not rec.transform[out].any()     # culled: no region
+        assert not rec.viewport_rect[out].any() and not rec.transform[out].any()  # culled: no region
         shares.append(tri[rec.visible].sum() / tri[seen["visible"]].sum())
         sets.append(out)
     assert all(keep <= s <= keep + 0.01 for s in shares), shares
     for a, b in zip(sets[:-1], sets[1:], strict=True):
-        assert (a & b).sum() >= 0.95 * max(a.sum(), b.sum())        # the same parts, not alternate ones
+        assert (a & b).sum() >= 0.95 * max(a.sum(), b.sum())  # the same parts, not alternate ones

@@ -30,8 +30,15 @@ def _box(k: int, base: int, corner: str = "{v}", quads: bool = True, shift=(0.0,
     return lines
 
 
-def _file(tmp_path, name: str, corner: str = "{v}", quads: bool = True, extra: list[str] = (), objects: int = 3,
-          newline: str = "\n"):
+def _file(
+    tmp_path,
+    name: str,
+    corner: str = "{v}",
+    quads: bool = True,
+    extra: list[str] = (),
+    objects: int = 3,
+    newline: str = "\n",
+):
     lines = ["# made by the test", *extra]
     for k in range(objects):
         lines += _box(k, 8 * k, corner, quads=quads if k % 2 == 0 else not quads)
@@ -44,9 +51,10 @@ def _file(tmp_path, name: str, corner: str = "{v}", quads: bool = True, extra: l
 def _triangles(scene, oid: int) -> tuple[np.ndarray, np.ndarray]:
     """An object's triangles as rows of their corners' (position, normal), rows sorted."""
     first, count = scene.index_ranges[oid]
-    corners = scene.indices[first:first + count].astype(np.int64)
-    tri = np.round(np.concatenate([scene.positions[corners], scene.normals[corners]], axis=1).astype(np.float64),
-                   5).reshape(-1, 3, 6)
+    corners = scene.indices[first : first + count].astype(np.int64)
+    tri = np.round(
+        np.concatenate([scene.positions[corners], scene.normals[corners]], axis=1).astype(np.float64), 5
+    ).reshape(-1, 3, 6)
     # each triangle from its smallest corner on (a rotation keeps the winding)
     first = np.array([min(range(3), key=lambda i, t=t: tuple(t[i])) for t in tri])
     tri = np.stack([tri[np.arange(len(tri)), (first + i) % 3] for i in range(3)], axis=1)
@@ -62,20 +70,21 @@ def _both(path, monkeypatch, **options):
     return direct, via_trimesh
 
 
-@pytest.mark.parametrize("corner,quads", [("{v}", True), ("{v}", False), ("{v}//{n}", True), ("{v}/{t}/{n}", False),
-                                          ("{v}/{t}", True)])
+@pytest.mark.parametrize(
+    "corner,quads", [("{v}", True), ("{v}", False), ("{v}//{n}", True), ("{v}/{t}/{n}", False), ("{v}/{t}", True)]
+)
 @pytest.mark.parametrize("smooth", [False, True])
 def test_plain_files_read_as_trimesh_reads_them(tmp_path, monkeypatch, corner, quads, smooth):
     path = _file(tmp_path, "parts.obj", corner, quads)
     data, names = obj_objects(path)
-    assert obj_read.decode(data, names) is not None            # the direct reading is the one tested
+    assert obj_read.decode(data, names) is not None  # the direct reading is the one tested
     direct, via_trimesh = _both(path, monkeypatch, smooth=smooth)
     assert direct.names == via_trimesh.names == ["part0", "part1", "part2"]
     np.testing.assert_allclose(direct.colors, via_trimesh.colors)
     for oid in range(direct.count):
         a, b = _triangles(direct, oid), _triangles(via_trimesh, oid)
-        np.testing.assert_allclose(a[1], b[1], atol=1e-6)       # the same triangles
-        np.testing.assert_allclose(a[0], b[0], atol=1e-5)       # with the same normals at their corners
+        np.testing.assert_allclose(a[1], b[1], atol=1e-6)  # the same triangles
+        np.testing.assert_allclose(a[0], b[0], atol=1e-5)  # with the same normals at their corners
     np.testing.assert_allclose(direct.aabb_min, via_trimesh.aabb_min)
 
 
@@ -92,17 +101,23 @@ def test_groups_as_objects_and_crlf(tmp_path, monkeypatch):
         np.testing.assert_allclose(_triangles(direct, oid)[0], _triangles(via_trimesh, oid)[0], atol=1e-5)
 
 
-@pytest.mark.parametrize("change", [
-    (None, "v 0 0 0 1 0 0"),                                      # vertex colours
-    (None, "l 1 2"),                                              # a line
-    (None, "f -1 -2 -3"),                                         # relative indices
-    (None, "f 1 2 99999"), (None, "f 0 1 2"),                     # out of range: trimesh's messages
-    (None, "v 1 2"), (None, "v 1 2 x"),                           # damaged rows
-    (None, "f 1 2"),                                              # a face of two corners
-    (None, "f 1/1/1 2//2 3/1"),                                   # mixed corner forms
-    (None, "v 1 2 3 \\"),                                         # a continued line
-    (None, "f 1 2 3.5"), (None, "f 1 2 99999999999999999999999"),  # indices that are not integers
-])
+@pytest.mark.parametrize(
+    "change",
+    [
+        (None, "v 0 0 0 1 0 0"),  # vertex colours
+        (None, "l 1 2"),  # a line
+        (None, "f -1 -2 -3"),  # relative indices
+        (None, "f 1 2 99999"),
+        (None, "f 0 1 2"),  # out of range: trimesh's messages
+        (None, "v 1 2"),
+        (None, "v 1 2 x"),  # damaged rows
+        (None, "f 1 2"),  # a face of two corners
+        (None, "f 1/1/1 2//2 3/1"),  # mixed corner forms
+        (None, "v 1 2 3 \\"),  # a continued line
+        (None, "f 1 2 3.5"),
+        (None, "f 1 2 99999999999999999999999"),  # indices that are not integers
+    ],
+)
 def test_other_files_go_to_trimesh(tmp_path, change):
     head, tail = change
     path = _file(tmp_path, "other.obj", extra=[head] if head else [])
@@ -114,8 +129,13 @@ def test_other_files_go_to_trimesh(tmp_path, change):
 
 def test_faces_before_any_object_go_to_trimesh(tmp_path):
     path = tmp_path / "loose.obj"
-    path.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n" + "\n".join(_box(0, 4)[:1] + _box(0, 4)[1:]) + "\n"
-                    + "\n".join(_box(1, 12)) + "\n")
+    path.write_text(
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"
+        + "\n".join(_box(0, 4)[:1] + _box(0, 4)[1:])
+        + "\n"
+        + "\n".join(_box(1, 12))
+        + "\n"
+    )
     data, names = obj_objects(path)
     assert len(names) == 2 and obj_read.decode(data, names) is None
 
@@ -133,7 +153,7 @@ def test_many_objects_each_get_their_own_vertices(tmp_path):
     for k in (0, 499, 999):
         geometry = decoded[k][1]
         assert geometry.faces.shape == (12, 3) and geometry.faces.max() == len(geometry.vertices) - 1
-        assert len(geometry.vertices) == 24                     # corners split by their normals
+        assert len(geometry.vertices) == 24  # corners split by their normals
         np.testing.assert_allclose(geometry.vertices.min(axis=0), (3 * k, 0, 0))
         np.testing.assert_allclose(np.linalg.norm(geometry.normals, axis=1), 1.0)
 
@@ -183,7 +203,7 @@ def test_material_colours_are_the_ones_trimesh_gives(tmp_path, monkeypatch, case
     np.testing.assert_array_equal(direct.colors, via_trimesh.colors)
     assert direct.warnings == via_trimesh.warnings and direct.inputs == via_trimesh.inputs
     if case == "carried":
-        assert direct.colors[4].tolist() == direct.colors[3].tolist()        # grey carried over
+        assert direct.colors[4].tolist() == direct.colors[3].tolist()  # grey carried over
         assert not np.array_equal(direct.colors[0], direct.colors[1])
     if case in ("missing file", "outside"):
         assert any("nothere.mtl" in w or "elsewhere.mtl" in w for w in direct.warnings)
@@ -232,7 +252,7 @@ def test_objects_of_one_material_share_their_skeleton_object(tmp_path, monkeypat
     path = _material_file(tmp_path, "parts.mtl", uses)
     data, _ = obj_objects(path)
     skeleton, stands_for = obj_read.material_skeleton(data)
-    assert len(stands_for) == 1000 and len(set(stands_for.values())) == 3      # [] inherits blue
+    assert len(stands_for) == 1000 and len(set(stands_for.values())) == 3  # [] inherits blue
     assert skeleton.count(b"\no rtta.o.") == 3
     direct, via_trimesh = _both(path, monkeypatch)
     np.testing.assert_array_equal(direct.colors, via_trimesh.colors)

@@ -14,8 +14,13 @@ from rtta.scene.model import from_meshes
 
 VP = (240, 180)
 CAMERAS = [(30, 20, 2.2), (75, 40, 0.7), (160, -30, 0.3), (250, 80, 1.2), (300, -85, 0.05), (0, 0, 1.0)]
-MODES = [("sprites", {}), ("ghosted", {"halo": 2}), ("ghosted-ao", {}), ("transparent", {}),
-         ("ghosted", {"order": "pixel", "outline_width": 3})]
+MODES = [
+    ("sprites", {}),
+    ("ghosted", {"halo": 2}),
+    ("ghosted-ao", {}),
+    ("transparent", {}),
+    ("ghosted", {"order": "pixel", "outline_width": 3}),
+]
 
 
 def _boxes() -> object:
@@ -28,7 +33,7 @@ def _boxes() -> object:
         size = rng.uniform(0.2, 1.0, 3)
         if i % 5 == 0:
             size[i % 3] = 0.02
-        box = trimesh.creation.box(extents=size).subdivide().subdivide()   # vertices along the edges
+        box = trimesh.creation.box(extents=size).subdivide().subdivide()  # vertices along the edges
         if i % 4 == 3:
             box.apply_transform(trimesh.transformations.random_rotation_matrix(rng.random(3)))
         center = np.array([i % 3, (i // 3) % 3, i // 9], float) * 1.4
@@ -39,6 +44,7 @@ def _boxes() -> object:
 def _rectangles(render):
     def render_without_outlines(self, **kw):
         return render(self, **{**kw, "eye": None})
+
     return render_without_outlines
 
 
@@ -61,7 +67,7 @@ def test_outline_sprites_shade_what_rectangles_shade(make_renderer, demo_scene, 
             rectangles = r.composite(mode, s).read()
             monkeypatch.setattr(CompositePass, "render", render)
             assert r._composite.hull_draws == 0
-            for got, want in zip(outlines, rectangles, strict=True):      # colour, depth
+            for got, want in zip(outlines, rectangles, strict=True):  # colour, depth
                 diff = np.argwhere(np.any(np.atleast_3d(got != want), axis=-1))
                 assert not len(diff), f"{mode} {style} {orbit}: {len(diff)} pixels differ, first {diff[:3].tolist()}"
             cases += 1

@@ -52,8 +52,15 @@ def test_packing_rejects_oversized():
         pack_shelves(np.array([11]), np.array([1]), 10, 10)
 
 
-@given(st.integers(0, 300), st.integers(0, 3), st.sampled_from([(64, 64), (200, 120), (37, 300)]),
-       st.integers(1, 4), st.floats(0, 359), st.floats(-89, 89), st.floats(0.3, 4.0))
+@given(
+    st.integers(0, 300),
+    st.integers(0, 3),
+    st.sampled_from([(64, 64), (200, 120), (37, 300)]),
+    st.integers(1, 4),
+    st.floats(0, 359),
+    st.floats(-89, 89),
+    st.floats(0.3, 4.0),
+)
 @settings(max_examples=60, deadline=None)
 def test_parameterization_regions(n, border, atlas_max, max_layers, az, el, dist):
     """No overlap, inside the atlas, every visible object present, layers <= cap (scaled if needed)."""
@@ -76,6 +83,7 @@ def test_parameterization_regions(n, border, atlas_max, max_layers, az, el, dist
     assert (r[:, 2] >= 1 + 2 * border).all() and (r[:, 3] >= 1 + 2 * border).all()
     assert (r[:, 0] >= 0).all() and (r[:, 0] + r[:, 2] <= tw).all() and (r[:, 1] + r[:, 3] <= th).all()
     from rtta.atlas.packing import Packing
+
     p = Packing(r[:, 0], r[:, 1], rec.layer[vis], tw, th, td)
     assert not overlaps(p, r[:, 2], r[:, 3])
     assert ((rec.scale[vis] > 0) & (rec.scale[vis] <= 1)).all()
@@ -83,6 +91,7 @@ def test_parameterization_regions(n, border, atlas_max, max_layers, az, el, dist
 
 def rec_min_area(scene, vpm, vp, border):
     from rtta.atlas.parameterize import project_bounds
+
     vis, _, _ = project_bounds(scene.box_corners(), vpm)
     return vis.sum() * (1 + 2 * border) ** 2
 
@@ -137,7 +146,7 @@ def test_viewport_rects_hold_each_objects_projection(n, az, el, dist):
             assert not rec.visible[i]
             continue
         if not front.all():
-            continue                                   # near-plane clipping: test_bounds
+            continue  # near-plane clipping: test_bounds
         ndc = clip[:, :3] / clip[:, 3:]
         lo, hi = ndc.min(axis=0), ndc.max(axis=0)
         outside = (lo[:2] > 1).any() or (hi[:2] < -1).any() or lo[2] > 1
@@ -146,7 +155,7 @@ def test_viewport_rects_hold_each_objects_projection(n, az, el, dist):
             continue
         px_lo = (np.clip(lo[:2], -1, 1) + 1) / 2 * size
         px_hi = (np.clip(hi[:2], -1, 1) + 1) / 2 * size
-        if not rec.visible[i]:                         # only a zero-area sliver on the border may drop
+        if not rec.visible[i]:  # only a zero-area sliver on the border may drop
             assert (np.minimum(px_hi, size) - np.maximum(px_lo, 0) <= 1e-3).any()
             continue
         x0, y0, x1, y1 = rec.viewport_rect[i]
@@ -176,7 +185,7 @@ def test_alignment_is_remembered_only_for_read_only_corners():
     assert np.array_equal(first.viewport_rect, again.viewport_rect)
     rot = np.array([[0.8, -0.6, 0.0], [0.6, 0.8, 0.0], [0.0, 0.0, 1.0]])
     centre = writable.mean(axis=1, keepdims=True)
-    writable[:] = (writable - centre) @ rot.T + centre          # turned boxes: not axis-aligned
+    writable[:] = (writable - centre) @ rot.T + centre  # turned boxes: not axis-aligned
     turned = parameterize(writable, vpm, (320, 240))
     fresh = parameterize(np.array(writable), vpm, (320, 240))
     assert np.array_equal(turned.viewport_rect, fresh.viewport_rect)
@@ -190,10 +199,10 @@ def test_projection_in_chunks_equals_one_pass(monkeypatch, turned):
     last short chunk, with boxes behind the camera and crossing the near plane among them."""
     import importlib
 
-    param = importlib.import_module("rtta.atlas.parameterize")   # the module, not the function
+    param = importlib.import_module("rtta.atlas.parameterize")  # the module, not the function
 
     scene = random_scene(700, seed=5)
-    cam = Camera.orbit(scene.center, scene.radius, 40.0, 15.0, 0.3)     # inside: crossings
+    cam = Camera.orbit(scene.center, scene.radius, 40.0, 15.0, 0.3)  # inside: crossings
     vpm = cam.projection(4 / 3) @ cam.view(scene.origin)
     corners = np.array(scene.box_corners())
     if turned:
@@ -205,7 +214,7 @@ def test_projection_in_chunks_equals_one_pass(monkeypatch, turned):
     front = [((np.c_[c, np.ones(8)] @ vpm.T)[:, 2:].sum(axis=1) >= 0).sum() for c in corners]
     crossing = np.isin(front, range(1, 8))
     assert crossing.any() and whole[0].any() and not whole[0].all()
-    monkeypatch.setattr(param, "CHUNK", 64)                  # 11 chunks, the last of 60 boxes
+    monkeypatch.setattr(param, "CHUNK", 64)  # 11 chunks, the last of 60 boxes
     chunked = param.project_bounds(planar, vpm)
     for a, b in zip(whole, chunked, strict=True):
         assert np.array_equal(a, b)
@@ -224,7 +233,7 @@ def test_records_are_not_reused_by_the_next_call():
     cam2 = Camera.orbit(scene.center, scene.radius, 120.0, -10.0, 1.5)
     again = parameterize(scene.box_corners(), cam2.projection(1.0) @ cam2.view(scene.origin), (200, 200), border=2)
     assert not np.array_equal(again.viewport_rect, kept["viewport_rect"])
-    parameterize(scene.box_corners(), vpm, (640, 480))                     # all visible: packed in place
+    parameterize(scene.box_corners(), vpm, (640, 480))  # all visible: packed in place
     parameterize(other.box_corners(), vpm, (320, 240), hidden=np.arange(500) % 3 == 0)
     for k in keys:
         assert np.array_equal(getattr(rec, k), kept[k]), k
@@ -248,7 +257,7 @@ def test_records_memory_is_reused_once_released():
     for i, a in enumerate(kept):
         fresh = parameterize(scene.box_corners(), vpms[i], (320, 240))
         assert np.array_equal(a.transform, fresh.transform) and np.array_equal(a.atlas_rect, fresh.atlas_rect)
-        for b in kept[i + 1:]:
+        for b in kept[i + 1 :]:
             assert not np.shares_memory(a.transform, b.transform)
 
 
@@ -276,12 +285,20 @@ def test_packed_records_match_the_std430_layout_field_by_field():
 
     scene = random_scene(400, seed=9)
     cam = Camera.orbit(scene.center, scene.radius, 30.0, 20.0, 1.2)
-    rec = parameterize(scene.box_corners(), cam.projection(4 / 3) @ cam.view(scene.origin), (320, 240),
-                       region_scale=np.linspace(0.3, 1.0, 400))
+    rec = parameterize(
+        scene.box_corners(),
+        cam.projection(4 / 3) @ cam.view(scene.origin),
+        (320, 240),
+        region_scale=np.linspace(0.3, 1.0, 400),
+    )
     assert not rec.visible.all()
     ref = np.zeros(400, RECORD_DTYPE)
-    ref["transform"], ref["clip"], ref["atlas"], ref["viewport"] = (rec.transform, rec.clip_ndc, rec.atlas_rect,
-                                                                   rec.viewport_rect)
+    ref["transform"], ref["clip"], ref["atlas"], ref["viewport"] = (
+        rec.transform,
+        rec.clip_ndc,
+        rec.atlas_rect,
+        rec.viewport_rect,
+    )
     ref["info"][:, 0], ref["info"][:, 1], ref["info"][:, 2] = rec.layer, rec.visible, rec.border
     ref["info"][:, 3] = rec.scale.astype(np.float32).view(np.int32)
     for reuse in (False, True):

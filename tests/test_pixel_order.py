@@ -38,10 +38,12 @@ def _nested_scene():
     inner = trimesh.creation.icosphere(3, 0.5)
     housing = trimesh.creation.box(extents=(1.4, 0.8, 0.8))
     shaft = trimesh.creation.cylinder(0.15, 3.0, sections=24)
-    parts = [("outer", np.asarray(outer.vertices), np.asarray(outer.faces), None),
-             ("inner", np.asarray(inner.vertices), np.asarray(inner.faces), None),
-             ("housing", np.asarray(housing.vertices) + (2.6, 0, 0), np.asarray(housing.faces), None),
-             ("shaft", np.asarray(shaft.vertices) + (2.6, 0.1, 0.9), np.asarray(shaft.faces), None)]
+    parts = [
+        ("outer", np.asarray(outer.vertices), np.asarray(outer.faces), None),
+        ("inner", np.asarray(inner.vertices), np.asarray(inner.faces), None),
+        ("housing", np.asarray(housing.vertices) + (2.6, 0, 0), np.asarray(housing.faces), None),
+        ("shaft", np.asarray(shaft.vertices) + (2.6, 0.1, 0.9), np.asarray(shaft.faces), None),
+    ]
     colors = [(0.8, 0.2, 0.1, 1), (0.1, 0.3, 0.9, 1), (0.2, 0.7, 0.2, 1), (0.9, 0.8, 0.1, 1)]
     return from_meshes(parts, colors)
 
@@ -54,9 +56,9 @@ def _numpy_blend(r, opacity: float) -> np.ndarray:
     atlas = r.atlas.read((tw, th), td)
     atlas = {"color": atlas["color"], "depth": atlas["depth"]}
     maps = [map_back(atlas, records, o) for o in np.flatnonzero(records.visible)]
-    depth = np.stack([m["depth"] for m in maps])                    # [k, H, W], 1 where not covered
+    depth = np.stack([m["depth"] for m in maps])  # [k, H, W], 1 where not covered
     color = np.stack([m["color"][..., :3] for m in maps]).astype(np.float64)
-    order = np.argsort(-depth, axis=0, kind="stable")               # farthest first
+    order = np.argsort(-depth, axis=0, kind="stable")  # farthest first
     out = np.broadcast_to(np.array(BACKGROUND[:3]) * 255, depth.shape[1:] + (3,)).copy()
     for k in range(len(maps)):
         idx = order[k]
@@ -97,7 +99,7 @@ def test_pixel_order_overflow_keeps_nearest(make_renderer, monkeypatch):
         fallback = r.composite("transparent", Style(order="pixel")).read()[0]
     assert r._composite.fallbacks == 1 and np.array_equal(fallback, by_object)
     with warnings.catch_warnings():
-        warnings.simplefilter("error")                          # said once: no second warning
+        warnings.simplefilter("error")  # said once: no second warning
         r.composite("transparent", Style())
     assert r._composite.fallbacks == 2 and len(r.warnings) == 1 and "object order" in r.warnings[0]
     with pytest.raises(ValueError, match="order"):
@@ -147,8 +149,15 @@ def test_more_surfaces_than_kept_merge_behind(make_renderer):
     last (what the list order alone would give on llvmpipe) fails here. The numpy blend of
     the rule matches; the exact blend does not."""
     k_kept, n = 8, 12
-    parts = [(f"s{i}", np.asarray(trimesh.creation.icosphere(3, 0.5 + 0.05 * (n - 1 - i)).vertices),
-              np.asarray(trimesh.creation.icosphere(3, 1.0).faces), None) for i in range(n)]
+    parts = [
+        (
+            f"s{i}",
+            np.asarray(trimesh.creation.icosphere(3, 0.5 + 0.05 * (n - 1 - i)).vertices),
+            np.asarray(trimesh.creation.icosphere(3, 1.0).faces),
+            None,
+        )
+        for i in range(n)
+    ]
     strong = [(0.9, 0.1, 0.1, 1), (0.1, 0.8, 0.1, 1), (0.1, 0.1, 0.9, 1), (0.9, 0.9, 0.1, 1)]
     scene = from_meshes(parts, [(0.5, 0.5, 0.5, 1)] * k_kept + strong)
     r = make_renderer(scene)
@@ -164,9 +173,9 @@ def test_more_surfaces_than_kept_merge_behind(make_renderer):
     depth = np.stack([m["depth"] for m in maps])
     color = np.stack([m["color"][..., :3] for m in maps]).astype(np.float64)
     alpha = np.array([opacity[i] for i in range(n)])
-    y, x = VP[1] // 2, VP[0] // 2                       # the centre: all 12 cover it
+    y, x = VP[1] // 2, VP[0] // 2  # the centre: all 12 cover it
     assert (depth[:, y, x] < 1).all()
-    kept = np.argsort(depth[:, y, x])[:k_kept]          # the nearest
+    kept = np.argsort(depth[:, y, x])[:k_kept]  # the nearest
     assert set(kept) == set(range(k_kept)), "the outer shells are not the nearest: the test proves nothing"
     out, exact = _kept_and_merged(color[:, y, x], depth[:, y, x], alpha, k_kept)
     assert np.abs(got[y, x] - out).max() <= 3, (got[y, x], out, exact)
@@ -177,14 +186,14 @@ def _kept_and_merged(color: np.ndarray, depth: np.ndarray, alpha: np.ndarray, k_
     """One pixel's surfaces (colour [n, 3] in 0..255, depth [n], opacity [n]) blended over the
     background by the resolve's rule: the k_kept nearest in depth order, the rest merged
     behind them (opacity-weighted mean colour, opacity 1 - prod(1 - a)); and exactly."""
-    by_depth = np.argsort(depth, kind="stable")         # nearest first
+    by_depth = np.argsort(depth, kind="stable")  # nearest first
     kept, rest = by_depth[:k_kept], by_depth[k_kept:]
     out = np.array(BACKGROUND[:3]) * 255
     if len(rest):
         w = alpha[rest]
         tail_a = 1 - np.prod(1 - w)
         out = (w[:, None] * color[rest]).sum(0) / w.sum() * tail_a + out * (1 - tail_a)
-    for o in kept[::-1]:                                # farthest first
+    for o in kept[::-1]:  # farthest first
         out = color[o] * alpha[o] + out * (1 - alpha[o])
     exact = np.array(BACKGROUND[:3]) * 255
     for o in by_depth[::-1]:
@@ -198,8 +207,9 @@ def test_a_pixel_with_hundreds_of_surfaces(make_renderer, list_path):
     resolve's rule, which differs from the exact blend there (so the test can fail)."""
     n, k_kept = 150, 8
     sphere = trimesh.creation.icosphere(1, 1.0)
-    parts = [(f"s{i}", np.asarray(sphere.vertices) * (0.3 + 0.7 * i / n), np.asarray(sphere.faces), None)
-             for i in range(n)]
+    parts = [
+        (f"s{i}", np.asarray(sphere.vertices) * (0.3 + 0.7 * i / n), np.asarray(sphere.faces), None) for i in range(n)
+    ]
     rng = np.random.default_rng(7)
     scene = from_meshes(parts, [(*rng.uniform(0.1, 0.9, 3), 1.0) for _ in range(n)])
     r = make_renderer(scene)
@@ -244,7 +254,7 @@ def _numpy_ghosted(r, focus: list[int], style: Style, clip: bool = True) -> tupl
     color = np.stack([maps[o]["color"][..., :3] for o in context]).astype(np.float64)
     grey = (color * [0.299, 0.587, 0.114]).sum(-1, keepdims=True)
     color = color + (grey - color) * style.desaturate
-    for k in np.argsort(-depth, axis=0, kind="stable"):          # farthest first
+    for k in np.argsort(-depth, axis=0, kind="stable"):  # farthest first
         d = np.take_along_axis(depth, k[None], 0)[0]
         c = np.take_along_axis(color, k[None, ..., None], 0)[0]
         a = np.where(d < 1.0, style.context_opacity, 0.0)[..., None]
@@ -268,7 +278,7 @@ def test_ghosted_context_in_pixel_order_equals_numpy(make_renderer, orbit, focus
     r = make_renderer(scene)
     cam = Camera.orbit(scene.center, scene.radius, *orbit)
     r.capture(cam, VP)
-    style = Style(focus={focus}, order="pixel", context_opacity=0.7, desaturate=0.2)   # strong enough to tell
+    style = Style(focus={focus}, order="pixel", context_opacity=0.7, desaturate=0.2)  # strong enough to tell
     want, edge = _numpy_ghosted(r, [focus], style)
     got = r.composite("ghosted", style).read()[0][..., :3].astype(np.float64)
     assert "resolve" in r._composite.passes and r._composite._pixel_order.fetch == list_path
@@ -298,8 +308,12 @@ def test_coplanar_surfaces_blend_alike_in_any_draw_order(make_renderer):
         scene = from_meshes([("a", *part), ("b", *part)], colors)
         r = make_renderer(scene)
         r.capture(Camera.orbit(scene.center, scene.radius, 20, 15, 2.2), VP)
-        images[name] = {order: r.composite("transparent", Style(default_opacity=0.6, order=order)).read()[0]
-                        [..., :3].astype(np.int64) for order in ("pixel", "object")}
+        images[name] = {
+            order: r.composite("transparent", Style(default_opacity=0.6, order=order))
+            .read()[0][..., :3]
+            .astype(np.int64)
+            for order in ("pixel", "object")
+        }
     covered = (np.abs(images["red first"]["pixel"] - np.array(BACKGROUND[:3]) * 255).max(-1) > 8).sum()
     assert covered > 2000
     by_object = np.abs(images["red first"]["object"] - images["blue first"]["object"]).max(-1)
@@ -334,7 +348,7 @@ def test_a_reallocated_target_is_drawn_into(make_renderer):
         old_name = r.target.color.glo
         r.target.release()
         r.target.ensure(VP)
-        r.target.color._glo = old_name          # what the new texture is called on such a driver
+        r.target.color._glo = old_name  # what the new texture is called on such a driver
         again = r.composite("transparent", Style(order="pixel")).read()[0]
         assert np.array_equal(again, first)
 

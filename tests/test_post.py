@@ -13,8 +13,19 @@ from rtta.renderer.renderer import Settings
 from rtta.scene.camera import DEFAULT_ORBIT, Camera
 
 VP = (240, 180)
-SPIRAL = np.array([(0.0548, 0.0300), (-0.1821, 0.0449), (0.1732, -0.2601), (0.0672, 0.4323),
-                   (-0.4391, -0.3515), (0.6860, -0.0457), (-0.5613, 0.5875), (0.0196, -0.9373)], np.float32)
+SPIRAL = np.array(
+    [
+        (0.0548, 0.0300),
+        (-0.1821, 0.0449),
+        (0.1732, -0.2601),
+        (0.0672, 0.4323),
+        (-0.4391, -0.3515),
+        (0.6860, -0.0457),
+        (-0.5613, 0.5875),
+        (0.0196, -0.9373),
+    ],
+    np.float32,
+)
 
 
 def _smoothstep(e0: float, e1: float, x: np.ndarray) -> np.ndarray:
@@ -34,13 +45,13 @@ class AtlasFrame:
         a = r.atlas.read((tw, th), td, ("normal", "id", "depth"))
         self.ids, self.depth = a["id"], a["depth"].astype(np.float32)
         p22, p23 = np.float32(proj[2, 2]), np.float32(proj[2, 3])
-        distance = p23 / (self.depth * np.float32(2) - np.float32(1) + p22)   # as post.frag's view_distance
-        self.normal = np.concatenate([a["normal"], distance[..., None]], -1)   # (normal, view distance)
+        distance = p23 / (self.depth * np.float32(2) - np.float32(1) + p22)  # as post.frag's view_distance
+        self.normal = np.concatenate([a["normal"], distance[..., None]], -1)  # (normal, view distance)
         self.rec, self.proj = records, proj
-        self.shape = self.ids.shape                              # (layers, th, tw)
-        self.covered = np.argwhere(self.ids >= 0)                # (layer, y, x)
+        self.shape = self.ids.shape  # (layers, th, tw)
+        self.covered = np.argwhere(self.ids >= 0)  # (layer, y, x)
         rect = records.atlas_rect[self.ids[tuple(self.covered.T)]]
-        self.lo = rect[:, [1, 0]]                                # (y, x) per covered texel
+        self.lo = rect[:, [1, 0]]  # (y, x) per covered texel
         self.hi = self.lo + rect[:, [3, 2]] - 1
 
     def inside(self, yx: np.ndarray) -> np.ndarray:
@@ -86,13 +97,13 @@ class AtlasFrame:
         R = radius * self.rec.scale[ids].astype(np.float32)
         for j in (0, 1):
             for i in (0, 1):
-                lane = self.covered[:, 1:] // 2 * 2 + (j, i)                  # (y, x)
+                lane = self.covered[:, 1:] // 2 * 2 + (j, i)  # (y, x)
                 d_lane = self.fetch(self.depth, lane)
                 live = self.inside(lane) & (d_lane < 1.0)
                 p = self.view_position(ids, lane, d_lane)
                 n = _normalize(self.fetch(self.normal, lane)[:, :3])
                 k = i + 2 * j
-                for o in SPIRAL[2 * k:2 * k + 2]:
+                for o in SPIRAL[2 * k : 2 * k + 2]:
                     s = lane + np.rint(R[:, None] * o[::-1]).astype(int)
                     d = self.fetch(self.depth, s)
                     ok = live & self.inside(s) & (d < 1.0)
@@ -116,7 +127,7 @@ def test_post_process_matches_numpy(make_renderer, demo_scene, edge_width, borde
     style = Style(edge_width=edge_width, ao_radius=12.0, ao_strength=1.5, ao_objects="all")
     post = r.post_process(style)
     post.texture.write(np.full(post.texture.size[:2] + (post.texture.layers, 4), SENTINEL, np.uint8))
-    r._post_key = None                      # run again over the sentinel
+    r._post_key = None  # run again over the sentinel
     post = r.post_process(style)
     frame = AtlasFrame(r, records, r.last[2])
     tw, th, td = records.atlas_size
@@ -135,10 +146,10 @@ def test_post_process_matches_numpy(make_renderer, demo_scene, edge_width, borde
     in_rect = np.zeros(frame.shape, bool)
     for oid in np.flatnonzero(records.visible):
         x, y, rw, rh = records.atlas_rect[oid]
-        in_rect[records.layer[oid], y:y + rh, x:x + rw] = True
+        in_rect[records.layer[oid], y : y + rh, x : x + rw] = True
     empty = in_rect & (frame.ids < 0)
     assert empty.sum() > 1000
     assert (got[empty] == SENTINEL / 255.0).all()
-    assert not (got[at] == SENTINEL / 255.0).all(-1).any()       # every covered texel was written
-    assert 0.02 < (frame.edges(edge_width) > 0.5).mean() < 0.6       # edges exist, not everywhere
+    assert not (got[at] == SENTINEL / 255.0).all(-1).any()  # every covered texel was written
+    assert 0.02 < (frame.edges(edge_width) > 0.5).mean() < 0.6  # edges exist, not everywhere
     assert (frame.ambient_occlusion(style.ao_radius, style.ao_strength) < 0.9).mean() > 0.01

@@ -75,13 +75,14 @@ def test_image_pixels_land_where_the_projection_predicts(make_renderer):
     cam = Camera(eye=np.array([1.5, -1.0, 6.0]), target=np.zeros(3), up=np.array([0.0, 1, 0]))
     cam.fit_depth(scene.center, scene.radius)
     image = _blocks()
-    projector = Projector(eye=np.array([0.4, -0.3, 5.0]), target=np.array([0.2, 0.1, 0.0]), fov_y=40.0,
-                          image=image, shadows=False).fit_depth(scene.center, scene.radius)
+    projector = Projector(
+        eye=np.array([0.4, -0.3, 5.0]), target=np.array([0.2, 0.1, 0.0]), fov_y=40.0, image=image, shadows=False
+    ).fit_depth(scene.center, scene.radius)
     plain = _render(r, cam, None)
     painted = _render(r, cam, projector)
     ix, iy, inside = _predicted_texel(projector, scene.origin, _world_on_plane(r, cam))
     block = (iy // 8) * 8 + ix // 8
-    check = inside & _same_in_3x3(np.where(inside, block, -1))        # 1 pixel away from any block edge
+    check = inside & _same_in_3x3(np.where(inside, block, -1))  # 1 pixel away from any block edge
     assert check.sum() > 5000
     light = plain / 255.0
     expected = image[iy, ix, :3] * light
@@ -96,14 +97,15 @@ def test_nothing_lands_behind_the_projector(make_renderer):
     r = make_renderer(scene)
     cam = Camera(eye=np.array([0.5, 0.5, 6.0]), target=np.zeros(3), up=np.array([0.0, 1, 0]))
     cam.fit_depth(scene.center, scene.radius)
-    away = Projector(eye=np.array([0.0, 0.0, 2.0]), target=np.array([0.0, 0.0, 6.0]), fov_y=120.0,
-                     image=_blocks(), shadows=False).fit_depth(scene.center, scene.radius)
+    away = Projector(
+        eye=np.array([0.0, 0.0, 2.0]), target=np.array([0.0, 0.0, 6.0]), fov_y=120.0, image=_blocks(), shadows=False
+    ).fit_depth(scene.center, scene.radius)
     world = _world_on_plane(r, cam)
     m = away.matrix(scene.origin)
     h = np.concatenate([world, np.ones((*world.shape[:2], 1))], -1) @ m.T
     s, t = h[..., 0] / h[..., 3], h[..., 1] / h[..., 3]
     mirrored = (h[..., 3] < 0) & (s >= 0) & (s <= 1) & (t >= 0) & (t <= 1)
-    assert mirrored.mean() > 0.3          # without the q <= 0 test these pixels would be painted
+    assert mirrored.mean() > 0.3  # without the q <= 0 test these pixels would be painted
     assert np.array_equal(_render(r, cam, away), _render(r, cam, None))
 
 
@@ -135,8 +137,8 @@ def test_shadowed_surface_receives_nothing(make_renderer):
     umbra = plane & _same_in_3x3(in_shadow.astype(int)) & in_shadow
     sunlit = plane & _same_in_3x3(in_shadow.astype(int)) & ~in_shadow
     assert umbra.sum() > 300 and sunlit.sum() > 1000
-    assert np.abs(shadowed - plain)[umbra].max() <= 1                       # nothing in the shadow
-    assert (np.abs(unshadowed - plain)[umbra].max(-1) > 3).mean() > 0.5     # painted without shadows
+    assert np.abs(shadowed - plain)[umbra].max() <= 1  # nothing in the shadow
+    assert (np.abs(unshadowed - plain)[umbra].max(-1) > 3).mean() > 0.5  # painted without shadows
     assert np.array_equal(shadowed[sunlit], unshadowed[sunlit])
 
 
@@ -152,7 +154,7 @@ def test_composited_modes_paint_like_std(make_renderer, demo_scene, mode):
     assert close.mean() >= 0.99
     r.projector = None
     plain, _ = r.composite("sprites").read()
-    assert (np.abs(plain[..., :3].astype(int) - std).max(-1) > 3).mean() > 0.05    # the projection shows
+    assert (np.abs(plain[..., :3].astype(int) - std).max(-1) > 3).mean() > 0.05  # the projection shows
     if mode == "ghosted":
         r.projector = Projector.orbit(demo_scene.center, demo_scene.radius, 60, 35, 2.5, fov_y=35.0)
         painted, _ = r.composite("ghosted").read()

@@ -36,7 +36,7 @@ def snapshots(ctx, demo_scene):
     finally:
         r.release()
     assert ctx.error == "GL_NO_ERROR"
-    return {m: np.ascontiguousarray(img[::-1]) for m, img in images.items()}   # top row first
+    return {m: np.ascontiguousarray(img[::-1]) for m, img in images.items()}  # top row first
 
 
 @pytest.mark.parametrize("mode", MODES)

@@ -64,7 +64,7 @@ def test_soak_is_flat(make_renderer, demo_scene):
     within about 1%."""
     steady_heap()
     r = make_renderer(demo_scene)
-    soak(r, 500, samples=1, seed=1)       # warm-up
+    soak(r, 500, samples=1, seed=1)  # warm-up
     samples, errors = soak(r, 480, samples=16, seed=2)
     assert errors == []
     memory, _ = drift(samples, warmup=0.0)
@@ -94,5 +94,5 @@ def test_deleted_atlases_are_not_kept(make_renderer, demo_scene):
         r.capture(small, (160, 120))
         r.composite("ghosted")
     r.ctx.finish()
-    grown = mapped_block_bytes() - before       # large blocks of earlier tests are not ours
+    grown = mapped_block_bytes() - before  # large blocks of earlier tests are not ours
     assert grown - r.target_bytes < 16 << 20, (grown >> 20, r.target_bytes >> 20)

@@ -45,7 +45,7 @@ def test_every_section_has_stamped_tables(quick_report, ctx):
     md, _ = quick_report
     text = md.read_text()
     assert text.startswith("# Benchmarks\n\nhand-written text that must stay\n")
-    block = text[text.index(BEGIN):text.index(END)]
+    block = text[text.index(BEGIN) : text.index(END)]
     chunks = re.split(r"^### ", block, flags=re.M)[1:]
     assert [c.splitlines()[0] for c in chunks] == list(SECTIONS)
     for chunk in chunks[:5]:
@@ -67,13 +67,13 @@ def test_numbers_parse_and_are_plausible(quick_report):
         assert _number(row[col["frame ms"]]) > 0
         off = _number(row[col["pixels off > 3/255"]])
         assert 0 <= off <= 100
-        if float(row[col["scale"]]) == 1.0:          # at scale 1 sprites reconstruct STD
+        if float(row[col["scale"]]) == 1.0:  # at scale 1 sprites reconstruct STD
             assert off < 0.5 and int(row[col["holes"]]) == 0
     capture = next(t for t in tables if t[0][:2] == ["sweep", "objects"])
     assert all(_number(c) > 0 for r in capture[1:] for c in r[3:7])
     stability = next(t for t in tables if t[0][:2] == ["sweep", "value"])
     assert {r[0] for r in stability[1:]} == {"near/far", "offset", "size ratio"}
-    assert all(r[5] == r[6] == r[7] == "0" for r in stability[1:])      # no NaN, holes or GL errors
+    assert all(r[5] == r[6] == r[7] == "0" for r in stability[1:])  # no NaN, holes or GL errors
     ldi = next(t for t in tables if t[0][:2] == ["mesh", "N"])
     assert all(0 <= float(r[4]) < 0.05 for r in ldi[1:])
 
@@ -84,7 +84,7 @@ def test_plots_are_drawn(quick_report):
     assert names == ["capture.png", "error_vs_time.png", "importance.png", "ldi.png", "packing.png", "stability.png"]
     for name in names:
         img = np.asarray(Image.open(plots / name).convert("L"))
-        assert img.shape[0] > 300 and img.shape[1] > 600 and img.std() > 10     # not blank
+        assert img.shape[0] > 300 and img.shape[1] > 600 and img.std() > 10  # not blank
     assert "](plots/error_vs_time.png)" in quick_report[0].read_text()
 
 
@@ -112,13 +112,16 @@ def test_importance_section(quick_report):
     context scale 0.5 changes ghosted-ao (the axis measures something)."""
     text = quick_report[0].read_text()
     section = text.split("### 7.")[1]
-    rows = [[c.strip() for c in line.strip("|").split("|")] for line in section.splitlines()
-            if line.startswith("| ") and not line.startswith("| scene")]
+    rows = [
+        [c.strip() for c in line.strip("|").split("|")]
+        for line in section.splitlines()
+        if line.startswith("| ") and not line.startswith("| scene")
+    ]
     assert len(rows) == 2 * 8
     first = {}
     for r in rows:
         first.setdefault((r[0], r[1]), r)
     assert all(r[7] == "0.000%" and r[8] == "0.00" for r in first.values())
-    assert sum(r[9] == "**yes**" for r in rows) == 2 * 3          # ghosted, ghosted-ao, transparent
+    assert sum(r[9] == "**yes**" for r in rows) == 2 * 3  # ghosted, ghosted-ao, transparent
     half = [r for r in rows if r[1] == "ghosted-ao" and r[2] == "0.5"]
     assert half and all(float(r[8]) > 0 for r in half)

@@ -22,7 +22,7 @@ def test_demo_assembly(demo_scene):
     assert first[-1] + count[-1] == len(demo_scene.indices)
     for oid in range(demo_scene.count):
         f, c = demo_scene.index_ranges[oid]
-        assert (demo_scene.object_ids[demo_scene.indices[f:f + c]] == oid).all()
+        assert (demo_scene.object_ids[demo_scene.indices[f : f + c]] == oid).all()
     np.testing.assert_allclose(np.linalg.norm(demo_scene.normals, axis=1), 1.0, atol=1e-3)
 
 
@@ -30,8 +30,12 @@ def test_instances_are_separate_objects(tmp_path):
     box = trimesh.creation.box()
     scene = trimesh.Scene()
     for k in range(3):
-        scene.add_geometry(box, node_name=("bolt_a", "bolt_b", "nut")[k], geom_name="box",
-                           transform=trimesh.transformations.translation_matrix((3.0 * k, 0, 0)))
+        scene.add_geometry(
+            box,
+            node_name=("bolt_a", "bolt_b", "nut")[k],
+            geom_name="box",
+            transform=trimesh.transformations.translation_matrix((3.0 * k, 0, 0)),
+        )
     path = tmp_path / "inst.glb"
     path.write_bytes(scene.export(file_type="glb"))
     s = load_scene(path)
@@ -59,7 +63,7 @@ def test_far_scene_keeps_precision(tmp_path):
     s = load_scene(path)
     np.testing.assert_allclose(s.origin, (1e6, 2e6, -3e6), atol=1e-6)
     extent = s.positions.max(axis=0) - s.positions.min(axis=0)
-    np.testing.assert_allclose(extent, 1e-3, rtol=1e-4)   # float32 relative to the origin
+    np.testing.assert_allclose(extent, 1e-3, rtol=1e-4)  # float32 relative to the origin
 
 
 def _write(path, data: bytes):
@@ -67,16 +71,19 @@ def _write(path, data: bytes):
     return path
 
 
-@pytest.mark.parametrize("name,data,message", [
-    ("empty.glb", b"", "empty"),
-    ("text.glb", b"this is not a glb file at all", "not a GLB file"),
-    ("trunc.stl", b"solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0", "no objects"),
-    ("trunc.glb", b"glTF\x02\x00\x00\x00\xff\xff\x00\x00JSON", "truncated"),
-    ("mesh.xyz", b"1 2 3", "unsupported file type"),
-    ("nan.obj", b"v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "NaN or infinite"),
-    ("inf.obj", b"v inf 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "NaN or infinite"),
-    ("nofaces.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\n", "no objects"),
-])
+@pytest.mark.parametrize(
+    "name,data,message",
+    [
+        ("empty.glb", b"", "empty"),
+        ("text.glb", b"this is not a glb file at all", "not a GLB file"),
+        ("trunc.stl", b"solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0", "no objects"),
+        ("trunc.glb", b"glTF\x02\x00\x00\x00\xff\xff\x00\x00JSON", "truncated"),
+        ("mesh.xyz", b"1 2 3", "unsupported file type"),
+        ("nan.obj", b"v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "NaN or infinite"),
+        ("inf.obj", b"v inf 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "NaN or infinite"),
+        ("nofaces.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\n", "no objects"),
+    ],
+)
 def test_bad_input_is_one_clear_error(tmp_path, name, data, message):
     path = _write(tmp_path / name, data)
     with pytest.raises(RttaError) as info:
@@ -113,7 +120,7 @@ def test_obj_groups_are_the_parts_when_there_are_no_objects(tmp_path):
     scene = _obj(tmp_path, TRIANGLES + "o assembly\ng bolt\nf 1 2 3\ng nut\nf 4 5 6\no washer\nf 7 8 9\n")
     assert scene.names == ["assembly", "washer"]
     assert scene.index_ranges[:, 1].tolist() == [6, 3]
-    scene = _obj(tmp_path, TRIANGLES + "o model\ng bolt\nf 1 2 3\ng nut\nf 4 5 6\nf 7 8 9\n")   # one `o`
+    scene = _obj(tmp_path, TRIANGLES + "o model\ng bolt\nf 1 2 3\ng nut\nf 4 5 6\nf 7 8 9\n")  # one `o`
     assert scene.names == ["bolt", "nut"] and scene.index_ranges[:, 1].tolist() == [3, 6]
     assert _obj(tmp_path, TRIANGLES + "o single\ng only\nf 1 2 3\nf 4 5 6\n").names == ["single"]
     assert _obj(tmp_path, TRIANGLES + "f 1 2 3\nf 4 5 6\n").count == 1

@@ -15,7 +15,7 @@ def test_hysteresis(gl):
         assert t.ensure((300, 100), 3) and t.size[0] >= 300 and t.layers == 3
         allocations = t.allocations
         for _ in range(SHRINK_AFTER_FRAMES - 1):
-            assert not t.ensure((40, 40), 1)          # small need: kept for a while
+            assert not t.ensure((40, 40), 1)  # small need: kept for a while
         assert t.allocations == allocations
         assert t.ensure((40, 40), 1) and t.layers == 1  # then shrunk once
         assert not t.ensure((300, 100), 1) or t.size[0] >= 300
@@ -41,7 +41,7 @@ def test_clear_values(gl):
         t.clear()
         d = t.read()
         assert (d["id"] == -1).all() and (d["depth"] == 1.0).all() and (d["color"] == 0).all()
-        assert (d["normal"] == 0).all()          # decoded, and masked like the atlas's
+        assert (d["normal"] == 0).all()  # decoded, and masked like the atlas's
         assert d["id"].shape == (2, 8, 16)
     finally:
         t.release()
@@ -84,7 +84,7 @@ def test_trim_shrinks_to_the_last_capture_at_once(make_renderer, demo_scene, gl)
     big = r.target_bytes
     r.capture(cam, (120, 90))
     before = over_background(r.composite("sprites").read()[0])
-    assert r.target_bytes == big                     # lazily kept
+    assert r.target_bytes == big  # lazily kept
     r.trim()
     assert r.target_bytes < big / 10 and r.atlas.size[0] <= 192 and r.target.size == (128, 128)
     r.capture(cam, (120, 90))

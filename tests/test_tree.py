@@ -22,14 +22,33 @@ NAMES = ["block", "shaft", "valve", "valve_2", "loose"]
 def _box(lo, hi):
     lo, hi = np.asarray(lo, float), np.asarray(hi, float)
     corners = np.array([[(hi if (i >> k) & 1 else lo)[k] for k in range(3)] for i in range(8)])
-    faces = np.array([[0, 2, 1], [1, 2, 3], [4, 5, 6], [5, 7, 6], [0, 1, 4], [1, 5, 4],
-                      [2, 6, 3], [3, 6, 7], [0, 4, 2], [2, 4, 6], [1, 3, 5], [3, 7, 5]])
+    faces = np.array(
+        [
+            [0, 2, 1],
+            [1, 2, 3],
+            [4, 5, 6],
+            [5, 7, 6],
+            [0, 1, 4],
+            [1, 5, 4],
+            [2, 6, 3],
+            [3, 6, 7],
+            [0, 4, 2],
+            [2, 4, 6],
+            [1, 3, 5],
+            [3, 7, 5],
+        ]
+    )
     return corners, faces
 
 
 def _scene(paths=True):
-    boxes = [((0, 0, 0), (4, 1, 1)), ((0, 2, 0), (1, 3, 1)), ((2, 2, 0), (3, 3, 1)), ((3.5, 2, 0), (4, 3, 1)),
-             ((1.5, -2, 0), (2.5, -1, 1))]
+    boxes = [
+        ((0, 0, 0), (4, 1, 1)),
+        ((0, 2, 0), (1, 3, 1)),
+        ((2, 2, 0), (3, 3, 1)),
+        ((3.5, 2, 0), (4, 3, 1)),
+        ((1.5, -2, 0), (2.5, -1, 1)),
+    ]
     parts = [(n, *_box(lo, hi), None) for n, (lo, hi) in zip(NAMES, boxes, strict=True)]
     s = from_meshes(parts)
     if paths:
@@ -45,7 +64,7 @@ def test_rows_open_close_filter_and_counts():
     assert list(t.members(head)) == [2, 3] and list(t.members(t.labels.index("E"))) == [0, 1, 2, 3]
     t.open.discard(head)
     assert [t.labels[n] for n in t.rows()] == ["loose", "E", "block", "crank", "shaft", "head"]
-    assert [t.labels[n] for n in t.rows("valve_")] == ["E", "head", "valve_2"]     # opened for the match
+    assert [t.labels[n] for n in t.rows("valve_")] == ["E", "head", "valve_2"]  # opened for the match
     counts = t.counts({2})
     assert counts[head] == 1 and counts[t.labels.index("E")] == 1 and counts[t.labels.index("crank")] == 0
     t.open.clear()
@@ -57,9 +76,9 @@ def test_state_group_toggle_hide_isolate():
     s = ViewerState(NAMES, paths=PATHS)
     head = s.tree.labels.index("head")
     s.toggle(2)
-    s.toggle_group(s.tree.members(head))        # mixed -> all
+    s.toggle_group(s.tree.members(head))  # mixed -> all
     assert s.highlighted == {2, 3}
-    s.toggle_group(s.tree.members(head))        # all -> none
+    s.toggle_group(s.tree.members(head))  # all -> none
     assert s.highlighted == set()
     rev = s.capture_key()
     s.hide([1])
@@ -83,7 +102,7 @@ def test_hidden_objects_have_no_region_and_are_not_drawn(make_renderer):
     assert (rec.atlas_rect[[1, 4]] == 0).all()
     ids = r.std(cam, vp).read(vp, 1)["id"][0]
     assert not np.isin(ids, [1, 4]).any()
-    keep = ~np.isin(full, [1, 4])               # elsewhere the picture is what it was
+    keep = ~np.isin(full, [1, 4])  # elsewhere the picture is what it was
     assert (ids[keep] == full[keep]).all()
     atlas_ids = r.atlas.read(rec.atlas_size[:2], rec.atlas_size[2], parts=("id",))["id"]
     assert not np.isin(atlas_ids, [1, 4]).any()
@@ -114,8 +133,8 @@ def test_framing_leaves_a_margin_at_every_aspect(make_renderer):
     scene = _scene()
     for hidden in ((), (4,)):
         for aspect, m in _framed(make_renderer, scene, hidden).items():
-            assert min(m) >= 0.02, (hidden, aspect, m)            # no object pixel within 2% of an edge
-            assert min(m[0] + m[1], m[2] + m[3]) < 0.5, (hidden, aspect, m)    # and it fills the view
+            assert min(m) >= 0.02, (hidden, aspect, m)  # no object pixel within 2% of an edge
+            assert min(m[0] + m[1], m[2] + m[3]) < 0.5, (hidden, aspect, m)  # and it fills the view
 
 
 @pytest.mark.skipif(not (SHARED / "engine_2cyl.glb").exists(), reason="../shared/data/engine_2cyl.glb not present")
@@ -128,10 +147,10 @@ def test_framing_the_engine(make_renderer):
 
 def test_z_up_orbit_stands_upright():
     cam = Camera.orbit(np.zeros(3), 1.0, 0.0, 30.0, 2.0, up_axis="z")
-    assert cam.eye[2] > 0 and cam.eye[1] < 0 and abs(cam.eye[0]) < 1e-9      # above, from the front (-Y)
+    assert cam.eye[2] > 0 and cam.eye[1] < 0 and abs(cam.eye[0]) < 1e-9  # above, from the front (-Y)
     assert cam.up[2] > 0.8
     o = Orbit.default(np.zeros(3), 1.0, up_axis="z")
-    o.rotate(0, 100)                                     # elevation 25 -> 55 degrees, about +Z
+    o.rotate(0, 100)  # elevation 25 -> 55 degrees, about +Z
     assert o.camera().eye[2] == pytest.approx(2.2 * np.sin(np.radians(55))) and o.camera().eye[1] < 0
     eye = o.camera().eye.copy()
     o.orbit_around([0.3, 0.1, 0.2])

@@ -41,8 +41,8 @@ def test_hover_outlines_and_click_reveals(tree_driven):
     assert result["hover"] == result["hover_node"]
     x, y, w, h = result["layout_hover"]
     comp = _region(shots["hover"], (x, y, w, h))
-    outline = (np.abs(comp - [255, 200, 80]).max(-1) < 40)
-    assert outline.sum() > 20                             # the hover colour around the door's bounds
+    outline = np.abs(comp - [255, 200, 80]).max(-1) < 40
+    assert outline.sum() > 20  # the hover colour around the door's bounds
     assert result["picked_expected"] is not None and result["picked_selected"] == result["picked_expected"]
     assert result["picked_row"] not in result["rows_before_reveal"] and result["picked_row_shown"]
 
@@ -58,15 +58,15 @@ def test_framing_leaves_a_margin_on_all_sides(tree_driven):
         mask = np.abs(img - BACKGROUND).max(-1) > 10
         ys, xs = np.nonzero(mask)
         margins = xs.min() / w, (w - 1 - xs.max()) / w, ys.min() / h, (h - 1 - ys.max()) / h
-        assert min(margins) >= 0.02, (key, margins)        # no object pixel within 2% of any edge
-        assert min(margins[0] + margins[1], margins[2] + margins[3]) < 0.5, (key, margins)   # and it fills
+        assert min(margins) >= 0.02, (key, margins)  # no object pixel within 2% of any edge
+        assert min(margins[0] + margins[1], margins[2] + margins[3]) < 0.5, (key, margins)  # and it fills
 
 
 def test_a_100000_object_tree_emits_only_the_rows_on_screen(tree_driven):
     result, _ = tree_driven
     assert result["many_rows"] == 100_000 + 1 + 20 + 1000
-    assert 5 <= result["many_emitted"] <= 40               # the list clipper: what fits in the list, no more
-    assert result["gl_errors"] == []                       # imgui's buffers did not overflow
+    assert 5 <= result["many_emitted"] <= 40  # the list clipper: what fits in the list, no more
+    assert result["gl_errors"] == []  # imgui's buffers did not overflow
 
 
 def test_double_click_fits_the_object(tree_driven):

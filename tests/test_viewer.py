@@ -25,7 +25,7 @@ from viewer.state import ViewerState
 from viewer.views import Layout, atlas_rects_on_screen, layer_tiles
 
 HERE = Path(__file__).parent
-RTTA_VIEW = str(Path(sys.executable).with_name("rtta-view"))   # the installed entry point users run
+RTTA_VIEW = str(Path(sys.executable).with_name("rtta-view"))  # the installed entry point users run
 
 
 def project(cam: Camera, p, aspect: float) -> np.ndarray:
@@ -36,7 +36,7 @@ def project(cam: Camera, p, aspect: float) -> np.ndarray:
 def test_orbit_never_flips_at_the_poles():
     o = Orbit.default(np.zeros(3), 1.0)
     for _ in range(50):
-        o.rotate(0, 100)                       # far past the pole
+        o.rotate(0, 100)  # far past the pole
         cam = o.camera()
         assert o.el <= MAX_ELEVATION and np.dot(cam.up, [0, 1, 0]) > 0
     assert np.all(np.isfinite(o.camera().view(np.zeros(3))))
@@ -59,7 +59,7 @@ def test_pan_moves_the_scene_with_the_cursor():
     o = Orbit.default(np.zeros(3), 1.0)
     height = 600
     before = project(o.camera(), np.zeros(3), 1.0)
-    o.pan(30, -60, height)                     # right 30 px, up 60 px (y down)
+    o.pan(30, -60, height)  # right 30 px, up 60 px (y down)
     after = project(o.camera(), np.zeros(3), 1.0)
     assert np.allclose((after - before) * height / 2, [30, 60], atol=1e-6)
 
@@ -69,7 +69,7 @@ def test_frame_and_orbit_around():
     o.zoom(-20)
     o.frame()
     cam = o.camera()
-    for axis in np.eye(3):                     # the bounding sphere's extreme points are in view
+    for axis in np.eye(3):  # the bounding sphere's extreme points are in view
         for p in (axis, -axis):
             assert np.all(np.abs(project(cam, p, 1.0)) <= 1.0)
     eye = cam.eye.copy()
@@ -103,12 +103,12 @@ def test_layout_and_atlas_tiles():
     tiles = layer_tiles((900, 20, 380, 700), (600, 700), 3, -1)
     assert [k for k, _ in tiles] == [0, 1, 2]
     boxes = [(x, y, x + w, y + h) for _, (x, y, w, h) in tiles]
-    for i, a in enumerate(boxes):           # inside the view, not overlapping
+    for i, a in enumerate(boxes):  # inside the view, not overlapping
         assert a[0] >= 900 and a[1] >= 20 and a[2] <= 1280 and a[3] <= 720
-        for b in boxes[i + 1:]:
+        for b in boxes[i + 1 :]:
             assert a[2] <= b[0] or b[2] <= a[0] or a[3] <= b[1] or b[3] <= a[1]
     # a full-extent region covers its whole tile; y flips (atlas rows count from the bottom)
-    (_, rect), = layer_tiles((0, 0, 100, 100), (50, 100), 1, 0)
+    ((_, rect),) = layer_tiles((0, 0, 100, 100), (50, 100), 1, 0)
     assert np.allclose(atlas_rects_on_screen([[0, 0, 50, 100]], (50, 100), rect), [[25, 0, 75, 100]])
     assert np.allclose(atlas_rects_on_screen([[0, 0, 10, 10]], (50, 100), rect), [[25, 90, 35, 100]])
 
@@ -127,7 +127,7 @@ def test_picking_finds_hidden_objects_and_front_most(make_renderer, demo_scene):
     for x, y in zip(rng.integers(0, 160, 300), rng.integers(0, 120, 300), strict=True):
         hits = objects_at(atlas, rec, int(x), int(y))
         assert (hits[0][0] if hits else -1) == front[y, x]
-        assert objects_at(r.atlas, rec, int(x), int(y)) == hits        # the candidates' texels read alone
+        assert objects_at(r.atlas, rec, int(x), int(y)) == hits  # the candidates' texels read alone
         assert [h[1] for h in hits] == sorted(h[1] for h in hits)
         if len(hits) > 1:
             occluded += 1
@@ -150,8 +150,11 @@ def display():
     xvfb = shutil.which("Xvfb")
     assert xvfb, "Xvfb is missing: scripts/setup.sh installs it (package xvfb)"
     r, w = os.pipe()
-    proc = subprocess.Popen([xvfb, "-displayfd", str(w), "-screen", "0", "1920x1080x24", "-nolisten", "tcp"],
-                            pass_fds=(w,), stderr=subprocess.DEVNULL)
+    proc = subprocess.Popen(
+        [xvfb, "-displayfd", str(w), "-screen", "0", "1920x1080x24", "-nolisten", "tcp"],
+        pass_fds=(w,),
+        stderr=subprocess.DEVNULL,
+    )
     os.close(w)
     with os.fdopen(r) as f:
         number = f.readline().strip()
@@ -174,8 +177,13 @@ def _env(display: str | None, headless: bool = True) -> dict:
 def run_driver(display: str | None, out: Path, script: str, *args: str, timeout: int = 300) -> tuple[dict, dict]:
     """Run a viewer driver script (tests/viewer_*driver.py) into `out` under the Xvfb display;
     its result.json and its screenshots (name -> RGB array)."""
-    proc = subprocess.run([sys.executable, str(HERE / script), str(out), *args], env=_env(display),
-                          capture_output=True, text=True, timeout=timeout)
+    proc = subprocess.run(
+        [sys.executable, str(HERE / script), str(out), *args],
+        env=_env(display),
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+    )
     assert proc.returncode == 0, proc.stderr[-3000:]
     result = json.loads((out / "result.json").read_text())
     shots = {p.stem: np.asarray(Image.open(p).convert("RGB")) for p in out.glob("*.png")}
@@ -184,7 +192,7 @@ def run_driver(display: str | None, out: Path, script: str, *args: str, timeout:
 
 def _region(img: np.ndarray, rect) -> np.ndarray:
     x, y, w, h = rect
-    return img[y:y + h, x:x + w, :3].astype(int)
+    return img[y : y + h, x : x + w, :3].astype(int)
 
 
 @pytest.fixture(scope="module")
@@ -196,11 +204,11 @@ def test_window_draws_panel_and_both_views(driven):
     result, shots = driven
     lay, img = result["layout"], shots["start"]
     panel, comp, atlas = (_region(img, lay[k]) for k in ("panel", "composite", "atlas"))
-    assert panel.std() > 20                                   # text and widgets on the panel
+    assert panel.std() > 20  # text and widgets on the panel
     bg = np.array([0.93, 0.93, 0.95]) * 255
-    assert (np.abs(comp - bg).max(-1) > 10).mean() > 0.1      # the scene over the background
+    assert (np.abs(comp - bg).max(-1) > 10).mean() > 0.1  # the scene over the background
     atlas_bg = np.array([0.16, 0.16, 0.18]) * 255
-    assert (np.abs(atlas - atlas_bg).max(-1) > 10).mean() > 0.1   # captured objects in the atlas
+    assert (np.abs(atlas - atlas_bg).max(-1) > 10).mean() > 0.1  # captured objects in the atlas
     assert result["gl_errors"] == []
 
 
@@ -246,16 +254,16 @@ def test_projector_toggle_and_move(driven):
     assert result["projector"]["on"] and not result["projector"]["attached"]
     rect = result["layout"]["composite"]
     unpainted, painted, moved = (_region(shots[k], rect) for k in ("unpainted", "painted", "projector_moved"))
-    assert (np.abs(painted - unpainted).max(-1) > 10).mean() > 0.05        # the grid lands on the scene
-    assert (np.abs(moved - painted).max(-1) > 10).mean() > 0.02            # and moves with the projector
+    assert (np.abs(painted - unpainted).max(-1) > 10).mean() > 0.05  # the grid lands on the scene
+    assert (np.abs(moved - painted).max(-1) > 10).mean() > 0.02  # and moves with the projector
 
 
 def test_lens_cuts_and_follows_the_mouse(driven):
     result, shots = driven
     rect = result["layout"]["composite"]
     plain, cut, moved = (_region(shots[k], rect) for k in ("no_lens", "lens", "lens_moved"))
-    assert (np.abs(cut - plain).max(-1) > 10).mean() > 0.02              # the context is cut away
-    assert (np.abs(moved - cut).max(-1) > 10).mean() > 0.02              # where the mouse went
+    assert (np.abs(cut - plain).max(-1) > 10).mean() > 0.02  # the context is cut away
+    assert (np.abs(moved - cut).max(-1) > 10).mean() > 0.02  # where the mouse went
     assert result["lens_center_1"] != result["lens_center_2"]
 
 
@@ -268,8 +276,10 @@ def test_bad_input_corpus_in_the_viewer(driven):
         assert "\n" not in c["message"] and "\x1b" not in c["message"], (name, c["message"])
         if c["expect_error"]:
             assert not c["opened"] and c["error"] and c["kept"], name
-            assert printable(c["path"]) in c["message"] and c["says"].lower() in c["message"].lower(), \
-                (name, c["message"])
+            assert printable(c["path"]) in c["message"] and c["says"].lower() in c["message"].lower(), (
+                name,
+                c["message"],
+            )
         else:
             assert c["opened"] and not c["error"] and c["says"] in c["message"], (name, c["message"])
 
@@ -298,14 +308,19 @@ def test_no_display_says_so_in_one_line():
 
 def test_bench_without_a_display_runs_headless():
     """`--bench` needs no screen (a GPU server, CI): pyglet's headless window, through EGL."""
-    proc = subprocess.run([RTTA_VIEW, "--bench", "1", "--bench-modes", "ghosted", "--size", "320x200"],
-                          env=_env(None, headless=False), capture_output=True, text=True, timeout=300)
+    proc = subprocess.run(
+        [RTTA_VIEW, "--bench", "1", "--bench-modes", "ghosted", "--size", "320x200"],
+        env=_env(None, headless=False),
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert "headless window (EGL) 320x200" in proc.stdout
     (row,) = [ln for ln in proc.stdout.splitlines() if ln.startswith("| ghosted |")]
     assert float(row.split("|")[2]) > 0
     bad = subprocess.run([RTTA_VIEW, "--bench", "-1"], env=_env(None, headless=False), capture_output=True, text=True)
-    assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "--bench" in bad.stderr, bad.stderr   # no NaN table
+    assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "--bench" in bad.stderr, bad.stderr  # no NaN table
 
 
 @pytest.mark.parametrize("after", [0.8, 1.2, 1.6, 2.5, 8.0])
@@ -315,8 +330,9 @@ def test_ctrl_c_closes_the_viewer_quietly(after):
     trimesh's imports catch BaseException: an interrupt there was swallowed and the viewer
     opened anyway, and one inside a native module's start could crash it (SIGSEGV)."""
     env = {**_env(None, headless=False), "PYGLET_HEADLESS": "true"}
-    proc = subprocess.Popen([RTTA_VIEW, "--size", "320x200"], env=env, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [RTTA_VIEW, "--size", "320x200"], env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
     time.sleep(after)
     proc.send_signal(signal.SIGINT)
     try:
@@ -329,15 +345,15 @@ def test_ctrl_c_closes_the_viewer_quietly(after):
 def test_bad_scene_on_the_command_line(display, tmp_path):
     bad = tmp_path / "scene.glb"
     bad.write_text("not a model")
-    proc = subprocess.run([RTTA_VIEW, str(bad)], env=_env(display),
-                          capture_output=True, text=True, timeout=120)
+    proc = subprocess.run([RTTA_VIEW, str(bad)], env=_env(display), capture_output=True, text=True, timeout=120)
     assert proc.returncode == 2 and "scene.glb" in proc.stderr and "Traceback" not in proc.stderr
     assert len(proc.stderr.strip().splitlines()) == 1
 
 
 def test_bench_prints_every_mode(display):
-    proc = subprocess.run([RTTA_VIEW, "--bench", "1", "--size", "640x360"],
-                          env=_env(display), capture_output=True, text=True, timeout=300)
+    proc = subprocess.run(
+        [RTTA_VIEW, "--bench", "1", "--size", "640x360"], env=_env(display), capture_output=True, text=True, timeout=300
+    )
     assert proc.returncode == 0, proc.stderr[-2000:]
     rows = [ln for ln in proc.stdout.splitlines() if ln.startswith("| ") and not ln.startswith("| mode")]
     assert [r.split("|")[1].strip() for r in rows] == ["std", "sprites", "transparent", "ghosted", "ghosted-ao"]
@@ -349,8 +365,9 @@ SCALE_PARTS = 20_000
 
 @pytest.fixture(scope="module")
 def driven_large(display, tmp_path_factory):
-    result, _ = run_driver(display, tmp_path_factory.mktemp("viewer_large"), "viewer_scale_driver.py",
-                           str(SCALE_PARTS), timeout=600)
+    result, _ = run_driver(
+        display, tmp_path_factory.mktemp("viewer_large"), "viewer_scale_driver.py", str(SCALE_PARTS), timeout=600
+    )
     return result
 
 
@@ -363,11 +380,11 @@ def test_large_assembly_survives_every_interaction(driven_large):
     # fast navigation: parts left out while the camera moved (never the focus), every part at rest
     assert max(r["drag_left_out"]) > 0 and r["moving_focus_packed"]
     assert r["rest_left_out"] == 0 and r["rest_whole"]
-    assert r["filter"] == "part0001" and r["filtered"] == 100          # part000100 .. part000199
+    assert r["filter"] == "part0001" and r["filtered"] == 100  # part000100 .. part000199
     assert r["after_all"] == 100 and r["after_invert"] == 0
     assert r["filter_cleared"] == "" and r["all_everything"] == SCALE_PARTS and r["after_none"] == 0
     assert r["picked"] is not None and r["after_pick"] == [r["picked"]]
-    assert r["capacity"][0] == 65536 and r["capacity"][1] > 65536    # the imgui buffers grew
+    assert r["capacity"][0] == 65536 and r["capacity"][1] > 65536  # the imgui buffers grew
     assert r["gl_errors"] == []
     # UI-only frames (no capture, no compositing) stay cheap at this size
     assert r["frame_ms"]["typing"] < 1000 and r["frame_ms"]["end"] < 1000

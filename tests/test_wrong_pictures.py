@@ -39,15 +39,16 @@ def _scene_file(path, part: trimesh.Trimesh, transform: np.ndarray, normals: boo
 @pytest.mark.parametrize("normals", [True, False], ids=["file-normals", "smoothed-normals"])
 def test_mirrored_node_equals_mirrored_vertices_in_every_mode(tmp_path, normals, gl):
     mirrored = _part()
-    mirrored.apply_transform(MIRROR)           # trimesh turns the winding of a mirrored mesh
+    mirrored.apply_transform(MIRROR)  # trimesh turns the winding of a mirrored mesh
     by_node = _scene_file(tmp_path / "node.glb", _part(), MIRROR, normals)
     by_data = _scene_file(tmp_path / "data.glb", mirrored, np.identity(4), normals)
     for mode in SNAPSHOT_MODES:
-        a, b = (rtta.snapshot(f, mode, focus=["block"], size=(160, 120), camera=(30, 20, 2.5))
-                for f in (by_node, by_data))
+        a, b = (
+            rtta.snapshot(f, mode, focus=["block"], size=(160, 120), camera=(30, 20, 2.5)) for f in (by_node, by_data)
+        )
         off = np.abs(a.astype(int) - b.astype(int)).max(-1) > 3
         assert off.mean() <= 0.005, (mode, off.mean())
-        assert (np.abs(a.astype(int) - 238).max(-1) > 10).mean() > 0.05, mode      # the scene is drawn
+        assert (np.abs(a.astype(int) - 238).max(-1) > 10).mean() > 0.05, mode  # the scene is drawn
 
 
 def _render(path, mode="std") -> np.ndarray:
@@ -62,15 +63,20 @@ def test_nan_base_colour_is_drawn_as_one(tmp_path, gl):
     scene = load_scene(tmp_path / "nan.glb")
     assert scene.colors[0][:3].tolist() == [1.0, 0.0, 0.0] and "baseColorFactor" in scene.warnings[0]
     centre = _render(tmp_path / "nan.glb")[36, 48]
-    assert centre[0] > 60 and centre[1] < 20 and centre[2] < 20, centre       # red, shaded; not black
+    assert centre[0] > 60 and centre[1] < 20 and centre[2] < 20, centre  # red, shaded; not black
 
 
 def test_fan_and_second_parent_are_drawn(tmp_path, gl):
     from bad_gltf import _fan_file
 
     (tmp_path / "fan.glb").write_bytes(_fan_file())
-    doc, binary = box_doc([{"children": [2], "name": "left", "translation": [-1, 0, 0]},
-                           {"children": [2], "name": "right", "translation": [1, 0, 0]}, {"mesh": 0, "name": "shared"}])
+    doc, binary = box_doc(
+        [
+            {"children": [2], "name": "left", "translation": [-1, 0, 0]},
+            {"children": [2], "name": "right", "translation": [1, 0, 0]},
+            {"mesh": 0, "name": "shared"},
+        ]
+    )
     doc["scenes"] = [{"nodes": [0, 1]}]
     (tmp_path / "shared.glb").write_bytes(glb(doc, binary))
     for name, count in (("fan.glb", 2), ("shared.glb", 2)):
@@ -79,13 +85,20 @@ def test_fan_and_second_parent_are_drawn(tmp_path, gl):
         img = _render(tmp_path / name, "sprites")
         drawn = np.abs(img[..., :3] - img[0, 0, :3]).max(-1) > 10
         columns = np.flatnonzero(drawn.any(axis=0))
-        assert len(columns) and (np.diff(columns) > 1).any(), name          # two separate things side by side
+        assert len(columns) and (np.diff(columns) > 1).any(), name  # two separate things side by side
 
 
-@pytest.mark.parametrize("scale,translate,must_render,warns", [
-    (1e-12, 0.0, True, False), (1e-30, 0.0, False, True), (1e-36, 0.0, False, True), (1e-40, 0.0, False, True),
-    (1e-5, 1e7, True, False), (1e-7, 1e7, True, True),
-])
+@pytest.mark.parametrize(
+    "scale,translate,must_render,warns",
+    [
+        (1e-12, 0.0, True, False),
+        (1e-30, 0.0, False, True),
+        (1e-36, 0.0, False, True),
+        (1e-40, 0.0, False, True),
+        (1e-5, 1e7, True, False),
+        (1e-7, 1e7, True, True),
+    ],
+)
 def test_tiny_and_far_scenes_render_or_warn(tmp_path, scale, translate, must_render, warns, gl):
     """Boxes down to 1e-12 units, and small ones far from the origin, render. Below
     TINY_SCENE (1e-15 units) a GPU may draw nothing (an NVIDIA H200 did at 1e-25 and below, llvmpipe

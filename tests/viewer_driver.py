@@ -24,7 +24,7 @@ from viewer.run import create_window
 OUT = Path(sys.argv[1])
 wnd = create_window((1280, 720))
 app = Viewer(wnd, load_scene_or_demo(None), screenshot_dir=OUT)
-pw = wnd._window                  # the pyglet window
+pw = wnd._window  # the pyglet window
 errors: list[str] = []
 
 
@@ -83,7 +83,7 @@ result["az1"], result["el1"] = app.orbit.az, app.orbit.el
 names = app.renderer.scene.names
 target = names.index("caliper_body") if "caliper_body" in names else 0
 x0, y0, x1, y1 = app.item_rects[target]
-click(int(x0 + 8), int((y0 + y1) / 2))              # the object's checkbox in the panel
+click(int(x0 + 8), int((y0 + y1) / 2))  # the object's checkbox in the panel
 frames(2, shot="highlight")
 result["focus_after_checkbox"] = sorted(app.state.highlighted)
 result["checkbox_target"] = target
@@ -95,7 +95,7 @@ app.state.toggle(piston)
 frames(2)
 px, py = composite_point(piston)
 result["front_most_at_piston"] = app.controls.object_at(px, py, front_most=True)
-click(px, py)                                         # prefers the highlighted piston -> off
+click(px, py)  # prefers the highlighted piston -> off
 result["focus_after_pick"] = sorted(app.state.highlighted)
 result["picked"] = piston
 wheel_dist = app.orbit.dist
@@ -105,8 +105,7 @@ frames(2)
 result["zoomed"] = app.orbit.dist < wheel_dist
 
 keys_seen = {}
-for name, symbol in (("right", key.RIGHT), ("zoom_in", key.EQUAL), ("frame", key.F), ("atlas", key.A),
-                     ("mode", key.M)):
+for name, symbol in (("right", key.RIGHT), ("zoom_in", key.EQUAL), ("frame", key.F), ("atlas", key.A), ("mode", key.M)):
     before = (app.orbit.az, app.orbit.dist, app.state.show_atlas, app.state.mode)
     send("on_key_press", symbol, 0)
     send("on_key_release", symbol, 0)
@@ -118,25 +117,28 @@ send("on_key_press", key.A, 0)
 send("on_key_press", key.M, 0)
 send("on_key_press", key.M, 0)
 send("on_key_press", key.M, 0)
-send("on_key_press", key.M, 0)       # five modes: back to ghosted-ao, atlas shown again
+send("on_key_press", key.M, 0)  # five modes: back to ghosted-ao, atlas shown again
 frames()
 result["mode_after_cycle"] = app.state.mode
 send("on_key_press", key.F12, 0)
-send("on_key_press", key.F12, 0)                  # a second screenshot: new names, nothing overwritten
+send("on_key_press", key.F12, 0)  # a second screenshot: new names, nothing overwritten
 frames()
 result["screenshots"] = sorted(p.name for p in OUT.glob("rtta-*.png"))
 
-frames(2, shot="unpainted")                      # the projector: P on, then Ctrl+Right moves it
+frames(2, shot="unpainted")  # the projector: P on, then Ctrl+Right moves it
 send("on_key_press", key.P, 0)
 frames(2, shot="painted")
 send("on_key_press", key.RIGHT, key.MOD_CTRL)
 frames(2, shot="projector_moved")
-result["projector"] = {"on": app.state.projector.on, "attached": app.state.projector.attached,
-                       "az": app.state.projector.az}
+result["projector"] = {
+    "on": app.state.projector.on,
+    "attached": app.state.projector.attached,
+    "az": app.state.projector.az,
+}
 send("on_key_press", key.P, 0)
 frames(1)
 
-app.state.style.context_opacity = 0.7           # the lens: C on (ghosted-ao), then it follows the mouse
+app.state.style.context_opacity = 0.7  # the lens: C on (ghosted-ao), then it follows the mouse
 frames(2, shot="no_lens")
 send("on_key_press", key.C, 0)
 cx, cy, cw, ch = app.layout.composite
@@ -167,17 +169,18 @@ from rtta.scene.generators.assembly import write_assembly  # noqa: E402
 big = write_assembly(OUT / "later.glb", 10_000)
 later = {}
 send("on_file_drop", 10, 10, [str(big)])
-frames(1)                                              # the window's events are handled in the frame
+frames(1)  # the window's events are handled in the frame
 later["message_at_start"] = app.message
-app.open_scene_later(bad)                              # a second file while the first loads: refused
+app.open_scene_later(bad)  # a second file while the first loads: refused
 later["second_refused"] = app.message_is_error and "still loading" in app.message
 drawn, t0 = 0, time.perf_counter()
 while app.loading is not None and time.perf_counter() - t0 < 300:
     frames(1, shot="loading" if drawn == 3 else None)
     drawn += 1
 frames(1)
-later.update(frames_while_loading=drawn, count=app.renderer.scene.count, message=app.message,
-             error=app.message_is_error)
+later.update(
+    frames_while_loading=drawn, count=app.renderer.scene.count, message=app.message, error=app.message_is_error
+)
 loaded = app.renderer.scene
 app.open_scene_later(bad)
 while app.loading is not None and time.perf_counter() - t0 < 300:
@@ -192,36 +195,45 @@ from bad_inputs import make_corpus  # noqa: E402  (tests/ is this script's folde
 
 corpus = OUT / "corpus"
 corpus.mkdir()
-os.environ["RTTA_MEMORY_LIMIT_MB"] = "1"          # the too-large cases exceed it
+os.environ["RTTA_MEMORY_LIMIT_MB"] = "1"  # the too-large cases exceed it
 result["corpus"] = {}
 for case in make_corpus(corpus):
     opened = app.open_scene(case.path)
-    result["corpus"][case.name] = {"opened": opened, "error": app.message_is_error, "message": app.message,
-                                   "kept": app.renderer.scene is before, "expect_error": case.error,
-                                   "says": case.says, "path": str(case.path)}
-    if opened:                       # a case that loads replaces the scene: put the demo back
+    result["corpus"][case.name] = {
+        "opened": opened,
+        "error": app.message_is_error,
+        "message": app.message,
+        "kept": app.renderer.scene is before,
+        "expect_error": case.error,
+        "says": case.says,
+        "path": str(case.path),
+    }
+    if opened:  # a case that loads replaces the scene: put the demo back
         app.set_scene(before)
     frames(1)
 
 from rtta.passes import oit  # noqa: E402
 
-kept, oit.MAX_NODES = oit.MAX_NODES, 10               # a view whose pixel order falls back: said in the panel
+kept, oit.MAX_NODES = oit.MAX_NODES, 10  # a view whose pixel order falls back: said in the panel
 mode, app.state.mode = app.state.mode, "transparent"
 frames(2)
 result["fallback"] = {"message": app.message, "error": app.message_is_error, "warnings": app.renderer.warnings}
 oit.MAX_NODES, app.state.mode = kept, mode
 frames(1)
 
-app.screenshot_dir = OUT / "no" / "such" / "folder"     # a screenshot that cannot be written: one line
-result["screenshot_bad_dir"] = {"written": [str(p) for p in app.screenshot()], "message": app.message,
-                                "error": app.message_is_error}
+app.screenshot_dir = OUT / "no" / "such" / "folder"  # a screenshot that cannot be written: one line
+result["screenshot_bad_dir"] = {
+    "written": [str(p) for p in app.screenshot()],
+    "message": app.message,
+    "error": app.message_is_error,
+}
 app.screenshot_dir = OUT
 
 for size in ((640, 400), (0, 0), (1, 1), (2600, 1500), (1280, 720)):
     if 0 in size:
-        send("on_resize", *size)                      # minimized: what the window system reports
+        send("on_resize", *size)  # minimized: what the window system reports
     else:
-        pw.set_size(*size)                            # a real resize, seen through the event queue
+        pw.set_size(*size)  # a real resize, seen through the event queue
         pw.dispatch_events()
     frames(2)
 result["after_resize"] = list(wnd.buffer_size)

@@ -61,7 +61,7 @@ def click(x: float, y: float, label: str) -> None:
     send("on_mouse_press", x, h - y, mouse.LEFT, 0)
     frames(1, label)
     send("on_mouse_release", x, h - y, mouse.LEFT, 0)
-    frames(2, label)            # imgui takes queued input events a frame at a time
+    frames(2, label)  # imgui takes queued input events a frame at a time
 
 
 def press(symbol: int, label: str) -> None:
@@ -81,7 +81,7 @@ result["layout"] = {"panel": app.layout.panel, "composite": app.layout.composite
 result["visible"] = int(app.records.visible.sum())
 cx, cy, cw, ch = app.layout.composite
 az0 = app.orbit.az
-app.state.navigation_fps = 240.0        # fast navigation over budget on any machine: parts are left out
+app.state.navigation_fps = 240.0  # fast navigation over budget on any machine: parts are left out
 send("on_mouse_press", cx + cw // 2, wnd.size[1] - (cy + ch // 2), mouse.LEFT, 0)
 left, focus = [], set(range(0, PARTS, 97))
 app.state.style.focus.update(focus)
@@ -92,7 +92,7 @@ for i in range(1, 6):
 in_view = app.renderer.parameterize(app.orbit.camera(), app.viewport).visible
 result["moving_focus_packed"] = all(bool(app.records.visible[o]) for o in focus if in_view[o])
 send("on_mouse_release", cx + cw // 2 + 100, wnd.size[1] - (cy + ch // 2), mouse.LEFT, 0)
-frames(2, "drag", shot="dragged")       # the camera rests (the release frame may still move it): every part
+frames(2, "drag", shot="dragged")  # the camera rests (the release frame may still move it): every part
 result["drag_left_out"] = left
 result["rest_left_out"] = app.left_out
 full = app.renderer.parameterize(app.orbit.camera(), app.viewport)
@@ -106,11 +106,11 @@ send("on_mouse_scroll", cx + cw // 2, wnd.size[1] - (cy + ch // 2), 0, 2)
 frames(2, "wheel")
 result["zoomed"] = app.orbit.dist < dist
 
-click(*centre(app.item_rects[-1]), "filter")                 # the filter box, then type into it
+click(*centre(app.item_rects[-1]), "filter")  # the filter box, then type into it
 for ch_ in "part0001":
     send("on_text", ch_)
     frames(1, "typing")
-press(key.ENTER, "typing")                # Enter: the filter box lets go of the keyboard
+press(key.ENTER, "typing")  # Enter: the filter box lets go of the keyboard
 result["filter"] = app.state.filter
 result["filtered"] = len(app.state.filtered())
 click(*centre(app.item_rects[-2]), "all")
@@ -119,7 +119,7 @@ click(*centre(app.item_rects[-4]), "invert")
 result["after_invert"] = len(app.state.highlighted)
 click(*centre(app.item_rects[-1]), "filter")
 for _ in "part0001":
-    press(key.BACKSPACE, "typing")          # the filter empties: the list is everything again
+    press(key.BACKSPACE, "typing")  # the filter empties: the list is everything again
 press(key.ENTER, "typing")
 result["filter_cleared"] = app.state.filter
 click(*centre(app.item_rects[-2]), "all")
@@ -128,7 +128,7 @@ frames(2, "all", shot="all")
 click(*centre(app.item_rects[-3]), "none")
 result["after_none"] = len(app.state.highlighted)
 
-rec = app.records                      # a click pick: the largest visible object's centre
+rec = app.records  # a click pick: the largest visible object's centre
 area = np.prod(rec.viewport_rect[:, 2:] - rec.viewport_rect[:, :2], axis=1) * rec.visible
 oid = int(np.argmax(area))
 x0, y0, x1, y1 = rec.viewport_rect[oid]

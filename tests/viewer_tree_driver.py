@@ -59,7 +59,7 @@ def click(x: float, y: float, button: int = mouse.LEFT) -> None:
 
 
 def centre(rect) -> tuple[float, float]:
-    return (rect[0] + 8, (rect[1] + rect[3]) / 2)      # the checkbox's box, left of its label
+    return (rect[0] + 8, (rect[1] + rect[3]) / 2)  # the checkbox's box, left of its label
 
 
 def node(label: str) -> int:
@@ -68,7 +68,7 @@ def node(label: str) -> int:
 
 def composite_of(img) -> list:
     x, y, w, h = app.layout.composite
-    return img[y:y + h, x:x + w, :3].tolist() if img is not None else []
+    return img[y : y + h, x : x + w, :3].tolist() if img is not None else []
 
 
 s = app.state
@@ -79,7 +79,7 @@ click(*centre(s.tree.rects[storey2]))
 frames(2, shot="group")
 result["group_focus"] = sorted(s.highlighted)
 result["storey2"] = [int(i) for i in s.tree.members(storey2)]
-click(*centre(s.tree.rects[storey2]))                   # off again
+click(*centre(s.tree.rects[storey2]))  # off again
 wall = house.index("IfcWall 'Wall 1'")
 click(*centre(app.item_rects[wall]))
 click(*centre(s.tree.buttons["hide highlighted"]))
@@ -91,27 +91,27 @@ click(*centre(s.tree.buttons["isolate"]))
 frames(2, shot="isolated")
 result["isolated_visible"] = [int(i) for i in np.flatnonzero(app.records.visible)]
 click(*centre(s.tree.buttons["show all"]))
-click(*centre(app.item_rects[wall]))                    # highlight off
+click(*centre(app.item_rects[wall]))  # highlight off
 frames(2, shot="shown")
 result["focus_after_shown"] = sorted(s.highlighted)
 result["shown_visible"] = int(app.records.visible.sum())
 
 door = house.index("IfcDoor 'Front door'")
 x0, y0, x1, y1 = app.item_rects[door]
-move(x1 - 4, (y0 + y1) / 2)                             # over the row's label: hover
+move(x1 - 4, (y0 + y1) / 2)  # over the row's label: hover
 img = frames(2, shot="hover")
 result["hover"] = s.hover
 result["hover_node"] = int(s.tree.row_of[door])
 result["hover_rect"] = [int(v) for v in app.records.viewport_rect[door]]
 result["layout_hover"] = list(app.layout.composite)
 
-s.tree.open.clear()                                      # every group closed: no object row is shown
+s.tree.open.clear()  # every group closed: no object row is shown
 move(5, 5)
 frames(2)
 cx, cy, cw, ch = app.layout.composite
 vx0, vy0, vx1, vy1 = app.records.viewport_rect[door]
 px, py = cx + (vx0 + vx1) / 2, cy + ch - 1 - (vy0 + vy1) / 2
-expected = app.controls.object_at(px, py)                # what the click picks (ghosted: maybe the wall)
+expected = app.controls.object_at(px, py)  # what the click picks (ghosted: maybe the wall)
 result["rows_before_reveal"] = [int(n) for n in s.tree.rows()]
 click(px, py)
 frames(2, shot="revealed")
@@ -121,21 +121,21 @@ result["picked_row"] = int(s.tree.row_of[expected]) if expected is not None else
 result["picked_row_shown"] = bool(np.isin(result["picked_row"], s.tree.rows()))
 
 
-s.mode = "transparent"                                    # a group's opacity slider sets its subtree's
+s.mode = "transparent"  # a group's opacity slider sets its subtree's
 frames(2)
 storey1 = node("Storey 1")
 sx0, sy0, sx1, sy1 = s.tree.sliders[storey1]
-click(sx0 + 2, (sy0 + sy1) / 2)                           # the slider's left end: opacity 0
+click(sx0 + 2, (sy0 + sy1) / 2)  # the slider's left end: opacity 0
 frames(2, shot="group_opacity")
 result["storey1"] = [int(i) for i in s.tree.members(storey1)]
 result["opacities"] = {str(k): v for k, v in s.style.opacity.items()}
 s.mode = "ghosted-ao"
 
-window = house.index("IfcWindow 'Window 2'")              # double-click: orbit around it and fit it
+window = house.index("IfcWindow 'Window 2'")  # double-click: orbit around it and fit it
 frames(2)
 wx0, wy0, wx1, wy1 = app.records.viewport_rect[window]
 point = (cx + (wx0 + wx1) / 2, cy + ch - 1 - (wy0 + wy1) / 2)
-window = app.controls.object_at(*point)                 # the object the double-click lands on
+window = app.controls.object_at(*point)  # the object the double-click lands on
 move(*point)
 for _ in range(2):
     h = wnd.size[1]
@@ -156,17 +156,25 @@ def many(n: int) -> Scene:
     pos = (offset[:, None, :] + corner[None]).reshape(-1, 3)
     lo, hi = offset.astype(np.float64), offset + np.array([0.8, 0.8, 0.0])
     origin = (lo.min(0) + hi.max(0)) / 2
-    scene = Scene(names=[f"part {i}" for i in range(n)], positions=pos - origin.astype(np.float32),
-                  normals=np.tile([0, 0, 1], (3 * n, 1)).astype(np.float32),
-                  object_ids=np.repeat(k, 3).astype(np.uint32), indices=np.arange(3 * n, dtype=np.uint32),
-                  index_ranges=np.stack([3 * k, np.full(n, 3)], 1), colors=np.tile([0.6, 0.6, 0.6, 1.0], (n, 1)),
-                  aabb_min=lo, aabb_max=hi, origin=origin, source="many")
+    scene = Scene(
+        names=[f"part {i}" for i in range(n)],
+        positions=pos - origin.astype(np.float32),
+        normals=np.tile([0, 0, 1], (3 * n, 1)).astype(np.float32),
+        object_ids=np.repeat(k, 3).astype(np.uint32),
+        indices=np.arange(3 * n, dtype=np.uint32),
+        index_ranges=np.stack([3 * k, np.full(n, 3)], 1),
+        colors=np.tile([0.6, 0.6, 0.6, 1.0], (n, 1)),
+        aabb_min=lo,
+        aabb_max=hi,
+        origin=origin,
+        source="many",
+    )
     scene.paths = [("assembly", f"sub {i // 5000}", f"group {i // 100}") for i in range(n)]
     return scene
 
 
-app.set_scene(many(100_000), mode="std")                 # the panel on 100,000 objects
-app.state.show_atlas = False                             # (the atlas overlay outlines every region)
+app.set_scene(many(100_000), mode="std")  # the panel on 100,000 objects
+app.state.show_atlas = False  # (the atlas overlay outlines every region)
 tree = app.state.tree
 tree.open.update(np.flatnonzero(tree.obj < 0).tolist())  # every group open: 101,021 rows
 frames(3)
@@ -191,7 +199,7 @@ for name, scene in (("house", house), *((("engine", load_scene(ENGINE)),) if ENG
         pw.set_size(*size)
         pw.dispatch_events()
         frames(2)
-        app.frame_objects()                          # F
+        app.frame_objects()  # F
         img = frames(2, shot=f"frame_{name}_{aspect}")
         x, y, w, h = app.layout.composite
         result["framing"][f"{name} {aspect}"] = {"rect": [x, y, w, h], "png": f"frame_{name}_{aspect}.png"}

@@ -7,8 +7,10 @@ import os
 import sys
 from pathlib import Path
 
-NO_DISPLAY = ("rtta-view: no display found (DISPLAY and WAYLAND_DISPLAY are not set); "
-              "for images without a display use `rtta snapshot`")
+NO_DISPLAY = (
+    "rtta-view: no display found (DISPLAY and WAYLAND_DISPLAY are not set); "
+    "for images without a display use `rtta snapshot`"
+)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -24,15 +26,25 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--size", default="1280x720", help="window size WxH")
     p.add_argument("--mode", default="ghosted-ao", choices=SNAPSHOT_MODES)
     p.add_argument("--screenshot-dir", default=".", help="folder for screenshots (F12)")
-    p.add_argument("--bench", type=int, default=0, metavar="FRAMES",
-                   help="orbit for FRAMES frames per mode and print frame times, then exit (without a display: in "
-                        "a headless EGL window)")
-    p.add_argument("--bench-modes", default=None, metavar="MODE,...",
-                   help="with --bench: only these modes (default: every mode)")
-    p.add_argument("--navigation-fps", default=None, metavar="FPS",
-                   help="fast navigation: while the camera moves, leave out the parts smallest on screen to keep "
-                        f"this frame rate (default {NAVIGATION_FPS:g}; scenes of 500 parts or more; a view at rest "
-                        "shows every part); 0: off")
+    p.add_argument(
+        "--bench",
+        type=int,
+        default=0,
+        metavar="FRAMES",
+        help="orbit for FRAMES frames per mode and print frame times, then exit (without a display: in "
+        "a headless EGL window)",
+    )
+    p.add_argument(
+        "--bench-modes", default=None, metavar="MODE,...", help="with --bench: only these modes (default: every mode)"
+    )
+    p.add_argument(
+        "--navigation-fps",
+        default=None,
+        metavar="FPS",
+        help="fast navigation: while the camera moves, leave out the parts smallest on screen to keep "
+        f"this frame rate (default {NAVIGATION_FPS:g}; scenes of 500 parts or more; a view at rest "
+        "shows every part); 0: off",
+    )
     add_load_options(p)
     return p
 
@@ -47,13 +59,14 @@ def main(argv: list[str] | None = None) -> int:
     except RttaError as exc:
         print(f"rtta-view: error: {printable(exc)}", file=sys.stderr)
         return 2
-    steady_heap()          # long sessions resize targets often: keep the heap from creeping
+    steady_heap()  # long sessions resize targets often: keep the heap from creeping
     if args.bench < 0:
-        print(f"rtta-view: error: --bench: expected a number of frames (0: no bench), got {args.bench}",
-              file=sys.stderr)
+        print(
+            f"rtta-view: error: --bench: expected a number of frames (0: no bench), got {args.bench}", file=sys.stderr
+        )
         return 2
     if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
-        if not (args.bench or os.environ.get("PYGLET_HEADLESS")):     # headless asked for: scripted runs
+        if not (args.bench or os.environ.get("PYGLET_HEADLESS")):  # headless asked for: scripted runs
             print(NO_DISPLAY, file=sys.stderr)
             return 2
         import pyglet  # --bench needs no screen: pyglet's headless window, an EGL surface
@@ -69,9 +82,16 @@ def main(argv: list[str] | None = None) -> int:
     try:
         size = parse_size(args.size)
         bench_modes = _modes(args.bench_modes)
-        return run(args.scene_opt or args.scene, size=size, mode=args.mode,
-                   screenshot_dir=Path(args.screenshot_dir), bench=args.bench, load=load_options(args),
-                   bench_modes=bench_modes, navigation_fps=_fps(args.navigation_fps))
+        return run(
+            args.scene_opt or args.scene,
+            size=size,
+            mode=args.mode,
+            screenshot_dir=Path(args.screenshot_dir),
+            bench=args.bench,
+            load=load_options(args),
+            bench_modes=bench_modes,
+            navigation_fps=_fps(args.navigation_fps),
+        )
     except RttaError as exc:
         print(f"rtta-view: error: {printable(exc)}", file=sys.stderr)
         return 2
@@ -103,8 +123,9 @@ def _modes(text: str | None) -> tuple[str, ...] | None:
     modes = tuple(m.strip() for m in text.split(",") if m.strip())
     unknown = [m for m in modes if m not in VIEW_MODES]
     if unknown or not modes:
-        raise RttaError(f"--bench-modes: unknown mode(s) {', '.join(unknown) or '(none)'}; "
-                        f"modes: {', '.join(VIEW_MODES)}")
+        raise RttaError(
+            f"--bench-modes: unknown mode(s) {', '.join(unknown) or '(none)'}; modes: {', '.join(VIEW_MODES)}"
+        )
     return modes
 
 

@@ -40,25 +40,32 @@ LABEL_HEIGHT = 22
 
 
 class Viewer:
-    def __init__(self, wnd, scene: Scene, *, screenshot_dir: Path | None = None, mode: str = "ghosted-ao",
-                 load: dict | None = None) -> None:
+    def __init__(
+        self,
+        wnd,
+        scene: Scene,
+        *,
+        screenshot_dir: Path | None = None,
+        mode: str = "ghosted-ao",
+        load: dict | None = None,
+    ) -> None:
         self.wnd = wnd
-        self.load_options = dict(load or {})          # smoothing for scenes opened from the panel
+        self.load_options = dict(load or {})  # smoothing for scenes opened from the panel
         self.ctx: moderngl.Context = wnd.ctx
         imgui.create_context()
         implot.create_context()
-        imgui.get_io().set_ini_filename("")          # never write imgui.ini into the user's folder
+        imgui.get_io().set_ini_filename("")  # never write imgui.ini into the user's folder
         self.imgui = GrowingImguiRenderer(wnd)
         self.view_pass = ViewPass(self.ctx)
         self.files = FileBrowser(self.open_scene_later)
-        self.loading: tuple | None = None            # (path, worker thread, result box) while a file loads
+        self.loading: tuple | None = None  # (path, worker thread, result box) while a file loads
         self.controls = Controls(self)
         self.stats = Stats()
         self.screenshot_dir = Path(screenshot_dir or Path.cwd())
         self.message, self.message_is_error = "", False
         self._projector_image = None
         self._lens_cache = None
-        self.item_rects: dict[int, tuple] = {}       # object list checkboxes on screen (tests click them)
+        self.item_rects: dict[int, tuple] = {}  # object list checkboxes on screen (tests click them)
         self.renderer: Renderer | None = None
         self.layout = Layout.of(wnd.buffer_size, True)
         self.set_scene(scene, mode=mode)
@@ -78,16 +85,16 @@ class Viewer:
         self.state = state
         self.renderer = Renderer(self.ctx, scene, state.settings)
         self.renderer.measure = state.measure
-        self.renderer.python_warnings = False      # what it degrades is said in the panel (frame())
+        self.renderer.python_warnings = False  # what it degrades is said in the panel (frame())
         self.orbit = Orbit.default(scene.center, scene.radius, up_axis=scene.up_axis)
         self.records = None
         self.scene_label = Path(scene.source).name
         self.scene_dir = Path(scene.source).parent if Path(scene.source).exists() else Path.cwd()
         self._capture_key = self._composite_key = self._std_key = None
-        self.budget = FrameBudget()     # its target follows state.navigation_fps when used
-        self._triangles = scene.index_ranges[:, 1] // 3       # per object
-        self.left_out = 0               # parts left out of the last capture (fast navigation)
-        self._moved = False             # the last frame captured while the camera moved
+        self.budget = FrameBudget()  # its target follows state.navigation_fps when used
+        self._triangles = scene.index_ranges[:, 1] // 3  # per object
+        self.left_out = 0  # parts left out of the last capture (fast navigation)
+        self._moved = False  # the last frame captured while the camera moved
         self.frame_objects()
 
     def frame_objects(self, ids=None) -> None:
@@ -113,8 +120,9 @@ class Viewer:
             self.say(f"still loading {Path(self.loading[0]).name}; open another file when it is done", error=True)
             return
         box: dict = {}
-        worker = threading.Thread(target=lambda: box.update(result=_read_scene(path, self.load_options)),
-                                  name="rtta-load", daemon=True)
+        worker = threading.Thread(
+            target=lambda: box.update(result=_read_scene(path, self.load_options)), name="rtta-load", daemon=True
+        )
         self.loading = (path, worker, box)
         self.say(f"loading {Path(path).name} ...")
         worker.start()
@@ -145,7 +153,7 @@ class Viewer:
     def frame(self) -> None:
         """One frame into the window's framebuffer (call swap_buffers after it)."""
         self.stats.tick()
-        if self._moved and self.stats.history:          # the last frame's time steers fast navigation
+        if self._moved and self.stats.history:  # the last frame's time steers fast navigation
             self.budget.update(self.stats.history[-1])
         self._moved = False
         self._take_loaded()
@@ -166,12 +174,12 @@ class Viewer:
             try:
                 self._draw_composite()
                 self._draw_atlas()
-            except RttaError as exc:             # e.g. targets too large for a huge window: say so, keep going
+            except RttaError as exc:  # e.g. targets too large for a huge window: say so, keep going
                 self.say(str(exc), error=True)
-            if len(self.renderer.warnings) > said:   # what was degraded (each said once per scene)
+            if len(self.renderer.warnings) > said:  # what was degraded (each said once per scene)
                 self.say("warning: " + "; ".join(self.renderer.warnings[said:]))
-            self.stats.stage_ms = dict(self.renderer.timings)     # what ran this frame
-            self.stats.last_ms.update(self.renderer.timings)      # for the panel: the last run of each
+            self.stats.stage_ms = dict(self.renderer.timings)  # what ran this frame
+            self.stats.last_ms.update(self.renderer.timings)  # for the panel: the last run of each
         overlay.draw(self)
         t1 = time.perf_counter()
         imgui.render()
@@ -191,16 +199,22 @@ class Viewer:
 
     def _capture(self, camera) -> None:
         vp = self.viewport
-        focus = self.renderer.scaled_for(self.state.style.focus)     # empty unless a context scale
-        normals = self.renderer.needs_normals(self.state.mode)        # ghosted-ao, the projector
+        focus = self.renderer.scaled_for(self.state.style.focus)  # empty unless a context scale
+        normals = self.renderer.needs_normals(self.state.mode)  # ghosted-ao, the projector
         key = (tuple(camera.eye), tuple(camera.target), vp, self.state.capture_key(), focus, normals)
-        if key != self._capture_key or self.left_out:     # a view at rest is captured whole
+        if key != self._capture_key or self.left_out:  # a view at rest is captured whole
             moving = self._capture_key is not None and key[:2] != self._capture_key[:2]
             self.renderer.hidden = self.state.hidden
             self.left_out = 0
             # no id image: compositing never reads it, picking reads depths (rtta.passes.picking)
-            self.records = self.renderer.capture(camera, vp, focus=focus, normals=normals, ids=False,
-                                                 thin=self._navigation_thinning() if moving else None)
+            self.records = self.renderer.capture(
+                camera,
+                vp,
+                focus=focus,
+                normals=normals,
+                ids=False,
+                thin=self._navigation_thinning() if moving else None,
+            )
             self._capture_key, self._composite_key = key, None
             self._moved = moving
 
@@ -218,37 +232,53 @@ class Viewer:
             out = left_out(visible, viewport_rect, self._triangles, keep, focus)
             self.left_out = 0 if out is None else int(out.sum())
             return out
+
         return thin
 
     def _draw_composite(self) -> None:
         vp, s, r = self.viewport, self.state, self.renderer
         if vp[0] < 1 or vp[1] < 1:
-            return                    # minimized or no room: nothing to draw, nothing to capture
+            return  # minimized or no room: nothing to draw, nothing to capture
         camera = self.orbit.camera()
         r.projector = self._projector(camera)
         r.lens = self._lens()
-        painted = (s.projector.key(), tuple(camera.eye) if s.projector.on and s.projector.attached else None,
-                   s.lens.key())
+        painted = (
+            s.projector.key(),
+            tuple(camera.eye) if s.projector.on and s.projector.attached else None,
+            s.lens.key(),
+        )
         atlas_visible = s.show_atlas and self.layout.atlas[2] > 0
         if s.mode != "std" or atlas_visible:
             self._capture(camera)
         if s.mode == "std":
             key = (tuple(camera.eye), tuple(camera.target), vp, painted, s.hidden_rev)
-            if key != self._std_key:          # a static view is not drawn again
+            if key != self._std_key:  # a static view is not drawn again
                 r.hidden = s.hidden
                 r.std(camera, vp)
                 self._std_key = key
             target = r.single_target
             extent = (vp[0] / target.size[0], vp[1] / target.size[1])
-            self.view_pass.render(texture=target.color, layer=0, depth=target.depth, extent=extent, rect=self._rect(vp),
-                                  window_height=self.wnd.buffer_size[1], target=self.wnd.fbo)
+            self.view_pass.render(
+                texture=target.color,
+                layer=0,
+                depth=target.depth,
+                extent=extent,
+                rect=self._rect(vp),
+                window_height=self.wnd.buffer_size[1],
+                target=self.wnd.fbo,
+            )
             return
         key = (self._capture_key, s.style_key(), painted)
         if key != self._composite_key:
             r.composite(s.mode, s.style)
             self._composite_key = key
-        self.view_pass.render(texture=r.target.color, extent=r.target.extent, rect=self._rect(vp),
-                              window_height=self.wnd.buffer_size[1], target=self.wnd.fbo)
+        self.view_pass.render(
+            texture=r.target.color,
+            extent=r.target.extent,
+            rect=self._rect(vp),
+            window_height=self.wnd.buffer_size[1],
+            target=self.wnd.fbo,
+        )
 
     def _projector(self, camera):
         """The Projector the panel describes (None when off); the image is made once."""
@@ -313,16 +343,23 @@ class Viewer:
         rec = self.records
         if not self.state.show_atlas or rec is None:
             return []
-        return layer_tiles((x, y + LABEL_HEIGHT, w, h - LABEL_HEIGHT), rec.atlas_size[:2],
-                           rec.atlas_size[2], self.state.atlas_layer)
+        return layer_tiles(
+            (x, y + LABEL_HEIGHT, w, h - LABEL_HEIGHT), rec.atlas_size[:2], rec.atlas_size[2], self.state.atlas_layer
+        )
 
     def _draw_atlas(self) -> None:
         atlas, rec = self.renderer.atlas, self.records
         for layer, rect in self.atlas_tiles():
-            self.view_pass.render(texture=atlas.color, layer=layer, depth=atlas.depth, rect=rect,
-                                  extent=(rec.atlas_size[0] / atlas.size[0], rec.atlas_size[1] / atlas.size[1]),
-                                  background=ATLAS_BACKGROUND, window_height=self.wnd.buffer_size[1],
-                                  target=self.wnd.fbo)
+            self.view_pass.render(
+                texture=atlas.color,
+                layer=layer,
+                depth=atlas.depth,
+                rect=rect,
+                extent=(rec.atlas_size[0] / atlas.size[0], rec.atlas_size[1] / atlas.size[1]),
+                background=ATLAS_BACKGROUND,
+                window_height=self.wnd.buffer_size[1],
+                target=self.wnd.fbo,
+            )
 
     # ---- screenshots -------------------------------------------------------------------
     def screenshot(self) -> list[Path]:
@@ -360,7 +397,7 @@ class Viewer:
             return None
         tw, th, td = rec.atlas_size
         color = self.renderer.atlas.read((tw, th), td, parts=("color",))["color"]
-        return np.concatenate(list(over_background(color, ATLAS_BACKGROUND)), axis=1)   # layers left to right
+        return np.concatenate(list(over_background(color, ATLAS_BACKGROUND)), axis=1)  # layers left to right
 
     def release(self) -> None:
         self.renderer.release()
@@ -372,7 +409,7 @@ def _read_scene(path, options: dict) -> tuple[Scene | None, str | None]:
     """(scene, None) or (None, the one-line error): a broken file never takes the session down."""
     try:
         scene = load_scene(str(path), **options)
-        _ = scene.closed    # which parts cull back faces: worked out here, not in the drawing thread
+        _ = scene.closed  # which parts cull back faces: worked out here, not in the drawing thread
         return scene, None
     except RttaError as exc:
         return None, str(exc)

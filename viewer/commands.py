@@ -76,7 +76,7 @@ class PanelsHost(Host, Protocol):
     message: str
     message_is_error: bool
     item_rects: dict[int, tuple]
-    left_out: int           # parts fast navigation left out of the last capture
+    left_out: int  # parts fast navigation left out of the last capture
 
     @property
     def capture_paths(self) -> list[str]: ...

@@ -33,12 +33,12 @@ class Controls:
     def __init__(self, app: ControlsHost) -> None:
         self.app = app
         self.mouse = (0.0, 0.0)
-        self._press = None            # (x, y, button, in composite)
+        self._press = None  # (x, y, button, in composite)
         self._moved = 0.0
-        self._last_click = (0.0, None)   # (time, object) of the last click, for double-clicks
+        self._last_click = (0.0, None)  # (time, object) of the last click, for double-clicks
 
     def attach(self, wnd) -> None:
-        wnd.exit_key = None            # Esc closes popups; Ctrl+Q quits
+        wnd.exit_key = None  # Esc closes popups; Ctrl+Q quits
         wnd.mouse_position_event_func = self.on_move
         wnd.mouse_drag_event_func = self.on_drag
         wnd.mouse_press_event_func = self.on_press
@@ -53,8 +53,12 @@ class Controls:
         self.mouse = (x, y)
         self.app.imgui.mouse_position_event(x, y, dx, dy)
         lens = self.app.state.lens
-        if (lens.on and lens.follow and not imgui.get_io().want_capture_mouse
-                and contains(self.app.layout.composite, x, y)):
+        if (
+            lens.on
+            and lens.follow
+            and not imgui.get_io().want_capture_mouse
+            and contains(self.app.layout.composite, x, y)
+        ):
             self.app.move_lens(x, y)
 
     def on_press(self, x, y, button) -> None:
@@ -95,15 +99,15 @@ class Controls:
         last_t, last_oid = self._last_click
         self._last_click = (now, oid)
         if oid is not None and oid == last_oid and now - last_t < DOUBLE_CLICK_S:
-            app.state.toggle(oid)                  # undo the first click's toggle
+            app.state.toggle(oid)  # undo the first click's toggle
             scene = app.renderer.scene
             app.orbit.orbit_around((scene.aabb_min[oid] + scene.aabb_max[oid]) / 2.0)
-            app.frame_objects([oid])               # then fit it, as F fits everything
+            app.frame_objects([oid])  # then fit it, as F fits everything
             self._last_click = (0.0, None)
             return oid
         if oid is not None:
             app.state.toggle(oid)
-            app.state.reveal(oid)                  # its row in the tree: opened, scrolled to, marked
+            app.state.reveal(oid)  # its row in the tree: opened, scrolled to, marked
         return oid
 
     def object_at(self, x: float, y: float, front_most: bool = False) -> int | None:
@@ -111,9 +115,9 @@ class Controls:
         if rec is None:
             return None
         cx, cy, _, ch = app.layout.composite
-        px, py = int(x - cx), int(cy + ch - 1 - y)          # viewport pixel, bottom-left origin
+        px, py = int(x - cx), int(cy + ch - 1 - y)  # viewport pixel, bottom-left origin
         prefer = None if front_most or not app.state.mode.startswith("ghosted") else app.state.highlighted
-        return pick(objects_at(app.renderer.atlas, rec, px, py), prefer)     # reads the candidates' texels alone
+        return pick(objects_at(app.renderer.atlas, rec, px, py), prefer)  # reads the candidates' texels alone
 
     def on_scroll(self, x_offset, y_offset) -> None:
         self.app.imgui.mouse_scroll_event(x_offset, y_offset)
@@ -138,7 +142,7 @@ class Controls:
         arrows = {keys.LEFT: (-1, 0), keys.RIGHT: (1, 0), keys.UP: (0, -1), keys.DOWN: (0, 1)}
         if key in arrows:
             dx, dy = arrows[key]
-            if modifiers.ctrl:          # the placed projector orbits (attached: it detaches there)
+            if modifiers.ctrl:  # the placed projector orbits (attached: it detaches there)
                 app.state.projector.attached = False
                 app.state.projector.nudge(dx * KEY_ROTATE_DEG, -dy * KEY_ROTATE_DEG)
             elif modifiers.shift:

@@ -80,8 +80,8 @@ class Stats:
 
     def __init__(self, keep: int = 240) -> None:
         self.history: deque[float] = deque(maxlen=keep)
-        self.stage_ms: dict[str, float] = {}    # stages run in the last frame
-        self.last_ms: dict[str, float] = {}     # the last time each stage ran
+        self.stage_ms: dict[str, float] = {}  # stages run in the last frame
+        self.last_ms: dict[str, float] = {}  # the last time each stage ran
         self._last = time.perf_counter()
 
     def tick(self) -> None:

@@ -39,8 +39,11 @@ class GrowingImguiRenderer(ModernglWindowRenderer):
         self._vertex_buffer = self.ctx.buffer(reserve=imgui.VERTEX_SIZE * self.vertex_capacity)
         self._index_buffer = self.ctx.buffer(reserve=imgui.INDEX_SIZE * self.index_capacity)
         self._vao = self.ctx.vertex_array(
-            self._prog, [(self._vertex_buffer, "2f 2f 4f1", "Position", "UV", "Color")],
-            index_buffer=self._index_buffer, index_element_size=imgui.INDEX_SIZE)
+            self._prog,
+            [(self._vertex_buffer, "2f 2f 4f1", "Position", "UV", "Color")],
+            index_buffer=self._index_buffer,
+            index_element_size=imgui.INDEX_SIZE,
+        )
 
     def render(self, draw_data: imgui.ImDrawData) -> None:
         io = self.io
@@ -51,4 +54,3 @@ class GrowingImguiRenderer(ModernglWindowRenderer):
         for commands in draw_data.cmd_lists:
             self.reserve(commands.vtx_buffer.size(), commands.idx_buffer.size())
         super().render(draw_data)
-

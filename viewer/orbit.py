@@ -37,14 +37,15 @@ class Orbit:
     scene_center: np.ndarray
     scene_radius: float
     fov_y: float = 45.0
-    up_axis: str = "y"             # the scene's up: the orbit turns about it
+    up_axis: str = "y"  # the scene's up: the orbit turns about it
 
     @classmethod
     def default(cls, center, radius: float, up_axis: str = "y") -> Orbit:
         az, el, dist = DEFAULT_ORBIT
         c = np.asarray(center, np.float64)
-        return cls(target=c.copy(), az=az, el=el, dist=dist * radius, scene_center=c, scene_radius=radius,
-                   up_axis=up_axis)
+        return cls(
+            target=c.copy(), az=az, el=el, dist=dist * radius, scene_center=c, scene_radius=radius, up_axis=up_axis
+        )
 
     def camera(self) -> Camera:
         d, up = _direction(self.az, self.el, self.up_axis)
@@ -94,12 +95,12 @@ class Orbit:
         else:
             c = self.scene_center if center is None else np.asarray(center, np.float64)
             r = self.scene_radius if radius is None else max(float(radius), self.scene_radius * 1e-4)
-            pts = c + np.concatenate([np.eye(3), -np.eye(3)]) * r       # the sphere's extreme points
+            pts = c + np.concatenate([np.eye(3), -np.eye(3)]) * r  # the sphere's extreme points
             corners = None
         d, up = _direction(self.az, self.el, self.up_axis)
         self.target = c.copy()
         dist = fit_distance(pts, c, d, up, self.fov_y, max(float(aspect), 1e-3))
-        if corners is None:      # a sphere: its silhouette, not only the six points, must fit
+        if corners is None:  # a sphere: its silhouette, not only the six points, must fit
             half = np.arctan(np.tan(np.radians(self.fov_y) / 2.0) * min(1.0, max(float(aspect), 1e-3)) * 0.9)
             dist = max(dist, r / np.sin(half))
         self.dist = float(np.clip(dist, self.scene_radius * 1e-4, self.scene_radius * 1e3))
@@ -112,7 +113,7 @@ class Orbit:
         dist = float(np.linalg.norm(v))
         if dist < self.scene_radius * 1e-6:
             return
-        v = up_basis(self.up_axis).T @ (v / dist)          # back into the orbit's Y-up frame
+        v = up_basis(self.up_axis).T @ (v / dist)  # back into the orbit's Y-up frame
         self.el = float(np.clip(np.degrees(np.arcsin(np.clip(v[1], -1, 1))), -MAX_ELEVATION, MAX_ELEVATION))
         self.az = float(np.degrees(np.arctan2(v[0], v[2])) % 360.0)
         self.target = np.asarray(point, np.float64).copy()

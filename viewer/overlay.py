@@ -17,8 +17,8 @@ if TYPE_CHECKING:
 REGION = imgui.IM_COL32(120, 200, 255, 140)
 TEXT = imgui.IM_COL32(235, 235, 240, 255)
 HOVER = imgui.IM_COL32(255, 200, 80, 255)
-HOVER_MAX = 2000          # outlines drawn for a hovered group at most (imgui's buffers are finite)
-MAX_OUTLINES = 1000      # region outlines drawn per frame: each is a call into imgui (3,000 took 5-8 ms a frame)
+HOVER_MAX = 2000  # outlines drawn for a hovered group at most (imgui's buffers are finite)
+MAX_OUTLINES = 1000  # region outlines drawn per frame: each is a call into imgui (3,000 took 5-8 ms a frame)
 
 
 def _col(rgba) -> int:
@@ -107,5 +107,7 @@ def draw(app: OverlayHost) -> None:
     oid = region_under(app, *app.mouse)
     if oid is not None and not imgui.get_io().want_capture_mouse:
         x, y, w, h = rec.atlas_rect[oid]
-        imgui.set_tooltip(f"{app.renderer.scene.names[oid]}\nregion {w}x{h} at ({x}, {y}), layer "
-                          f"{rec.layer[oid]}\nscale {rec.scale[oid]:.2f} texels/pixel")
+        imgui.set_tooltip(
+            f"{app.renderer.scene.names[oid]}\nregion {w}x{h} at ({x}, {y}), layer "
+            f"{rec.layer[oid]}\nscale {rec.scale[oid]:.2f} texels/pixel"
+        )

@@ -92,8 +92,11 @@ def _style(app: PanelsHost) -> None:
     _, st.ao_radius = imgui.slider_float("AO radius (px)", st.ao_radius, 1.0, 16.0)
     _, st.ao_strength = imgui.slider_float("AO strength", st.ao_strength, 0.0, 2.0)
     _, st.halo = imgui.slider_int("halo (px)", st.halo, 0, 16)
-    for label, attr, choices in (("AO on", "ao_objects", ROLES), ("edges on", "edge_objects", ROLES),
-                                 ("transparency order", "order", ORDERS)):
+    for label, attr, choices in (
+        ("AO on", "ao_objects", ROLES),
+        ("edges on", "edge_objects", ROLES),
+        ("transparency order", "order", ORDERS),
+    ):
         changed, i = imgui.combo(label, choices.index(getattr(st, attr)), list(choices))
         if changed:
             setattr(st, attr, choices[i])
@@ -155,8 +158,9 @@ def _atlas(app: PanelsHost) -> None:
         s.settings.capture_path = paths[i]
     layers = app.records.atlas_size[2] if app.records is not None else 0
     if layers > 0:
-        _, s.atlas_layer = imgui.slider_int("layer (L)", min(s.atlas_layer, layers - 1), -1, layers - 1,
-                                            "all" if s.atlas_layer < 0 else "%d")
+        _, s.atlas_layer = imgui.slider_int(
+            "layer (L)", min(s.atlas_layer, layers - 1), -1, layers - 1, "all" if s.atlas_layer < 0 else "%d"
+        )
 
 
 def _navigation(app: PanelsHost) -> None:
@@ -165,8 +169,10 @@ def _navigation(app: PanelsHost) -> None:
     on = s.navigation_fps > 0
     changed, on = imgui.checkbox("fast navigation", on)
     if imgui.is_item_hovered():
-        imgui.set_tooltip("while the camera moves, leave out the parts smallest on screen to keep the frame rate\n"
-                          "(scenes of 500 parts or more); a view at rest always shows every part")
+        imgui.set_tooltip(
+            "while the camera moves, leave out the parts smallest on screen to keep the frame rate\n"
+            "(scenes of 500 parts or more); a view at rest always shows every part"
+        )
     if changed:
         s.navigation_fps = NAVIGATION_FPS if on else 0.0
     if on:

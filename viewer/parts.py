@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-OPEN_ROWS = 100     # a tree opens level by level while it shows at most this many rows
+OPEN_ROWS = 100  # a tree opens level by level while it shows at most this many rows
 
 
 class PartTree:
@@ -19,7 +19,7 @@ class PartTree:
         self.names = names
         labels, depth, obj, end = [], [], [], []
         order: list[int] = []
-        stack: list[tuple[tuple[str, ...], int]] = []      # open groups: (path, node)
+        stack: list[tuple[tuple[str, ...], int]] = []  # open groups: (path, node)
         groups_of = [tuple(p) for p in paths] if paths is not None else [()] * len(names)
         by_path: dict[tuple[str, ...], list[int]] = {}
         for oid, path in enumerate(groups_of):
@@ -28,8 +28,8 @@ class PartTree:
         for path in by_path:
             for k in range(len(path)):
                 kids = children.setdefault(path[:k], [])
-                if path[:k + 1] not in kids:
-                    kids.append(path[:k + 1])
+                if path[: k + 1] not in kids:
+                    kids.append(path[: k + 1])
 
         def visit(path: tuple[str, ...]) -> None:
             if path:
@@ -43,6 +43,7 @@ class PartTree:
             if path:
                 _, node = stack.pop()
                 end[node] = len(labels)
+
         visit(())
         self.labels = labels
         self.depth = np.asarray(depth, np.int32)
@@ -55,7 +56,7 @@ class PartTree:
         self.row_of = np.full(len(names), -1, np.int64)
         self.row_of[self.obj[is_obj]] = np.flatnonzero(is_obj)
         self.parent = np.full(len(labels), -1, np.int64)
-        for node in np.flatnonzero(~is_obj)[::-1]:          # innermost groups first
+        for node in np.flatnonzero(~is_obj)[::-1]:  # innermost groups first
             kids = np.arange(node + 1, self.end[node])
             self.parent[kids[self.parent[kids] < 0]] = node
         self._rows_key: tuple | None = None
@@ -79,7 +80,7 @@ class PartTree:
 
     def members(self, node: int) -> np.ndarray:
         """Object ids below a node (the object itself for an object row)."""
-        return self.order[self.first[node]:self.last[node]]
+        return self.order[self.first[node] : self.last[node]]
 
     def counts(self, ids: set[int]) -> np.ndarray:
         """Per node, how many of its objects are in `ids` (cumulative sums over the order)."""

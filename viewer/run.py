@@ -30,15 +30,23 @@ def create_window(size: tuple[int, int], visible: bool = True):
     return wnd
 
 
-def run(scene_path: str | None, *, size: tuple[int, int], mode: str, screenshot_dir: Path, bench: int = 0,
-        load: dict | None = None, bench_modes: tuple[str, ...] | None = None,
-        navigation_fps: float | None = None) -> int:
+def run(
+    scene_path: str | None,
+    *,
+    size: tuple[int, int],
+    mode: str,
+    screenshot_dir: Path,
+    bench: int = 0,
+    load: dict | None = None,
+    bench_modes: tuple[str, ...] | None = None,
+    navigation_fps: float | None = None,
+) -> int:
     """`load`: the loader's options (smoothing), for this scene and those opened later;
     `navigation_fps`: the frame rate fast navigation keeps while the camera moves (0: off;
     None: the viewer's default)."""
     from .app import Viewer
 
-    scene = load_scene_or_demo(scene_path, **(load or {}))   # a bad file on the command line: one line, exit 2
+    scene = load_scene_or_demo(scene_path, **(load or {}))  # a bad file on the command line: one line, exit 2
     wnd = create_window(size)
     app = Viewer(wnd, scene, screenshot_dir=screenshot_dir, mode=mode, load=load)
     if navigation_fps is not None:
@@ -77,7 +85,7 @@ def bench_mode(app, mode: str, frames: int, warmup: int = 5) -> dict:
     app.state.mode = mode
     app.state.measure = False
     _orbit_frames(app, warmup)
-    app.orbit.az = DEFAULT_ORBIT[0]        # every mode sees the same views: one full turn
+    app.orbit.az = DEFAULT_ORBIT[0]  # every mode sees the same views: one full turn
     left: list[int] = []
     ms = 1e3 * float(np.mean(_orbit_frames(app, frames, left=left)))
     app.state.measure = True
@@ -89,8 +97,13 @@ def bench_mode(app, mode: str, frames: int, warmup: int = 5) -> dict:
         for k in STAGE_COLUMNS:
             stages[k].append(app.stats.stage_ms.get(k, 0.0))
     share = float(np.mean(left)) / max(1, app.renderer.scene.count)
-    return {"mode": mode, "ms": ms, "fps": 1e3 / ms, "left_out": share,
-            **{k: float(np.mean(v)) for k, v in stages.items()}}
+    return {
+        "mode": mode,
+        "ms": ms,
+        "fps": 1e3 / ms,
+        "left_out": share,
+        **{k: float(np.mean(v)) for k, v in stages.items()},
+    }
 
 
 def print_bench(app, frames: int, modes: tuple[str, ...] | None = None) -> list[dict]:
@@ -100,19 +113,26 @@ def print_bench(app, frames: int, modes: tuple[str, ...] | None = None) -> list[
     vp = app.viewport
     print(f"renderer: {app.ctx.info['GL_RENDERER']}")
     kind = "headless window (EGL)" if pyglet.options["headless"] else "window"
-    print(f"scene: {app.scene_label} ({app.renderer.scene.count} objects, {app.renderer.scene.vertex_count} "
-          f"vertices); {kind} {w}x{h}, composite {vp[0]}x{vp[1]}, atlas view shown; {frames} frames per mode, "
-          "one full orbit")
+    print(
+        f"scene: {app.scene_label} ({app.renderer.scene.count} objects, {app.renderer.scene.vertex_count} "
+        f"vertices); {kind} {w}x{h}, composite {vp[0]}x{vp[1]}, atlas view shown; {frames} frames per mode, "
+        "one full orbit"
+    )
     fps = app.state.navigation_fps
-    print("stage columns: ms per stage from a second run that waits for the GPU after each stage; left out: parts "
-          "fast navigation left out while orbiting (share of all, mean over the fps run; "
-          + (f"--navigation-fps {fps:g})" if fps > 0 else "off: --navigation-fps 0)"))
+    print(
+        "stage columns: ms per stage from a second run that waits for the GPU after each stage; left out: parts "
+        "fast navigation left out while orbiting (share of all, mean over the fps run; "
+        + (f"--navigation-fps {fps:g})" if fps > 0 else "off: --navigation-fps 0)")
+    )
     print("| mode | fps | frame ms | left out | " + " | ".join(STAGE_COLUMNS) + " |")
     print("|---" * (4 + len(STAGE_COLUMNS)) + "|")
     rows = []
     for mode in modes or VIEW_MODES:
         r = bench_mode(app, mode, frames)
         rows.append(r)
-        print(f"| {mode} | {r['fps']:.1f} | {r['ms']:.1f} | {100 * r['left_out']:.0f}% | "
-              + " | ".join(f"{r[k]:.1f}" for k in STAGE_COLUMNS) + " |")
+        print(
+            f"| {mode} | {r['fps']:.1f} | {r['ms']:.1f} | {100 * r['left_out']:.0f}% | "
+            + " | ".join(f"{r[k]:.1f}" for k in STAGE_COLUMNS)
+            + " |"
+        )
     return rows

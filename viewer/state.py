@@ -17,7 +17,7 @@ from .parts import PartTree
 
 VIEW_MODES = ("std", *MODES)
 ATLAS_MAX_CHOICES = ("viewport", "512", "1024", "2048", "4096")
-NAVIGATION_FPS = 10.0      # the frame rate fast navigation keeps by default (rtta.renderer.navigation)
+NAVIGATION_FPS = 10.0  # the frame rate fast navigation keeps by default (rtta.renderer.navigation)
 
 
 @dataclass
@@ -71,11 +71,25 @@ def _counting(method):
         result = method(self, *args)
         self.version += 1
         return self if result is self else result
+
     return changed
 
 
-for _name in ("add", "discard", "remove", "pop", "clear", "update", "difference_update",
-              "intersection_update", "symmetric_difference_update", "__ior__", "__isub__", "__ixor__", "__iand__"):
+for _name in (
+    "add",
+    "discard",
+    "remove",
+    "pop",
+    "clear",
+    "update",
+    "difference_update",
+    "intersection_update",
+    "symmetric_difference_update",
+    "__ior__",
+    "__isub__",
+    "__ixor__",
+    "__iand__",
+):
     setattr(TrackedSet, _name, _counting(getattr(set, _name)))
 
 
@@ -87,19 +101,19 @@ class ViewerState:
     settings: Settings = field(default_factory=Settings)
     atlas_max: str = "viewport"
     show_atlas: bool = True
-    atlas_layer: int = -1          # -1: all layers side by side
+    atlas_layer: int = -1  # -1: all layers side by side
     filter: str = ""
-    measure: bool = True           # time each stage (waits for the GPU after each: costs a little)
+    measure: bool = True  # time each stage (waits for the GPU after each: costs a little)
     navigation_fps: float = NAVIGATION_FPS  # fast navigation: while moving, the smallest parts are left out to keep
-                                   # this frame rate (scenes of 500 parts or more); 0: off
+    # this frame rate (scenes of 500 parts or more); 0: off
     projector: ProjectorState = field(default_factory=lambda: ProjectorState())
     lens: LensState = field(default_factory=lambda: LensState())
-    paths: list[tuple[str, ...]] | None = None   # the part tree (Scene.paths)
+    paths: list[tuple[str, ...]] | None = None  # the part tree (Scene.paths)
     hidden: set[int] = field(default_factory=set)  # not captured, drawn or packed
-    hidden_rev: int = 0            # bumped on every change of `hidden` (a cheap capture key)
-    hover: int | None = None       # tree node under the mouse: its objects are outlined
-    selected: int | None = None    # object picked in the composite: its row is revealed
-    scroll_to: int | None = None   # tree node the panel scrolls to on its next frame
+    hidden_rev: int = 0  # bumped on every change of `hidden` (a cheap capture key)
+    hover: int | None = None  # tree node under the mouse: its objects are outlined
+    selected: int | None = None  # object picked in the composite: its row is revealed
+    scroll_to: int | None = None  # tree node the panel scrolls to on its next frame
 
     def __post_init__(self) -> None:
         if self.mode not in VIEW_MODES:
@@ -198,13 +212,36 @@ class ViewerState:
         """Changes whenever compositing must re-run (the capture need not)."""
         s = self.style
         focus = (id(s.focus), s.focus.version) if isinstance(s.focus, TrackedSet) else tuple(sorted(s.focus))
-        return (self.mode, focus, len(s.focus), tuple(sorted(s.opacity.items())), s.default_opacity,
-                s.context_opacity, s.desaturate, tuple(s.edge_color), tuple(s.outline_color),
-                s.outline_width, s.edge_width, s.ao_radius, s.ao_strength, s.ao_objects, s.edge_objects,
-                s.order, s.halo)
+        return (
+            self.mode,
+            focus,
+            len(s.focus),
+            tuple(sorted(s.opacity.items())),
+            s.default_opacity,
+            s.context_opacity,
+            s.desaturate,
+            tuple(s.edge_color),
+            tuple(s.outline_color),
+            s.outline_width,
+            s.edge_width,
+            s.ao_radius,
+            s.ao_strength,
+            s.ao_objects,
+            s.edge_objects,
+            s.order,
+            s.halo,
+        )
 
     def capture_key(self) -> tuple:
         """Changes whenever the atlas must be captured again (besides camera and viewport)."""
         s = self.settings
-        return (s.border, s.atlas_max, s.max_layers, s.capture_path, s.region_scale, s.context_scale, s.bounds,
-                self.hidden_rev)
+        return (
+            s.border,
+            s.atlas_max,
+            s.max_layers,
+            s.capture_path,
+            s.region_scale,
+            s.context_scale,
+            s.bounds,
+            self.hidden_rev,
+        )

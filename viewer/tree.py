@@ -41,8 +41,8 @@ def draw(app: PanelsHost) -> None:
     rows = tree.rows(s.filter)
     imgui.begin_child("objects", imgui.ImVec2(0, LIST_HEIGHT), imgui.ChildFlags_.borders)
     app.item_rects.clear()
-    app.item_rects.update(controls)         # -1: filter box, -2..-4: all/none/invert (tests click them)
-    tree.rects = {}                       # rows on screen: node -> checkbox rect (tests click them)
+    app.item_rects.update(controls)  # -1: filter box, -2..-4: all/none/invert (tests click them)
+    tree.rects = {}  # rows on screen: node -> checkbox rect (tests click them)
     tree.sliders = {}
     focus, hidden = tree.counts(s.highlighted), tree.counts(s.hidden)
     sizes = tree.last - tree.first
@@ -65,13 +65,18 @@ def draw(app: PanelsHost) -> None:
 def _toolbar(app: PanelsHost) -> None:
     s = app.state
     s.tree.buttons = {}
-    for k, (label, act) in enumerate((("hide highlighted", lambda: s.hide(s.highlighted)),
-                                      ("isolate", lambda: s.isolate(s.highlighted)), ("show all", s.show_all))):
+    for k, (label, act) in enumerate(
+        (
+            ("hide highlighted", lambda: s.hide(s.highlighted)),
+            ("isolate", lambda: s.isolate(s.highlighted)),
+            ("show all", s.show_all),
+        )
+    ):
         if k:
             imgui.same_line()
         if imgui.small_button(label):
             act()
-        s.tree.buttons[label] = (*imgui.get_item_rect_min(), *imgui.get_item_rect_max())   # tests click them
+        s.tree.buttons[label] = (*imgui.get_item_rect_min(), *imgui.get_item_rect_max())  # tests click them
     if s.hidden:
         imgui.same_line()
         imgui.text_disabled(f"{len(s.hidden)} hidden")
@@ -92,7 +97,7 @@ def _row(app: PanelsHost, node: int, focus: np.ndarray, hidden: np.ndarray, size
     if mixed:
         imgui.push_item_flag(MIXED, True)
     label = tree.labels[node] if oid >= 0 else f"{tree.labels[node]}  ({n})"
-    if s.mode == "transparent":              # room for the opacity slider on the right
+    if s.mode == "transparent":  # room for the opacity slider on the right
         label = _fit(label, imgui.get_window_width() - SLIDER_W - 40 - imgui.get_cursor_pos_x())
     if off == n:
         imgui.push_style_color(imgui.Col_.text, HIDDEN_TEXT)
@@ -141,7 +146,7 @@ def _opacity(app: PanelsHost, node: int) -> None:
     imgui.set_next_item_width(SLIDER_W)
     current = s.opacity(int(ids[0])) if len(ids) else s.style.default_opacity
     changed, a = imgui.slider_float("##a", current, 0.0, 1.0, "%.2f")
-    s.tree.sliders[node] = (*imgui.get_item_rect_min(), *imgui.get_item_rect_max())   # tests drag them
+    s.tree.sliders[node] = (*imgui.get_item_rect_min(), *imgui.get_item_rect_max())  # tests drag them
     if changed:
         for oid in ids:
             s.style.opacity[int(oid)] = a

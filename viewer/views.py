@@ -25,7 +25,7 @@ Rect = tuple[int, int, int, int]
 class Layout:
     panel: Rect
     composite: Rect
-    atlas: Rect      # zero-sized when the atlas view is hidden
+    atlas: Rect  # zero-sized when the atlas view is hidden
 
     @classmethod
     def of(cls, size: tuple[int, int], show_atlas: bool) -> Layout:
@@ -34,8 +34,7 @@ class Layout:
         rest = w - panel_w
         atlas_w = int(rest * ATLAS_FRACTION) if show_atlas else 0
         comp_w = rest - atlas_w
-        return cls(panel=(0, 0, panel_w, h), composite=(panel_w, 0, comp_w, h),
-                   atlas=(panel_w + comp_w, 0, atlas_w, h))
+        return cls(panel=(0, 0, panel_w, h), composite=(panel_w, 0, comp_w, h), atlas=(panel_w + comp_w, 0, atlas_w, h))
 
 
 def contains(rect: Rect, x: float, y: float) -> bool:
@@ -72,8 +71,7 @@ def layer_tiles(rect: Rect, extent: tuple[int, int], layers: int, choice: int) -
     cols = max(range(1, layers + 1), key=scale)
     rows = -(-layers // cols)
     cw, ch = rw // cols, rh // rows
-    return [(k, fitted((rx + (k % cols) * cw, ry + (k // cols) * ch, cw - 2, ch - 2), extent))
-            for k in range(layers)]
+    return [(k, fitted((rx + (k % cols) * cw, ry + (k // cols) * ch, cw - 2, ch - 2), extent)) for k in range(layers)]
 
 
 def atlas_rects_on_screen(atlas_rect: np.ndarray, extent: tuple[int, int], rect: Rect) -> np.ndarray:
@@ -96,15 +94,25 @@ class ViewPass:
 
     def _program(self, array: bool) -> tuple[moderngl.Program, moderngl.VertexArray]:
         if array not in self._programs:
-            prog = glsl.program(self.ctx, vertex_shader=glsl.load("view.vert"),
-                                fragment_shader=glsl.load("view.frag", ARRAY=array))
+            prog = glsl.program(
+                self.ctx, vertex_shader=glsl.load("view.vert"), fragment_shader=glsl.load("view.frag", ARRAY=array)
+            )
             self._programs[array] = prog
             self._vaos[array] = self.ctx.vertex_array(prog, [])
         return self._programs[array], self._vaos[array]
 
-    def render(self, *, texture, rect: Rect, window_height: int, layer: int | None = None,
-               depth=None, extent: tuple[float, float] = (1.0, 1.0), background=BACKGROUND[:3],
-               target: moderngl.Framebuffer) -> None:
+    def render(
+        self,
+        *,
+        texture,
+        rect: Rect,
+        window_height: int,
+        layer: int | None = None,
+        depth=None,
+        extent: tuple[float, float] = (1.0, 1.0),
+        background=BACKGROUND[:3],
+        target: moderngl.Framebuffer,
+    ) -> None:
         """Draw `texture` into `rect` of `target`; `layer` selects an array layer (then
         `depth`, the depth-keyed atlas's DepthArray, says which texels are empty), `extent`
         the fraction of the texture shown (fitted into `rect`, aspect kept, for arrays)."""

@@ -17,12 +17,12 @@ from .scratch import scratch
 
 @dataclass
 class Packing:
-    x: np.ndarray        # int64 [n] lower-left corner in texels
+    x: np.ndarray  # int64 [n] lower-left corner in texels
     y: np.ndarray
-    layer: np.ndarray    # int64 [n]
-    width: int           # used atlas width  (T_w)
-    height: int          # used atlas height (T_h)
-    layers: int          # T_d
+    layer: np.ndarray  # int64 [n]
+    width: int  # used atlas width  (T_w)
+    height: int  # used atlas height (T_h)
+    layers: int  # T_d
 
     @property
     def size(self) -> tuple[int, int, int]:
@@ -34,7 +34,7 @@ def _breaks(cum: np.ndarray, sizes: np.ndarray, limit: int) -> np.ndarray:
     end of a run from every index in one vectorised search, then one hop per run."""
     reach = np.subtract(cum, sizes, out=scratch("pack.reach", len(cum), cum.dtype))
     reach += limit
-    nxt = cum.searchsorted(reach, side="right")     # where a run from each index ends
+    nxt = cum.searchsorted(reach, side="right")  # where a run from each index ends
     starts = []
     n = len(sizes)
     i = 0
@@ -68,8 +68,9 @@ def _by_shelf(starts: np.ndarray, n: int) -> np.ndarray:
     return np.cumsum(of, out=of)
 
 
-def pack_shelves(w: np.ndarray, h: np.ndarray, max_w: int, max_h: int,
-                 out: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None) -> Packing:
+def pack_shelves(
+    w: np.ndarray, h: np.ndarray, max_w: int, max_h: int, out: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+) -> Packing:
     """Pack w x h rectangles (each <= max_w x max_h) into shelves and layers. `out`: int64
     arrays [n] to write x, y and layer into (fresh ones when None)."""
     w = np.asarray(w, np.int64)
@@ -80,7 +81,7 @@ def pack_shelves(w: np.ndarray, h: np.ndarray, max_w: int, max_h: int,
         return Packing(z, z, z, 0, 0, 0)
     if (w > max_w).any() or (h > max_h).any() or (w < 1).any() or (h < 1).any():
         raise ValueError("rectangles must be between 1x1 and the atlas size")
-    order = _decreasing_order(w, h)       # tallest first, then widest
+    order = _decreasing_order(w, h)  # tallest first, then widest
     ws = np.take(w, order, out=scratch("pack.ws", n, np.int64))
     hs = np.take(h, order, out=scratch("pack.hs", n, np.int64))
     cum = np.cumsum(ws, out=scratch("pack.cum", n, np.int64))
@@ -88,13 +89,12 @@ def pack_shelves(w: np.ndarray, h: np.ndarray, max_w: int, max_h: int,
     shelf_of = _by_shelf(shelf_start, n)
     xs = np.subtract(cum, ws, out=scratch("pack.xs", n, np.int64))
     gathered = scratch("pack.gathered", n, np.int64)
-    xs -= np.take(xs[shelf_start], shelf_of, out=gathered)      # from the shelf's left end
+    xs -= np.take(xs[shelf_start], shelf_of, out=gathered)  # from the shelf's left end
     shelf_h = hs[shelf_start]
     shelf_w = np.add.reduceat(ws, shelf_start)
     cum_h = np.cumsum(shelf_h)
     layer_start = _breaks(cum_h, shelf_h, max_h)
-    layer_of_shelf = np.repeat(np.arange(len(layer_start)),
-                               np.diff(np.append(layer_start, len(shelf_h))))
+    layer_of_shelf = np.repeat(np.arange(len(layer_start)), np.diff(np.append(layer_start, len(shelf_h))))
     shelf_y = cum_h - shelf_h - (cum_h[layer_start] - shelf_h[layer_start])[layer_of_shelf]
     layer_h = np.add.reduceat(shelf_h, layer_start)
     x, y, layer = out if out is not None else (np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n, np.int64))

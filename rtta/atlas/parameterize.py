@@ -21,9 +21,9 @@ from .scratch import result_block, scratch
 # (visible [n] bool, inner B_viewport [n, 4]) -> bool [n] of the objects to leave out, or None
 Thinning = Callable[[np.ndarray, np.ndarray], "np.ndarray | None"]
 
-EPS_PX = 1e-3        # slack against CPU/GPU rounding when snapping bounds to pixels
-CHUNK = 16_384    # boxes per pass of project_bounds: its rows (128 KB) stay in the CPU's cache and
-                  # below the fixed mmap threshold of rtta.memory.steady_heap (no page faults)
+EPS_PX = 1e-3  # slack against CPU/GPU rounding when snapping bounds to pixels
+CHUNK = 16_384  # boxes per pass of project_bounds: its rows (128 KB) stay in the CPU's cache and
+# below the fixed mmap threshold of rtta.memory.steady_heap (no page faults)
 
 
 def project_bounds(corners: np.ndarray, vpm: np.ndarray, reuse: bool = False):
@@ -46,13 +46,12 @@ def project_bounds(corners: np.ndarray, vpm: np.ndarray, reuse: bool = False):
     if not all_front.all():
         lo[:, ~all_front] = 0
         hi[:, ~all_front] = 0
-        rows = np.flatnonzero(some_front & ~all_front)     # crossing the near plane: clipped
+        rows = np.flatnonzero(some_front & ~all_front)  # crossing the near plane: clipped
         if rows.size:
             pts = _points_clip(np.asarray(corners[rows], np.float64), m)
             a, b = _clipped_bounds(pts, pts[..., 2] + pts[..., 3])
             lo[:, rows], hi[:, rows] = a.T, b.T
-    in_frustum = (some_front & (lo[0] <= 1) & (hi[0] >= -1) & (lo[1] <= 1)
-                  & (hi[1] >= -1) & (lo[2] <= 1))
+    in_frustum = some_front & (lo[0] <= 1) & (hi[0] >= -1) & (lo[1] <= 1) & (hi[1] >= -1) & (lo[2] <= 1)
     return in_frustum, lo[:2].T, hi[:2].T
 
 
@@ -68,7 +67,7 @@ def _project_chunk(clip: _CornerClip, planar, lo, hi, all_front, some_front) -> 
     with np.errstate(divide="ignore", invalid="ignore"):
         for k in range(8):
             x, y, z, w = rows(k)
-            np.greater_equal(np.add(z, w, out=q), 0, out=front)    # in front of the near plane
+            np.greater_equal(np.add(z, w, out=q), 0, out=front)  # in front of the near plane
             all_front &= front
             some_front |= front
             for j, v in enumerate((x, y, z)):
@@ -90,7 +89,7 @@ class _CornerClip:
     def __init__(self, m: np.ndarray, size: int, aligned: bool):
         self.m, self.aligned = m, aligned
         self.out = scratch("clip.out", (4, size))
-        self.prod = scratch("clip.prod", (3, 2, 4, size)) if aligned else None    # axis, end, clip row
+        self.prod = scratch("clip.prod", (3, 2, 4, size)) if aligned else None  # axis, end, clip row
         self.q = scratch("clip.q", size)
         self.front = scratch("clip.front", size, bool)
 
@@ -99,6 +98,7 @@ class _CornerClip:
         c, m = planar.shape[2], self.m
         out = self.out[:, :c]
         if not self.aligned:
+
             def rows(k: int) -> np.ndarray:
                 p = planar[:, k]
                 for r in range(4):
@@ -107,10 +107,11 @@ class _CornerClip:
                     row += p[2] * m[r, 2]
                     row += m[r, 3]
                 return out
+
             return rows
         prod = self.prod[..., :c]
         for j in range(3):
-            for e, corner in enumerate((0, 7)):                # min and max corner
+            for e, corner in enumerate((0, 7)):  # min and max corner
                 np.multiply(m[:, j, None], planar[j, corner], out=prod[j, e])
         prod[0] += m[:, 3, None]
 
@@ -118,10 +119,11 @@ class _CornerClip:
             np.add(prod[0, k & 1], prod[1, (k >> 1) & 1], out=out)
             np.add(out, prod[2, k >> 2], out=out)
             return out
+
         return rows_aabb
 
 
-_ALIGNED: dict[int, tuple[weakref.ref, dict]] = {}   # id of a read-only corner array: (its ref, answers per view)
+_ALIGNED: dict[int, tuple[weakref.ref, dict]] = {}  # id of a read-only corner array: (its ref, answers per view)
 
 
 def _axis_aligned(planar: np.ndarray) -> bool:
@@ -168,8 +170,8 @@ def _clipped_bounds(clip: np.ndarray, d: np.ndarray):
     da, db = d[:, BOX_EDGES[:, 0]], d[:, BOX_EDGES[:, 1]]
     crossing = (da * db) < 0
     t = np.where(crossing, da / np.where(crossing, da - db, 1.0), 0.0)
-    hits = a + t[..., None] * (b - a)                     # [m, 12, 4], on the plane: w = near > 0
-    pts = np.concatenate([clip, hits], axis=1)            # [m, 20, 4]
+    hits = a + t[..., None] * (b - a)  # [m, 12, 4], on the plane: w = near > 0
+    pts = np.concatenate([clip, hits], axis=1)  # [m, 20, 4]
     valid = np.concatenate([d >= 0, crossing], axis=1)
     w = np.maximum(np.where(valid, pts[..., 3], 1.0), np.finfo(np.float64).tiny)
     xyz = pts[..., :3] / w[..., None]
@@ -178,17 +180,18 @@ def _clipped_bounds(clip: np.ndarray, d: np.ndarray):
     return lo, hi
 
 
-def viewport_rects(vis: np.ndarray, lo: np.ndarray, hi: np.ndarray, size: tuple[int, int],
-                   out: np.ndarray | None = None):
+def viewport_rects(
+    vis: np.ndarray, lo: np.ndarray, hi: np.ndarray, size: tuple[int, int], out: np.ndarray | None = None
+):
     """Clip NDC bounds to the viewport and snap outward to whole pixels: [n,4] x0,y0,x1,y1
     (a transposed view of planar [4, n] rows, as numpy is fastest on long contiguous rows;
     `out`: int64 [4, n] to hold them)."""
     wh = np.asarray(size, np.float64)[:, None]
-    px = scratch("rects.px", (4, len(vis)))                # [4, n], worked on in place
+    px = scratch("rects.px", (4, len(vis)))  # [4, n], worked on in place
     px[:2], px[2:] = lo.T, hi.T
     np.minimum(np.maximum(px, -1, out=px), 1, out=px)
     px += 1
-    px *= np.tile(0.5 * wh, (2, 1))                        # == (c + 1) * 0.5 * wh: halving is exact
+    px *= np.tile(0.5 * wh, (2, 1))  # == (c + 1) * 0.5 * wh: halving is exact
     x0y0, x1y1 = px[:2], px[2:]
     x0y0 -= EPS_PX
     np.floor(x0y0, out=x0y0)
@@ -199,16 +202,24 @@ def viewport_rects(vis: np.ndarray, lo: np.ndarray, hi: np.ndarray, size: tuple[
     np.maximum(x1y1, np.minimum(np.add(x0y0, 1, out=t), wh, out=t), out=x1y1)
     np.minimum(x0y0, np.subtract(x1y1, 1, out=t), out=x0y0)
     rect = np.empty(px.shape, np.int64) if out is None else out
-    np.copyto(rect, px, casting="unsafe")                  # whole numbers: exact
+    np.copyto(rect, px, casting="unsafe")  # whole numbers: exact
     vis = vis & (rect[2] > rect[0]) & (rect[3] > rect[1])
     rect *= vis
     return vis, rect.T
 
 
-def parameterize(corners: np.ndarray, vpm: np.ndarray, viewport: tuple[int, int], *,
-                 border: int = 1, atlas_max: tuple[int, int] | None = None,
-                 max_layers: int = 2048, region_scale: float | np.ndarray = 1.0,
-                 hidden: np.ndarray | None = None, thin: Thinning | None = None) -> Records:
+def parameterize(
+    corners: np.ndarray,
+    vpm: np.ndarray,
+    viewport: tuple[int, int],
+    *,
+    border: int = 1,
+    atlas_max: tuple[int, int] | None = None,
+    max_layers: int = 2048,
+    region_scale: float | np.ndarray = 1.0,
+    hidden: np.ndarray | None = None,
+    thin: Thinning | None = None,
+) -> Records:
     """Algorithm 1: records for all objects, given B_world corners [n, 8, 3] (or several
     enclosing boxes per object [k, n, 8, 3], whose projections are intersected) and VPM.
 
@@ -230,33 +241,36 @@ def parameterize(corners: np.ndarray, vpm: np.ndarray, viewport: tuple[int, int]
     vis, lo, hi = project_bounds(corners, vpm, reuse=True) if corners.ndim == 3 else _intersected(corners, vpm)
     if hidden is not None:
         vis = vis & ~np.asarray(hidden, bool)
-    keep = _result_arrays(n)                               # the records' arrays: no fresh pages
+    keep = _result_arrays(n)  # the records' arrays: no fresh pages
     vis, rect = viewport_rects(vis, lo, hi, (W, H), keep["rect"])
     if thin is not None and (more := thin(vis, rect)) is not None:
         more = np.asarray(more, bool) & vis
         vis = vis & ~more
         rect[more] = 0
     idx = np.flatnonzero(vis)
-    every = len(idx) == n                                  # all visible: views, no gathers
-    rt = rect.T                                            # planar [4, n]
-    inner = np.subtract(rt[2:], rt[:2], out=scratch("param.inner", (2, n)))   # [2, n]; row-wise 1-D gathers below
+    every = len(idx) == n  # all visible: views, no gathers
+    rt = rect.T  # planar [4, n]
+    inner = np.subtract(rt[2:], rt[:2], out=scratch("param.inner", (2, n)))  # [2, n]; row-wise 1-D gathers below
     inner_v = inner if every else scratch("param.inner_v", (2, len(idx)))
     for row in range(0 if every else 2):
         np.take(inner[row], idx, out=inner_v[row])
     fit = np.divide(max_w - 2 * border, inner_v[0], out=scratch("param.fit", len(idx)))
     np.minimum(fit, np.divide(max_h - 2 * border, inner_v[1], out=scratch("param.fit_h", len(idx))), out=fit)
     atlas_rect, layer, scale = keep["atlas"], keep["layer"], keep["scale"]
-    out = ((atlas_rect[0], atlas_rect[1], layer) if every       # packed straight into the records
-           else tuple(scratch(f"param.packed_{k}", len(idx), np.int64) for k in "xyl"))
+    out = (
+        (atlas_rect[0], atlas_rect[1], layer)
+        if every  # packed straight into the records
+        else tuple(scratch(f"param.packed_{k}", len(idx), np.int64) for k in "xyl")
+    )
     wanted = region_scale if every or region_scale.ndim == 0 else region_scale[idx]
     first = np.minimum(wanted, fit, out=scale if every else scratch("param.first", len(idx)))
     packing, scale_v, sizes = _pack_with_scaling(inner_v, first, border, max_w, max_h, max_layers, out)
     if every:
         atlas_rect[2:] = sizes
-        if scale_v is not scale:                           # scaled down to fit the layers
+        if scale_v is not scale:  # scaled down to fit the layers
             scale[:] = scale_v
     else:
-        for a in (atlas_rect, layer, scale):         # culled objects: no region, scale 0
+        for a in (atlas_rect, layer, scale):  # culled objects: no region, scale 0
             a[...] = 0
         scale[idx] = scale_v
         layer[idx] = packing.layer
@@ -267,17 +281,32 @@ def parameterize(corners: np.ndarray, vpm: np.ndarray, viewport: tuple[int, int]
     clip_ndc = np.divide(rt, np.array([[W], [H], [W], [H]], np.float64), out=keep["clip"])
     clip_ndc *= 2.0
     clip_ndc -= 1.0
-    if not every:                                          # culled: zero T and clip rectangle
+    if not every:  # culled: zero T and clip rectangle
         transform *= vis
         clip_ndc *= vis
-    atlas_rect, transform, clip_ndc = atlas_rect.T, transform.T, clip_ndc.T   # [n, 4] views
-    return Records(visible=vis, viewport_rect=rect, atlas_rect=atlas_rect, layer=layer,
-                   scale=scale, transform=transform, clip_ndc=clip_ndc, viewport=(W, H),
-                   atlas_size=(packing.width, packing.height, packing.layers), border=border)
+    atlas_rect, transform, clip_ndc = atlas_rect.T, transform.T, clip_ndc.T  # [n, 4] views
+    return Records(
+        visible=vis,
+        viewport_rect=rect,
+        atlas_rect=atlas_rect,
+        layer=layer,
+        scale=scale,
+        transform=transform,
+        clip_ndc=clip_ndc,
+        viewport=(W, H),
+        atlas_size=(packing.width, packing.height, packing.layers),
+        border=border,
+    )
 
 
-_RESULT_ROWS = (("rect", 4, np.int64), ("atlas", 4, np.int64), ("layer", 1, np.int64), ("scale", 1, np.float64),
-                ("transform", 4, np.float64), ("clip", 4, np.float64))
+_RESULT_ROWS = (
+    ("rect", 4, np.int64),
+    ("atlas", 4, np.int64),
+    ("layer", 1, np.int64),
+    ("scale", 1, np.float64),
+    ("transform", 4, np.float64),
+    ("clip", 4, np.float64),
+)
 
 
 def _result_arrays(n: int) -> dict[str, np.ndarray]:
@@ -285,7 +314,7 @@ def _result_arrays(n: int) -> dict[str, np.ndarray]:
     block = result_block("records", 8 * n * sum(rows for _, rows, _ in _RESULT_ROWS))
     out, at = {}, 0
     for name, rows, dtype in _RESULT_ROWS:
-        a = block[at:at + 8 * n * rows].view(dtype)
+        a = block[at : at + 8 * n * rows].view(dtype)
         out[name] = a.reshape(rows, n) if rows > 1 else a
         at += 8 * n * rows
     return out
@@ -305,8 +334,10 @@ def _checked_scale(region_scale, n: int) -> np.ndarray:
 
 def default_atlas_max(viewport: tuple[int, int], border: int, region_scale: float = 1.0) -> tuple[int, int]:
     """A layer that holds the whole viewport at the region scale, borders included."""
-    return (int(np.ceil(viewport[0] * region_scale)) + 2 * border,
-            int(np.ceil(viewport[1] * region_scale)) + 2 * border)
+    return (
+        int(np.ceil(viewport[0] * region_scale)) + 2 * border,
+        int(np.ceil(viewport[1] * region_scale)) + 2 * border,
+    )
 
 
 def _region_sizes(inner: np.ndarray, scale: np.ndarray, border: int) -> np.ndarray:
@@ -322,8 +353,9 @@ def _region_sizes(inner: np.ndarray, scale: np.ndarray, border: int) -> np.ndarr
     return sizes
 
 
-def _pack_with_scaling(inner, scale, border, max_w, max_h, max_layers,
-                       out=None) -> tuple[Packing, np.ndarray, np.ndarray]:
+def _pack_with_scaling(
+    inner, scale, border, max_w, max_h, max_layers, out=None
+) -> tuple[Packing, np.ndarray, np.ndarray]:
     """Pack the visible regions (inner sizes [2, m] at `scale` [m]); while more layers than
     allowed are needed, scale all regions down (none dropped). Returns (packing, scale, sizes);
     `out`: pack_shelves' x, y, layer arrays."""
@@ -338,8 +370,10 @@ def _pack_with_scaling(inner, scale, border, max_w, max_h, max_layers,
         area = float((sizes[0] * sizes[1]).sum())
         shrink = min(0.9, np.sqrt(capacity / area) * 0.95)
         scale = scale * shrink
-    raise ValueError(f"{inner.shape[1]} regions with border {border} do not fit into {max_layers} "
-                     f"layer(s) of {max_w}x{max_h} even at the smallest scale")
+    raise ValueError(
+        f"{inner.shape[1]} regions with border {border} do not fit into {max_layers} "
+        f"layer(s) of {max_w}x{max_h} even at the smallest scale"
+    )
 
 
 def _transforms(x0y0, atlas_xy, scale, border, viewport, atlas, out: np.ndarray) -> np.ndarray:
@@ -349,13 +383,13 @@ def _transforms(x0y0, atlas_xy, scale, border, viewport, atlas, out: np.ndarray)
     at = np.asarray(atlas, np.float64)[:, None]
     sxy, txy = out[:2], out[2:]
     np.multiply(scale, vp, out=sxy)
-    sxy /= at                                              # scale * vp / at
+    sxy /= at  # scale * vp / at
     np.multiply(x0y0, 2.0, out=txy)
     np.subtract(vp, txy, out=txy)
-    txy *= scale                                           # scale * (vp - 2 x0y0)
+    txy *= scale  # scale * (vp - 2 x0y0)
     origin = np.add(atlas_xy, border, out=scratch("param.origin", txy.shape))
     origin *= 2.0
-    txy += origin                                          # + 2 (atlas_xy + border)
+    txy += origin  # + 2 (atlas_xy + border)
     txy /= at
     txy -= 1.0
     return out

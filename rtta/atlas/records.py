@@ -10,23 +10,24 @@ import numpy as np
 
 from .scratch import scratch
 
-RECORD_DTYPE = np.dtype([("transform", "<f4", 4), ("clip", "<f4", 4), ("atlas", "<f4", 4),
-                         ("viewport", "<f4", 4), ("info", "<i4", 4)])
+RECORD_DTYPE = np.dtype(
+    [("transform", "<f4", 4), ("clip", "<f4", 4), ("atlas", "<f4", 4), ("viewport", "<f4", 4), ("info", "<i4", 4)]
+)
 
 
 @dataclass
 class Records:
     """The record set R for one frame (arrays indexed by object id)."""
 
-    visible: np.ndarray        # bool [n]
+    visible: np.ndarray  # bool [n]
     viewport_rect: np.ndarray  # int64 [n,4] inner B_viewport x0,y0,x1,y1 (pixels, clipped)
-    atlas_rect: np.ndarray     # int64 [n,4] B_atlas x,y,w,h (texels, border included)
-    layer: np.ndarray          # int64 [n]
-    scale: np.ndarray          # float64 [n] atlas texels per viewport pixel
-    transform: np.ndarray      # float64 [n,4] T as (sx, sy, tx, ty) in NDC
-    clip_ndc: np.ndarray       # float64 [n,4] inner B_viewport in viewport NDC
+    atlas_rect: np.ndarray  # int64 [n,4] B_atlas x,y,w,h (texels, border included)
+    layer: np.ndarray  # int64 [n]
+    scale: np.ndarray  # float64 [n] atlas texels per viewport pixel
+    transform: np.ndarray  # float64 [n,4] T as (sx, sy, tx, ty) in NDC
+    clip_ndc: np.ndarray  # float64 [n,4] inner B_viewport in viewport NDC
     viewport: tuple[int, int]
-    atlas_size: tuple[int, int, int]   # (T_w, T_h, T_d)
+    atlas_size: tuple[int, int, int]  # (T_w, T_h, T_d)
     border: int
 
     def packed(self, reuse: bool = False) -> np.ndarray:
@@ -35,10 +36,10 @@ class Records:
         n = len(self.visible)
         rows = scratch("records.rows", (20, n), np.float32)
         for k, field in enumerate((self.transform, self.clip_ndc, self.atlas_rect, self.viewport_rect)):
-            rows[4 * k:4 * k + 4] = field.T
+            rows[4 * k : 4 * k + 4] = field.T
         ints = rows.view(np.int32)
         ints[16], ints[17], ints[18] = self.layer, self.visible, self.border
-        rows[19] = self.scale                  # info.w: the scale's float bits
+        rows[19] = self.scale  # info.w: the scale's float bits
         out = scratch("records.packed", (n, 20), np.float32) if reuse else np.empty((n, 20), np.float32)
         np.copyto(out, rows.T)
         return out.view(RECORD_DTYPE).reshape(n)

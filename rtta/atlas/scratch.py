@@ -16,8 +16,8 @@ import threading
 
 import numpy as np
 
-_LOCAL = threading.local()      # one pool per thread: a call never shares its temporaries
-RESULT_BLOCKS = 3               # result blocks kept per name: a caller's last result, the new one, a spare
+_LOCAL = threading.local()  # one pool per thread: a call never shares its temporaries
+RESULT_BLOCKS = 3  # result blocks kept per name: a caller's last result, the new one, a spare
 
 
 def _pool() -> dict:
@@ -33,7 +33,7 @@ def scratch(name: str, shape: tuple[int, ...] | int, dtype=np.float64) -> np.nda
     The pool keeps the largest size asked for per name."""
     pool = _pool()
     dtype = np.dtype(dtype)
-    count = int(math.prod(shape)) if isinstance(shape, tuple) else int(shape)    # (np.prod: 5 µs a call)
+    count = int(math.prod(shape)) if isinstance(shape, tuple) else int(shape)  # (np.prod: 5 µs a call)
     nbytes = count * dtype.itemsize
     buf = pool.get(name)
     if buf is None or buf.nbytes < nbytes:
@@ -55,7 +55,7 @@ def result_block(name: str, nbytes: int) -> np.ndarray:
     block = np.empty(max(nbytes, 1), np.uint8)
     if len(blocks) < RESULT_BLOCKS:
         blocks.append(block)
-    elif free:                              # in place of one no result uses (from a scene of another size)
+    elif free:  # in place of one no result uses (from a scene of another size)
         blocks[free[0]] = block
     return block[:nbytes]
 

@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 
 DEPTH_TOL = 1e-5
-SNAP_PX = 2.0 / 256.0   # two steps of the rasterizer's sub-pixel grid (8 bits on llvmpipe)
-CREASE = 2e-4           # window depth is affine over a planar triangle: larger 2nd differences are contours
+SNAP_PX = 2.0 / 256.0  # two steps of the rasterizer's sub-pixel grid (8 bits on llvmpipe)
+CREASE = 2e-4  # window depth is affine over a planar triangle: larger 2nd differences are contours
 
 
 def near_edges(ids: np.ndarray) -> np.ndarray:
@@ -17,7 +17,7 @@ def near_edges(ids: np.ndarray) -> np.ndarray:
     edge = np.zeros(ids.shape, bool)
     for dy in (-1, 0, 1):
         for dx in (-1, 0, 1):
-            edge |= pad[1 + dy:1 + dy + h, 1 + dx:1 + dx + w] != ids
+            edge |= pad[1 + dy : 1 + dy + h, 1 + dx : 1 + dx + w] != ids
     return edge
 
 

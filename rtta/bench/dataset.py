@@ -28,7 +28,7 @@ from .render import shared_data
 
 METHODS = {"rtta": render_rtta, "rtt": render_rtt}
 STAGES = {"rtta": alone_rtta, "rtt": alone_rtt}
-PER_ROUND = 2      # views a method renders in a row (so that writing overlaps the next view, as in a run)
+PER_ROUND = 2  # views a method renders in a row (so that writing overlaps the next view, as in a run)
 
 
 def bench_scenes(quick: bool) -> list[tuple[str, object]]:
@@ -43,8 +43,10 @@ def bench_scenes(quick: bool) -> list[tuple[str, object]]:
     engine = shared_data() / "engine_2cyl.glb"
     if engine.is_file():
         out.append(("engine_2cyl", lambda: load_scene(engine)))
-    return out + [("table1-580", lambda: table1_scene(580, 56654)),
-                  ("random-2000", lambda: random_scene(2000, seed=3, spread=40.0))]
+    return out + [
+        ("table1-580", lambda: table1_scene(580, 56654)),
+        ("random-2000", lambda: random_scene(2000, seed=3, spread=40.0)),
+    ]
 
 
 def _amodal(out: Path, key: str, view: int) -> dict[int, dict]:
@@ -74,30 +76,35 @@ def bench_scene(ctx, name: str, scene, size: tuple[int, int], views: int, appear
     renderer = Renderer(ctx, scene)
     row = {"name": name, "parts": scene.count, "views": views}
     try:
-        for method, render in METHODS.items():          # warm-up: shaders, targets, caches
+        for method, render in METHODS.items():  # warm-up: shaders, targets, caches
             produce_view(renderer, s, meta, (0, 0), tmp / "warm" / method, render)
         wall = {m: [] for m in METHODS}
         masks = {m: [] for m in METHODS}
         split = {m: {} for m in METHODS}
-        for start in range(0, views, PER_ROUND):      # rounds: each method writes PER_ROUND views in turn
+        for start in range(0, views, PER_ROUND):  # rounds: each method writes PER_ROUND views in turn
             for method, render in METHODS.items():
                 ctx.finish()
                 writer = Writer()
                 t0 = time.perf_counter()
                 for v in range(start, min(views, start + PER_ROUND)):
-                    masks[method].append(produce_view(renderer, s, meta, (0, v), tmp / method, render,
-                                                      split[method], writer))
+                    masks[method].append(
+                        produce_view(renderer, s, meta, (0, v), tmp / method, render, split[method], writer)
+                    )
                 writer.close()
                 wall[method].append(time.perf_counter() - t0)
         for m in METHODS:
             w = float(np.sum(wall[m]))
-            row[m] = {"views_per_s": views / w, "masks_per_s": float(np.sum(masks[m])) / w,
-                      "masks_per_view": float(np.mean(masks[m])),
-                      "ms_per_view": {k: v / views * 1e3 for k, v in split[m].items()}}
+            row[m] = {
+                "views_per_s": views / w,
+                "masks_per_s": float(np.sum(masks[m])) / w,
+                "masks_per_view": float(np.mean(masks[m])),
+                "ms_per_view": {k: v / views * 1e3 for k, v in split[m].items()},
+            }
         row["ratio_masks"] = row["rtta"]["masks_per_s"] / row["rtt"]["masks_per_s"]
-        row["ratio_median"] = float(np.median(np.array(wall["rtt"]) / np.array(wall["rtta"])))   # per round
+        row["ratio_median"] = float(np.median(np.array(wall["rtt"]) / np.array(wall["rtta"])))  # per round
         row["only_one"], row["off_band_px"], row["differing_px"] = disagreement(
-            _amodal(tmp / "rtta", name, 0), _amodal(tmp / "rtt", name, 0))
+            _amodal(tmp / "rtta", name, 0), _amodal(tmp / "rtt", name, 0)
+        )
         row["stage"] = amodal_stage(ctx, renderer, s, name, views)
     finally:
         renderer.release()
@@ -121,14 +128,22 @@ def amodal_stage(ctx, renderer, s: dict, key: str, views: int) -> dict:
             _, areas, _ = encode_flat(objects.mask, objects.rects, h, w)
             wall[method].append(time.perf_counter() - t0)
             masks[method] += int((areas > 0).sum())
-    out = {m: {"masks_per_s": masks[m] / float(np.sum(wall[m])), "ms_per_view": float(np.mean(wall[m])) * 1e3}
-           for m in STAGES}
+    out = {
+        m: {"masks_per_s": masks[m] / float(np.sum(wall[m])), "ms_per_view": float(np.mean(wall[m])) * 1e3}
+        for m in STAGES
+    }
     out["ratio"] = out["rtta"]["masks_per_s"] / out["rtt"]["masks_per_s"]
     return out
 
 
-def run_bench(size: tuple[int, int], views: int = 5, quick: bool = False, appearance: bool = False,
-              json_path: str | None = None, ctx=None) -> int:
+def run_bench(
+    size: tuple[int, int],
+    views: int = 5,
+    quick: bool = False,
+    appearance: bool = False,
+    json_path: str | None = None,
+    ctx=None,
+) -> int:
     ctx = ctx or shared_context()
     if quick:
         size, views = (320, 240), 2
@@ -142,30 +157,42 @@ def run_bench(size: tuple[int, int], views: int = 5, quick: bool = False, appear
         shutil.rmtree(tmp, ignore_errors=True)
     _print(rows, gl_renderer, size, views, appearance)
     if json_path:
-        Path(json_path).write_text(json.dumps({"renderer": gl_renderer, "size": list(size), "views": views,
-                                               "appearance": appearance, "scenes": rows}, indent=1))
+        Path(json_path).write_text(
+            json.dumps(
+                {"renderer": gl_renderer, "size": list(size), "views": views, "appearance": appearance, "scenes": rows},
+                indent=1,
+            )
+        )
     return 0
 
 
 def _print(rows: list[dict], gl_renderer: str, size, views: int, appearance: bool) -> None:
-    print(f"renderer: {gl_renderer}; {size[0]}x{size[1]}; {views} views per scene, RTTA and RTT taking turns "
-          f"every {PER_ROUND} views; every file written, as `rtta dataset` writes it (on a background thread)"
-          f"{' with --appearance' if appearance else ''}")
-    print(f"{'scene':>12} {'parts':>6} {'masks':>6} | {'RTTA v/s':>8} {'masks/s':>8} | {'RTT v/s':>8} "
-          f"{'masks/s':>8} | {'ratio':>6} {'median':>6} | {'RTTA render/annot/write ms':>27} | "
-          f"{'RTT render ms':>13} | {'diff px (off band)':>18} || {'amodal only: RTTA ms':>20} "
-          f"{'RTT ms':>7} {'ratio':>6}")
+    print(
+        f"renderer: {gl_renderer}; {size[0]}x{size[1]}; {views} views per scene, RTTA and RTT taking turns "
+        f"every {PER_ROUND} views; every file written, as `rtta dataset` writes it (on a background thread)"
+        f"{' with --appearance' if appearance else ''}"
+    )
+    print(
+        f"{'scene':>12} {'parts':>6} {'masks':>6} | {'RTTA v/s':>8} {'masks/s':>8} | {'RTT v/s':>8} "
+        f"{'masks/s':>8} | {'ratio':>6} {'median':>6} | {'RTTA render/annot/write ms':>27} | "
+        f"{'RTT render ms':>13} | {'diff px (off band)':>18} || {'amodal only: RTTA ms':>20} "
+        f"{'RTT ms':>7} {'ratio':>6}"
+    )
     for r in rows:
         a, b = r["rtta"], r["rtt"]
         split = "/".join(f"{a['ms_per_view'].get(k, 0):.0f}" for k in ("render", "annotate", "write"))
-        print(f"{r['name']:>12} {r['parts']:>6} {a['masks_per_view']:>6.0f} | {a['views_per_s']:>8.2f} "
-              f"{a['masks_per_s']:>8.0f} | {b['views_per_s']:>8.2f} {b['masks_per_s']:>8.0f} | "
-              f"{r['ratio_masks']:>5.2f}x {r['ratio_median']:>5.2f}x | {split:>27} | "
-              f"{b['ms_per_view'].get('render', 0):>13.0f} | {r['differing_px']:>9} ({r['off_band_px']}) || "
-              f"{r['stage']['rtta']['ms_per_view']:>20.1f} {r['stage']['rtt']['ms_per_view']:>7.1f} "
-              f"{r['stage']['ratio']:>5.2f}x")
-    print(f"masks: amodal masks (annotations) per view; ratio: RTTA masks/s over RTT masks/s; median: of the "
-          f"ratios per turn of {PER_ROUND} views; ms: per view (write: on the writer thread, overlapping the "
-          f"next view); diff px: amodal pixels of view 0 where the two differ (off the 1-px silhouette band); "
-          f"amodal only: ms per view to the encoded amodal masks (one capture and its gather, or every object "
-          f"drawn alone and read back; no STD, no visible masks, no files), ratio of masks/s")
+        print(
+            f"{r['name']:>12} {r['parts']:>6} {a['masks_per_view']:>6.0f} | {a['views_per_s']:>8.2f} "
+            f"{a['masks_per_s']:>8.0f} | {b['views_per_s']:>8.2f} {b['masks_per_s']:>8.0f} | "
+            f"{r['ratio_masks']:>5.2f}x {r['ratio_median']:>5.2f}x | {split:>27} | "
+            f"{b['ms_per_view'].get('render', 0):>13.0f} | {r['differing_px']:>9} ({r['off_band_px']}) || "
+            f"{r['stage']['rtta']['ms_per_view']:>20.1f} {r['stage']['rtt']['ms_per_view']:>7.1f} "
+            f"{r['stage']['ratio']:>5.2f}x"
+        )
+    print(
+        f"masks: amodal masks (annotations) per view; ratio: RTTA masks/s over RTT masks/s; median: of the "
+        f"ratios per turn of {PER_ROUND} views; ms: per view (write: on the writer thread, overlapping the "
+        f"next view); diff px: amodal pixels of view 0 where the two differ (off the 1-px silhouette band); "
+        f"amodal only: ms per view to the encoded amodal masks (one capture and its gather, or every object "
+        f"drawn alone and read back; no STD, no visible masks, no files), ratio of masks/s"
+    )

@@ -46,7 +46,7 @@ def library_load(path: Path) -> None:
     else:
         import trimesh
 
-        trimesh.load(str(path), force="scene")       # STEP: cascadio through trimesh
+        trimesh.load(str(path), force="scene")  # STEP: cascadio through trimesh
 
 
 def _files(paths: list[str]) -> list[Path]:
@@ -74,12 +74,23 @@ def run_formats(paths: list[str], json_path: str | None = None) -> int:
         for path in _files(paths):
             lib, _ = _best(lambda p=path: library_load(p))
             ours, scene = _best(lambda p=path: load_scene(p))
-            rows.append([path.suffix.lower()[1:], path.name, scene.count, len(scene.indices) // 3,
-                         round(lib, 3), round(ours, 3), round(ours - lib, 3)])
+            rows.append(
+                [
+                    path.suffix.lower()[1:],
+                    path.name,
+                    scene.count,
+                    len(scene.indices) // 3,
+                    round(lib, 3),
+                    round(ours, 3),
+                    round(ours - lib, 3),
+                ]
+            )
     print_table(COLUMNS, rows)
     worst = max((r[-1] for r in rows), default=0.0)
-    print(f"rtta's overhead over the library: at most {worst:.2f} s "
-          f"({'within' if worst <= OVERHEAD_S else 'OVER'} the {OVERHEAD_S:g} s bound)")
+    print(
+        f"rtta's overhead over the library: at most {worst:.2f} s "
+        f"({'within' if worst <= OVERHEAD_S else 'OVER'} the {OVERHEAD_S:g} s bound)"
+    )
     if json_path:
         Path(json_path).write_text(json.dumps({"columns": COLUMNS, "rows": rows}, indent=1))
     return 0 if worst <= OVERHEAD_S else 1

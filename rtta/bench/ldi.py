@@ -12,7 +12,7 @@ import numpy as np
 
 from .tables import print_table
 
-GPU_REPEATS = 9      # the GPU paths take ~15 ms: more repeats steady the best on a noisy VM
+GPU_REPEATS = 9  # the GPU paths take ~15 ms: more repeats steady the best on a noisy VM
 
 
 def _cow() -> Path:
@@ -42,8 +42,9 @@ def _best_ms(fn, repeats: int) -> tuple[float, object]:
     return best, result
 
 
-def error_by_resolution(ctx, name: str, mesh, points: int, resolutions, *, peeler=None, pts=None, ref=None,
-                        direction=None) -> list[dict]:
+def error_by_resolution(
+    ctx, name: str, mesh, points: int, resolutions, *, peeler=None, pts=None, ref=None, direction=None
+) -> list[dict]:
     """Parity-test error against trimesh.contains (fraction of points classified differently)
     for LDIs of one mesh at each resolution, with peel and test times. Points are uniform in
     the bounding box; the viewpoint is chosen once (at the first resolution) unless given."""
@@ -57,7 +58,7 @@ def error_by_resolution(ctx, name: str, mesh, points: int, resolutions, *, peele
         lo, hi = mesh.bounds
         pts = np.random.default_rng(1).uniform(lo, hi, (points, 3))
         ref = mesh.contains(pts)
-    if direction is None:      # choose the viewpoint once; this also compiles the shaders
+    if direction is None:  # choose the viewpoint once; this also compiles the shaders
         direction = build(ctx, v, f, resolutions[0], peeler=peeler).direction
     rows = []
     for n in resolutions:
@@ -65,8 +66,17 @@ def error_by_resolution(ctx, name: str, mesh, points: int, resolutions, *, peele
         test = ParityTest(ctx, ldi_n)
         ms, got = _best_ms(lambda t=test, p=pts: t.classify(p), 3)
         test.release()
-        rows.append({"mesh": name, "resolution": n, "points": len(pts), "error": float((got != ref).mean()),
-                     "peel_ms": ldi_n.timings["peel"], "test_ms": ms, "layers": ldi_n.depth})
+        rows.append(
+            {
+                "mesh": name,
+                "resolution": n,
+                "points": len(pts),
+                "error": float((got != ref).mean()),
+                "peel_ms": ldi_n.timings["peel"],
+                "test_ms": ms,
+                "layers": ldi_n.depth,
+            }
+        )
     if own:
         peeler.release()
     return rows
@@ -84,12 +94,14 @@ def run_ldi(quick: bool = False, points: int = 1_000_000, resolution: int = 512,
     points = 20_000 if quick else points
     resolutions = (64, 256) if quick else (64, 128, 256, 512, 1024)
     renderer = ctx.info["GL_RENDERER"]
-    print(f"renderer: {renderer}; cpu: {platform.processor() or platform.machine()}; "
-          f"date: {time.strftime('%Y-%m-%d')}; command: rtta bench ldi{' --quick' if quick else ''}")
+    print(
+        f"renderer: {renderer}; cpu: {platform.processor() or platform.machine()}; "
+        f"date: {time.strftime('%Y-%m-%d')}; command: rtta bench ldi{' --quick' if quick else ''}"
+    )
     table, speed, error = [], [], []
     for name, mesh in bench_meshes(quick):
         v, f = closed_mesh(mesh.vertices, mesh.faces, name)
-        build(ctx, v, f, resolution, peeler=peeler)       # warm-up: shader compilation
+        build(ctx, v, f, resolution, peeler=peeler)  # warm-up: shader compilation
         ldi = build(ctx, v, f, resolution, peeler=peeler)
         packed = compress(ldi)
         table.append(stats_row(name, v, ldi, packed))
@@ -100,7 +112,7 @@ def run_ldi(quick: bool = False, points: int = 1_000_000, resolution: int = 512,
 
         def run(t=test, p=pts, k=kernel):
             inside = t.classify(p)
-            k.append(t.last_ms["test"])          # the test pass alone, of the same runs
+            k.append(t.last_ms["test"])  # the test pass alone, of the same runs
             return inside
 
         gpu_ms, inside = _best_ms(run, GPU_REPEATS)
@@ -108,29 +120,72 @@ def run_ldi(quick: bool = False, points: int = 1_000_000, resolution: int = 512,
         comp_ms, inside_c = _best_ms(lambda t=test, p=pts: t.classify(p, compressed=True), GPU_REPEATS)
         test.release()
         ref_ms, ref = _best_ms(lambda m=mesh, p=pts: m.contains(p), 3 if not quick else 1)
-        speed.append({"mesh": name, "points": points, "gpu_ms": gpu_ms, "kernel_ms": kernel_ms,
-                      "compressed_ms": comp_ms, "trimesh_ms": ref_ms, "agree": float((inside == ref).mean()),
-                      "compressed_equal": bool((inside == inside_c).all())})
-        error += error_by_resolution(ctx, name, mesh, points, resolutions, peeler=peeler, pts=pts, ref=ref,
-                                     direction=ldi.direction)
+        speed.append(
+            {
+                "mesh": name,
+                "points": points,
+                "gpu_ms": gpu_ms,
+                "kernel_ms": kernel_ms,
+                "compressed_ms": comp_ms,
+                "trimesh_ms": ref_ms,
+                "agree": float((inside == ref).mean()),
+                "compressed_equal": bool((inside == inside_c).all()),
+            }
+        )
+        error += error_by_resolution(
+            ctx, name, mesh, points, resolutions, peeler=peeler, pts=pts, ref=ref, direction=ldi.direction
+        )
     peeler.release()
     print(f"\nLDI figures at {resolution}x{resolution} (the seed's table; times in ms, memory in bytes)")
     print_table(STATS_COLUMNS, table)
     runs = 3 if not quick else 1
-    print(f"\nparity test of {points} random points in the bounding box "
-          f"(best of {GPU_REPEATS}; trimesh: best of {runs})")
-    print_table(("mesh", "GPU ms", "kernel ms", "compressed ms", "trimesh+embree ms", "speed-up", "agree",
-                 "plain == compressed"),
-                [(s["mesh"], f"{s['gpu_ms']:.1f}", f"{s['kernel_ms']:.1f}", f"{s['compressed_ms']:.1f}",
-                  f"{s['trimesh_ms']:.0f}", f"{s['trimesh_ms'] / s['gpu_ms']:.0f}x", f"{s['agree']:.5f}",
-                  s["compressed_equal"]) for s in speed])
+    print(
+        f"\nparity test of {points} random points in the bounding box (best of {GPU_REPEATS}; trimesh: best of {runs})"
+    )
+    print_table(
+        (
+            "mesh",
+            "GPU ms",
+            "kernel ms",
+            "compressed ms",
+            "trimesh+embree ms",
+            "speed-up",
+            "agree",
+            "plain == compressed",
+        ),
+        [
+            (
+                s["mesh"],
+                f"{s['gpu_ms']:.1f}",
+                f"{s['kernel_ms']:.1f}",
+                f"{s['compressed_ms']:.1f}",
+                f"{s['trimesh_ms']:.0f}",
+                f"{s['trimesh_ms'] / s['gpu_ms']:.0f}x",
+                f"{s['agree']:.5f}",
+                s["compressed_equal"],
+            )
+            for s in speed
+        ],
+    )
     print("GPU ms: points in (float64 -> float32 upload), test, result back; kernel ms: the test pass alone")
     print("\nclassification error against trimesh.contains by LDI resolution")
-    print_table(("mesh", "N", "layers", "error", "peel ms", "test ms"),
-                [(e["mesh"], e["resolution"], e["layers"], f"{e['error']:.5f}", f"{e['peel_ms']:.1f}",
-                  f"{e['test_ms']:.1f}") for e in error])
+    print_table(
+        ("mesh", "N", "layers", "error", "peel ms", "test ms"),
+        [
+            (e["mesh"], e["resolution"], e["layers"], f"{e['error']:.5f}", f"{e['peel_ms']:.1f}", f"{e['test_ms']:.1f}")
+            for e in error
+        ],
+    )
     if json_path:
-        Path(json_path).write_text(json.dumps({"renderer": renderer, "table": [dict(zip(STATS_COLUMNS, map(str, r),
-                                                                                       strict=True)) for r in table],
-                                               "throughput": speed, "resolution": error}, indent=1))
+        Path(json_path).write_text(
+            json.dumps(
+                {
+                    "renderer": renderer,
+                    "table": [dict(zip(STATS_COLUMNS, map(str, r), strict=True)) for r in table],
+                    "throughput": speed,
+                    "resolution": error,
+                },
+                indent=1,
+            )
+        )
     return 0

@@ -26,8 +26,10 @@ COLUMNS = ["view", "method", "draw calls", "frame ms"]
 
 def _views(scene):
     """The seed's two walkthrough cases: an overview and a close-up where most is culled."""
-    return [("overview", Camera.orbit(scene.center, scene.radius, 0.0, 0.0, 1.4)),
-            ("close-up", Camera.orbit(scene.center, scene.radius, 0.0, 0.0, 0.12))]
+    return [
+        ("overview", Camera.orbit(scene.center, scene.radius, 0.0, 0.0, 1.4)),
+        ("close-up", Camera.orbit(scene.center, scene.radius, 0.0, 0.0, 0.12)),
+    ]
 
 
 def _frame(r, pass_, cam, view, proj, target, viewport):
@@ -40,15 +42,16 @@ def _frame(r, pass_, cam, view, proj, target, viewport):
 def frame_rows(ctx, scene, viewport, frames: int, max_vertices: int) -> list[list]:
     r = Renderer(ctx, scene)
     sep, chunked = SeparatePass(ctx), ChunkedStdPass(ctx, max_vertices)
-    target = LayeredTarget(ctx, viewport, 1, normals=False)   # as the renderer's STD target
+    target = LayeredTarget(ctx, viewport, 1, normals=False)  # as the renderer's STD target
     rows = []
     try:
         for name, cam in _views(scene):
             view, proj = r.matrices(cam, viewport)
-            runs = [("separate textures, one call per object", sep, lambda: sep.draw_calls),
-                    ("material atlas, one batch", None, lambda: 1),
-                    (f"material atlas, BVH chunks <= {max_vertices} vertices, culled", chunked,
-                     lambda: chunked.draw_calls)]
+            runs = [
+                ("separate textures, one call per object", sep, lambda: sep.draw_calls),
+                ("material atlas, one batch", None, lambda: 1),
+                (f"material atlas, BVH chunks <= {max_vertices} vertices, culled", chunked, lambda: chunked.draw_calls),
+            ]
             for label, pass_, calls in runs:
                 ms = _median_ms(_gl_timed(ctx, _frame(r, pass_, cam, view, proj, target, viewport)), frames)
                 rows.append([name, label, calls(), f"{ms:.2f}"])
@@ -63,9 +66,14 @@ def frame_rows(ctx, scene, viewport, frames: int, max_vertices: int) -> list[lis
             plain.release()
         leaves = len(chunked.bvh(r.gpu).leaves)
         info = r.gpu.atlas_info
-        memory = {"textures": len(scene.textures), "original_bytes": original_nbytes(scene.textures),
-                  "atlas_bytes": info.nbytes, "atlas": f"{info.size}x{info.size}x{info.layers}",
-                  "levels": info.levels, "bvh_leaves": leaves}
+        memory = {
+            "textures": len(scene.textures),
+            "original_bytes": original_nbytes(scene.textures),
+            "atlas_bytes": info.nbytes,
+            "atlas": f"{info.size}x{info.size}x{info.layers}",
+            "levels": info.levels,
+            "bvh_leaves": leaves,
+        }
     finally:
         for p in (sep, chunked, target):
             p.release()
@@ -73,23 +81,40 @@ def frame_rows(ctx, scene, viewport, frames: int, max_vertices: int) -> list[lis
     return rows, memory
 
 
-def run_material(objects: int, quick: bool = False, json_path: str | None = None,
-                 viewport: tuple[int, int] = (1024, 768), max_vertices: int = 480) -> int:
+def run_material(
+    objects: int,
+    quick: bool = False,
+    json_path: str | None = None,
+    viewport: tuple[int, int] = (1024, 768),
+    max_vertices: int = 480,
+) -> int:
     ctx = create_headless_context()
     renderer = ctx.info["GL_RENDERER"]
     frames = 5 if quick else 30
     scene = textured_scene(objects, seed=1, textures=48 if not quick else 16, untextured_every=9)
-    print(f"renderer: {renderer}; cpu: {platform.processor() or platform.machine()}; viewport "
-          f"{viewport[0]}x{viewport[1]}; {scene.count} objects, {len(scene.textures)} textures, "
-          f"{scene.vertex_count} vertices; median of {frames} frames")
+    print(
+        f"renderer: {renderer}; cpu: {platform.processor() or platform.machine()}; viewport "
+        f"{viewport[0]}x{viewport[1]}; {scene.count} objects, {len(scene.textures)} textures, "
+        f"{scene.vertex_count} vertices; median of {frames} frames"
+    )
     rows, memory = frame_rows(ctx, scene, viewport, frames, max_vertices)
     print_table(COLUMNS, rows)
     ratio = memory["atlas_bytes"] / memory["original_bytes"]
-    print(f"memory: {memory['textures']} textures with full mip chains {memory['original_bytes'] / 2**20:.2f} MiB; "
-          f"atlas {memory['atlas']} with levels 0..{memory['levels']} {memory['atlas_bytes'] / 2**20:.2f} MiB "
-          f"({ratio:.2f}x); BVH leaves: {memory['bvh_leaves']}")
+    print(
+        f"memory: {memory['textures']} textures with full mip chains {memory['original_bytes'] / 2**20:.2f} MiB; "
+        f"atlas {memory['atlas']} with levels 0..{memory['levels']} {memory['atlas_bytes'] / 2**20:.2f} MiB "
+        f"({ratio:.2f}x); BVH leaves: {memory['bvh_leaves']}"
+    )
     if json_path:
-        Path(json_path).write_text(json.dumps({"renderer": renderer, "objects": scene.count,
-                                               "rows": [dict(zip(COLUMNS, r, strict=True)) for r in rows],
-                                               "memory": memory}, indent=1))
+        Path(json_path).write_text(
+            json.dumps(
+                {
+                    "renderer": renderer,
+                    "objects": scene.count,
+                    "rows": [dict(zip(COLUMNS, r, strict=True)) for r in rows],
+                    "memory": memory,
+                },
+                indent=1,
+            )
+        )
     return 0

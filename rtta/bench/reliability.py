@@ -24,8 +24,8 @@ from ..scene.camera import Camera
 from ..scene.model import Scene
 from .compare import crease_limit, depth_mismatch, depth_tolerance, near_silhouettes
 
-COLOR_TOL = 3            # of 255: the core's sprites-vs-STD tolerance
-COLOR_FRACTION = 0.995   # of pixels within COLOR_TOL; depth: rtta.compare.depth_mismatch
+COLOR_TOL = 3  # of 255: the core's sprites-vs-STD tolerance
+COLOR_FRACTION = 0.995  # of pixels within COLOR_TOL; depth: rtta.compare.depth_mismatch
 
 _CENSUS = {  # kind -> (glIs*, glGen*, glDelete*); programs use glCreate/glDeleteProgram
     "buffers": ("glIsBuffer", "glGenBuffers", "glDeleteBuffers"),
@@ -56,7 +56,7 @@ def _newest_name(gen: str | None, delete: str) -> int:
 def gl_census(ctx: moderngl.Context) -> dict[str, int]:
     """Live GL objects per kind in this context (moderngl's own and raw ones alike)."""
     gl = _lib()
-    gl.glUseProgram(0)    # a deleted program still in use would count as live
+    gl.glUseProgram(0)  # a deleted program still in use would count as live
     out = {}
     for kind, (is_name, gen, delete) in _CENSUS.items():
         top = _newest_name(gen, delete)
@@ -98,11 +98,11 @@ def random_viewport(rng: np.random.Generator, low: int = 8, high: int = 320) -> 
 class FrameCheck:
     finite: bool
     gl_error: str
-    color_fraction: float     # pixels with sprites within COLOR_TOL of STD
-    depth_error: float        # max |sprites - STD| window depth, covered pixels off silhouettes
-    depth_off: int            # covered pixels over the depth tolerance, off creases
-    depth_crease: int         # ... on creases
-    crease_limit: int         # 0.1% of covered pixels: how many of both may differ
+    color_fraction: float  # pixels with sprites within COLOR_TOL of STD
+    depth_error: float  # max |sprites - STD| window depth, covered pixels off silhouettes
+    depth_off: int  # covered pixels over the depth tolerance, off creases
+    depth_crease: int  # ... on creases
+    crease_limit: int  # 0.1% of covered pixels: how many of both may differ
     visible: int
 
     @property
@@ -111,8 +111,12 @@ class FrameCheck:
         tolerance except on at most 0.1% of covered pixels. Off-crease exceptions are
         counted apart: they are single pixels where two surfaces of one object lie within
         ~1e-4 window depth of each other and the displaced vertex snapped the other way."""
-        return (self.finite and self.gl_error == "GL_NO_ERROR" and self.color_fraction >= COLOR_FRACTION
-                and self.depth_off + self.depth_crease <= self.crease_limit)
+        return (
+            self.finite
+            and self.gl_error == "GL_NO_ERROR"
+            and self.color_fraction >= COLOR_FRACTION
+            and self.depth_off + self.depth_crease <= self.crease_limit
+        )
 
 
 def sprites_and_std(renderer: Renderer, camera: Camera, viewport: tuple[int, int]):
@@ -139,13 +143,19 @@ def check_sprites_frame(renderer: Renderer, camera: Camera, viewport: tuple[int,
     inner = covered & ~near_silhouettes(std_id, std_depth, depth)
     err = float(np.abs(depth[inner] - std_depth[inner]).max()) if inner.any() else 0.0
     off, crease = depth_mismatch(depth, std_depth, covered, std_id)
-    return FrameCheck(finite=finite, gl_error=renderer.ctx.error, color_fraction=float(close.mean()),
-                      depth_error=err, depth_off=off, depth_crease=crease, crease_limit=crease_limit(covered),
-                      visible=int(records.visible.sum()))
+    return FrameCheck(
+        finite=finite,
+        gl_error=renderer.ctx.error,
+        color_fraction=float(close.mean()),
+        depth_error=err,
+        depth_off=off,
+        depth_crease=crease,
+        crease_limit=crease_limit(covered),
+        visible=int(records.visible.sum()),
+    )
 
 
-def _depth_ties(renderer: Renderer, records, where: np.ndarray, std_id: np.ndarray,
-                depth: np.ndarray) -> np.ndarray:
+def _depth_ties(renderer: Renderer, records, where: np.ndarray, std_id: np.ndarray, depth: np.ndarray) -> np.ndarray:
     """Pixels of `where` where STD's object lies in the atlas at the depth the sprite shows:
     coincident surfaces of two objects (touching parts), where either one is front-most."""
     tw, th, td = records.atlas_size
@@ -167,7 +177,7 @@ def _depth_ties(renderer: Renderer, records, where: np.ndarray, std_id: np.ndarr
 @dataclass
 class SweepResult:
     frames: int = 0
-    failures: list = field(default_factory=list)   # (frame, kind, FrameCheck)
+    failures: list = field(default_factory=list)  # (frame, kind, FrameCheck)
     kinds: dict = field(default_factory=dict)
     worst_color: float = 1.0
     worst_depth: float = 0.0
@@ -194,9 +204,9 @@ def sweep(renderer: Renderer, frames: int, seed: int = 0, progress: Callable | N
 @dataclass
 class SoakSample:
     frame: int
-    rss: int              # resident set size, bytes
-    targets: int          # of which the render targets as allocated at that moment
-    objects: dict         # the GL census
+    rss: int  # resident set size, bytes
+    targets: int  # of which the render targets as allocated at that moment
+    objects: dict  # the GL census
 
     @property
     def other(self) -> int:
@@ -204,8 +214,14 @@ class SoakSample:
         return self.rss - self.targets
 
 
-def soak(renderer: Renderer, frames: int, samples: int = 10, seed: int = 0,
-         progress: Callable | None = None, viewports: list | None = None) -> tuple[list[SoakSample], list[str]]:
+def soak(
+    renderer: Renderer,
+    frames: int,
+    samples: int = 10,
+    seed: int = 0,
+    progress: Callable | None = None,
+    viewports: list | None = None,
+) -> tuple[list[SoakSample], list[str]]:
     """Capture and composite `frames` frames, changing camera, focus set, mode and viewport
     size at random (from `viewports` when given); sample RSS and the GL census `samples`
     times. Returns the samples and the GL errors seen."""
@@ -215,8 +231,9 @@ def soak(renderer: Renderer, frames: int, samples: int = 10, seed: int = 0,
     every = max(1, frames // samples)
     for i in range(frames):
         cam, _ = random_camera(rng, scene)
-        viewport = (random_viewport(rng, 16, 400) if viewports is None
-                    else tuple(viewports[int(rng.integers(len(viewports)))]))
+        viewport = (
+            random_viewport(rng, 16, 400) if viewports is None else tuple(viewports[int(rng.integers(len(viewports)))])
+        )
         renderer.capture(cam, viewport)
         focus = set(rng.choice(scene.count, size=int(rng.integers(0, 4)), replace=False).tolist())
         mode = str(rng.choice(["std", *MODES]))
@@ -249,7 +266,7 @@ def _reference_frame(renderer: Renderer) -> None:
     camera = Camera.orbit(scene.center, scene.radius, 30.0, 20.0, 2.2)
     renderer.capture(camera, (320, 240))
     renderer.trim()
-    for mode in MODES:     # every mode with a focus once: its shader variants exist from the first sample
+    for mode in MODES:  # every mode with a focus once: its shader variants exist from the first sample
         renderer.composite(mode, Style(focus={0}))
     for _ in range(REFERENCE_REPEATS):
         renderer.capture(camera, (320, 240))
@@ -262,7 +279,7 @@ def drift(samples: list[SoakSample], warmup: float = 0.2) -> tuple[float, dict]:
     the render targets over the kept samples, from a least-squares line through them (single
     readings swing by several percent with the driver's caches), relative to their mean.
     GL objects: last sample against the first after warm-up."""
-    kept = samples[min(len(samples) - 1, int(len(samples) * warmup)):]
+    kept = samples[min(len(samples) - 1, int(len(samples) * warmup)) :]
     frames = np.array([s.frame for s in kept], np.float64)
     other = np.array([s.other for s in kept], np.float64)
     slope = np.polyfit(frames, other, 1)[0] if len(kept) >= 2 and np.ptp(frames) > 0 else 0.0

@@ -27,10 +27,15 @@ def _progress(label: str, total: int):
     def show(done: int) -> None:
         if done % step == 0 or done == total:
             filled = int(30 * done / total)
-            print(f"\r{label:>12} [{'#' * filled}{'.' * (30 - filled)}] {done}/{total}", end="",
-                  file=sys.stderr, flush=True)
+            print(
+                f"\r{label:>12} [{'#' * filled}{'.' * (30 - filled)}] {done}/{total}",
+                end="",
+                file=sys.stderr,
+                flush=True,
+            )
             if done == total:
                 print(file=sys.stderr)
+
     return show
 
 
@@ -41,13 +46,21 @@ def _scenes(quick: bool) -> dict:
     from ..scene.generators.textured import textured_scene
     from ..scene.loader import load_scene_or_demo
 
-    return {"demo": lambda: load_scene_or_demo(None),
-            "random-2000": lambda: random_scene(200 if quick else 2000, seed=3, spread=40.0),
-            "textured-64": lambda: textured_scene(64, seed=4)}
+    return {
+        "demo": lambda: load_scene_or_demo(None),
+        "random-2000": lambda: random_scene(200 if quick else 2000, seed=3, spread=40.0),
+        "textured-64": lambda: textured_scene(64, seed=4),
+    }
 
 
-def run_reliability(sweep_frames: int, soak_frames: int, quick: bool = False, json_path: str | None = None,
-                    ctx=None, only: list[str] | None = None) -> int:
+def run_reliability(
+    sweep_frames: int,
+    soak_frames: int,
+    quick: bool = False,
+    json_path: str | None = None,
+    ctx=None,
+    only: list[str] | None = None,
+) -> int:
     """Sweep and soak on the demo, a generated 2,000-object scene and a textured scene (or
     the `only` ones); exit 1 on any failure."""
     makers = _scenes(quick)
@@ -57,15 +70,19 @@ def run_reliability(sweep_frames: int, soak_frames: int, quick: bool = False, js
     names = [name for name in makers if only is None or name in only]
     ctx = ctx or create_headless_context()
     renderer_name = str(ctx.info["GL_RENDERER"])
-    print(f"renderer: {renderer_name}; cpu: {platform.processor() or platform.machine()}; "
-          f"date: {time.strftime('%Y-%m-%d')}")
+    print(
+        f"renderer: {renderer_name}; cpu: {platform.processor() or platform.machine()}; "
+        f"date: {time.strftime('%Y-%m-%d')}"
+    )
     flags = " --quick" if quick else f" --sweep {sweep_frames} --soak {soak_frames}"
     flags += f" --scenes {','.join(only)}" if only else ""
     print(f"command: rtta bench reliability{flags}")
     report, failed = {"renderer": renderer_name, "scenes": []}, False
-    print(f"{'scene':>12} {'objects':>7} {'sweep frames':>12} {'failed':>6} {'worst colour':>12} "
-          f"{'worst depth':>11} {'s':>7} | {'soak frames':>11} {'RSS MiB':>15} {'drift':>7} "
-          f"{'GL objects':>10} {'GL errors':>9} {'s':>7}")
+    print(
+        f"{'scene':>12} {'objects':>7} {'sweep frames':>12} {'failed':>6} {'worst colour':>12} "
+        f"{'worst depth':>11} {'s':>7} | {'soak frames':>11} {'RSS MiB':>15} {'drift':>7} "
+        f"{'GL objects':>10} {'GL errors':>9} {'s':>7}"
+    )
     for name in names:
         scene = makers[name]()
         r = Renderer(ctx, scene)
@@ -79,24 +96,40 @@ def run_reliability(sweep_frames: int, soak_frames: int, quick: bool = False, js
         start, end = samples[min(len(samples) - 1, len(samples) // 5)], samples[-1]
         objs = f"{sum(start.objects.values())}->{sum(end.objects.values())}"
         rss = f"{start.rss / 2**20:.0f}->{end.rss / 2**20:.0f}"
-        print(f"{name:>12} {scene.count:>7} {sw.frames:>12} {len(sw.failures):>6} {sw.worst_color:>12.4f} "
-              f"{sw.worst_depth:>11.2e} {t1 - t0:>7.1f} | {soak_frames:>11} {rss:>15} {rss_drift:>+7.1%} "
-              f"{objs:>10} {len(errors):>9} {t2 - t1:>7.1f}")
+        print(
+            f"{name:>12} {scene.count:>7} {sw.frames:>12} {len(sw.failures):>6} {sw.worst_color:>12.4f} "
+            f"{sw.worst_depth:>11.2e} {t1 - t0:>7.1f} | {soak_frames:>11} {rss:>15} {rss_drift:>+7.1%} "
+            f"{objs:>10} {len(errors):>9} {t2 - t1:>7.1f}"
+        )
         for frame, kind, check in sw.failures[:5]:
             print(f"   failed sweep frame {frame} ({kind}): {check}")
         failed |= bool(sw.failures or errors) or abs(rss_drift) > 0.05 or any(objects_drift.values())
-        report["scenes"].append({"name": name, "objects": scene.count, "sweep_frames": sw.frames,
-                                 "sweep_failures": len(sw.failures), "kinds": sw.kinds,
-                                 "worst_color": sw.worst_color, "worst_depth": sw.worst_depth,
-                                 "soak_frames": soak_frames, "rss_drift": rss_drift,
-                                 "gl_objects_drift": objects_drift, "gl_errors": len(errors),
-                                 "samples": [(s.frame, s.rss, s.targets, s.objects) for s in samples]})
-    print("worst colour: smallest fraction of pixels within 3/255 of STD in any frame (ties between coincident "
-          "surfaces of two objects count as equal); worst depth: largest |sprites - STD| window depth off "
-          "silhouettes")
-    print("RSS: first sample after warm-up (20% of the soak) -> last; drift: change of RSS without the render "
-          "targets after warm-up (least-squares line through the samples, relative to their mean); GL objects "
-          "counted with glIs* over every name handed out")
+        report["scenes"].append(
+            {
+                "name": name,
+                "objects": scene.count,
+                "sweep_frames": sw.frames,
+                "sweep_failures": len(sw.failures),
+                "kinds": sw.kinds,
+                "worst_color": sw.worst_color,
+                "worst_depth": sw.worst_depth,
+                "soak_frames": soak_frames,
+                "rss_drift": rss_drift,
+                "gl_objects_drift": objects_drift,
+                "gl_errors": len(errors),
+                "samples": [(s.frame, s.rss, s.targets, s.objects) for s in samples],
+            }
+        )
+    print(
+        "worst colour: smallest fraction of pixels within 3/255 of STD in any frame (ties between coincident "
+        "surfaces of two objects count as equal); worst depth: largest |sprites - STD| window depth off "
+        "silhouettes"
+    )
+    print(
+        "RSS: first sample after warm-up (20% of the soak) -> last; drift: change of RSS without the render "
+        "targets after warm-up (least-squares line through the samples, relative to their mean); GL objects "
+        "counted with glIs* over every name handed out"
+    )
     if json_path:
         Path(json_path).write_text(json.dumps(report, indent=1))
     return 1 if failed else 0

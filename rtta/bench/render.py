@@ -57,6 +57,7 @@ def _gl_timed(ctx, fn):
     def run():
         fn()
         ctx.finish()
+
     return run
 
 
@@ -68,11 +69,17 @@ def capture_row(ctx, scene, viewport, frames: int, rtt: bool = True) -> dict:
     row = {"objects": scene.count, "vertices": scene.vertex_count}
     row["std_ms"] = _median_ms(_gl_timed(ctx, lambda: r.std(cam, viewport)), frames)
     visible = np.flatnonzero(r.parameterize(cam, viewport).visible)
-    row["rtt_ms"] = (_median_ms(_gl_timed(ctx, lambda: r.rtt(cam, viewport, visible)), max(1, frames // 3), 1)
-                     if rtt else float("nan"))
+    row["rtt_ms"] = (
+        _median_ms(_gl_timed(ctx, lambda: r.rtt(cam, viewport, visible)), max(1, frames // 3), 1)
+        if rtt
+        else float("nan")
+    )
     row["rtta_gs_ms"] = _median_ms(_gl_timed(ctx, lambda: r.capture(cam, viewport, "gs")), frames)
-    row["rtta_vs_ms"] = (_median_ms(_gl_timed(ctx, lambda: r.capture(cam, viewport, "vs")), frames)
-                         if r.caps.vertex_layer else float("nan"))
+    row["rtta_vs_ms"] = (
+        _median_ms(_gl_timed(ctx, lambda: r.capture(cam, viewport, "vs")), frames)
+        if r.caps.vertex_layer
+        else float("nan")
+    )
     row["param_ms"] = _median_ms(lambda: parameterize(corners, vpm, viewport, border=1), frames * 5)
     row["atlas"] = list(r.parameterize(cam, viewport).atlas_size)
     r.release()
@@ -90,8 +97,7 @@ def param_scaling(counts, viewport, frames: int) -> list[dict]:
     return out
 
 
-def run_capture(viewport: tuple[int, int], quick: bool = False, json_path: str | None = None,
-                ctx=None) -> int:
+def run_capture(viewport: tuple[int, int], quick: bool = False, json_path: str | None = None, ctx=None) -> int:
     ctx = ctx or create_headless_context()
     renderer = str(ctx.info["GL_RENDERER"])
     frames = 3 if quick else 15
@@ -100,25 +106,33 @@ def run_capture(viewport: tuple[int, int], quick: bool = False, json_path: str |
         if quick:
             vertices = min(vertices, 60000)
         rows.append(capture_row(ctx, table1_scene(objects, vertices), viewport, frames))
-    scaling = param_scaling([100, 1000] if quick else [100, 300, 1000, 3000, 10000], viewport,
-                            5 if quick else 21)
+    scaling = param_scaling([100, 1000] if quick else [100, 300, 1000, 3000, 10000], viewport, 5 if quick else 21)
     _print_capture(rows, scaling, renderer, viewport)
     if json_path:
-        Path(json_path).write_text(json.dumps({"renderer": renderer, "viewport": list(viewport),
-                                               "scenes": rows, "param_scaling": scaling}, indent=1))
+        Path(json_path).write_text(
+            json.dumps(
+                {"renderer": renderer, "viewport": list(viewport), "scenes": rows, "param_scaling": scaling}, indent=1
+            )
+        )
     return 0
 
 
 def _print_capture(rows, scaling, renderer, viewport) -> None:
-    print(f"renderer: {renderer}; cpu: {platform.processor() or platform.machine()}; "
-          f"viewport {viewport[0]}x{viewport[1]}; median ms per frame")
-    print(f"{'objects':>8} {'vertices':>9} {'STD':>8} {'RTT':>9} {'RTTA-GS':>8} {'RTTA-VS':>8} "
-          f"{'param':>7} {'GS/STD':>7} {'VS/STD':>7} {'RTT/VS':>7}  atlas")
+    print(
+        f"renderer: {renderer}; cpu: {platform.processor() or platform.machine()}; "
+        f"viewport {viewport[0]}x{viewport[1]}; median ms per frame"
+    )
+    print(
+        f"{'objects':>8} {'vertices':>9} {'STD':>8} {'RTT':>9} {'RTTA-GS':>8} {'RTTA-VS':>8} "
+        f"{'param':>7} {'GS/STD':>7} {'VS/STD':>7} {'RTT/VS':>7}  atlas"
+    )
     for r in rows:
-        print(f"{r['objects']:>8} {r['vertices']:>9} {r['std_ms']:>8.2f} {r['rtt_ms']:>9.2f} "
-              f"{r['rtta_gs_ms']:>8.2f} {r['rtta_vs_ms']:>8.2f} {r['param_ms']:>7.3f} "
-              f"{r['rtta_gs_ms'] / r['std_ms']:>7.2f} {r['rtta_vs_ms'] / r['std_ms']:>7.2f} "
-              f"{r['rtt_ms'] / r['rtta_vs_ms']:>7.2f}  {r['atlas']}")
+        print(
+            f"{r['objects']:>8} {r['vertices']:>9} {r['std_ms']:>8.2f} {r['rtt_ms']:>9.2f} "
+            f"{r['rtta_gs_ms']:>8.2f} {r['rtta_vs_ms']:>8.2f} {r['param_ms']:>7.3f} "
+            f"{r['rtta_gs_ms'] / r['std_ms']:>7.2f} {r['rtta_vs_ms'] / r['std_ms']:>7.2f} "
+            f"{r['rtt_ms'] / r['rtta_vs_ms']:>7.2f}  {r['atlas']}"
+        )
     print("parameterization + packing scaling:")
     print(f"{'objects':>8} {'ms':>8} {'ms/(n log2 n) x1e3':>20}")
     for s in scaling:
@@ -139,8 +153,10 @@ def composite_row(ctx, name, scene, viewport, frames: int, settings=None) -> dic
     full = Renderer(ctx, scene, Settings(border=r.settings.border))
     cam = Camera.orbit(scene.center, scene.radius, 30.0, 20.0, 2.2)
     focus = {0, scene.count // 2}
-    styles = {"full": Style(focus=focus, ao_objects="all", edge_objects="all"),
-              "object": Style(focus=focus, order="object")}
+    styles = {
+        "full": Style(focus=focus, ao_objects="all", edge_objects="all"),
+        "object": Style(focus=focus, order="object"),
+    }
 
     def frame(renderer, mode, style):
         renderer.capture(cam, viewport, focus=style.focus, normals=renderer.needs_normals(mode), ids=False)
@@ -153,11 +169,15 @@ def composite_row(ctx, name, scene, viewport, frames: int, settings=None) -> dic
     times = _interleaved_ms(fns, frames)
     std = np.array(times["std"])
     names = [n for n in fns if n != "std"]
-    row = {"name": name, "objects": scene.count, "vertices": scene.vertex_count,
-           "std_ms": float(np.median(std)),
-           "modes": {n: float(np.median(times[n])) for n in names},
-           "ratios": {n: float(np.median(np.array(times[n]) / std)) for n in names},
-           "pixel_over_object": float(np.median(np.divide(times["transparent"], times["transparent object"])))}
+    row = {
+        "name": name,
+        "objects": scene.count,
+        "vertices": scene.vertex_count,
+        "std_ms": float(np.median(std)),
+        "modes": {n: float(np.median(times[n])) for n in names},
+        "ratios": {n: float(np.median(np.array(times[n]) / std)) for n in names},
+        "pixel_over_object": float(np.median(np.divide(times["transparent"], times["transparent object"]))),
+    }
     want = frame(full, "ghosted-ao", styles["full"]).read()[0][..., :3].astype(np.int64)
     got = frame(r, "ghosted-ao", Style(focus=focus)).read()[0][..., :3].astype(np.int64)
     diff = np.abs(got - want)
@@ -194,8 +214,13 @@ def composite_scenes(specs: list[str] | None, quick: bool) -> list[tuple[str, ob
     return out
 
 
-def run_composite(viewport: tuple[int, int], quick: bool = False, json_path: str | None = None,
-                  ctx=None, scenes: list[str] | None = None) -> int:
+def run_composite(
+    viewport: tuple[int, int],
+    quick: bool = False,
+    json_path: str | None = None,
+    ctx=None,
+    scenes: list[str] | None = None,
+) -> int:
     ctx = ctx or create_headless_context()
     renderer = str(ctx.info["GL_RENDERER"])
     frames = 3 if quick else 11
@@ -203,31 +228,41 @@ def run_composite(viewport: tuple[int, int], quick: bool = False, json_path: str
     rows = [composite_row(ctx, name, scene, viewport, frames) for name, scene in scenes]
     _print_composite(rows, renderer, viewport, frames)
     if json_path:
-        Path(json_path).write_text(json.dumps({"renderer": renderer, "viewport": list(viewport),
-                                               "scenes": rows}, indent=1))
+        Path(json_path).write_text(
+            json.dumps({"renderer": renderer, "viewport": list(viewport), "scenes": rows}, indent=1)
+        )
     return 0
 
 
 def _print_composite(rows, renderer, viewport, frames) -> None:
-    print(f"renderer: {renderer}; viewport {viewport[0]}x{viewport[1]}; median ms per full frame "
-          f"(capture + post + composite) over {frames} rounds (STD and every column in turn, each turn one "
-          f"untimed and one timed frame); in brackets the median over rounds of the frame's ratio to STD "
-          f"in the same round")
+    print(
+        f"renderer: {renderer}; viewport {viewport[0]}x{viewport[1]}; median ms per full frame "
+        f"(capture + post + composite) over {frames} rounds (STD and every column in turn, each turn one "
+        f"untimed and one timed frame); in brackets the median over rounds of the frame's ratio to STD "
+        f"in the same round"
+    )
     names = list(rows[0]["modes"])
-    print(f"{'scene':>13} {'STD':>8} " + " ".join(f"{m:>18}" for m in names)
-          + f" {'pixel/obj':>9} {'ao >8/255':>9} {'ao MAE':>7} {'recomposite':>16}")
+    print(
+        f"{'scene':>13} {'STD':>8} "
+        + " ".join(f"{m:>18}" for m in names)
+        + f" {'pixel/obj':>9} {'ao >8/255':>9} {'ao MAE':>7} {'recomposite':>16}"
+    )
     for r in rows:
         cells = " ".join(f"{r['modes'][m]:>9.2f} ({r['ratios'][m]:>5.2f}x)" for m in names)
         rc, err = r["recomposite_ms"], r["ao_error"]
-        print(f"{r['name']:>13} {r['std_ms']:>8.2f} {cells} {r['pixel_over_object']:>8.2f}x "
-              f"{100 * err['over_8']:>8.3f}% {255 * err['mae']:>7.3f} {rc:>8.2f} "
-              f"({rc / r['modes']['ghosted-ao']:.2f}x)")
-    print("columns at the default settings (transparent: --order pixel), except 'ghosted-ao full' (AO and edges on "
-          "every object, every region at scale 1) and 'transparent object' (--order object); pixel/obj: transparent "
-          "(pixel) over object order, paired per round; ao >8/255, ao MAE (in 1/255): default ghosted-ao against "
-          "full quality; "
-          "recomposite: ghosted-ao after a focus change (post for the objects whose role changed + "
-          "compositing), ratio to a full default ghosted-ao frame")
+        print(
+            f"{r['name']:>13} {r['std_ms']:>8.2f} {cells} {r['pixel_over_object']:>8.2f}x "
+            f"{100 * err['over_8']:>8.3f}% {255 * err['mae']:>7.3f} {rc:>8.2f} "
+            f"({rc / r['modes']['ghosted-ao']:.2f}x)"
+        )
+    print(
+        "columns at the default settings (transparent: --order pixel), except 'ghosted-ao full' (AO and edges on "
+        "every object, every region at scale 1) and 'transparent object' (--order object); pixel/obj: transparent "
+        "(pixel) over object order, paired per round; ao >8/255, ao MAE (in 1/255): default ghosted-ao against "
+        "full quality; "
+        "recomposite: ghosted-ao after a focus change (post for the objects whose role changed + "
+        "compositing), ratio to a full default ghosted-ao frame"
+    )
 
 
 def _rectpack(w, h, W, H):
@@ -238,7 +273,7 @@ def _rectpack(w, h, W, H):
         packer.add_rect(int(a), int(b), rid=i)
     packer.add_bin(int(W), int(H), count=float("inf"))
     packer.pack()
-    rects = np.array(packer.rect_list())           # (bin, x, y, w, h, rid)
+    rects = np.array(packer.rect_list())  # (bin, x, y, w, h, rid)
     extent = (rects[:, 1] + rects[:, 3]).max() * (rects[:, 2] + rects[:, 4]).max()
     return len(packer), float(extent) * len(packer)
 
@@ -247,8 +282,7 @@ def _rpack(w, h, W, H):
     import rpack
 
     try:
-        pos = np.array(rpack.pack(list(zip(w.tolist(), h.tolist(), strict=True)),
-                                  max_width=int(W), max_height=int(H)))
+        pos = np.array(rpack.pack(list(zip(w.tolist(), h.tolist(), strict=True)), max_width=int(W), max_height=int(H)))
     except rpack.PackingImpossibleError:
         return float("nan")
     return float((pos[:, 0] + w).max() * (pos[:, 1] + h).max())
@@ -262,12 +296,16 @@ def run_packing(quick: bool = False, json_path: str | None = None) -> int:
     counts = [10, 100, 1000] if quick else [10, 100, 1000, 3000, 10000]
     for n in counts:
         side = rng.lognormal(np.log(1024 / np.sqrt(n) / 1.6), 0.5, (n, 2))
-        w, h = (np.clip(side, 1, W).astype(np.int64).T)
+        w, h = np.clip(side, 1, W).astype(np.int64).T
         area = float((w * h).sum())
         frames = 5 if quick else 11
         p = pack_shelves(w, h, W, H)
-        row = {"objects": n, "shelf_ms": _median_ms(lambda w=w, h=h: pack_shelves(w, h, W, H), frames),
-               "shelf_util": area / (p.width * p.height * p.layers), "shelf_layers": p.layers}
+        row = {
+            "objects": n,
+            "shelf_ms": _median_ms(lambda w=w, h=h: pack_shelves(w, h, W, H), frames),
+            "shelf_util": area / (p.width * p.height * p.layers),
+            "shelf_layers": p.layers,
+        }
         if n <= (100 if quick else 1000):
             t0 = time.perf_counter()
             bins, used = _rectpack(w, h, W, H)
@@ -280,13 +318,17 @@ def run_packing(quick: bool = False, json_path: str | None = None) -> int:
             row["rpack_util"] = area / used
         rows.append(row)
     print("packing into layers of at most 1024x1024; util = region area / (used width x height x layers)")
-    print(f"{'objects':>8} {'shelf ms':>9} {'util':>6} {'layers':>6} {'rectpack ms':>12} {'util':>6} "
-          f"{'layers':>6} {'rpack ms':>9} {'util':>6}")
+    print(
+        f"{'objects':>8} {'shelf ms':>9} {'util':>6} {'layers':>6} {'rectpack ms':>12} {'util':>6} "
+        f"{'layers':>6} {'rpack ms':>9} {'util':>6}"
+    )
     for r in rows:
-        print(f"{r['objects']:>8} {r['shelf_ms']:>9.3f} {r['shelf_util']:>6.3f} {r['shelf_layers']:>6} "
-              f"{r.get('rectpack_ms', float('nan')):>12.1f} {r.get('rectpack_util', float('nan')):>6.3f} "
-              f"{r.get('rectpack_layers', '-'):>6} {r.get('rpack_ms', float('nan')):>9.1f} "
-              f"{r.get('rpack_util', float('nan')):>6.3f}")
+        print(
+            f"{r['objects']:>8} {r['shelf_ms']:>9.3f} {r['shelf_util']:>6.3f} {r['shelf_layers']:>6} "
+            f"{r.get('rectpack_ms', float('nan')):>12.1f} {r.get('rectpack_util', float('nan')):>6.3f} "
+            f"{r.get('rectpack_layers', '-'):>6} {r.get('rpack_ms', float('nan')):>9.1f} "
+            f"{r.get('rpack_util', float('nan')):>6.3f}"
+        )
     if json_path:
         Path(json_path).write_text(json.dumps({"rows": rows}, indent=1))
     return 0

@@ -23,9 +23,15 @@ from .reliability_table import _progress
 
 BEGIN = "<!-- rtta bench report: begin (generated; edit report.py, not this block) -->"
 END = "<!-- rtta bench report: end -->"
-SECTIONS = ("1. Reconstruction error against frame time", "2. Packing", "3. Capture cost",
-            "4. Numerical stability", "5. Layered depth images: error against resolution and time",
-            "6. Material atlas", "7. Importance: context scale, AO on the focus, transparency order")
+SECTIONS = (
+    "1. Reconstruction error against frame time",
+    "2. Packing",
+    "3. Capture cost",
+    "4. Numerical stability",
+    "5. Layered depth images: error against resolution and time",
+    "6. Material atlas",
+    "7. Importance: context scale, AO on the focus, transparency order",
+)
 
 
 def cpu_name() -> str:
@@ -61,13 +67,20 @@ def _ticker(total: int):
         done[0] += 1
         if show:
             show(done[0])
+
     return tick
 
 
 def _steps(quick: bool, scenes: int, meshes: int) -> int:
     """Ticks of the whole run, as report_runs' loops make them."""
-    return (scenes * (4 if quick else 16) + 2 * (2 if quick else 4) + 2 * min(scenes, 2)
-            + (4 if quick else 12) + (9 if quick else 17) + meshes)
+    return (
+        scenes * (4 if quick else 16)
+        + 2 * (2 if quick else 4)
+        + 2 * min(scenes, 2)
+        + (4 if quick else 12)
+        + (9 if quick else 17)
+        + meshes
+    )
 
 
 def run_report(quick: bool = False, markdown: str | None = None, plots: str | None = None, ctx=None) -> int:
@@ -84,8 +97,13 @@ def run_report(quick: bool = False, markdown: str | None = None, plots: str | No
         raise RttaError("needs matplotlib for its plots: pip install 'rtta[report]'") from None
     ctx = ctx or shared_context()
     viewport = (256, 256) if quick else (1024, 1024)
-    header = {"renderer": str(ctx.info["GL_RENDERER"]), "cpu": cpu_name(), "date": time.strftime("%Y-%m-%d"),
-              "command": "rtta bench report" + (" --quick" if quick else ""), "viewport": viewport}
+    header = {
+        "renderer": str(ctx.info["GL_RENDERER"]),
+        "cpu": cpu_name(),
+        "date": time.strftime("%Y-%m-%d"),
+        "command": "rtta bench report" + (" --quick" if quick else ""),
+        "viewport": viewport,
+    }
     scenes, meshes = runs.report_scenes(quick), runs.ldi_meshes(quick)
     important = importance.importance_scenes(scenes, quick)
     tick = _ticker(_steps(quick, len(scenes), len(meshes)) + importance.steps(len(important), quick))
@@ -126,23 +144,31 @@ def write_block(path: Path, text: str) -> None:
 
 
 def _stamp(h: dict) -> str:
-    return (f"renderer `{h['renderer']}`; CPU {h['cpu']}; {h['date']}; command `{h['command']}`; "
-            f"viewport {h['viewport'][0]}x{h['viewport'][1]} unless stated")
+    return (
+        f"renderer `{h['renderer']}`; CPU {h['cpu']}; {h['date']}; command `{h['command']}`; "
+        f"viewport {h['viewport'][0]}x{h['viewport'][1]} unless stated"
+    )
 
 
 def render_markdown(res: dict, h: dict, images: dict, md_dir: Path) -> str:
     parts = ["## Error against run time (`rtta bench report`)", ""]
-    for title, body, key in ((SECTIONS[0], _error_md(res["error"]), "error"),
-                             (SECTIONS[1], _packing_md(res["packing"], res["bounds"]), "packing"),
-                             (SECTIONS[2], _capture_md(res["capture"]), "capture"),
-                             (SECTIONS[3], _stability_md(res["stability"]), "stability"),
-                             (SECTIONS[4], _ldi_md(res["ldi"]), "ldi")):
+    for title, body, key in (
+        (SECTIONS[0], _error_md(res["error"]), "error"),
+        (SECTIONS[1], _packing_md(res["packing"], res["bounds"]), "packing"),
+        (SECTIONS[2], _capture_md(res["capture"]), "capture"),
+        (SECTIONS[3], _stability_md(res["stability"]), "stability"),
+        (SECTIONS[4], _ldi_md(res["ldi"]), "ldi"),
+    ):
         parts += [f"### {title}", "", _stamp(h), "", body, ""]
         if key in images:
             rel = os.path.relpath(images[key].resolve(), md_dir.resolve())
             parts += [f"![{title}]({Path(rel).as_posix()})", ""]
-    parts += [f"### {SECTIONS[5]}", "", "Measured by `rtta bench material`, not by this report: see "
-              "\"Material atlas and batching (issue 6)\" above.", ""]
+    parts += [
+        f"### {SECTIONS[5]}",
+        "",
+        'Measured by `rtta bench material`, not by this report: see "Material atlas and batching (issue 6)" above.',
+        "",
+    ]
     parts += [f"### {SECTIONS[6]}", "", _stamp(h), "", _importance_md(res["importance"]), ""]
     if "importance" in images:
         rel = os.path.relpath(images["importance"].resolve(), md_dir.resolve())
@@ -151,78 +177,212 @@ def render_markdown(res: dict, h: dict, images: dict, md_dir: Path) -> str:
 
 
 def _error_md(rows: list[dict]) -> str:
-    cols = ["scene", "scale", "border", "frame ms", "pixels off > 3/255", "depth RMS", "depth max", "holes",
-            "atlas WxHxL", "pareto"]
+    cols = [
+        "scene",
+        "scale",
+        "border",
+        "frame ms",
+        "pixels off > 3/255",
+        "depth RMS",
+        "depth max",
+        "holes",
+        "atlas WxHxL",
+        "pareto",
+    ]
     front = runs.pareto(rows)
-    body = [[r["scene"], r["scale"], r["border"], f"{r['frame_ms']:.1f}", f"{r['color_off']:.3%}",
-             f"{r['depth_rms']:.2e}", f"{r['depth_max']:.2e}", r["holes"], "x".join(map(str, r["atlas"])),
-             "*" if id(r) in front else ""] for r in rows]
-    note = ("sprites against STD from the same camera (orbit 30°, 20°, 2.2 radii); frame = capture + sprites "
-            "composite, median after glFinish; depth = window depth where both cover the pixel; holes = pixels "
-            "STD covers and sprites do not; pareto `*`: no other setting of the scene is both faster and "
-            "more accurate.")
+    body = [
+        [
+            r["scene"],
+            r["scale"],
+            r["border"],
+            f"{r['frame_ms']:.1f}",
+            f"{r['color_off']:.3%}",
+            f"{r['depth_rms']:.2e}",
+            f"{r['depth_max']:.2e}",
+            r["holes"],
+            "x".join(map(str, r["atlas"])),
+            "*" if id(r) in front else "",
+        ]
+        for r in rows
+    ]
+    note = (
+        "sprites against STD from the same camera (orbit 30°, 20°, 2.2 radii); frame = capture + sprites "
+        "composite, median after glFinish; depth = window depth where both cover the pixel; holes = pixels "
+        "STD covers and sprites do not; pareto `*`: no other setting of the scene is both faster and "
+        "more accurate."
+    )
     return note + "\n\n" + table(cols, body)
 
 
 def _packing_md(rows: list[dict], bounds: list[dict]) -> str:
-    cols = ["objects", "packer / bounds", "ms per frame", "bounds setup ms", "region area / atlas",
-            "covered texels / atlas", "layers"]
-    body = [[r["objects"], r["packer"], _g(r["ms"]), _g(r["setup_ms"]), _g(r["region_util"]),
-             _g(r["covered_util"]), r["layers"]] for r in rows]
-    note = ("random boxes and spheres (64 vertices each); shelf = our packer inside parameterization (ms "
-            "= the whole parameterization); rectpack and rectangle-packer pack the same AABB regions once "
-            "(ms = that one packing; `-`: rectangle-packer found no packing within one layer); obb = "
-            "oriented bounds (principal-axes boxes computed once per scene: setup).")
-    cols2 = ["scene", "bounds", "setup ms (once)", "parameterize ms", "capture ms", "region area (px)",
-             "atlas texels", "covered texels / atlas", "atlas WxHxL"]
-    body2 = [[r["scene"], r["bounds"], _g(r["setup_ms"]), _g(r["param_ms"]), _g(r["capture_ms"]), r["region_px"],
-              r["atlas_texels"], _g(r["covered_util"]), "x".join(map(str, r["atlas"]))] for r in bounds]
-    note2 = ("The paper's AABB against our oriented bounds (per object, the intersection of the projections "
-             "of its AABB and of its principal-axes box) on assemblies, same camera as section 1:")
+    cols = [
+        "objects",
+        "packer / bounds",
+        "ms per frame",
+        "bounds setup ms",
+        "region area / atlas",
+        "covered texels / atlas",
+        "layers",
+    ]
+    body = [
+        [
+            r["objects"],
+            r["packer"],
+            _g(r["ms"]),
+            _g(r["setup_ms"]),
+            _g(r["region_util"]),
+            _g(r["covered_util"]),
+            r["layers"],
+        ]
+        for r in rows
+    ]
+    note = (
+        "random boxes and spheres (64 vertices each); shelf = our packer inside parameterization (ms "
+        "= the whole parameterization); rectpack and rectangle-packer pack the same AABB regions once "
+        "(ms = that one packing; `-`: rectangle-packer found no packing within one layer); obb = "
+        "oriented bounds (principal-axes boxes computed once per scene: setup)."
+    )
+    cols2 = [
+        "scene",
+        "bounds",
+        "setup ms (once)",
+        "parameterize ms",
+        "capture ms",
+        "region area (px)",
+        "atlas texels",
+        "covered texels / atlas",
+        "atlas WxHxL",
+    ]
+    body2 = [
+        [
+            r["scene"],
+            r["bounds"],
+            _g(r["setup_ms"]),
+            _g(r["param_ms"]),
+            _g(r["capture_ms"]),
+            r["region_px"],
+            r["atlas_texels"],
+            _g(r["covered_util"]),
+            "x".join(map(str, r["atlas"])),
+        ]
+        for r in bounds
+    ]
+    note2 = (
+        "The paper's AABB against our oriented bounds (per object, the intersection of the projections "
+        "of its AABB and of its principal-axes box) on assemblies, same camera as section 1:"
+    )
     return note + "\n\n" + table(cols, body) + "\n\n" + note2 + "\n\n" + table(cols2, body2)
 
 
 def _capture_md(rows: list[dict]) -> str:
     cols = ["sweep", "objects", "vertices", "STD ms", "RTT ms", "RTTA-GS ms", "RTTA-VS ms", "RTT / best RTTA"]
-    body = [[r["sweep"], r["objects"], r["vertices"], _g(r["std_ms"]), _g(r["rtt_ms"]), _g(r["rtta_gs_ms"]),
-             _g(r["rtta_vs_ms"]), _g(r["rtt_ms"] / min(r["rtta_gs_ms"], r["rtta_vs_ms"]))] for r in rows]
+    body = [
+        [
+            r["sweep"],
+            r["objects"],
+            r["vertices"],
+            _g(r["std_ms"]),
+            _g(r["rtt_ms"]),
+            _g(r["rtta_gs_ms"]),
+            _g(r["rtta_vs_ms"]),
+            _g(r["rtt_ms"] / min(r["rtta_gs_ms"], r["rtta_vs_ms"])),
+        ]
+        for r in rows
+    ]
     cross = runs.crossover(rows)
-    where = (f"RTTA is faster than RTT from **{cross} objects** on (the paper: about 20)." if cross
-             else "RTTA never stays faster than RTT in this sweep.")
-    return ("tori (Table 1 generator); objects sweep at a fixed vertex total, vertices sweep at 20 objects. "
-            + where + "\n\n" + table(cols, body))
+    where = (
+        f"RTTA is faster than RTT from **{cross} objects** on (the paper: about 20)."
+        if cross
+        else "RTTA never stays faster than RTT in this sweep."
+    )
+    return (
+        "tori (Table 1 generator); objects sweep at a fixed vertex total, vertices sweep at 20 objects. "
+        + where
+        + "\n\n"
+        + table(cols, body)
+    )
 
 
 def _stability_md(rows: list[dict]) -> str:
-    cols = ["sweep", "value", "frames", "pixels off > 3/255 (worst)", "depth max", "NaN frames", "hole frames",
-            "GL-error frames", "what the program said"]
-    body = [[r["sweep"], f"{r['value']:g}", r["frames"], f"{r['color_off']:.3%}", f"{r['depth_max']:.2e}",
-             r["nan_frames"], r["hole_frames"], r["gl_error_frames"], "; ".join(r["warnings"]) or "-"]
-            for r in rows]
-    note = ("near/far: the demo with the near plane at far/ratio; offset: the demo rebuilt at (1, 0.5, -1) x "
-            "offset; size ratio: a unit sphere touching one 1/ratio its size. Worst over the frames (orbits).")
+    cols = [
+        "sweep",
+        "value",
+        "frames",
+        "pixels off > 3/255 (worst)",
+        "depth max",
+        "NaN frames",
+        "hole frames",
+        "GL-error frames",
+        "what the program said",
+    ]
+    body = [
+        [
+            r["sweep"],
+            f"{r['value']:g}",
+            r["frames"],
+            f"{r['color_off']:.3%}",
+            f"{r['depth_max']:.2e}",
+            r["nan_frames"],
+            r["hole_frames"],
+            r["gl_error_frames"],
+            "; ".join(r["warnings"]) or "-",
+        ]
+        for r in rows
+    ]
+    note = (
+        "near/far: the demo with the near plane at far/ratio; offset: the demo rebuilt at (1, 0.5, -1) x "
+        "offset; size ratio: a unit sphere touching one 1/ratio its size. Worst over the frames (orbits)."
+    )
     return note + "\n\n" + table(cols, body)
 
 
 def _ldi_md(rows: list[dict]) -> str:
     cols = ["mesh", "N", "layers", "points", "error", "peel ms", "test ms"]
-    body = [[r["mesh"], r["resolution"], r["layers"], r["points"], f"{r['error']:.5f}", _g(r["peel_ms"]),
-             _g(r["test_ms"])] for r in rows]
-    return ("error = fraction of random points in the bounding box classified unlike trimesh.contains; test ms "
-            "= upload, test and read back, best of 3.\n\n" + table(cols, body))
+    body = [
+        [r["mesh"], r["resolution"], r["layers"], r["points"], f"{r['error']:.5f}", _g(r["peel_ms"]), _g(r["test_ms"])]
+        for r in rows
+    ]
+    return (
+        "error = fraction of random points in the bounding box classified unlike trimesh.contains; test ms "
+        "= upload, test and read back, best of 3.\n\n" + table(cols, body)
+    )
 
 
 def _importance_md(rows: list[dict]) -> str:
     tol, budget = importance.TOLERANCE, importance.BUDGET
-    cols = ["scene", "mode", "context scale", "AO on", "order", "frame ms", "x STD", f"pixels > {tol}/255",
-            "MAE /255", "default"]
-    body = [[r["scene"], r["mode"], f"{r['scale']:g}", r["ao"], r["order"], f"{r['frame_ms']:.1f}",
-             f"{r['ratio']:.2f}", f"{r['over']:.3%}", f"{255 * r['mae']:.2f}",
-             "**yes**" if r["default"] else ""] for r in rows]
-    note = (f"Focus: objects 0 and n/2; orbit 30°, 20°, 2.2 radii. Frame: capture + post + composite, median "
-            f"over rounds in which STD and every setting take turns; x STD: the median over rounds of the "
-            f"ratio within a round. Error against the full-quality output of the "
-            f"same mode (context scale 1, AO and edges on every object; `transparent`: the exact per-pixel "
-            f"order). A default must keep at most {budget:.0%} of pixels over {tol}/255 in `ghosted` and "
-            f"`ghosted-ao` on every scene; among those it is the cheapest.")
+    cols = [
+        "scene",
+        "mode",
+        "context scale",
+        "AO on",
+        "order",
+        "frame ms",
+        "x STD",
+        f"pixels > {tol}/255",
+        "MAE /255",
+        "default",
+    ]
+    body = [
+        [
+            r["scene"],
+            r["mode"],
+            f"{r['scale']:g}",
+            r["ao"],
+            r["order"],
+            f"{r['frame_ms']:.1f}",
+            f"{r['ratio']:.2f}",
+            f"{r['over']:.3%}",
+            f"{255 * r['mae']:.2f}",
+            "**yes**" if r["default"] else "",
+        ]
+        for r in rows
+    ]
+    note = (
+        f"Focus: objects 0 and n/2; orbit 30°, 20°, 2.2 radii. Frame: capture + post + composite, median "
+        f"over rounds in which STD and every setting take turns; x STD: the median over rounds of the "
+        f"ratio within a round. Error against the full-quality output of the "
+        f"same mode (context scale 1, AO and edges on every object; `transparent`: the exact per-pixel "
+        f"order). A default must keep at most {budget:.0%} of pixels over {tol}/255 in `ghosted` and "
+        f"`ghosted-ao` on every scene; among those it is the cheapest."
+    )
     return note + "\n\n" + table(cols, body)

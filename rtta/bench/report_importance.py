@@ -16,8 +16,8 @@ from ..renderer.renderer import Renderer, Settings
 from .render import _gl_timed, _interleaved_ms
 
 SCALES = (1.0, 0.5, 0.25)
-TOLERANCE = 8            # /255: a pixel is off beyond it
-BUDGET = 0.01            # share of pixels off that a default may leave
+TOLERANCE = 8  # /255: a pixel is off beyond it
+BUDGET = 0.01  # share of pixels off that a default may leave
 
 
 def _configs(quick: bool) -> list[dict]:
@@ -54,6 +54,7 @@ def _frame(r: Renderer, cam, viewport, mode: str, style: Style):
     def frame():
         r.capture(cam, viewport, focus=style.focus, normals=r.needs_normals(mode), ids=False)
         return r.composite(mode, style)
+
     return frame
 
 
@@ -70,22 +71,32 @@ def importance_rows(ctx, scenes, viewport, quick: bool, tick) -> list[dict]:
         focus = {0, scene.count // 2}
         configs = _configs(quick)
         renderers = [Renderer(ctx, scene, Settings(context_scale=c["scale"])) for c in configs]
-        frames_of = {k: _frame(r, cam, viewport, c["mode"], _style(c, focus))
-                     for k, (c, r) in enumerate(zip(configs, renderers, strict=True))}
+        frames_of = {
+            k: _frame(r, cam, viewport, c["mode"], _style(c, focus))
+            for k, (c, r) in enumerate(zip(configs, renderers, strict=True))
+        }
         refs, images = {}, {}
         for k, c in enumerate(configs):
             images[k] = frames_of[k]().read()[0][..., :3].astype(np.int64)
-            refs.setdefault(c["mode"], images[k])       # the first setting of a mode is its reference
+            refs.setdefault(c["mode"], images[k])  # the first setting of a mode is its reference
         fns = {"std": _gl_timed(ctx, lambda r=renderers[0], cam=cam: r.std(cam, viewport))}
         fns.update({k: _gl_timed(ctx, f) for k, f in frames_of.items()})
         times = _interleaved_ms(fns, frames)
         std = np.array(times["std"])
         for k, c in enumerate(configs):
             diff = np.abs(images[k] - refs[c["mode"]])
-            rows.append({"scene": name, **c, "frame_ms": float(np.median(times[k])), "std_ms": float(np.median(std)),
-                         "ratio": float(np.median(np.array(times[k]) / std)),
-                         "over": float((diff.max(-1) > TOLERANCE).mean()), "mae": float(diff.mean() / 255.0),
-                         "default": _is_default(c)})
+            rows.append(
+                {
+                    "scene": name,
+                    **c,
+                    "frame_ms": float(np.median(times[k])),
+                    "std_ms": float(np.median(std)),
+                    "ratio": float(np.median(np.array(times[k]) / std)),
+                    "over": float((diff.max(-1) > TOLERANCE).mean()),
+                    "mae": float(diff.mean() / 255.0),
+                    "default": _is_default(c),
+                }
+            )
             tick()
         for r in renderers:
             r.release()

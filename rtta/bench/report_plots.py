@@ -43,8 +43,15 @@ def error_plot(rows: list[dict], header: dict, path: Path) -> Path:
     for ax, scene in zip(axes.flat, scenes, strict=False):
         mine = [r for r in rows if r["scene"] == scene]
         for r in mine:
-            ax.scatter(r["frame_ms"], 100 * r["color_off"], c=SCALE_COLORS.get(r["scale"], "k"),
-                       marker=BORDER_MARKERS.get(r["border"], "x"), s=40, edgecolors="k", linewidths=0.4)
+            ax.scatter(
+                r["frame_ms"],
+                100 * r["color_off"],
+                c=SCALE_COLORS.get(r["scale"], "k"),
+                marker=BORDER_MARKERS.get(r["border"], "x"),
+                s=40,
+                edgecolors="k",
+                linewidths=0.4,
+            )
         best = sorted((r for r in mine if id(r) in front), key=lambda r: r["frame_ms"])
         ax.plot([r["frame_ms"] for r in best], [100 * r["color_off"] for r in best], "k--", lw=0.8)
         ax.set_title(scene, fontsize=9)
@@ -52,11 +59,12 @@ def error_plot(rows: list[dict], header: dict, path: Path) -> Path:
         ax.set_ylabel("pixels off by > 3/255 (%)")
         ax.set_yscale("symlog", linthresh=0.01)
         ax.grid(alpha=0.3)
-    for ax in list(axes.flat)[len(scenes):]:
+    for ax in list(axes.flat)[len(scenes) :]:
         ax.axis("off")
     handles = [plt.Line2D([], [], ls="", marker="o", color=c, label=f"scale {s:g}") for s, c in SCALE_COLORS.items()]
-    handles += [plt.Line2D([], [], ls="", marker=m, color="gray", label=f"border {b}")
-                for b, m in BORDER_MARKERS.items()]
+    handles += [
+        plt.Line2D([], [], ls="", marker=m, color="gray", label=f"border {b}") for b, m in BORDER_MARKERS.items()
+    ]
     handles.append(plt.Line2D([], [], ls="--", color="k", label="Pareto front"))
     fig.legend(handles=handles, fontsize=8, loc="lower center", ncol=len(handles))
     fig.tight_layout(rect=(0, 0.05, 1, 0.98))
@@ -85,10 +93,16 @@ def packing_plot(rows: list[dict], header: dict, path: Path) -> Path:
 
 def capture_plot(rows: list[dict], header: dict, path: Path) -> Path:
     plt, fig, axes = _figure(1, 2, 10, 3.8)
-    paths = (("std_ms", "STD"), ("rtt_ms", "RTT"), ("rtta_gs_ms", "RTTA geometry shader"),
-             ("rtta_vs_ms", "RTTA vertex shader"))
-    for ax, sweep, xkey, xlabel in ((axes[0, 0], "objects", "objects", "objects (fixed vertex total)"),
-                                    (axes[0, 1], "vertices", "vertices", "vertices (20 objects)")):
+    paths = (
+        ("std_ms", "STD"),
+        ("rtt_ms", "RTT"),
+        ("rtta_gs_ms", "RTTA geometry shader"),
+        ("rtta_vs_ms", "RTTA vertex shader"),
+    )
+    for ax, sweep, xkey, xlabel in (
+        (axes[0, 0], "objects", "objects", "objects (fixed vertex total)"),
+        (axes[0, 1], "vertices", "vertices", "vertices (20 objects)"),
+    ):
         mine = sorted((r for r in rows if r["sweep"] == sweep), key=lambda r: r[xkey])
         for key, label in paths:
             ax.plot([r[xkey] for r in mine], [r[key] for r in mine], "o-", label=label)
@@ -103,9 +117,12 @@ def capture_plot(rows: list[dict], header: dict, path: Path) -> Path:
 
 def stability_plot(rows: list[dict], header: dict, path: Path) -> Path:
     plt, fig, axes = _figure(1, 3, 13, 3.8)
-    for ax, sweep, xlabel in zip(axes.flat, ("near/far", "offset", "size ratio"),
-                                 ("far / near", "scene offset (world units; 0 drawn at 1)",
-                                  "object size ratio"), strict=True):
+    for ax, sweep, xlabel in zip(
+        axes.flat,
+        ("near/far", "offset", "size ratio"),
+        ("far / near", "scene offset (world units; 0 drawn at 1)", "object size ratio"),
+        strict=True,
+    ):
         mine = sorted((r for r in rows if r["sweep"] == sweep), key=lambda r: r["value"])
         x = np.maximum([r["value"] for r in mine], 1.0)
         ax.plot(x, np.maximum([r["depth_max"] for r in mine], 1e-9), "o-", label="max depth error (window)")
@@ -130,8 +147,9 @@ def ldi_plot(rows: list[dict], header: dict, path: Path) -> Path:
         mine = sorted((r for r in rows if r["mesh"] == mesh), key=lambda r: r["resolution"])
         n = [r["resolution"] for r in mine]
         axes[0, 0].plot(n, [max(r["error"], 1e-6) for r in mine], "o-", label=mesh)
-        axes[0, 1].plot([r["peel_ms"] + r["test_ms"] for r in mine], [max(r["error"], 1e-6) for r in mine],
-                        "o-", label=mesh)
+        axes[0, 1].plot(
+            [r["peel_ms"] + r["test_ms"] for r in mine], [max(r["error"], 1e-6) for r in mine], "o-", label=mesh
+        )
     axes[0, 0].set_xlabel("LDI resolution N (texels per side)")
     axes[0, 1].set_xlabel("peel + parity test time (ms)")
     for ax in axes.flat:
@@ -144,12 +162,14 @@ def ldi_plot(rows: list[dict], header: dict, path: Path) -> Path:
 
 
 def draw_all(results: dict, header: dict, folder: Path) -> dict[str, Path]:
-    return {"error": error_plot(results["error"], header, folder / "error_vs_time.png"),
-            "packing": packing_plot(results["packing"], header, folder / "packing.png"),
-            "capture": capture_plot(results["capture"], header, folder / "capture.png"),
-            "stability": stability_plot(results["stability"], header, folder / "stability.png"),
-            "ldi": ldi_plot(results["ldi"], header, folder / "ldi.png"),
-            "importance": importance_plot(results["importance"], header, folder / "importance.png")}
+    return {
+        "error": error_plot(results["error"], header, folder / "error_vs_time.png"),
+        "packing": packing_plot(results["packing"], header, folder / "packing.png"),
+        "capture": capture_plot(results["capture"], header, folder / "capture.png"),
+        "stability": stability_plot(results["stability"], header, folder / "stability.png"),
+        "ldi": ldi_plot(results["ldi"], header, folder / "ldi.png"),
+        "importance": importance_plot(results["importance"], header, folder / "importance.png"),
+    }
 
 
 def importance_plot(rows: list[dict], header: dict, path: Path) -> Path:
@@ -162,9 +182,15 @@ def importance_plot(rows: list[dict], header: dict, path: Path) -> Path:
     for ax, scene in zip(np.atleast_1d(axes).flat, scenes, strict=False):
         for r in (r for r in rows if r["scene"] == scene):
             face = colors.get(r["scale"], "k") if r["ao"] != "focus" and r["order"] != "pixel" else "white"
-            ax.scatter(r["ratio"], 100 * r["over"] + 1e-3, marker=marks[r["mode"]], s=60 if
-                       r["default"] else 30, facecolors=face, edgecolors=colors.get(r["scale"], "k"),
-                       linewidths=2.0 if r["default"] else 0.8)
+            ax.scatter(
+                r["ratio"],
+                100 * r["over"] + 1e-3,
+                marker=marks[r["mode"]],
+                s=60 if r["default"] else 30,
+                facecolors=face,
+                edgecolors=colors.get(r["scale"], "k"),
+                linewidths=2.0 if r["default"] else 0.8,
+            )
         ax.axhline(100 * BUDGET, color="gray", ls=":", lw=0.8)
         ax.set_title(scene, fontsize=9)
         ax.set_xlabel("frame time / STD")

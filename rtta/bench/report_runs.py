@@ -25,10 +25,15 @@ def sprites_error(r: Renderer, camera: Camera, viewport: tuple[int, int]) -> dic
     covered = std["id"][0] >= 0
     both = covered & (depth < 1.0)
     d = np.abs(depth[both].astype(np.float64) - std["depth"][0][both])
-    return {"color_off": float(off.mean()), "depth_rms": float(np.sqrt((d ** 2).mean())) if d.size else 0.0,
-            "depth_max": float(d.max()) if d.size else 0.0, "holes": int((covered & (depth >= 1.0) & off).sum()),
-            "finite": finite and bool(np.isfinite(depth).all()), "gl_error": r.ctx.error,
-            "atlas": records.atlas_size}
+    return {
+        "color_off": float(off.mean()),
+        "depth_rms": float(np.sqrt((d**2).mean())) if d.size else 0.0,
+        "depth_max": float(d.max()) if d.size else 0.0,
+        "holes": int((covered & (depth >= 1.0) & off).sum()),
+        "finite": finite and bool(np.isfinite(depth).all()),
+        "gl_error": r.ctx.error,
+        "atlas": records.atlas_size,
+    }
 
 
 def report_scenes(quick: bool) -> list[tuple[str, Scene]]:
@@ -39,7 +44,7 @@ def report_scenes(quick: bool) -> list[tuple[str, Scene]]:
     engine = shared_data() / "engine_2cyl.glb"
     if engine.is_file() and not quick:
         scenes.append(("engine_2cyl", load_scene(str(engine))))
-    for objects, vertices in (TABLE1[:1] if quick else TABLE1):
+    for objects, vertices in TABLE1[:1] if quick else TABLE1:
         scenes.append((f"table1-{objects}", table1_scene(objects, min(vertices, 20000) if quick else vertices)))
     return scenes
 
@@ -61,8 +66,9 @@ def error_vs_time(ctx, scenes, viewport, quick: bool, tick) -> list[dict]:
             for border in borders:
                 r = Renderer(ctx, scene, Settings(border=border, region_scale=scale))
                 err = sprites_error(r, cam, viewport)
-                ms = _median_ms(_gl_timed(ctx, lambda r=r, cam=cam: (r.capture(cam, viewport), r.composite("sprites"))),
-                                frames)
+                ms = _median_ms(
+                    _gl_timed(ctx, lambda r=r, cam=cam: (r.capture(cam, viewport), r.composite("sprites"))), frames
+                )
                 r.release()
                 rows.append({"scene": name, "scale": scale, "border": border, "frame_ms": ms, **err})
                 tick()
@@ -93,9 +99,17 @@ def packing(ctx, viewport, quick: bool, tick) -> list[dict]:
             sizes = rec.atlas_rect[rec.visible, 2:]
             area = float((sizes[:, 0] * sizes[:, 1]).sum())
             tw, th, td = rec.atlas_size
-            rows.append({"objects": n, "packer": f"shelf/{bounds}", "ms": ms, "setup_ms": setup_ms,
-                         "region_util": area / (tw * th * td), "covered_util": covered / (tw * th * td),
-                         "layers": td})
+            rows.append(
+                {
+                    "objects": n,
+                    "packer": f"shelf/{bounds}",
+                    "ms": ms,
+                    "setup_ms": setup_ms,
+                    "region_util": area / (tw * th * td),
+                    "covered_util": covered / (tw * th * td),
+                    "layers": td,
+                }
+            )
             if bounds == "aabb" and n <= (100 if quick else 1000):
                 rows += _other_packers(n, sizes, area, covered, viewport)
             tick()
@@ -111,7 +125,7 @@ def bounds_cost(ctx, scenes, viewport, quick: bool, tick) -> list[dict]:
         cam = _orbit(scene)
         for bounds in ("aabb", "obb"):
             t0 = time.perf_counter()
-            if bounds == "obb":       # what box_corners('obb') computes once per scene
+            if bounds == "obb":  # what box_corners('obb') computes once per scene
                 oriented_corners(scene.positions, scene.object_ids, scene.count)
             setup_ms = (time.perf_counter() - t0) * 1e3
             r = Renderer(ctx, scene, Settings(bounds=bounds))
@@ -122,10 +136,19 @@ def bounds_cost(ctx, scenes, viewport, quick: bool, tick) -> list[dict]:
             r.release()
             inner = rec.viewport_rect[rec.visible, 2:] - rec.viewport_rect[rec.visible, :2]
             tw, th, td = rec.atlas_size
-            rows.append({"scene": name, "bounds": bounds, "setup_ms": setup_ms, "param_ms": param_ms,
-                         "capture_ms": capture_ms, "region_px": int((inner[:, 0] * inner[:, 1]).sum()),
-                         "atlas_texels": tw * th * td, "covered_util": covered / (tw * th * td),
-                         "atlas": rec.atlas_size})
+            rows.append(
+                {
+                    "scene": name,
+                    "bounds": bounds,
+                    "setup_ms": setup_ms,
+                    "param_ms": param_ms,
+                    "capture_ms": capture_ms,
+                    "region_px": int((inner[:, 0] * inner[:, 1]).sum()),
+                    "atlas_texels": tw * th * td,
+                    "covered_util": covered / (tw * th * td),
+                    "atlas": rec.atlas_size,
+                }
+            )
             tick()
     return rows
 
@@ -144,13 +167,30 @@ def _other_packers(n, sizes, area, covered, viewport) -> list[dict]:
     out = []
     t0 = time.perf_counter()
     bins, used = _rectpack(w, h, W, H)
-    out.append({"objects": n, "packer": "rectpack", "ms": (time.perf_counter() - t0) * 1e3, "setup_ms": 0.0,
-                "region_util": area / used, "covered_util": covered / used, "layers": bins})
+    out.append(
+        {
+            "objects": n,
+            "packer": "rectpack",
+            "ms": (time.perf_counter() - t0) * 1e3,
+            "setup_ms": 0.0,
+            "region_util": area / used,
+            "covered_util": covered / used,
+            "layers": bins,
+        }
+    )
     t0 = time.perf_counter()
     used = _rpack(w, h, W, H)
-    out.append({"objects": n, "packer": "rectangle-packer", "ms": (time.perf_counter() - t0) * 1e3,
-                "setup_ms": 0.0, "region_util": area / used, "covered_util": covered / used,
-                "layers": 1 if np.isfinite(used) else 0})
+    out.append(
+        {
+            "objects": n,
+            "packer": "rectangle-packer",
+            "ms": (time.perf_counter() - t0) * 1e3,
+            "setup_ms": 0.0,
+            "region_util": area / used,
+            "covered_util": covered / used,
+            "layers": 1 if np.isfinite(used) else 0,
+        }
+    )
     return out
 
 
@@ -189,7 +229,7 @@ def _moved(scene: Scene, offset: float) -> Scene:
     parts = []
     for i, name in enumerate(scene.names):
         first, count = scene.index_ranges[i]
-        f = scene.indices[first:first + count].astype(np.int64).reshape(-1, 3)
+        f = scene.indices[first : first + count].astype(np.int64).reshape(-1, 3)
         vids = np.flatnonzero(scene.object_ids == i)
         v = scene.positions[vids].astype(np.float64) + scene.origin + shift
         parts.append((name, v, f - vids[0], scene.normals[vids]))
@@ -203,8 +243,10 @@ def _two_spheres(ratio: float) -> Scene:
     s = trimesh.creation.icosphere(subdivisions=3)
     small = 1.0 / ratio
     v = np.asarray(s.vertices)
-    return from_meshes([("large", v, s.faces, None), ("small", v * small + [1.0 + small, 0, 0], s.faces, None)],
-                       source=f"<spheres 1:{ratio:g}>")
+    return from_meshes(
+        [("large", v, s.faces, None), ("small", v * small + [1.0 + small, 0, 0], s.faces, None)],
+        source=f"<spheres 1:{ratio:g}>",
+    )
 
 
 def stability(ctx, viewport, quick: bool, tick) -> list[dict]:
@@ -213,8 +255,7 @@ def stability(ctx, viewport, quick: bool, tick) -> list[dict]:
     from ..scene.loader import load_scene_or_demo
 
     demo = load_scene_or_demo(None)
-    angles = [(30.0, 20.0), (200.0, -35.0)] if quick else [(30.0, 20.0), (110.0, 60.0), (200.0, -35.0),
-                                                           (300.0, 5.0)]
+    angles = [(30.0, 20.0), (200.0, -35.0)] if quick else [(30.0, 20.0), (110.0, 60.0), (200.0, -35.0), (300.0, 5.0)]
     rows = []
     ratios = (1e2, 1e5, 1e7) if quick else (1e2, 1e3, 1e4, 1e5, 1e6, 1e7)
     for ratio in ratios:
@@ -225,14 +266,14 @@ def stability(ctx, viewport, quick: bool, tick) -> list[dict]:
             cams.append(cam)
         rows.append(_stability_row(ctx, demo, "near/far", ratio, cams, viewport))
         tick()
-    for offset in ((0.0, 1e4, 1e7) if quick else (0.0, 1e2, 1e4, 1e5, 1e6, 1e7)):
+    for offset in (0.0, 1e4, 1e7) if quick else (0.0, 1e2, 1e4, 1e5, 1e6, 1e7):
         scene = _moved(demo, offset)
         rows.append(_stability_row(ctx, scene, "offset", offset, _cams(scene, angles), viewport))
         tick()
-    for ratio in ((1.0, 1e4, 1e8) if quick else (1.0, 1e2, 1e4, 1e6, 1e8)):
+    for ratio in (1.0, 1e4, 1e8) if quick else (1.0, 1e2, 1e4, 1e6, 1e8):
         scene = _two_spheres(ratio)
         small = (scene.aabb_min[1] + scene.aabb_max[1]) / 2
-        close_up = Camera.orbit(small, 1.0 / ratio, 30.0, 20.0, 2.2)      # the small one fills the view
+        close_up = Camera.orbit(small, 1.0 / ratio, 30.0, 20.0, 2.2)  # the small one fills the view
         rows.append(_stability_row(ctx, scene, "size ratio", ratio, [*_cams(scene, angles), close_up], viewport))
         tick()
     return rows
@@ -248,11 +289,17 @@ def _stability_row(ctx, scene: Scene, sweep: str, value: float, cams, viewport) 
         warnings.simplefilter("ignore")
         errs = [sprites_error(r, cam, viewport) for cam in cams]
     r.release()
-    return {"sweep": sweep, "value": value, "frames": len(errs),
-            "color_off": max(e["color_off"] for e in errs), "depth_max": max(e["depth_max"] for e in errs),
-            "nan_frames": sum(not e["finite"] for e in errs), "hole_frames": sum(e["holes"] > 0 for e in errs),
-            "gl_error_frames": sum(e["gl_error"] != "GL_NO_ERROR" for e in errs),
-            "warnings": list(scene.warnings) + r.warnings}
+    return {
+        "sweep": sweep,
+        "value": value,
+        "frames": len(errs),
+        "color_off": max(e["color_off"] for e in errs),
+        "depth_max": max(e["depth_max"] for e in errs),
+        "nan_frames": sum(not e["finite"] for e in errs),
+        "hole_frames": sum(e["holes"] > 0 for e in errs),
+        "gl_error_frames": sum(e["gl_error"] != "GL_NO_ERROR" for e in errs),
+        "warnings": list(scene.warnings) + r.warnings,
+    }
 
 
 def ldi_meshes(quick: bool):
@@ -281,7 +328,11 @@ def pareto(rows: list[dict]) -> set[int]:
     out = set()
     for r in rows:
         same = [o for o in rows if o["scene"] == r["scene"] and o is not r]
-        if not any(o["frame_ms"] <= r["frame_ms"] and o["color_off"] <= r["color_off"]
-                   and (o["frame_ms"] < r["frame_ms"] or o["color_off"] < r["color_off"]) for o in same):
+        if not any(
+            o["frame_ms"] <= r["frame_ms"]
+            and o["color_off"] <= r["color_off"]
+            and (o["frame_ms"] < r["frame_ms"] or o["color_off"] < r["color_off"])
+            for o in same
+        ):
             out.add(id(r))
     return out

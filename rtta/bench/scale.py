@@ -57,8 +57,9 @@ def load_figures(path: Path) -> dict:
     fresh Python process that imported trimesh first (imports in both peaks, in neither time)."""
     out = {}
     for which in ("trimesh", "rtta"):
-        proc = subprocess.run([sys.executable, "-c", _CHILD, str(path), which], capture_output=True, text=True,
-                              timeout=3600)
+        proc = subprocess.run(
+            [sys.executable, "-c", _CHILD, str(path), which], capture_output=True, text=True, timeout=3600
+        )
         if proc.returncode:
             raise RuntimeError(f"{which} load of {path.name} failed: {proc.stderr.strip()[-400:]}")
         seconds, rss = proc.stdout.split()
@@ -81,13 +82,22 @@ def frame_figures(ctx, path: Path, viewport: tuple[int, int], rounds: int) -> di
         r.capture(cam, viewport, normals=False, ids=False)
         r.composite("ghosted", style)
 
-    times = _interleaved_ms({"std": _gl_timed(ctx, lambda: r.std(cam, viewport)),
-                             "capture": _gl_timed(ctx, lambda: r.capture(cam, viewport)),
-                             "ghosted": _gl_timed(ctx, ghosted)}, rounds)
+    times = _interleaved_ms(
+        {
+            "std": _gl_timed(ctx, lambda: r.std(cam, viewport)),
+            "capture": _gl_timed(ctx, lambda: r.capture(cam, viewport)),
+            "ghosted": _gl_timed(ctx, ghosted),
+        },
+        rounds,
+    )
     records = r.parameterize(cam, viewport)
-    row = {"objects": scene.count, "triangles": len(scene.indices) // 3,
-           "param_ms": _median_ms(lambda: parameterize(corners, vpm, viewport, border=1), max(5, rounds)),
-           "visible": int(records.visible.sum()), "atlas": list(records.atlas_size)}
+    row = {
+        "objects": scene.count,
+        "triangles": len(scene.indices) // 3,
+        "param_ms": _median_ms(lambda: parameterize(corners, vpm, viewport, border=1), max(5, rounds)),
+        "visible": int(records.visible.sum()),
+        "atlas": list(records.atlas_size),
+    }
     std = np.array(times["std"])
     for k in ("std", "capture", "ghosted"):
         row[f"{k}_ms"] = float(np.median(times[k]))
@@ -104,8 +114,12 @@ def viewer_fps(path: Path, frames: int, size: str = "1280x720", navigation_fps: 
     if not Path(exe).exists():
         return None
     flags = [] if navigation_fps is None else ["--navigation-fps", str(navigation_fps)]
-    proc = subprocess.run([exe, str(path), "--bench", str(frames), "--bench-modes", "ghosted", "--size", size, *flags],
-                          capture_output=True, text=True, timeout=3600)
+    proc = subprocess.run(
+        [exe, str(path), "--bench", str(frames), "--bench-modes", "ghosted", "--size", size, *flags],
+        capture_output=True,
+        text=True,
+        timeout=3600,
+    )
     rows = [ln for ln in proc.stdout.splitlines() if re.match(r"\| ghosted \|", ln)]
     return float(rows[0].split("|")[2]) if proc.returncode == 0 and rows else None
 
@@ -123,8 +137,15 @@ def parse_parts(text: str | None) -> tuple[int, ...] | None:
     return parts
 
 
-def run_scale(viewport: tuple[int, int], quick: bool = False, sizes: str | None = None,
-              json_path: str | None = None, viewer: bool = True, ctx=None, normals: bool = False) -> int:
+def run_scale(
+    viewport: tuple[int, int],
+    quick: bool = False,
+    sizes: str | None = None,
+    json_path: str | None = None,
+    viewer: bool = True,
+    ctx=None,
+    normals: bool = False,
+) -> int:
     counts = parse_parts(sizes)
     ctx = ctx or create_headless_context()
     renderer = str(ctx.info["GL_RENDERER"])
@@ -132,8 +153,10 @@ def run_scale(viewport: tuple[int, int], quick: bool = False, sizes: str | None 
     rows = []
     with tempfile.TemporaryDirectory(prefix="rtta-scale-") as tmp:
         tag = "assembly-n" if normals else "assembly"
-        scenes = [(f"{tag}-{n}", write_assembly(Path(tmp) / f"assembly_{n}.glb", n, normals=normals))
-                  for n in (counts or (QUICK_SIZES if quick else SIZES))]
+        scenes = [
+            (f"{tag}-{n}", write_assembly(Path(tmp) / f"assembly_{n}.glb", n, normals=normals))
+            for n in (counts or (QUICK_SIZES if quick else SIZES))
+        ]
         engine = shared_data() / "engine_2cyl.glb"
         if engine.exists() and not quick:
             scenes.append(("engine_2cyl", engine))
@@ -145,25 +168,33 @@ def run_scale(viewport: tuple[int, int], quick: bool = False, sizes: str | None 
             rows.append(row)
             _print_row(row, len(rows) == 1, renderer, viewport)
     if json_path:
-        Path(json_path).write_text(json.dumps({"renderer": renderer, "viewport": list(viewport), "scenes": rows},
-                                              indent=1))
+        Path(json_path).write_text(
+            json.dumps({"renderer": renderer, "viewport": list(viewport), "scenes": rows}, indent=1)
+        )
     return 0
 
 
 def _print_row(r: dict, header: bool, renderer: str, viewport: tuple[int, int]) -> None:
     if header:
-        print(f"renderer: {renderer}; viewport {viewport[0]}x{viewport[1]}; load and peak RSS each in a fresh "
-              "process; frame ms are medians over rounds of STD, capture and ghosted in turn, ratios to STD "
-              "taken within each round; viewer: rtta-view --bench in ghosted at 1280x720, with fast navigation "
-              "(at the viewer's default frame rate) and exact (--navigation-fps 0: every part in every frame)")
-        print("| scene | parts | triangles | load s | trimesh.load s | load / trimesh | peak RSS MB | "
-              "trimesh RSS MB | RSS / trimesh | param+pack ms | STD ms | capture ms (x STD) | "
-              "ghosted ms (x STD) | viewer fps | viewer fps exact |")
+        print(
+            f"renderer: {renderer}; viewport {viewport[0]}x{viewport[1]}; load and peak RSS each in a fresh "
+            "process; frame ms are medians over rounds of STD, capture and ghosted in turn, ratios to STD "
+            "taken within each round; viewer: rtta-view --bench in ghosted at 1280x720, with fast navigation "
+            "(at the viewer's default frame rate) and exact (--navigation-fps 0: every part in every frame)"
+        )
+        print(
+            "| scene | parts | triangles | load s | trimesh.load s | load / trimesh | peak RSS MB | "
+            "trimesh RSS MB | RSS / trimesh | param+pack ms | STD ms | capture ms (x STD) | "
+            "ghosted ms (x STD) | viewer fps | viewer fps exact |"
+        )
         print("|---" * 15 + "|")
     ld = r["load"]
     fps, exact = ("n/a" if r[k] is None else f"{r[k]:.1f}" for k in ("viewer_fps", "viewer_fps_exact"))
-    print(f"| {r['scene']} | {r['objects']:,} | {r['triangles']:,} | {ld['rtta']['s']:.2f} | {ld['trimesh']['s']:.2f} "
-          f"| {ld['rtta']['s'] / ld['trimesh']['s']:.2f} | {ld['rtta']['peak_rss'] / 2**20:.0f} "
-          f"| {ld['trimesh']['peak_rss'] / 2**20:.0f} | {ld['rtta']['peak_rss'] / ld['trimesh']['peak_rss']:.2f} "
-          f"| {r['param_ms']:.1f} | {r['std_ms']:.1f} | {r['capture_ms']:.1f} ({r['capture_ratio']:.2f}x) "
-          f"| {r['ghosted_ms']:.1f} ({r['ghosted_ratio']:.2f}x) | {fps} | {exact} |", flush=True)
+    print(
+        f"| {r['scene']} | {r['objects']:,} | {r['triangles']:,} | {ld['rtta']['s']:.2f} | {ld['trimesh']['s']:.2f} "
+        f"| {ld['rtta']['s'] / ld['trimesh']['s']:.2f} | {ld['rtta']['peak_rss'] / 2**20:.0f} "
+        f"| {ld['trimesh']['peak_rss'] / 2**20:.0f} | {ld['rtta']['peak_rss'] / ld['trimesh']['peak_rss']:.2f} "
+        f"| {r['param_ms']:.1f} | {r['std_ms']:.1f} | {r['capture_ms']:.1f} ({r['capture_ratio']:.2f}x) "
+        f"| {r['ghosted_ms']:.1f} ({r['ghosted_ratio']:.2f}x) | {fps} | {exact} |",
+        flush=True,
+    )

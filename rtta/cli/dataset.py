@@ -15,41 +15,83 @@ def add_parsers(sub, bench_sub, common: tuple) -> None:
     """The dataset command and its benchmark. `common` is main's (add_load_options,
     load_options, parse_size), handed in so that this module never imports main."""
     add_load_options = common[0]
-    p = sub.add_parser("dataset", help="amodal datasets in COCO form: every part's full and visible mask "
-                                       "(and its unoccluded appearance) for many views; 'merge' joins shards",
-                       description="rtta dataset SCENE... --out DIR [options], or "
-                                   "rtta dataset merge INPUT... --out FILE.json")
-    p.add_argument("scenes", nargs="*", metavar="SCENE",
-                   help="scene files, folders or globs (default: the demo); 'merge INPUT...' joins annotation files")
-    p.add_argument("--out", required=True, help="dataset folder (created; resumed when it holds the same "
-                                                "settings); for merge, the annotations file to write")
+    p = sub.add_parser(
+        "dataset",
+        help="amodal datasets in COCO form: every part's full and visible mask "
+        "(and its unoccluded appearance) for many views; 'merge' joins shards",
+        description="rtta dataset SCENE... --out DIR [options], or rtta dataset merge INPUT... --out FILE.json",
+    )
+    p.add_argument(
+        "scenes",
+        nargs="*",
+        metavar="SCENE",
+        help="scene files, folders or globs (default: the demo); 'merge INPUT...' joins annotation files",
+    )
+    p.add_argument(
+        "--out",
+        required=True,
+        help="dataset folder (created; resumed when it holds the same "
+        "settings); for merge, the annotations file to write",
+    )
     p.add_argument("--views", type=int, default=10, help="cameras per scene (default 10)")
     p.add_argument("--seed", type=int, default=0, help="seed of the camera sampling")
     p.add_argument("--size", default="640x480", help="image WxH")
-    for name, default, what in (("azimuth", "0,360", "degrees about +Y"), ("elevation", "10,60", "degrees"),
-                                ("distance", "1.4,2.6", "bounding radii"), ("fov", "40,60", "vertical, degrees")):
-        p.add_argument(f"--{name}", default=default, metavar="LO,HI",
-                       help=f"range sampled uniformly, {what} (one value: fixed; default {default})")
-    p.add_argument("--cameras", default=None, metavar="FILE.json",
-                   help='explicit cameras instead: [{"orbit": [AZ, EL, DIST], "fov": F} or '
-                        '{"eye": [..], "target": [..], "up": [..], "fov": F}, ...]')
-    p.add_argument("--depth", choices=("png", "npy"), default="png",
-                   help="depth.png (16-bit, x depth_scale = world units) or depth.npy (float32)")
-    p.add_argument("--appearance", action="store_true",
-                   help="also write each annotated object's RGBA image alone (alpha = amodal mask)")
-    p.add_argument("--category-by", choices=("name", "group", "ifc-class"), default="name",
-                   help="one category per object name, group (part-tree parent or name stem) or IFC class")
-    p.add_argument("--min-visible", type=int, default=0, metavar="PX",
-                   help="leave out objects with fewer visible pixels (default 0: hidden objects are kept)")
+    for name, default, what in (
+        ("azimuth", "0,360", "degrees about +Y"),
+        ("elevation", "10,60", "degrees"),
+        ("distance", "1.4,2.6", "bounding radii"),
+        ("fov", "40,60", "vertical, degrees"),
+    ):
+        p.add_argument(
+            f"--{name}",
+            default=default,
+            metavar="LO,HI",
+            help=f"range sampled uniformly, {what} (one value: fixed; default {default})",
+        )
+    p.add_argument(
+        "--cameras",
+        default=None,
+        metavar="FILE.json",
+        help='explicit cameras instead: [{"orbit": [AZ, EL, DIST], "fov": F} or '
+        '{"eye": [..], "target": [..], "up": [..], "fov": F}, ...]',
+    )
+    p.add_argument(
+        "--depth",
+        choices=("png", "npy"),
+        default="png",
+        help="depth.png (16-bit, x depth_scale = world units) or depth.npy (float32)",
+    )
+    p.add_argument(
+        "--appearance",
+        action="store_true",
+        help="also write each annotated object's RGBA image alone (alpha = amodal mask)",
+    )
+    p.add_argument(
+        "--category-by",
+        choices=("name", "group", "ifc-class"),
+        default="name",
+        help="one category per object name, group (part-tree parent or name stem) or IFC class",
+    )
+    p.add_argument(
+        "--min-visible",
+        type=int,
+        default=0,
+        metavar="PX",
+        help="leave out objects with fewer visible pixels (default 0: hidden objects are kept)",
+    )
     p.add_argument("--shard", default="0/1", metavar="I/N", help="render only the I-th of N slices of the views")
     p.add_argument("--workers", type=int, default=1, help="local processes, one GL context each")
-    p.add_argument("--keep-going", action="store_true",
-                   help="skip scenes that cannot be read (exit 2 at the end) instead of stopping")
+    p.add_argument(
+        "--keep-going",
+        action="store_true",
+        help="skip scenes that cannot be read (exit 2 at the end) instead of stopping",
+    )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_load_options(p)
     p.set_defaults(common=common)
-    b = bench_sub.add_parser("dataset", help="views/s and amodal masks/s: one RTTA capture per view against "
-                                             "each object rendered alone (RTT)")
+    b = bench_sub.add_parser(
+        "dataset", help="views/s and amodal masks/s: one RTTA capture per view against each object rendered alone (RTT)"
+    )
     b.add_argument("--size", default="640x480")
     b.add_argument("--views", type=int, default=5, help="views per scene")
     b.add_argument("--appearance", action="store_true", help="write the objects' RGBA images too")
@@ -90,18 +132,32 @@ def cmd_dataset(args: argparse.Namespace) -> int:
     load = load_options(args)
     if not 1 <= args.views <= 1_000_000 or args.workers < 1 or args.min_visible < 0:
         raise RttaError("--views must be 1..1000000, --workers at least 1, --min-visible at least 0")
-    opts = Options(scenes=args.scenes, views=args.views, seed=args.seed, size=parse_size(args.size),
-                   azimuth=_range(args.azimuth, "azimuth", -720, 720),
-                   elevation=_range(args.elevation, "elevation", -90, 90),
-                   distance=_range(args.distance, "distance", 1e-3, 1e6),
-                   fov=_range(args.fov, "fov", 0.5, 170),
-                   cameras=parse_cameras(args.cameras) if args.cameras else None, depth=args.depth,
-                   appearance=args.appearance, category_by=args.category_by, min_visible=args.min_visible,
-                   smooth_angle=load["smooth_angle"], smooth=load["smooth"])
-    how = Run(out=Path(args.out).absolute(), shard=_shard(args.shard), workers=args.workers,
-              keep_going=args.keep_going, progress=False if args.no_progress else None)
+    opts = Options(
+        scenes=args.scenes,
+        views=args.views,
+        seed=args.seed,
+        size=parse_size(args.size),
+        azimuth=_range(args.azimuth, "azimuth", -720, 720),
+        elevation=_range(args.elevation, "elevation", -90, 90),
+        distance=_range(args.distance, "distance", 1e-3, 1e6),
+        fov=_range(args.fov, "fov", 0.5, 170),
+        cameras=parse_cameras(args.cameras) if args.cameras else None,
+        depth=args.depth,
+        appearance=args.appearance,
+        category_by=args.category_by,
+        min_visible=args.min_visible,
+        smooth_angle=load["smooth_angle"],
+        smooth=load["smooth"],
+    )
+    how = Run(
+        out=Path(args.out).absolute(),
+        shard=_shard(args.shard),
+        workers=args.workers,
+        keep_going=args.keep_going,
+        progress=False if args.no_progress else None,
+    )
     main_thread = threading.current_thread() is threading.main_thread()
-    previous = signal.signal(signal.SIGTERM, _interrupted) if main_thread else None   # a scheduler's kill
+    previous = signal.signal(signal.SIGTERM, _interrupted) if main_thread else None  # a scheduler's kill
     try:
         return run(opts, how)
     finally:
@@ -141,8 +197,7 @@ def _merge(args: argparse.Namespace) -> int:
         raise RttaError("parent directory does not exist", out.parent)
     doc = coco.merge(inputs, out)
     atomic_write(out, lambda tmp: Path(tmp).write_text(coco.dumps(doc), encoding="utf-8"))
-    print(f"wrote {out}: {len(doc['images'])} images, {len(doc['annotations'])} annotations "
-          f"from {len(inputs)} file(s)")
+    print(f"wrote {out}: {len(doc['images'])} images, {len(doc['annotations'])} annotations from {len(inputs)} file(s)")
     return 0
 
 
@@ -162,5 +217,6 @@ def cmd_bench_dataset(args: argparse.Namespace) -> int:
     parse_size = args.common[2]
     if args.views < 1:
         raise RttaError("--views must be at least 1")
-    return run_bench(parse_size(args.size), views=args.views, quick=args.quick, appearance=args.appearance,
-                     json_path=args.json)
+    return run_bench(
+        parse_size(args.size), views=args.views, quick=args.quick, appearance=args.appearance, json_path=args.json
+    )

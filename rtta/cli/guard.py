@@ -84,8 +84,9 @@ def _subject(args: argparse.Namespace | None) -> str | None:
     return None
 
 
-def run_command(handler: Callable[[argparse.Namespace], int], args: argparse.Namespace, *,
-                process: bool = False) -> int:
+def run_command(
+    handler: Callable[[argparse.Namespace], int], args: argparse.Namespace, *, process: bool = False
+) -> int:
     """Run `handler(args)` under the one-line failure contract (see the module docstring).
     `process`: this is the whole process (the `rtta` command), so once an output has been
     committed the signal handlers stay, and a late signal cannot kill the finished run."""
@@ -93,22 +94,22 @@ def run_command(handler: Callable[[argparse.Namespace], int], args: argparse.Nam
     real_stdout = sys.stdout
     sys.stdout = _GuardedStdout(real_stdout)
     shown = warnings.showwarning
-    warnings.showwarning = _show_warning       # what the library degraded: `rtta: warning: ...`
+    warnings.showwarning = _show_warning  # what the library degraded: `rtta: warning: ...`
     try:
-        with outputs.signals_held():    # the scene readers' native libraries: a signal must not cut their start
+        with outputs.signals_held():  # the scene readers' native libraries: a signal must not cut their start
             _import_readers()
         code = handler(args)
         sys.stdout.flush()
-        if outputs.interrupt_requested():           # a library swallowed it before the output was in place
+        if outputs.interrupt_requested():  # a library swallowed it before the output was in place
             raise outputs.Interrupted(outputs.interrupt_requested())
         return code
-    except KeyboardInterrupt:                       # Interrupted too: the run stops, its temporaries gone
+    except KeyboardInterrupt:  # Interrupted too: the run stops, its temporaries gone
         print("rtta: interrupted", file=sys.stderr)
         return 130
     except Exception as exc:
         if outputs.interrupt_requested() is None:
             return _failed(exc, args)
-        print("rtta: interrupted", file=sys.stderr)   # what failed was the work the signal cut short
+        print("rtta: interrupted", file=sys.stderr)  # what failed was the work the signal cut short
         return 130
     finally:
         warnings.showwarning = shown
@@ -132,7 +133,7 @@ def _failed(exc: Exception, args) -> int:
     except RttaError as exc:
         say("error", str(exc))
         return 2
-    except BrokenPipeError:          # `rtta info | head`: the reader left; say nothing more
+    except BrokenPipeError:  # `rtta info | head`: the reader left; say nothing more
         _silence_stdout()
         return 1
     except StdoutError as exc:
@@ -149,6 +150,9 @@ def _failed(exc: Exception, args) -> int:
         if os.environ.get("RTTA_DEBUG"):
             raise
         reason = str(exc).strip().splitlines()[0][:200] if str(exc).strip() else ""
-        say("error", f"cannot process ({type(exc).__name__}{': ' + reason if reason else ''}); "
-                     "RTTA_DEBUG=1 shows where", _subject(args))
+        say(
+            "error",
+            f"cannot process ({type(exc).__name__}{': ' + reason if reason else ''}); RTTA_DEBUG=1 shows where",
+            _subject(args),
+        )
         return 2

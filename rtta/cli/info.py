@@ -11,17 +11,22 @@ AXES = {"y": "Y-up", "z": "Z-up"}
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--tree", action="store_true",
-                   help="print the part tree: every group with its object and triangle counts, objects below")
+    p.add_argument(
+        "--tree",
+        action="store_true",
+        help="print the part tree: every group with its object and triangle counts, objects below",
+    )
 
 
 def summary(scene: Scene) -> list[str]:
     """The header lines: counts and bounds, then the unit and the up axis."""
     lo, hi = scene.bounds
     unit = scene.unit or "unstated"
-    return [f"{printable(scene.source)}: {scene.count} objects, {scene.vertex_count} vertices, "
-            f"{len(scene.indices) // 3} triangles, bounds {lo.round(4).tolist()} .. {hi.round(4).tolist()}",
-            f"unit: {unit}, up axis: {AXES.get(scene.up_axis, scene.up_axis)}"]
+    return [
+        f"{printable(scene.source)}: {scene.count} objects, {scene.vertex_count} vertices, "
+        f"{len(scene.indices) // 3} triangles, bounds {lo.round(4).tolist()} .. {hi.round(4).tolist()}",
+        f"unit: {unit}, up axis: {AXES.get(scene.up_axis, scene.up_axis)}",
+    ]
 
 
 def run(scene: Scene, tree: bool) -> int:
@@ -49,9 +54,10 @@ def tree_lines(scene: Scene) -> list[str]:
         while common < min(len(path), len(shown)) and path[common] == shown[common]:
             common += 1
         for depth in range(common, len(path)):
-            ids = groups["/".join(path[:depth + 1])]
-            out.append(f"{'  ' * depth}{printable(path[depth])}/  ({len(ids)} objects, "
-                       f"{int(triangles[ids].sum())} triangles)")
+            ids = groups["/".join(path[: depth + 1])]
+            out.append(
+                f"{'  ' * depth}{printable(path[depth])}/  ({len(ids)} objects, {int(triangles[ids].sum())} triangles)"
+            )
         shown = path
         out.append(f"{'  ' * len(path)}{oid:d}  {printable(name)}  ({triangles[oid]} triangles)")
     return out

@@ -71,9 +71,11 @@ def read_points(path: str) -> np.ndarray:
         raise RttaError(f"expected a numeric array of shape [N, 3], got {dtype} {list(shape)}", path)
     need = shape[0] * 3 * dtype.itemsize
     if need != size - body:
-        raise RttaError(f"the header says {shape[0]:,} points ({need:,} bytes) but the file holds "
-                        f"{size - body:,} bytes of data", path)
-    if shape[0] * 3 * 8 * 2 > memory_limit():        # the float64 copy and the GPU buffer
+        raise RttaError(
+            f"the header says {shape[0]:,} points ({need:,} bytes) but the file holds {size - body:,} bytes of data",
+            path,
+        )
+    if shape[0] * 3 * 8 * 2 > memory_limit():  # the float64 copy and the GPU buffer
         raise RttaError(f"{shape[0]:,} points are over the memory limit (RTTA_MEMORY_LIMIT_MB)", path)
     try:
         points = np.load(path, allow_pickle=False)
@@ -89,7 +91,7 @@ def write_npy(path: str, array: np.ndarray) -> None:
     from ..outputs import atomic_write
 
     def save(tmp: str) -> None:
-        with open(tmp, "wb") as fh:          # a file object: np.save would add ".npy" to a bare name
+        with open(tmp, "wb") as fh:  # a file object: np.save would add ".npy" to a bare name
             np.save(fh, array)
 
     atomic_write(path, save, final=True)
@@ -113,8 +115,8 @@ def cmd_ldi(args: argparse.Namespace) -> int:
     if args.out:
         check_file(args.out, [*inputs, *files], suffix=".npy")
     center, extent = (vertices.min(axis=0) + vertices.max(axis=0)) / 2, float(np.ptp(vertices, axis=0).max())
-    if points is not None:            # parity is unchanged by moving and scaling both: test at unit size,
-        points = (points - center) / extent        # so float32 depths work for meshes at 1e-30 or 1e12 units
+    if points is not None:  # parity is unchanged by moving and scaling both: test at unit size,
+        points = (points - center) / extent  # so float32 depths work for meshes at 1e-30 or 1e12 units
     ctx = shared_context()
     ldi = build(ctx, (vertices - center) / extent, faces, args.resolution)
     packed = compress(ldi)
@@ -129,6 +131,9 @@ def cmd_ldi(args: argparse.Namespace) -> int:
         finally:
             test.release()
         write_npy(args.out, inside)
-        print(f"{printable(args.out)}: {int(inside.sum())} of {len(inside)} points inside {printable(name)} "
-              f"(LDI {ldi.size[0]}x{ldi.size[1]}, {ldi.depth} layers)", file=sys.stderr)
+        print(
+            f"{printable(args.out)}: {int(inside.sum())} of {len(inside)} points inside {printable(name)} "
+            f"(LDI {ldi.size[0]}x{ldi.size[1]}, {ldi.depth} layers)",
+            file=sys.stderr,
+        )
     return 0

@@ -19,18 +19,27 @@ def parse_size(text: str, what: str = "--size") -> tuple[int, int]:
 
 
 def _scene_arg(p: argparse.ArgumentParser) -> None:
-    p.add_argument("scene", nargs="?", help="glTF/GLB/OBJ/STL/PLY/3MF/OFF, STEP, IFC, COLLADA, USD or 3DXML "
-                                            "file (default: the built-in demo)")
+    p.add_argument(
+        "scene",
+        nargs="?",
+        help="glTF/GLB/OBJ/STL/PLY/3MF/OFF, STEP, IFC, COLLADA, USD or 3DXML file (default: the built-in demo)",
+    )
     add_load_options(p)
 
 
 def add_load_options(p: argparse.ArgumentParser) -> None:
     """Mesh preprocessing options of every command that loads a scene (the viewer's too)."""
-    p.add_argument("--smooth-angle", type=float, default=DEFAULT_SMOOTH_ANGLE, metavar="DEG",
-                   help="normals are smoothed across edges below this angle where the file has none "
-                        f"(default {DEFAULT_SMOOTH_ANGLE:g}; 0 = faceted, 180 = smooth everywhere)")
-    p.add_argument("--smooth", action="store_true",
-                   help="recompute normals by --smooth-angle even where the file has its own")
+    p.add_argument(
+        "--smooth-angle",
+        type=float,
+        default=DEFAULT_SMOOTH_ANGLE,
+        metavar="DEG",
+        help="normals are smoothed across edges below this angle where the file has none "
+        f"(default {DEFAULT_SMOOTH_ANGLE:g}; 0 = faceted, 180 = smooth everywhere)",
+    )
+    p.add_argument(
+        "--smooth", action="store_true", help="recompute normals by --smooth-angle even where the file has its own"
+    )
 
 
 def _view_args(p: argparse.ArgumentParser) -> None:
@@ -41,13 +50,22 @@ def _view_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--atlas-max", default=None, help="maximum atlas layer size WxH (default: viewport + border)")
     p.add_argument("--max-layers", type=int, default=None, help="cap on atlas layers")
     p.add_argument("--capture-path", choices=("auto", "vs", "gs"), default="auto")
-    p.add_argument("--region-scale", type=float, default=1.0,
-                   help="atlas texels per viewport pixel (0.25 to 4; default 1)")
-    p.add_argument("--bounds", choices=("aabb", "obb"), default="aabb",
-                   help="object bounds projected per frame: the paper's AABB or the tighter oriented box")
-    p.add_argument("--context-scale", type=float, default=None,
-                   help="region scale of objects outside the focus, as a fraction of --region-scale "
-                        "(0.25 to 1; default: the library's, see README); upsampled depth-aware when composited")
+    p.add_argument(
+        "--region-scale", type=float, default=1.0, help="atlas texels per viewport pixel (0.25 to 4; default 1)"
+    )
+    p.add_argument(
+        "--bounds",
+        choices=("aabb", "obb"),
+        default="aabb",
+        help="object bounds projected per frame: the paper's AABB or the tighter oriented box",
+    )
+    p.add_argument(
+        "--context-scale",
+        type=float,
+        default=None,
+        help="region scale of objects outside the focus, as a fraction of --region-scale "
+        "(0.25 to 1; default: the library's, see README); upsampled depth-aware when composited",
+    )
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -61,31 +79,61 @@ def build_parser() -> argparse.ArgumentParser:
     _scene_arg(p)
     _view_args(p)
     p.add_argument("--mode", default="ghosted-ao", help="std, sprites, transparent, ghosted or ghosted-ao")
-    p.add_argument("--focus", nargs="+", default=[], metavar="NAME",
-                   help="objects highlighted: opaque in ghosted modes, outlined in sprites/transparent")
+    p.add_argument(
+        "--focus",
+        nargs="+",
+        default=[],
+        metavar="NAME",
+        help="objects highlighted: opaque in ghosted modes, outlined in sprites/transparent",
+    )
     p.add_argument("--opacity", nargs="+", default=[], metavar="NAME=A", help="per-object opacity in [0, 1]")
     p.add_argument("--context-opacity", type=float, default=None, help="opacity of non-focus objects (ghosted)")
     p.add_argument("--edge-width", type=int, default=1, help="edge detection distance in pixels (ghosted-ao)")
     p.add_argument("--ao-radius", type=float, default=6.0, help="ambient occlusion radius in pixels (ghosted-ao)")
     p.add_argument("--ao-strength", type=float, default=1.0, help="ambient occlusion strength (ghosted-ao)")
-    p.add_argument("--ao-objects", choices=("focus", "all"), default=None,
-                   help="ambient occlusion on the focus objects only or on all (ghosted-ao; default: see README)")
-    p.add_argument("--halo", type=int, default=0, metavar="WIDTH",
-                   help="ghosted modes: a dark halo WIDTH pixels wide around focus objects where context lies behind")
-    p.add_argument("--order", choices=("auto", "object", "pixel"), default=None,
-                   help="transparency order (transparent, ghosted context): by object (bounds centres) or per "
-                        "pixel (each object's surface depth; nested parts blend right); auto (default): per pixel "
-                        "in transparent, by object in the ghosted context (see README)")
-    p.add_argument("--edge-objects", choices=("focus", "all"), default=None,
-                   help="edges on the focus objects only or on all (ghosted-ao; default: see README)")
-    p.add_argument("--projector", default=None, metavar="IMAGE[,AZ,EL,DIST]",
-                   help="paint the scene with IMAGE ('default': the shipped grid) from an orbit position "
-                        "(as --camera); without one the projector sits at the camera")
+    p.add_argument(
+        "--ao-objects",
+        choices=("focus", "all"),
+        default=None,
+        help="ambient occlusion on the focus objects only or on all (ghosted-ao; default: see README)",
+    )
+    p.add_argument(
+        "--halo",
+        type=int,
+        default=0,
+        metavar="WIDTH",
+        help="ghosted modes: a dark halo WIDTH pixels wide around focus objects where context lies behind",
+    )
+    p.add_argument(
+        "--order",
+        choices=("auto", "object", "pixel"),
+        default=None,
+        help="transparency order (transparent, ghosted context): by object (bounds centres) or per "
+        "pixel (each object's surface depth; nested parts blend right); auto (default): per pixel "
+        "in transparent, by object in the ghosted context (see README)",
+    )
+    p.add_argument(
+        "--edge-objects",
+        choices=("focus", "all"),
+        default=None,
+        help="edges on the focus objects only or on all (ghosted-ao; default: see README)",
+    )
+    p.add_argument(
+        "--projector",
+        default=None,
+        metavar="IMAGE[,AZ,EL,DIST]",
+        help="paint the scene with IMAGE ('default': the shipped grid) from an orbit position "
+        "(as --camera); without one the projector sits at the camera",
+    )
     p.add_argument("--projector-fov", type=float, default=30.0, help="projector field of view in degrees")
     p.add_argument("--no-projector-shadows", action="store_true", help="let the image pass through objects")
-    p.add_argument("--lens", default=None, metavar="SHAPE[,RADIUS]",
-                   help="cut the context away inside a lens (ghosted modes): sphere or box with a radius in "
-                        "world units (default: 0.6 x the focus bounds' diagonal), or the name of a closed object")
+    p.add_argument(
+        "--lens",
+        default=None,
+        metavar="SHAPE[,RADIUS]",
+        help="cut the context away inside a lens (ghosted modes): sphere or box with a radius in "
+        "world units (default: 0.6 x the focus bounds' diagonal), or the name of a closed object",
+    )
     p.add_argument("--lens-at", default=None, metavar="X,Y,Z", help="lens centre in world units (default: the focus)")
     out = p.add_mutually_exclusive_group(required=True)
     out.add_argument("--out", help="PNG file to write")
@@ -104,18 +152,27 @@ def build_parser() -> argparse.ArgumentParser:
     b = bsub.add_parser("composite", help="per-mode frame time against STD, and re-composite time")
     b.add_argument("--size", default="1024x1024")
     b.add_argument("--quick", action="store_true")
-    b.add_argument("--scene", nargs="+", default=None, metavar="NAME",
-                   help="demo, table1-N, random-N or a file (default: the demo and the Table 1 rows)")
+    b.add_argument(
+        "--scene",
+        nargs="+",
+        default=None,
+        metavar="NAME",
+        help="demo, table1-N, random-N or a file (default: the demo and the Table 1 rows)",
+    )
     b.add_argument("--json", default=None)
     b = bsub.add_parser("reliability", help="random extreme cameras against STD, and a soak (RELIABILITY.md)")
     b.add_argument("--sweep", type=int, default=10000, help="random cameras per scene")
     b.add_argument("--soak", type=int, default=20000, help="soak frames per scene")
     b.add_argument("--quick", action="store_true", help="200 cameras, 500 soak frames, a 200-object scene")
-    b.add_argument("--scenes", default=None, metavar="NAME,...",
-                   help="only these of demo, random-2000, textured-64 (default: all)")
+    b.add_argument(
+        "--scenes", default=None, metavar="NAME,...", help="only these of demo, random-2000, textured-64 (default: all)"
+    )
     b.add_argument("--json", default=None)
-    b = bsub.add_parser("scale", help="generated 1k/10k/100k-part assemblies (and the engine): load vs "
-                                      "trimesh.load, peak RSS, param+pack, STD, capture, ghosted, viewer fps")
+    b = bsub.add_parser(
+        "scale",
+        help="generated 1k/10k/100k-part assemblies (and the engine): load vs "
+        "trimesh.load, peak RSS, param+pack, STD, capture, ghosted, viewer fps",
+    )
     b.add_argument("--size", default="1280x720")
     b.add_argument("--quick", action="store_true", help="the 1k assembly only, fewer rounds")
     b.add_argument("--parts", default=None, metavar="N,...", help="assembly sizes (default 1000,10000,100000)")
@@ -125,24 +182,36 @@ def build_parser() -> argparse.ArgumentParser:
     b = bsub.add_parser("packing", help="our packer against rectpack and rectangle-packer")
     b.add_argument("--quick", action="store_true")
     b.add_argument("--json", default=None)
-    b = bsub.add_parser("ldi", help="the seed's LDI table, parity-test throughput against trimesh, "
-                                    "error by resolution")
+    b = bsub.add_parser("ldi", help="the seed's LDI table, parity-test throughput against trimesh, error by resolution")
     b.add_argument("--quick", action="store_true", help="20,000 points, the generated shapes, two resolutions")
     b.add_argument("--points", type=int, default=1_000_000)
     b.add_argument("--json", default=None)
-    b = bsub.add_parser("material", help="textured objects without and with batching (material atlas, "
-                                         "BVH chunks): draw calls, frame time, atlas memory")
+    b = bsub.add_parser(
+        "material",
+        help="textured objects without and with batching (material atlas, "
+        "BVH chunks): draw calls, frame time, atlas memory",
+    )
     b.add_argument("--objects", type=int, default=240, help="textured boxes in the generated scene")
-    b.add_argument("--max-vertices", type=int, default=480,
-                   help="BVH leaf size in vertices (the seed used 5000 for a city; the generated scene is smaller)")
+    b.add_argument(
+        "--max-vertices",
+        type=int,
+        default=480,
+        help="BVH leaf size in vertices (the seed used 5000 for a city; the generated scene is smaller)",
+    )
     b.add_argument("--quick", action="store_true", help="5 frames per figure, 16 textures")
     b.add_argument("--json", default=None)
-    b = bsub.add_parser("report", help="error against run time: regenerate the report block of BENCHMARKS.md "
-                                       "and the plots in docs/bench/")
-    b.add_argument("--quick", action="store_true",
-                   help="small scenes and grids, under two minutes (default output: out/report-quick/)")
-    b.add_argument("--markdown", default=None, help="markdown file whose report block is replaced "
-                                                    "(default: BENCHMARKS.md)")
+    b = bsub.add_parser(
+        "report",
+        help="error against run time: regenerate the report block of BENCHMARKS.md and the plots in docs/bench/",
+    )
+    b.add_argument(
+        "--quick",
+        action="store_true",
+        help="small scenes and grids, under two minutes (default output: out/report-quick/)",
+    )
+    b.add_argument(
+        "--markdown", default=None, help="markdown file whose report block is replaced (default: BENCHMARKS.md)"
+    )
     b.add_argument("--plots", default=None, help="folder for the PNG plots (default: docs/bench)")
     b = bsub.add_parser("formats", help="load time of every scene file: the format's library against rtta")
     b.add_argument("files", nargs="*", help="scene files (default: every one in ../shared/data)")
@@ -174,8 +243,15 @@ def _load(args):
 def _settings(args):
     from ..renderer.api import make_settings
 
-    return make_settings(args.border, args.atlas_max, args.max_layers, args.capture_path, args.region_scale,
-                         args.bounds, getattr(args, "context_scale", None))
+    return make_settings(
+        args.border,
+        args.atlas_max,
+        args.max_layers,
+        args.capture_path,
+        args.region_scale,
+        args.bounds,
+        getattr(args, "context_scale", None),
+    )
 
 
 def _renderer(ctx, scene, settings):
@@ -184,7 +260,7 @@ def _renderer(ctx, scene, settings):
     from ..renderer.renderer import Renderer
 
     caps = Capabilities.of(ctx)
-    caps.capture_path(settings.capture_path)     # a path the driver lacks is an error, before any work
+    caps.capture_path(settings.capture_path)  # a path the driver lacks is an error, before any work
     for note in caps.notes if settings.capture_path == "auto" else []:
         say("note", note)
     return Renderer(ctx, scene, settings)
@@ -197,7 +273,7 @@ def cmd_export(args) -> int:
 
     viewport = parse_size(args.size)
     settings = _settings(args)
-    check_folder(args.out, [args.scene])                  # before the work: a refused --out fails fast
+    check_folder(args.out, [args.scene])  # before the work: a refused --out fails fast
     scene = _load(args)
     camera = orbit_camera(scene, args.camera, args.fov)
     ctx = shared_context()
@@ -220,13 +296,21 @@ def cmd_snapshot(args) -> int:
     if args.mode not in SNAPSHOT_MODES:
         raise RttaError(f"--mode must be one of {', '.join(SNAPSHOT_MODES)}, got '{args.mode}'")
     viewport = parse_size(args.size)
-    _snapshot_targets(args, [args.scene, *_projector_files(args)])     # refused outputs fail before the work
+    _snapshot_targets(args, [args.scene, *_projector_files(args)])  # refused outputs fail before the work
     scene = _load(args)
     camera = orbit_camera(scene, args.camera, args.fov)
-    style = make_style(resolve_names(scene, args.focus, "--focus"), parse_opacities(scene, args.opacity),
-                       context_opacity=args.context_opacity, edge_width=args.edge_width,
-                       ao_radius=args.ao_radius, ao_strength=args.ao_strength, ao_objects=args.ao_objects,
-                       edge_objects=args.edge_objects, order=args.order, halo=args.halo)
+    style = make_style(
+        resolve_names(scene, args.focus, "--focus"),
+        parse_opacities(scene, args.opacity),
+        context_opacity=args.context_opacity,
+        edge_width=args.edge_width,
+        ao_radius=args.ao_radius,
+        ao_strength=args.ao_strength,
+        ao_objects=args.ao_objects,
+        edge_objects=args.edge_objects,
+        order=args.order,
+        halo=args.halo,
+    )
     targets = _snapshot_targets(args, [*scene.inputs, *_projector_files(args)])
     renderer = _renderer(shared_context(), scene, _settings(args))
     if args.projector is not None:
@@ -324,8 +408,14 @@ def cmd_bench(args) -> int:
     if args.bench == "scale":
         from ..bench.scale import run_scale
 
-        return run_scale(parse_size(args.size), quick=args.quick, sizes=args.parts,
-                         json_path=args.json, viewer=not args.no_viewer, normals=args.normals)
+        return run_scale(
+            parse_size(args.size),
+            quick=args.quick,
+            sizes=args.parts,
+            json_path=args.json,
+            viewer=not args.no_viewer,
+            normals=args.normals,
+        )
     if args.bench == "report":
         from ..bench.report import run_report
 
@@ -344,8 +434,14 @@ def main(argv: list[str] | None = None) -> int:
         say("error", str(exc))
         return 2
     steady_heap()
-    handler = {"export": cmd_export, "snapshot": cmd_snapshot, "info": cmd_info, "bench": cmd_bench,
-               "ldi": cmd_ldi, "dataset": cmd_dataset}[args.command]
+    handler = {
+        "export": cmd_export,
+        "snapshot": cmd_snapshot,
+        "info": cmd_info,
+        "bench": cmd_bench,
+        "ldi": cmd_ldi,
+        "dataset": cmd_dataset,
+    }[args.command]
     return run_command(handler, args, process=argv is None)
 
 

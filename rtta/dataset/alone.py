@@ -15,12 +15,12 @@ from .coco import flatten, layout
 
 @dataclass
 class Alone:
-    oids: np.ndarray               # int64 [N]: objects in view (a non-empty rectangle)
-    rects: np.ndarray              # int64 [N, 4]: x, y, w, h in image pixels (y down)
-    lay: dict                      # coco.layout(rects)
-    mask: np.ndarray               # bool, flat: where the object alone covers the pixel
-    depth: np.ndarray              # float32, flat: its window depth there (1: none)
-    colors: list[np.ndarray] | None = None   # RGBA [h, w, 4] per object, top row first
+    oids: np.ndarray  # int64 [N]: objects in view (a non-empty rectangle)
+    rects: np.ndarray  # int64 [N, 4]: x, y, w, h in image pixels (y down)
+    lay: dict  # coco.layout(rects)
+    mask: np.ndarray  # bool, flat: where the object alone covers the pixel
+    depth: np.ndarray  # float32, flat: its window depth there (1: none)
+    colors: list[np.ndarray] | None = None  # RGBA [h, w, 4] per object, top row first
 
 
 def in_view(records, height: int) -> tuple[np.ndarray, np.ndarray]:
@@ -32,8 +32,9 @@ def in_view(records, height: int) -> tuple[np.ndarray, np.ndarray]:
     return oids[keep], rects[keep]
 
 
-def alone_rtta(renderer: Renderer, camera: Camera, viewport: tuple[int, int], appearance: bool = False,
-               queue=None) -> Alone:
+def alone_rtta(
+    renderer: Renderer, camera: Camera, viewport: tuple[int, int], appearance: bool = False, queue=None
+) -> Alone:
     """ONE capture; every object's atlas region gathered in one numpy pass. `queue()`, when
     given, issues more GPU work after the capture (the STD draw): it runs while the gather does."""
     records = renderer.capture(camera, viewport)
@@ -44,13 +45,13 @@ def alone_rtta(renderer: Renderer, camera: Camera, viewport: tuple[int, int], ap
     oids, rects = in_view(records, viewport[1])
     lay = layout(rects)
     col, row, co = lay["col"], lay["row"], lay["col_obj"]
-    o = oids[co]                                             # per column
+    o = oids[co]  # per column
     ax0 = records.atlas_rect[o, 0] + records.border
     ay = records.atlas_rect[o, 1] + records.border
-    if np.all(records.scale[oids] == 1):                     # T is a shift: texel = the column's base - row
+    if np.all(records.scale[oids] == 1):  # T is a shift: texel = the column's base - row
         tx = (ax0 + lay["col_index"])[col]
         ty = (ay + rects[co, 3] - 1)[col] - row
-    else:                                                    # scaled-down regions: T's nearest texel per pixel
+    else:  # scaled-down regions: T's nearest texel per pixel
         s = records.scale[o][col]
         gx = (rects[co, 0] + lay["col_index"])[col]
         gy = viewport[1] - 1 - (rects[co, 1][col] + row)
@@ -66,7 +67,7 @@ def alone_rtta(renderer: Renderer, camera: Camera, viewport: tuple[int, int], ap
     if appearance:
         colors = []
         for i, oid in enumerate(oids):
-            a, b = lay["offsets"][i:i + 2]
+            a, b = lay["offsets"][i : i + 2]
             shape = (rects[i, 2], rects[i, 3] + 2)
             cols, rows = (np.clip(v[a:b].reshape(shape)[:, 1:-1].T, 0, lim) for v, lim in ((tx, tw - 1), (ty, th - 1)))
             colors.append(atlas["color"][records.layer[oid], rows, cols])

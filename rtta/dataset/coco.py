@@ -46,8 +46,15 @@ def layout(rects: np.ndarray) -> dict[str, np.ndarray]:
     col_start = offsets[col_obj] + col_index * col_len
     col = np.repeat(np.arange(len(col_obj), dtype=np.int32), col_len)
     row = np.arange(int(offsets[-1]), dtype=np.int64) - col_start[col] - 1
-    return {"offsets": offsets, "col_obj": col_obj, "col_index": col_index, "col_start": col_start,
-            "col": col, "row": row, "pixel": (row >= 0) & (row < (col_len - 2)[col])}
+    return {
+        "offsets": offsets,
+        "col_obj": col_obj,
+        "col_index": col_index,
+        "col_start": col_start,
+        "col": col,
+        "row": row,
+        "pixel": (row >= 0) & (row < (col_len - 2)[col]),
+    }
 
 
 def flatten(crops: list[np.ndarray], rects: np.ndarray, fill=0) -> np.ndarray:
@@ -60,7 +67,7 @@ def flatten(crops: list[np.ndarray], rects: np.ndarray, fill=0) -> np.ndarray:
     for i, crop in enumerate(crops):
         w, t = int(rects[i, 2]), int(tall[i])
         if w and t > 2:
-            out[offsets[i]:offsets[i + 1]].reshape(w, t)[:, 1:-1] = crop.T
+            out[offsets[i] : offsets[i + 1]].reshape(w, t)[:, 1:-1] = crop.T
     return out
 
 
@@ -75,13 +82,13 @@ def run_counts(flat: np.ndarray, rects: np.ndarray, height: int, width: int) -> 
         return []
     tall = rects[:, 3] + 2
     offsets = np.concatenate(([0], np.cumsum(rects[:, 2] * tall)))
-    at = np.flatnonzero(np.diff(flat.astype(np.int8))) + 1   # first element of each run (never an object's first)
+    at = np.flatnonzero(np.diff(flat.astype(np.int8))) + 1  # first element of each run (never an object's first)
     obj = np.searchsorted(offsets, at, side="right") - 1
     column, row = np.divmod(at - offsets[obj], tall[obj])
     index = (rects[obj, 0] + column) * height + rects[obj, 1] + row - 1
     # an end at the bottom of a column and a start at the top of the next one are the same place
     same = (index[1:] == index[:-1]) & (obj[1:] == obj[:-1])
-    keep = index < total                             # a run ending on the last pixel needs no end
+    keep = index < total  # a run ending on the last pixel needs no end
     keep[:-1] &= ~same
     keep[1:] &= ~same
     index, obj = index[keep], obj[keep]
@@ -97,23 +104,26 @@ def run_counts(flat: np.ndarray, rects: np.ndarray, height: int, width: int) -> 
     return [counts[a:b] for a, b in zip(starts.tolist(), ends.tolist(), strict=True)]
 
 
-def encode_flat(flat: np.ndarray, rects: np.ndarray, height: int,
-                width: int) -> tuple[list[dict], np.ndarray, np.ndarray]:
+def encode_flat(
+    flat: np.ndarray, rects: np.ndarray, height: int, width: int
+) -> tuple[list[dict], np.ndarray, np.ndarray]:
     """(RLEs as JSON dicts {size, counts}, areas, boxes [x, y, w, h]) of the full-image masks
     whose crops `flat` holds (see layout); compressed, measured and boxed by pycocotools."""
     if not len(np.asarray(rects).reshape(-1, 4)):
         return [], np.zeros(0, np.int64), np.zeros((0, 4))
     mask = _mask_api()
-    rles = mask.frPyObjects([{"size": [height, width], "counts": c}
-                             for c in run_counts(flat, rects, height, width)], height, width)
+    rles = mask.frPyObjects(
+        [{"size": [height, width], "counts": c} for c in run_counts(flat, rects, height, width)], height, width
+    )
     # mask.area sizes a uint8 scratch array by the count (numpy 2 refuses 256 or more): 255 at a time
-    areas = np.concatenate([mask.area(rles[k:k + 255]) for k in range(0, len(rles), 255)]).astype(np.int64)
+    areas = np.concatenate([mask.area(rles[k : k + 255]) for k in range(0, len(rles), 255)]).astype(np.int64)
     boxes = mask.toBbox(rles)
     return [{"size": [height, width], "counts": r["counts"].decode("ascii")} for r in rles], areas, boxes
 
 
-def encode_crops(crops: list[np.ndarray], rects: np.ndarray, height: int,
-                 width: int) -> tuple[list[dict], np.ndarray, np.ndarray]:
+def encode_crops(
+    crops: list[np.ndarray], rects: np.ndarray, height: int, width: int
+) -> tuple[list[dict], np.ndarray, np.ndarray]:
     """encode_flat of crops given one by one (bool [h, w] each, top row first)."""
     return encode_flat(flatten(crops, rects), rects, height, width)
 
@@ -130,10 +140,10 @@ def assemble(info: dict, scenes: list[dict], views: list[dict]) -> dict:
     """One COCO document from per-scene parts (objects with their category names) and per-view
     parts (an image and its annotations, which name their category): categories sorted by
     name with ids 1..K, images by id, annotations by (image, object) with ids 1..N."""
-    names = sorted({o["category"] for s in scenes for o in s["objects"]} |
-                   {a["category"] for v in views for a in v["annotations"]})
-    return _document(info, names, [v["image"] for v in views],
-                     [a for v in views for a in v["annotations"]])
+    names = sorted(
+        {o["category"] for s in scenes for o in s["objects"]} | {a["category"] for v in views for a in v["annotations"]}
+    )
+    return _document(info, names, [v["image"] for v in views], [a for v in views for a in v["annotations"]])
 
 
 def _document(info: dict, names: list[str], images: list[dict], annotations: list[dict]) -> dict:
@@ -145,9 +155,12 @@ def _document(info: dict, names: list[str], images: list[dict], annotations: lis
         entry = {"id": k + 1, "image_id": a["image_id"], "category_id": category[a["category"]]}
         entry.update((key, v) for key, v in a.items() if key not in ("id", "image_id", "category", "category_id"))
         out.append(entry)
-    return {"info": info, "images": images,
-            "categories": [{"id": category[n], "name": n, "supercategory": "object"} for n in names],
-            "annotations": out}
+    return {
+        "info": info,
+        "images": images,
+        "categories": [{"id": category[n], "name": n, "supercategory": "object"} for n in names],
+        "annotations": out,
+    }
 
 
 def read_document(path: Path) -> dict:
@@ -156,8 +169,9 @@ def read_document(path: Path) -> dict:
         doc = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise RttaError(f"cannot read annotations ({exc})", path) from None
-    if not isinstance(doc, dict) or not all(isinstance(doc.get(k), list)
-                                            for k in ("images", "annotations", "categories")):
+    if not isinstance(doc, dict) or not all(
+        isinstance(doc.get(k), list) for k in ("images", "annotations", "categories")
+    ):
         raise RttaError("not a COCO annotations file (images, annotations, categories)", path)
     return doc
 
@@ -191,8 +205,9 @@ def merge(inputs: list[Path], out: Path) -> dict:
                 a["appearance"] = _rebased(a["appearance"], path.resolve().parent, base, ("file",))
             key = (key_of[a["image_id"]], a["object_id"])
             if key in annotations and {**annotations[key], "image_id": 0} != {**a, "image_id": 0}:
-                raise RttaError(f"object {key[1]} of image {key[0]} appears in several inputs with different "
-                                "content", path)
+                raise RttaError(
+                    f"object {key[1]} of image {key[0]} appears in several inputs with different content", path
+                )
             annotations[key] = a
     ids = [im["id"] for im in images.values()]
     if len(set(ids)) != len(ids):
@@ -201,8 +216,7 @@ def merge(inputs: list[Path], out: Path) -> dict:
             image["id"] = renumber[key]
     for (key, _), a in annotations.items():
         a["image_id"] = images[key]["id"]
-    info = infos[0] if all(i == infos[0] for i in infos) else {"description": "merged rtta datasets",
-                                                                "merged": infos}
+    info = infos[0] if all(i == infos[0] for i in infos) else {"description": "merged rtta datasets", "merged": infos}
     return _document(info, sorted(names), list(images.values()), list(annotations.values()))
 
 

@@ -49,7 +49,6 @@ def object_meta(scene: Scene, category_by: str = "name") -> list[dict]:
     else:
         classes = [ifc_class(n) for n in scene.names]
         if not any(classes):
-            raise RttaError("--category-by ifc-class: no object is named by an IFC class (IfcWall ...)",
-                            scene.source)
+            raise RttaError("--category-by ifc-class: no object is named by an IFC class (IfcWall ...)", scene.source)
         cats = [c or "unclassified" for c in classes]
     return [{"name": n, "path": p, "category": c} for n, p, c in zip(scene.names, paths, cats, strict=True)]

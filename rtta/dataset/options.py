@@ -32,15 +32,15 @@ FORMAT = "rtta-dataset 1"
 class Options:
     """Everything that decides what a dataset holds (saved in dataset.json), and how to run it."""
 
-    scenes: list[str] = field(default_factory=list)   # files, folders or globs; none: the demo
+    scenes: list[str] = field(default_factory=list)  # files, folders or globs; none: the demo
     views: int = 10
     seed: int = 0
     size: tuple[int, int] = (640, 480)
     azimuth: tuple[float, float] = (0.0, 360.0)
     elevation: tuple[float, float] = (10.0, 60.0)
-    distance: tuple[float, float] = (1.4, 2.6)       # bounding radii
+    distance: tuple[float, float] = (1.4, 2.6)  # bounding radii
     fov: tuple[float, float] = (40.0, 60.0)
-    cameras: list[dict] | None = None                # explicit cameras (--cameras FILE.json)
+    cameras: list[dict] | None = None  # explicit cameras (--cameras FILE.json)
     depth: str = "png"
     appearance: bool = False
     category_by: str = "name"
@@ -57,7 +57,7 @@ class Run:
     shard: tuple[int, int] = (0, 1)
     workers: int = 1
     keep_going: bool = False
-    progress: bool | None = None                     # None: a bar when stderr is a terminal
+    progress: bool | None = None  # None: a bar when stderr is a terminal
 
 
 def expand_scenes(args: list[str]) -> list[str]:
@@ -146,9 +146,11 @@ def parse_cameras(path: str) -> list[dict]:
         except (AttributeError, KeyError, TypeError, ValueError):
             ok = False
         if not ok:
-            raise RttaError(f"camera {i}: expected {{\"orbit\": [AZ, EL, DIST>0], \"fov\": F}} or "
-                            "{\"eye\": [x,y,z], \"target\": [x,y,z], \"up\": [x,y,z], \"fov\": F} with 0 < F < 180",
-                            path)
+            raise RttaError(
+                f'camera {i}: expected {{"orbit": [AZ, EL, DIST>0], "fov": F}} or '
+                '{"eye": [x,y,z], "target": [x,y,z], "up": [x,y,z], "fov": F} with 0 < F < 180',
+                path,
+            )
         out.append(cam)
     return out
 
@@ -157,7 +159,7 @@ def items_of(s: dict, shard: tuple[int, int]) -> list[tuple[int, int]]:
     """The shard's (scene, view) items: the I-th of N contiguous slices of all of them."""
     every = [(i, v) for i in range(len(s["scenes"])) for v in range(s["views"])]
     i, n = shard
-    return every[len(every) * i // n: len(every) * (i + 1) // n]
+    return every[len(every) * i // n : len(every) * (i + 1) // n]
 
 
 def image_id(s: dict, item: tuple[int, int]) -> int:
@@ -201,8 +203,11 @@ def prepare_out(out: Path, s: dict) -> None:
         if old != new:
             theirs = old.get("settings", {}) if isinstance(old, dict) else {}
             diff = [k for k in new["settings"] if theirs.get(k) != new["settings"][k]] or ["format"]
-            raise RttaError(f"holds a dataset made with other settings ({', '.join(diff[:4])}): "
-                            "choose another --out, or the same settings to resume", out) from None
+            raise RttaError(
+                f"holds a dataset made with other settings ({', '.join(diff[:4])}): "
+                "choose another --out, or the same settings to resume",
+                out,
+            ) from None
 
 
 def _marker_temporary(entry: Path) -> bool:
@@ -220,13 +225,26 @@ def annotations_name(shard: tuple[int, int]) -> str:
 def assemble(out: Path, s: dict, items: list[tuple[int, int]], name: str) -> tuple[Path, dict]:
     """annotations(-shard-I-of-N).json from the parts of the items' complete views."""
     keys = [sc["key"] for sc in s["scenes"]]
-    views = [json.loads(part_path(out, keys[i], v).read_text(encoding="utf-8"))
-             for i, v in items if complete(out, keys[i], v)]
-    scenes = [json.loads(part_path(out, keys[i]).read_text(encoding="utf-8"))
-              for i in sorted({i for i, _ in items}) if part_path(out, keys[i]).is_file()]
+    views = [
+        json.loads(part_path(out, keys[i], v).read_text(encoding="utf-8"))
+        for i, v in items
+        if complete(out, keys[i], v)
+    ]
+    scenes = [
+        json.loads(part_path(out, keys[i]).read_text(encoding="utf-8"))
+        for i in sorted({i for i, _ in items})
+        if part_path(out, keys[i]).is_file()
+    ]
     from .. import __version__
 
-    doc = coco.assemble({"description": "rtta dataset: amodal and visible masks of every part",
-                         "version": f"rtta {__version__}", "settings": s}, scenes, views)
+    doc = coco.assemble(
+        {
+            "description": "rtta dataset: amodal and visible masks of every part",
+            "version": f"rtta {__version__}",
+            "settings": s,
+        },
+        scenes,
+        views,
+    )
     target = out / name
     return atomic_write(target, lambda tmp: Path(tmp).write_text(coco.dumps(doc))), doc

@@ -25,7 +25,7 @@ class Worker:
 
     def __init__(self, s: dict, out: Path, scenes: dict | None = None) -> None:
         self.s, self.out = s, Path(out)
-        self.given = scenes or {}             # in-memory scenes by their SCENE argument (library, tests)
+        self.given = scenes or {}  # in-memory scenes by their SCENE argument (library, tests)
         self.index: int | None = None
         self.renderer = None
         self.meta: list[dict] = []
@@ -42,8 +42,9 @@ class Worker:
 
         self.close()
         sc = self.s["scenes"][index]
-        scene = self.given.get(sc["file"]) or load_scene(sc["file"], smooth_angle=self.s["smooth_angle"],
-                                                         smooth=self.s["smooth"])
+        scene = self.given.get(sc["file"]) or load_scene(
+            sc["file"], smooth_angle=self.s["smooth_angle"], smooth=self.s["smooth"]
+        )
         for note in scene.warnings:
             print(f"rtta: warning: {printable(scene.source)}: {printable(note)}", file=sys.stderr)
         self.meta = object_meta(scene, self.s["category_by"])
@@ -112,8 +113,16 @@ class Writer:
                 self._pool.shutdown(wait=True)
 
 
-def produce_view(renderer, s: dict, meta: list[dict], item: tuple[int, int], out: Path,
-                 render=render_rtta, times: dict | None = None, writer: Writer | None = None) -> int:
+def produce_view(
+    renderer,
+    s: dict,
+    meta: list[dict],
+    item: tuple[int, int],
+    out: Path,
+    render=render_rtta,
+    times: dict | None = None,
+    writer: Writer | None = None,
+) -> int:
     """One view of scene item[0] (loaded in `renderer`) into `out`: rendered by `render`
     (render_rtta, or the benchmark's render_rtt), annotated, then its folder and its part
     written by `writer` (at once without one). Returns the number of annotations; `times`
@@ -131,8 +140,16 @@ def produce_view(renderer, s: dict, meta: list[dict], item: tuple[int, int], out
     notes = annotate(result, meta, iid, s["min_visible"], folder if s["appearance"] else None)
     cam = dict(camera_entry(renderer, camera, size), **how)
     big = scene.count > MAX_PNG_ID
-    image = {"id": iid, **view_files(folder, s["depth"], big), "width": size[0], "height": size[1],
-             "scene": key, "scene_file": s["scenes"][index]["file"], "view_index": view, "camera": cam}
+    image = {
+        "id": iid,
+        **view_files(folder, s["depth"], big),
+        "width": size[0],
+        "height": size[1],
+        "scene": key,
+        "scene_file": s["scenes"][index]["file"],
+        "view_index": view,
+        "camera": cam,
+    }
     if s["depth"] == "png":
         image["depth_scale"] = depth_scale(cam)
     _add(times, "render", t1 - t0)
@@ -188,8 +205,8 @@ _worker: Worker | None = None
 
 def _init(s: dict, out: str) -> None:
     global _worker
-    signal.signal(signal.SIGINT, signal.SIG_IGN)          # the parent handles Ctrl+C
-    signal.signal(signal.SIGTERM, _exit)                  # temporaries are removed on the way out
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent handles Ctrl+C
+    signal.signal(signal.SIGTERM, _exit)  # temporaries are removed on the way out
     _worker = Worker(s, Path(out))
 
 
@@ -201,7 +218,7 @@ def _task(chunk):
     try:
         return _worker.run(chunk)
     finally:
-        _worker.writer.wait()           # the chunk's views are on disk before it is reported
+        _worker.writer.wait()  # the chunk's views are on disk before it is reported
 
 
 def execute(s: dict, how: Run, todo: list[tuple[int, int]], scenes: dict | None = None) -> set[int]:
@@ -248,8 +265,10 @@ def _collect(results: list[tuple], failed: set[int], how: Run, bar) -> bool:
         elif r[1] not in failed:
             failed.add(r[1])
             bar.clear()
-            print(f"rtta: error: {printable(r[2])}" + ("" if how.keep_going else " (stopped; --keep-going skips it)"),
-                  file=sys.stderr)
+            print(
+                f"rtta: error: {printable(r[2])}" + ("" if how.keep_going else " (stopped; --keep-going skips it)"),
+                file=sys.stderr,
+            )
             if not how.keep_going:
                 return False
     return True
@@ -260,8 +279,13 @@ def _bar(total: int, progress: bool | None):
         from tqdm import tqdm
     except ImportError:
         raise RttaError("tqdm is needed for rtta dataset: pip install 'rtta[dataset]'") from None
-    return tqdm(total=total, unit="view", disable=None if progress is None else not progress,
-                file=sys.stderr, dynamic_ncols=True)
+    return tqdm(
+        total=total,
+        unit="view",
+        disable=None if progress is None else not progress,
+        file=sys.stderr,
+        dynamic_ncols=True,
+    )
 
 
 def run(opts: Options, how: Run, scenes: dict | None = None) -> int:
@@ -282,6 +306,8 @@ def run(opts: Options, how: Run, scenes: dict | None = None) -> int:
     rendered = len(todo) - sum(1 for it in todo if it[0] in failed)
     rate = f", {rendered / elapsed:.2f} views/s" if rendered and elapsed > 0 else ""
     skipped = f", {len(failed)} scene(s) skipped" if failed else ""
-    print(f"wrote {target}: {len(doc['images'])} images, {len(doc['annotations'])} annotations "
-          f"({rendered} views rendered, {len(items) - len(todo)} already complete{skipped}{rate})")
+    print(
+        f"wrote {target}: {len(doc['images'])} images, {len(doc['annotations'])} annotations "
+        f"({rendered} views rendered, {len(items) - len(todo)} already complete{skipped}{rate})"
+    )
     return 2 if failed else 0

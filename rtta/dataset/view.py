@@ -23,8 +23,8 @@ from ..scene.camera import Camera
 from .alone import Alone, alone_rtt, alone_rtta
 from .coco import encode_flat
 
-PNG_LEVEL = 1          # zlib level of every PNG written: 3-4x faster than Pillow's 6, files ~20% larger
-MAX_PNG_ID = 65534     # visible_id.png holds id + 1 in 16 bits; larger scenes get visible_id.npy
+PNG_LEVEL = 1  # zlib level of every PNG written: 3-4x faster than Pillow's 6, files ~20% larger
+MAX_PNG_ID = 65534  # visible_id.png holds id + 1 in 16 bits; larger scenes get visible_id.npy
 
 
 @dataclass
@@ -32,15 +32,15 @@ class View:
     """A rendered view: images, and every object in view (a non-empty rectangle) with its
     masks in the flat layout of coco.layout (what encoding reads)."""
 
-    rgb: np.ndarray                # uint8 [H, W, 3]
-    depth: np.ndarray              # float32 [H, W]: distance along the view axis, world units; 0 = none
-    ids: np.ndarray                # int32 [H, W]: the front-most object, -1 = none
-    oids: np.ndarray               # int64 [N]
-    rects: np.ndarray              # int64 [N, 4]: x, y, w, h in image pixels (y down)
-    amodal: np.ndarray             # bool, flat: the object alone (and any pixel STD shows of it)
-    visible: np.ndarray            # bool, flat: where STD shows it
-    nearest: np.ndarray            # float [N]: window depth of its nearest surface (1: none)
-    colors: list[np.ndarray] | None = None   # RGBA [h, w, 4] of each object alone, alpha = amodal
+    rgb: np.ndarray  # uint8 [H, W, 3]
+    depth: np.ndarray  # float32 [H, W]: distance along the view axis, world units; 0 = none
+    ids: np.ndarray  # int32 [H, W]: the front-most object, -1 = none
+    oids: np.ndarray  # int64 [N]
+    rects: np.ndarray  # int64 [N, 4]: x, y, w, h in image pixels (y down)
+    amodal: np.ndarray  # bool, flat: the object alone (and any pixel STD shows of it)
+    visible: np.ndarray  # bool, flat: where STD shows it
+    nearest: np.ndarray  # float [N]: window depth of its nearest surface (1: none)
+    colors: list[np.ndarray] | None = None  # RGBA [h, w, 4] of each object alone, alpha = amodal
 
 
 def _std(renderer: Renderer, viewport) -> dict[str, np.ndarray]:
@@ -65,7 +65,7 @@ def _view(std: dict, proj, objects: Alone) -> View:
     h, w = std["id"].shape
     col, pix = lay["col"], lay["pixel"]
     co = lay["col_obj"]
-    at = ((rects[co, 1] * w + rects[co, 0] + lay["col_index"])[col] + lay["row"] * w)   # image pixel, pads off
+    at = (rects[co, 1] * w + rects[co, 0] + lay["col_index"])[col] + lay["row"] * w  # image pixel, pads off
     ids = np.ascontiguousarray(std["id"]).ravel()
     visible = (ids.take(at, mode="clip") == oids[co][col]) & pix
     amodal = alone | visible
@@ -76,19 +76,28 @@ def _view(std: dict, proj, objects: Alone) -> View:
     if raw_colors is not None:
         colors = []
         for i, raw in enumerate(raw_colors):
-            a, b = lay["offsets"][i:i + 2]
+            a, b = lay["offsets"][i : i + 2]
             shape = (rects[i, 2], rects[i, 3] + 2)
-            m = {k: v[a:b].reshape(shape)[:, 1:-1].T for k, v in (("alone", alone), ("vis", visible),
-                                                                ("amodal", amodal))}
+            m = {
+                k: v[a:b].reshape(shape)[:, 1:-1].T for k, v in (("alone", alone), ("vis", visible), ("amodal", amodal))
+            }
             color = np.array(raw)
             x, y, cw, ch = rects[i]
             extra = m["vis"] & ~m["alone"]
-            color[extra] = std["color"][y:y + ch, x:x + cw][extra]
+            color[extra] = std["color"][y : y + ch, x : x + cw][extra]
             color[..., 3] = np.where(m["amodal"], 255, 0)
             colors.append(color)
-    return View(rgb=np.ascontiguousarray(std["color"][..., :3]), depth=linear_depth(std["depth"], proj),
-                ids=std["id"].astype(np.int32), oids=oids, rects=rects, amodal=amodal, visible=visible,
-                nearest=nearest, colors=colors)
+    return View(
+        rgb=np.ascontiguousarray(std["color"][..., :3]),
+        depth=linear_depth(std["depth"], proj),
+        ids=std["id"].astype(np.int32),
+        oids=oids,
+        rects=rects,
+        amodal=amodal,
+        visible=visible,
+        nearest=nearest,
+        colors=colors,
+    )
 
 
 def render_rtta(renderer: Renderer, camera: Camera, viewport: tuple[int, int], appearance: bool = False) -> View:
@@ -100,7 +109,7 @@ def render_rtta(renderer: Renderer, camera: Camera, viewport: tuple[int, int], a
 def render_rtt(renderer: Renderer, camera: Camera, viewport: tuple[int, int], appearance: bool = False) -> View:
     """The baseline: every object in view drawn alone with RTT and read back, and STD."""
     renderer.std(camera, viewport)
-    std = _std(renderer, viewport)             # before RTT, which draws into the same target
+    std = _std(renderer, viewport)  # before RTT, which draws into the same target
     return _view(std, renderer.matrices(camera, viewport)[1], alone_rtt(renderer, camera, viewport, appearance))
 
 
@@ -111,16 +120,27 @@ def camera_entry(renderer: Renderer, camera: Camera, viewport: tuple[int, int]) 
     view, proj = world_matrices(renderer, camera, viewport)
     used, _ = camera.depth_limited()
     w, h = viewport
-    k = [[proj[0, 0] * w / 2, 0.0, w / 2 * (1 - proj[0, 2])],
-         [0.0, proj[1, 1] * h / 2, h / 2 * (1 + proj[1, 2])],
-         [0.0, 0.0, 1.0]]
-    return {"view": view.tolist(), "proj": proj.tolist(), "K": [[float(v) for v in row] for row in k],
-            "eye": camera.eye.tolist(), "target": camera.target.tolist(), "up": camera.up.tolist(),
-            "fov_y": float(camera.fov_y), "near": float(used.near), "far": float(used.far)}
+    k = [
+        [proj[0, 0] * w / 2, 0.0, w / 2 * (1 - proj[0, 2])],
+        [0.0, proj[1, 1] * h / 2, h / 2 * (1 + proj[1, 2])],
+        [0.0, 0.0, 1.0],
+    ]
+    return {
+        "view": view.tolist(),
+        "proj": proj.tolist(),
+        "K": [[float(v) for v in row] for row in k],
+        "eye": camera.eye.tolist(),
+        "target": camera.target.tolist(),
+        "up": camera.up.tolist(),
+        "fov_y": float(camera.fov_y),
+        "near": float(used.near),
+        "far": float(used.far),
+    }
 
 
-def annotate(view: View, meta: list[dict], image_id: int, min_visible: int = 0,
-             appearance_dir: str | None = None) -> list[dict]:
+def annotate(
+    view: View, meta: list[dict], image_id: int, min_visible: int = 0, appearance_dir: str | None = None
+) -> list[dict]:
     """COCO annotations (no ids yet; `category` by name) of the view's objects that cover a
     pixel. depth_order ranks them by nearest depth (0 = nearest, ties by id); objects with
     fewer than `min_visible` visible pixels are then left out."""
@@ -136,10 +156,22 @@ def annotate(view: View, meta: list[dict], image_id: int, min_visible: int = 0,
     for i in shown[vis_area[shown] >= min_visible].tolist():
         oid, area, box, amodal_area, amodal_box, occluded, rank = (c[i] for c in columns)
         info = meta[oid]
-        a = {"image_id": image_id, "category": info["category"], "segmentation": vis[i], "area": area,
-             "bbox": box, "iscrowd": 0, "amodal_segmentation": amo[i], "amodal_area": amodal_area,
-             "amodal_bbox": amodal_box, "occlusion_rate": occluded, "depth_order": rank,
-             "object_id": oid, "object_name": info["name"], "object_path": info["path"]}
+        a = {
+            "image_id": image_id,
+            "category": info["category"],
+            "segmentation": vis[i],
+            "area": area,
+            "bbox": box,
+            "iscrowd": 0,
+            "amodal_segmentation": amo[i],
+            "amodal_area": amodal_area,
+            "amodal_bbox": amodal_box,
+            "occlusion_rate": occluded,
+            "depth_order": rank,
+            "object_id": oid,
+            "object_name": info["name"],
+            "object_path": info["path"],
+        }
         if appearance_dir is not None and view.colors is not None:
             a["appearance"] = {"file": f"{appearance_dir}/objects/{oid:05d}.png", "rect": view.rects[i].tolist()}
         out.append(a)
@@ -151,8 +183,9 @@ def depth_scale(camera_json: dict) -> float:
     return camera_json["far"] / 65535.0
 
 
-def write_view(view: View, folder: Path, depth_format: str, scale: float, big: bool = False,
-               keep: set[int] | None = None) -> None:
+def write_view(
+    view: View, folder: Path, depth_format: str, scale: float, big: bool = False, keep: set[int] | None = None
+) -> None:
     """rgb.png, depth.png (uint16, value x scale = world units, 0 = none) or depth.npy (float32),
     visible_id.png (uint16, id + 1, 0 = none; with `big`, scenes of over MAX_PNG_ID objects,
     visible_id.npy, uint32) and
@@ -172,8 +205,11 @@ def write_view(view: View, folder: Path, depth_format: str, scale: float, big: b
             np.save(tmp / "visible_id.npy", ids.astype(np.uint32))
         else:
             Image.fromarray(ids.astype(np.uint16)).save(tmp / "visible_id.png", compress_level=PNG_LEVEL)
-        crops = [(oid, c) for oid, c in zip(view.oids.tolist(), view.colors or [], strict=False)
-                 if keep is None or oid in keep]
+        crops = [
+            (oid, c)
+            for oid, c in zip(view.oids.tolist(), view.colors or [], strict=False)
+            if keep is None or oid in keep
+        ]
         if crops:
             (tmp / "objects").mkdir()
         for oid, color in crops:
@@ -193,5 +229,8 @@ def _umask() -> int:
 
 def view_files(folder_rel: str, depth_format: str, big: bool) -> dict:
     """The image entry's file fields for a view folder (relative to the dataset root)."""
-    return {"file_name": f"{folder_rel}/rgb.png", "depth_file": f"{folder_rel}/depth.{depth_format}",
-            "visible_id_file": f"{folder_rel}/visible_id.{'npy' if big else 'png'}"}
+    return {
+        "file_name": f"{folder_rel}/rgb.png",
+        "depth_file": f"{folder_rel}/depth.{depth_format}",
+        "visible_id_file": f"{folder_rel}/visible_id.{'npy' if big else 'png'}",
+    }

@@ -18,10 +18,13 @@ def create_headless_context() -> moderngl.Context:
     except Exception as exc:
         offered = _offered_version()
         if offered:
-            raise RttaError(f"OpenGL 4.3 is required (storage buffers, layered rendering); this driver "
-                            f"offers only {offered}") from None
-        raise RttaError(f"cannot create an OpenGL 4.3 context through EGL ({exc}); "
-                        "install Mesa (libegl1 libgl1-mesa-dri) or a GPU driver") from None
+            raise RttaError(
+                f"OpenGL 4.3 is required (storage buffers, layered rendering); this driver offers only {offered}"
+            ) from None
+        raise RttaError(
+            f"cannot create an OpenGL 4.3 context through EGL ({exc}); "
+            "install Mesa (libegl1 libgl1-mesa-dri) or a GPU driver"
+        ) from None
     return ctx
 
 
@@ -62,20 +65,28 @@ class Capabilities:
     @classmethod
     def of(cls, ctx: moderngl.Context) -> Capabilities:
         if ctx.version_code < 430:
-            raise RttaError(f"OpenGL 4.3 is required, the context offers {ctx.version_code // 100}."
-                            f"{ctx.version_code // 10 % 10} ({ctx.info['GL_RENDERER']})")
-        return cls(version=ctx.version_code, renderer=str(ctx.info["GL_RENDERER"]),
-                   geometry_shader=True, vertex_layer=LAYER_EXTENSION in ctx.extensions,
-                   max_layers=int(ctx.info["GL_MAX_ARRAY_TEXTURE_LAYERS"]),
-                   max_texture=int(ctx.info["GL_MAX_TEXTURE_SIZE"]))
+            raise RttaError(
+                f"OpenGL 4.3 is required, the context offers {ctx.version_code // 100}."
+                f"{ctx.version_code // 10 % 10} ({ctx.info['GL_RENDERER']})"
+            )
+        return cls(
+            version=ctx.version_code,
+            renderer=str(ctx.info["GL_RENDERER"]),
+            geometry_shader=True,
+            vertex_layer=LAYER_EXTENSION in ctx.extensions,
+            max_layers=int(ctx.info["GL_MAX_ARRAY_TEXTURE_LAYERS"]),
+            max_texture=int(ctx.info["GL_MAX_TEXTURE_SIZE"]),
+        )
 
     @property
     def notes(self) -> list[str]:
         """What is missing and which fallback is used instead (empty on a full GL 4.5 driver)."""
         if self.vertex_layer:
             return []
-        return [f"{LAYER_EXTENSION} is missing on {self.renderer}: capturing through the "
-                "geometry-shader path (the paper's) instead"]
+        return [
+            f"{LAYER_EXTENSION} is missing on {self.renderer}: capturing through the "
+            "geometry-shader path (the paper's) instead"
+        ]
 
     def capture_path(self, requested: str = "auto") -> str:
         """'vs' where the layer extension exists, else the paper's 'gs' path."""

@@ -69,8 +69,7 @@ class DepthArray:
         gl = _lib()
         gl.glPixelStorei(GL_PACK_ALIGNMENT, 4)
         gl.glBindTexture(GL_TEXTURE_2D_ARRAY, self.glo)
-        gl.glGetTexImage(GL_TEXTURE_2D_ARRAY, 0, GL_DEPTH_COMPONENT, GL_FLOAT,
-                         out.ctypes.data_as(ctypes.c_void_p))
+        gl.glGetTexImage(GL_TEXTURE_2D_ARRAY, 0, GL_DEPTH_COMPONENT, GL_FLOAT, out.ctypes.data_as(ctypes.c_void_p))
         gl.glBindTexture(GL_TEXTURE_2D_ARRAY, 0)
         return out
 
@@ -168,8 +167,10 @@ class Throttle:
         gl = _lib()
         gl.glClientWaitSync.restype = ctypes.c_uint
         fence = ctypes.c_void_p(self._fence)
-        while gl.glClientWaitSync(fence, ctypes.c_uint(GL_SYNC_FLUSH_COMMANDS_BIT),
-                                  ctypes.c_uint64(WAIT_STEP_NS)) == GL_TIMEOUT_EXPIRED:
+        while (
+            gl.glClientWaitSync(fence, ctypes.c_uint(GL_SYNC_FLUSH_COMMANDS_BIT), ctypes.c_uint64(WAIT_STEP_NS))
+            == GL_TIMEOUT_EXPIRED
+        ):
             pass
         self.release()
 
@@ -248,8 +249,12 @@ class BufferTexture:
         gl = _lib()
         gl.glMapNamedBufferRange.restype = ctypes.c_void_p
         nbytes = count * 12
-        ptr = gl.glMapNamedBufferRange(ctypes.c_uint(self.buffer_glo), ctypes.c_ssize_t(0), ctypes.c_ssize_t(nbytes),
-                                       ctypes.c_uint(GL_MAP_WRITE_BIT | GL_MAP_INVALIDATE_BUFFER_BIT))
+        ptr = gl.glMapNamedBufferRange(
+            ctypes.c_uint(self.buffer_glo),
+            ctypes.c_ssize_t(0),
+            ctypes.c_ssize_t(nbytes),
+            ctypes.c_uint(GL_MAP_WRITE_BIT | GL_MAP_INVALIDATE_BUFFER_BIT),
+        )
         if not ptr:
             raise RuntimeError("glMapNamedBufferRange failed")
         try:
@@ -300,8 +305,9 @@ class DepthStencil:
         self.glo, self.size = rb.value, (width, height)
         self.stencil_only = stencil_only
         gl.glBindRenderbuffer(GL_RENDERBUFFER, self.glo)
-        gl.glRenderbufferStorage(GL_RENDERBUFFER, GL_STENCIL_INDEX8 if stencil_only else GL_DEPTH32F_STENCIL8,
-                                 width, height)
+        gl.glRenderbufferStorage(
+            GL_RENDERBUFFER, GL_STENCIL_INDEX8 if stencil_only else GL_DEPTH32F_STENCIL8, width, height
+        )
         gl.glBindRenderbuffer(GL_RENDERBUFFER, 0)
 
     @property

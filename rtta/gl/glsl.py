@@ -61,8 +61,10 @@ def stage_sources(stages: dict[str, str | None], **defines: object) -> dict[str,
     unknown = sorted(set(defines) - known)
     if unknown:
         raise ValueError(f"no shader of this pass declares {', '.join(unknown)}")
-    return {stage: load(name, **{k: v for k, v in defines.items() if k in declared_defines(name)}) if name else None
-            for stage, name in stages.items()}
+    return {
+        stage: load(name, **{k: v for k, v in defines.items() if k in declared_defines(name)}) if name else None
+        for stage, name in stages.items()
+    }
 
 
 def program(ctx: moderngl.Context, **sources: str | None) -> moderngl.Program:

@@ -12,7 +12,7 @@ from ..scene.model import Scene
 
 VERTEX_LAYOUT = (("in_position", "3f", "12x"), ("in_normal", "3f", "12x"), ("in_object", "u4", "4x"))
 UV_LAYOUT = (("in_uv", "2f", "8x"),)
-MATERIAL_UNIT = 15          # texture unit of the material atlas
+MATERIAL_UNIT = 15  # texture unit of the material atlas
 MATERIAL_DTYPE = np.dtype([("rect", "<f4", 4), ("info", "<i4", 4)])
 
 
@@ -23,7 +23,7 @@ class GpuScene:
         self.ctx = ctx
         self.scene = scene
         self.textured = scene.textured
-        self.cull_closed = True     # the scene passes cull the back faces of closed objects (Scene.closed)
+        self.cull_closed = True  # the scene passes cull the back faces of closed objects (Scene.closed)
         fields = [("p", "<f4", 3), ("n", "<f4", 3), ("id", "<u4")] + ([("uv", "<f4", 2)] if self.textured else [])
         interleaved = np.zeros(scene.vertex_count, dtype=fields)
         interleaved["p"] = scene.positions
@@ -42,8 +42,8 @@ class GpuScene:
         # B_world per object as two vec4 (min, max), the scene origin at 0 as for the vertex
         # positions: compositing draws sprites over their projected outlines (composite.geom)
         bounds = np.zeros((max(scene.count, 1), 2, 4), np.float32)
-        bounds[:scene.count, 0, :3] = scene.aabb_min - scene.origin
-        bounds[:scene.count, 1, :3] = scene.aabb_max - scene.origin
+        bounds[: scene.count, 0, :3] = scene.aabb_min - scene.origin
+        bounds[: scene.count, 1, :3] = scene.aabb_max - scene.origin
         self.bounds = ctx.buffer(bounds.tobytes())
 
     def vao(self, program: moderngl.Program) -> moderngl.VertexArray:
@@ -59,8 +59,9 @@ class GpuScene:
         used = [(name, fmt if name in program else skip) for name, fmt, skip in self.layout]
         layout = " ".join(fmt for _, fmt in used)
         names = [name for name, fmt in used if not fmt.endswith("x")]
-        return self.ctx.vertex_array(program, [(self.vbo, layout, *names)], index_buffer=index_buffer,
-                                     index_element_size=4)
+        return self.ctx.vertex_array(
+            program, [(self.vbo, layout, *names)], index_buffer=index_buffer, index_element_size=4
+        )
 
     def _upload_materials(self) -> None:
         """Pack the textures into the material atlas (mip levels 0..levels built by GL from
@@ -92,7 +93,7 @@ class GpuScene:
 
     def upload_records(self, records: Records) -> None:
         """Write R for this frame (same size every frame: no reallocation)."""
-        self.records.write(records.packed(reuse=True))     # no copy to bytes: 8 MB a frame at 10^5 objects
+        self.records.write(records.packed(reuse=True))  # no copy to bytes: 8 MB a frame at 10^5 objects
 
     def bind_storage(self) -> None:
         self.records.bind_to_storage_buffer(0)
@@ -104,7 +105,6 @@ class GpuScene:
         for vao in self._vaos.values():
             vao.release()
         self._vaos.clear()
-        for buf in (self.vbo, self.ibo, self.objects, self.records, self.materials, self.material_atlas,
-                    self.bounds):
+        for buf in (self.vbo, self.ibo, self.objects, self.records, self.materials, self.material_atlas, self.bounds):
             if buf is not None:
                 buf.release()

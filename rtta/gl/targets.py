@@ -15,7 +15,7 @@ from ..scene.files import memory_limit
 from . import glraw
 
 SHRINK_AFTER_FRAMES = 60
-MIN_TARGET_BYTES = 512 * 2**20     # render targets may always take this much, whatever the scene limit
+MIN_TARGET_BYTES = 512 * 2**20  # render targets may always take this much, whatever the scene limit
 
 
 def release_framebuffer(ctx: moderngl.Context, fbo) -> None:
@@ -58,13 +58,19 @@ class LayeredTarget:
     depth alone (inside a frame the difference is smaller: BENCHMARKS.md).
     """
 
-    def __init__(self, ctx: moderngl.Context, size: tuple[int, int], layers: int = 1,
-                 depth_keyed: bool = False, normals: bool = True) -> None:
+    def __init__(
+        self,
+        ctx: moderngl.Context,
+        size: tuple[int, int],
+        layers: int = 1,
+        depth_keyed: bool = False,
+        normals: bool = True,
+    ) -> None:
         self.ctx = ctx
         self.depth_keyed = depth_keyed
         self.normals = normals
-        self.normals_written = normals   # False after a capture that left the normal image alone
-        self.ids_written = True          # False after a capture that left the id image alone
+        self.normals_written = normals  # False after a capture that left the normal image alone
+        self.ids_written = True  # False after a capture that left the id image alone
         self.size = (0, 0)
         self.layers = 0
         self.allocations = 0
@@ -79,14 +85,18 @@ class LayeredTarget:
         n = max(1, int(layers))
         need = w * h * n * (4 + 4 * self.normals + 4 + 4)
         if need > max(memory_limit() // 2, MIN_TARGET_BYTES):
-            raise RttaError(f"the render targets would need {w}x{h}x{n} texels ({need / 2**20:,.0f} MiB), over half "
-                            "the memory limit (RTTA_MEMORY_LIMIT_MB); use a smaller --size or --region-scale")
+            raise RttaError(
+                f"the render targets would need {w}x{h}x{n} texels ({need / 2**20:,.0f} MiB), over half "
+                "the memory limit (RTTA_MEMORY_LIMIT_MB); use a smaller --size or --region-scale"
+            )
         try:
             self._make(w, h, n)
-        except moderngl.Error as exc:       # the driver could not allocate what it allows in principle
+        except moderngl.Error as exc:  # the driver could not allocate what it allows in principle
             self._free()
-            raise RttaError(f"the driver cannot allocate {w}x{h}x{n} render targets ({need / 2**20:,.0f} MiB: "
-                            f"{str(exc).splitlines()[0][:80]}); use a smaller --size or --region-scale") from None
+            raise RttaError(
+                f"the driver cannot allocate {w}x{h}x{n} render targets ({need / 2**20:,.0f} MiB: "
+                f"{str(exc).splitlines()[0][:80]}); use a smaller --size or --region-scale"
+            ) from None
 
     def _make(self, w: int, h: int, n: int) -> None:
         ctx = self.ctx
@@ -110,8 +120,7 @@ class LayeredTarget:
         w, h = self.size
         if need_w > w or need_h > h or need_l > self.layers:
             self._small_frames = 0
-            self._allocate((max(w, round_up(need_w, 64)), max(h, round_up(need_h, 64))),
-                           max(self.layers, need_l))
+            self._allocate((max(w, round_up(need_w, 64)), max(h, round_up(need_h, 64))), max(self.layers, need_l))
             return True
         if need_w * need_h * need_l * 2 < w * h * self.layers:
             self._small_frames += 1
@@ -161,8 +170,9 @@ class LayeredTarget:
             glraw.clear_color_int(len(self._textures) - 1, -1)
         glraw.clear_depth(1.0)
 
-    def read(self, size: tuple[int, int] | None = None, layers: int | None = None,
-             parts: tuple[str, ...] | None = None) -> dict[str, np.ndarray]:
+    def read(
+        self, size: tuple[int, int] | None = None, layers: int | None = None, parts: tuple[str, ...] | None = None
+    ) -> dict[str, np.ndarray]:
         """Layers as numpy [layers, H, W(, C)], cropped to `size`; row 0 is the bottom row;
         normals decoded to float32 xyz. `parts` picks which attachments are read (picking
         needs only id and depth; None: all there are, so no "normal" without normals or after
@@ -172,8 +182,11 @@ class LayeredTarget:
         n = self.layers
         cw, ch = size or (w, h)
         cl = n if layers is None else max(1, layers)
-        parts = parts or tuple(k for k, on in (("color", True), ("normal", self.normals_written),
-                                               ("id", self.ids_written), ("depth", True)) if on)
+        parts = parts or tuple(
+            k
+            for k, on in (("color", True), ("normal", self.normals_written), ("id", self.ids_written), ("depth", True))
+            if on
+        )
         self._check_readable(parts)
         readers = {
             "color": lambda: np.frombuffer(self.color.read(), np.uint8).reshape(n, h, w, 4),

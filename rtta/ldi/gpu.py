@@ -15,7 +15,7 @@ from .pack import CompressedLDI, compress
 from .peel import NIL, LayeredDepthImage
 
 POINTS_WIDTH = 2048
-LOCAL_SIZE = 256      # ldi_classify.comp's local_size_x (injected); divides POINTS_WIDTH
+LOCAL_SIZE = 256  # ldi_classify.comp's local_size_x (injected); divides POINTS_WIDTH
 
 
 def texel_major(layers: np.ndarray, max_width: int) -> tuple[np.ndarray, int]:
@@ -35,8 +35,13 @@ class LdiTextures:
     """The plain layers (R32F, texel-major, read as an image) and the compressed ranges
     (RG32UI) of one LDI."""
 
-    def __init__(self, ctx: moderngl.Context, ldi: LayeredDepthImage, packed: CompressedLDI | None = None,
-                 max_width: int | None = None) -> None:
+    def __init__(
+        self,
+        ctx: moderngl.Context,
+        ldi: LayeredDepthImage,
+        packed: CompressedLDI | None = None,
+        max_width: int | None = None,
+    ) -> None:
         """`max_width`: the layers image's width limit (default: the driver's)."""
         self.ldi = ldi
         self.packed = packed or compress(ldi)
@@ -55,8 +60,11 @@ class LdiTextures:
         self.ranges.use(packed_unit)
         if f"{prefix}to_crop" in prog:
             prog[f"{prefix}to_crop"].write(mat_bytes(self.ldi.crop_matrix @ to_world))
-        for name, value in (("crop_size", tuple(self.ldi.crop[2:])), ("depth", self.ldi.depth),
-                            ("per_row", self.per_row)):
+        for name, value in (
+            ("crop_size", tuple(self.ldi.crop[2:])),
+            ("depth", self.ldi.depth),
+            ("per_row", self.per_row),
+        ):
             if prefix + name in prog:
                 prog[prefix + name].value = value
 
@@ -68,8 +76,13 @@ class LdiTextures:
 class ParityTest:
     """`classify(points, compressed=False)` -> bool [N], one compute invocation per point."""
 
-    def __init__(self, ctx: moderngl.Context, ldi: LayeredDepthImage, packed: CompressedLDI | None = None,
-                 max_width: int | None = None) -> None:
+    def __init__(
+        self,
+        ctx: moderngl.Context,
+        ldi: LayeredDepthImage,
+        packed: CompressedLDI | None = None,
+        max_width: int | None = None,
+    ) -> None:
         self.ctx = ctx
         self.textures = LdiTextures(ctx, ldi, packed, max_width)
         self._programs: dict[bool, moderngl.ComputeShader] = {}
@@ -79,8 +92,12 @@ class ParityTest:
 
     def _program(self, compressed: bool) -> moderngl.ComputeShader:
         if compressed not in self._programs:
-            source = glsl.load("ldi_classify.comp", COMPRESSED=compressed, LOCAL_SIZE=LOCAL_SIZE,
-                               LDI_DEPTH=max(1, self.textures.ldi.depth))
+            source = glsl.load(
+                "ldi_classify.comp",
+                COMPRESSED=compressed,
+                LOCAL_SIZE=LOCAL_SIZE,
+                LDI_DEPTH=max(1, self.textures.ldi.depth),
+            )
             self._programs[compressed] = self.ctx.compute_shader(source)
         return self._programs[compressed]
 
@@ -106,7 +123,7 @@ class ParityTest:
         t0 = time.perf_counter()
         ldi = self.textures.ldi
         m = ldi.matrix[:3, :3]
-        center = np.linalg.solve(m, 0.5 - ldi.matrix[:3, 3])          # world point at T = 0.5
+        center = np.linalg.solve(m, 0.5 - ldi.matrix[:3, 3])  # world point at T = 0.5
         if np.abs(center).max() <= 64.0 / np.linalg.norm(m, axis=1).min():
             center = np.zeros(3)
         shift = np.eye(4)
@@ -124,8 +141,7 @@ class ParityTest:
         t2 = time.perf_counter()
         raw = self.inside.read()
         out = np.frombuffer(raw, np.uint8)[:n] != 0
-        self.last_ms = {"upload": (t1 - t0) * 1e3, "test": (t2 - t1) * 1e3,
-                        "read": (time.perf_counter() - t2) * 1e3}
+        self.last_ms = {"upload": (t1 - t0) * 1e3, "test": (t2 - t1) * 1e3, "read": (time.perf_counter() - t2) * 1e3}
         return out
 
     def _release_targets(self) -> None:

@@ -31,7 +31,7 @@ class Lens:
     faces: np.ndarray
     center: np.ndarray
     radius: float = 1.0
-    object_id: int = -1         # the scene object used as the lens: never cut itself
+    object_id: int = -1  # the scene object used as the lens: never cut itself
 
     @classmethod
     def shape(cls, kind: str, center, radius: float) -> Lens:
@@ -48,7 +48,7 @@ class Lens:
     def of_object(cls, scene: Scene, oid: int) -> Lens:
         """A closed object of the scene as the lens, placed where it is."""
         first, count = scene.index_ranges[oid]
-        faces = scene.indices[first:first + count].reshape(-1, 3).astype(np.int64)
+        faces = scene.indices[first : first + count].reshape(-1, 3).astype(np.int64)
         used, faces = np.unique(faces, return_inverse=True)
         local = scene.positions[used].astype(np.float64)
         center = (local.min(axis=0) + local.max(axis=0)) / 2
@@ -63,7 +63,7 @@ class Lens:
         return m
 
 
-NO_FOCUS_SHARE = 0.25     # of the scene's bounds diagonal: a lens on the whole scene would cut it all
+NO_FOCUS_SHARE = 0.25  # of the scene's bounds diagonal: a lens on the whole scene would cut it all
 
 
 def default_placement(scene: Scene, focus) -> tuple[np.ndarray, float]:

@@ -20,12 +20,12 @@ from .peel import NIL, LayeredDepthImage
 
 @dataclass
 class CompressedLDI:
-    data: np.ndarray                 # uint32 [rows, width, 2]
-    depth: int                       # layers of the original (for decompression)
+    data: np.ndarray  # uint32 [rows, width, 2]
+    depth: int  # layers of the original (for decompression)
     crop: tuple[int, int, int, int]
     size: tuple[int, int]
-    ranges: int                      # depth ranges stored
-    milliseconds: float = 0.0        # time to compress
+    ranges: int  # depth ranges stored
+    milliseconds: float = 0.0  # time to compress
 
     @property
     def nbytes(self) -> int:
@@ -40,7 +40,7 @@ def compress(ldi: LayeredDepthImage, max_width: int = 4096) -> CompressedLDI:
     pairs = (d + 1) // 2
     padded = np.full((2 * pairs, h, w), NIL, np.float32)
     padded[:d] = layers
-    starts = padded[0::2].transpose(1, 2, 0).reshape(h * w, pairs)     # texel-major, range j within
+    starts = padded[0::2].transpose(1, 2, 0).reshape(h * w, pairs)  # texel-major, range j within
     ends = padded[1::2].transpose(1, 2, 0).reshape(h * w, pairs)
     present = starts < NIL
     count = present.sum(axis=1).astype(np.uint32)
@@ -53,8 +53,9 @@ def compress(ldi: LayeredDepthImage, max_width: int = 4096) -> CompressedLDI:
     rows = max(1, -(-total // width))
     data = np.zeros((rows * width, 2), np.uint32)
     data[:total] = flat
-    return CompressedLDI(data.reshape(rows, width, 2), d, ldi.crop, ldi.size, int(count.sum()),
-                         (time.perf_counter() - t0) * 1e3)
+    return CompressedLDI(
+        data.reshape(rows, width, 2), d, ldi.crop, ldi.size, int(count.sum()), (time.perf_counter() - t0) * 1e3
+    )
 
 
 def decompress(comp: CompressedLDI) -> np.ndarray:

@@ -25,8 +25,8 @@ from ..gl import glraw, glsl
 from ..gl.targets import release_all
 from ..passes.capture import mat_bytes
 
-NIL = 4.0            # depth of "no surface" (> every linear depth in [0, 1])
-MAX_LAYERS = 256     # a closed mesh needing more is refused, not peeled forever
+NIL = 4.0  # depth of "no surface" (> every linear depth in [0, 1])
+MAX_LAYERS = 256  # a closed mesh needing more is refused, not peeled forever
 _NDC = np.array([[2.0, 0, 0, -1], [0, 2.0, 0, -1], [0, 0, 2.0, -1], [0, 0, 0, 1]])
 
 
@@ -48,8 +48,11 @@ def closed_mesh(vertices, faces, name: str = "mesh") -> tuple[np.ndarray, np.nda
         raise RttaError("has no triangles", name)
     if not mesh.is_watertight:
         _, uses = np.unique(mesh.edges_sorted, axis=0, return_counts=True)
-        raise RttaError(f"is not a closed mesh ({int((uses == 1).sum())} open edges, {int((uses > 2).sum())} "
-                        "shared by more than two triangles); the parity test needs a closed surface", name)
+        raise RttaError(
+            f"is not a closed mesh ({int((uses == 1).sum())} open edges, {int((uses > 2).sum())} "
+            "shared by more than two triangles); the parity test needs a closed surface",
+            name,
+        )
     return np.asarray(mesh.vertices) * extent + center, np.asarray(mesh.faces)
 
 
@@ -68,7 +71,7 @@ def to_texture(rotation: np.ndarray, vertices: np.ndarray, resolution: int) -> n
     texel in s and t (silhouettes are sampled) and 1% in r (no fragment clipped)."""
     local = vertices @ rotation.T
     lo, hi = local.min(axis=0), local.max(axis=0)
-    extent = np.maximum(hi - lo, 1e-9 * max(float((hi - lo).max()), 1e-300))     # flat sides: scale-free floor
+    extent = np.maximum(hi - lo, 1e-9 * max(float((hi - lo).max()), 1e-300))  # flat sides: scale-free floor
     pad = np.array([extent[0] / max(resolution - 2, 1), extent[1] / max(resolution - 2, 1), extent[2] * 0.01])
     lo, hi = lo - pad, hi + pad
     m = np.eye(4)
@@ -87,8 +90,8 @@ class LayeredDepthImage:
     crop: tuple[int, int, int, int]
     matrix: np.ndarray
     direction: np.ndarray
-    timings: dict[str, float] = field(default_factory=dict)   # ms: view, peel, crop
-    complexity: tuple[int, int] = (0, 0)                        # (d_min, d_max) over the viewpoints tried
+    timings: dict[str, float] = field(default_factory=dict)  # ms: view, peel, crop
+    complexity: tuple[int, int] = (0, 0)  # (d_min, d_max) over the viewpoints tried
 
     @property
     def depth(self) -> int:
@@ -135,9 +138,10 @@ class Peeler:
         self.vertices = np.asarray(vertices, np.float64)
         vbo = self.ctx.buffer(np.asarray(vertices, np.float32).tobytes())
         ibo = self.ctx.buffer(np.asarray(faces, np.uint32).tobytes())
-        self._vaos = {prog.glo: self.ctx.vertex_array(prog, [(vbo, "3f", "in_position")], index_buffer=ibo,
-                                                      index_element_size=4)
-                      for prog in (self.peel_prog, self.count_prog)}
+        self._vaos = {
+            prog.glo: self.ctx.vertex_array(prog, [(vbo, "3f", "in_position")], index_buffer=ibo, index_element_size=4)
+            for prog in (self.peel_prog, self.count_prog)
+        }
         self._mesh = [*self._vaos.values(), vbo, ibo]
 
     def _targets(self, n: int) -> None:
@@ -225,8 +229,9 @@ def sphere_directions(horizontal: int = 8, vertical: int = 4) -> np.ndarray:
     return np.array(out)
 
 
-def select_viewpoint(peeler: Peeler, resolution: int = 128,
-                     directions: np.ndarray | None = None) -> tuple[np.ndarray, list[tuple[int, float]]]:
+def select_viewpoint(
+    peeler: Peeler, resolution: int = 128, directions: np.ndarray | None = None
+) -> tuple[np.ndarray, list[tuple[int, float]]]:
     """For the mesh loaded in `peeler`: the direction of minimal depth complexity, ties broken
     by maximal coverage of the texture (covered texels / all texels); also every direction's
     (d, coverage)."""
@@ -249,13 +254,21 @@ def crop_bounds(layer0: np.ndarray) -> tuple[int, int, int, int]:
     return int(cols[0]), int(rows[0]), int(cols[-1] - cols[0] + 1), int(rows[-1] - rows[0] + 1)
 
 
-def build(ctx: moderngl.Context, vertices, faces, resolution: int = 512, *, direction=None,
-          peeler: Peeler | None = None, select_resolution: int = 128) -> LayeredDepthImage:
+def build(
+    ctx: moderngl.Context,
+    vertices,
+    faces,
+    resolution: int = 512,
+    *,
+    direction=None,
+    peeler: Peeler | None = None,
+    select_resolution: int = 128,
+) -> LayeredDepthImage:
     """Viewpoint selection (unless `direction` is given), peeling and cropping of a closed mesh."""
     if not 4 <= resolution <= 8192:
         raise RttaError(f"LDI resolution {resolution} outside 4..8192", "--resolution")
     vertices = np.asarray(vertices, np.float64)
-    center = (vertices.min(axis=0) + vertices.max(axis=0)) / 2     # peel centred: float32 keeps precision
+    center = (vertices.min(axis=0) + vertices.max(axis=0)) / 2  # peel centred: float32 keeps precision
     vertices = vertices - center
     own = peeler is None
     peeler = peeler or Peeler(ctx)
@@ -275,14 +288,15 @@ def build(ctx: moderngl.Context, vertices, faces, resolution: int = 512, *, dire
         timings["peel"] = (time.perf_counter() - t0) * 1e3
         t0 = time.perf_counter()
         s0, t0_, w, h = crop = crop_bounds(layers[0]) if len(layers) else (0, 0, 0, 0)
-        cropped = np.ascontiguousarray(layers[:, t0_:t0_ + h, s0:s0 + w])
+        cropped = np.ascontiguousarray(layers[:, t0_ : t0_ + h, s0 : s0 + w])
         timings["crop"] = (time.perf_counter() - t0) * 1e3
         if complexity == (0, 0):
             complexity = (len(layers), len(layers))
         shift = np.eye(4)
         shift[:3, 3] = -center
-        return LayeredDepthImage(cropped, (resolution, resolution), crop, matrix @ shift,
-                                 np.asarray(direction, float), timings, complexity)
+        return LayeredDepthImage(
+            cropped, (resolution, resolution), crop, matrix @ shift, np.asarray(direction, float), timings, complexity
+        )
     finally:
         if own:
             peeler.release()
@@ -306,7 +320,7 @@ def classify(ldi: LayeredDepthImage, points: np.ndarray) -> np.ndarray:
     idx = np.flatnonzero(ok)
     if len(idx) == 0 or ldi.depth == 0:
         return out
-    depths = ldi.layers[:, texel[idx, 1], texel[idx, 0]]          # [d, M]
+    depths = ldi.layers[:, texel[idx, 1], texel[idx, 0]]  # [d, M]
     in_front = (depths < q[idx, 2][None, :]).sum(axis=0)
     out[idx] = in_front % 2 == 1
     return out

@@ -11,5 +11,4 @@ from .capture import CapturePass, RttPass, StdPass
 from .composite import MODES, CompositePass, CompositeTarget, Style
 from .post import AtlasPostPass
 
-__all__ = ["MODES", "AtlasPostPass", "CapturePass", "CompositePass", "CompositeTarget", "RttPass", "StdPass",
-           "Style"]
+__all__ = ["MODES", "AtlasPostPass", "CapturePass", "CompositePass", "CompositeTarget", "RttPass", "StdPass", "Style"]

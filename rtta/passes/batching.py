@@ -24,7 +24,7 @@ class SeparatePass(ScenePass):
 
     def __init__(self, ctx: moderngl.Context) -> None:
         super().__init__(ctx, SEPARATE=True)
-        self._for: GpuScene | None = None          # the scene whose textures are uploaded
+        self._for: GpuScene | None = None  # the scene whose textures are uploaded
         self._textures: list[moderngl.Texture] = []
         self.draw_calls = 0
 
@@ -40,8 +40,9 @@ class SeparatePass(ScenePass):
             self._for = gpu
         return self._textures
 
-    def render(self, *, gpu: GpuScene, view: np.ndarray, proj: np.ndarray,
-               target: LayeredTarget, viewport: tuple[int, int]) -> None:
+    def render(
+        self, *, gpu: GpuScene, view: np.ndarray, proj: np.ndarray, target: LayeredTarget, viewport: tuple[int, int]
+    ) -> None:
         target.ensure(viewport, 1)
         target.clear()
         vao = self.setup(gpu, view, proj, target)
@@ -58,7 +59,7 @@ class SeparatePass(ScenePass):
                     self.program["u_textured"].value = bool(has)
                     if has:
                         textures[ids[oid]].use(0)
-                self.cull(bool(self._cullable[oid]))          # as STD culls (ScenePass.draw_objects)
+                self.cull(bool(self._cullable[oid]))  # as STD culls (ScenePass.draw_objects)
                 vao.render(moderngl.TRIANGLES, vertices=int(count), first=int(first))
                 self.draw_calls += 1
         finally:
@@ -95,8 +96,9 @@ class ChunkedStdPass(ScenePass):
             self._built = (gpu, bvh, ibo, {})
         return self._built
 
-    def render(self, *, gpu: GpuScene, view: np.ndarray, proj: np.ndarray,
-               target: LayeredTarget, viewport: tuple[int, int]) -> None:
+    def render(
+        self, *, gpu: GpuScene, view: np.ndarray, proj: np.ndarray, target: LayeredTarget, viewport: tuple[int, int]
+    ) -> None:
         target.ensure(viewport, 1)
         target.clear()
         self.setup(gpu, view, proj, target)
@@ -108,7 +110,7 @@ class ChunkedStdPass(ScenePass):
         ranges = visible_leaves(bvh, proj @ view)
         self.visible = int(ranges[:, 2].sum()) if len(ranges) else 0
         self.draw_calls = len(ranges)
-        self.cull(bool(self._cullable.all()))     # chunks mix objects: culled when every object may be
+        self.cull(bool(self._cullable.all()))  # chunks mix objects: culled when every object may be
         try:
             for first, count, _ in ranges:
                 vaos[key].render(moderngl.TRIANGLES, vertices=int(count), first=int(first))

@@ -17,8 +17,8 @@ class Bvh:
     leaves: (first index, index count) per leaf; lo/hi: each leaf's bounds (float32 space)."""
 
     indices: np.ndarray
-    leaves: np.ndarray       # int64 [L, 2]
-    lo: np.ndarray           # float64 [L, 3]
+    leaves: np.ndarray  # int64 [L, 2]
+    lo: np.ndarray  # float64 [L, 3]
     hi: np.ndarray
 
 
@@ -28,7 +28,7 @@ def build_bvh(positions: np.ndarray, triangles: np.ndarray, max_vertices: int = 
         raise ValueError(f"max_vertices must be at least 3, got {max_vertices}")
     p = np.asarray(positions, np.float64)
     tri = np.asarray(triangles, np.int64)
-    corners = p[tri]                                   # [F, 3, 3]
+    corners = p[tri]  # [F, 3, 3]
     tlo, thi = corners.min(axis=1), corners.max(axis=1)
     centroid = (tlo + thi) / 2
     order: list[np.ndarray] = []
@@ -95,5 +95,6 @@ def visible_leaves(bvh: Bvh, view_proj: np.ndarray) -> np.ndarray:
         return np.zeros((0, 3), np.int64)
     breaks = np.flatnonzero(np.diff(idx) != 1) + 1
     runs = np.split(idx, breaks)
-    return np.array([(bvh.leaves[r[0], 0], bvh.leaves[r[-1]].sum() - bvh.leaves[r[0], 0], len(r)) for r in runs],
-                    np.int64)
+    return np.array(
+        [(bvh.leaves[r[0], 0], bvh.leaves[r[-1]].sum() - bvh.leaves[r[0], 0], len(r)) for r in runs], np.int64
+    )

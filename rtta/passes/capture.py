@@ -24,7 +24,7 @@ from ..gl.gpu import GpuScene
 from ..gl.targets import LayeredTarget
 from ..scene.closure import beyond_near
 
-DIRECT_RUNS = 1          # more runs of visible objects than this: one indirect multi-draw
+DIRECT_RUNS = 1  # more runs of visible objects than this: one indirect multi-draw
 
 
 def mat_bytes(m: np.ndarray) -> bytes:
@@ -36,13 +36,14 @@ class ScenePass:
     """Shared setup: a program from scene.vert (+ optional geometry shader) and scene.frag
     (or another fragment shader, e.g. depth.frag for the projector's shadow map)."""
 
-    def __init__(self, ctx: moderngl.Context, geometry: str | None = None, fragment: str = "scene.frag",
-                 **defines: object) -> None:
+    def __init__(
+        self, ctx: moderngl.Context, geometry: str | None = None, fragment: str = "scene.frag", **defines: object
+    ) -> None:
         self.ctx = ctx
         self._source = (geometry, fragment, defines)
         self._programs: dict[tuple, moderngl.Program] = {}
         self._indirect: moderngl.Buffer | None = None
-        self._cullable = np.zeros(0, bool)     # per object, for the view of the last setup()
+        self._cullable = np.zeros(0, bool)  # per object, for the view of the last setup()
         self.program = self.program_for(False)
 
     def program_for(self, textured: bool, normals: bool = True, **variant: bool) -> moderngl.Program:
@@ -60,16 +61,20 @@ class ScenePass:
             self._programs[key] = glsl.program(self.ctx, **glsl.stage_sources(stages, **defines))
         return self._programs[key]
 
-    def setup(self, gpu: GpuScene, view: np.ndarray, proj: np.ndarray,
-              target: LayeredTarget | None = None, **variant: bool) -> moderngl.VertexArray:
+    def setup(
+        self, gpu: GpuScene, view: np.ndarray, proj: np.ndarray, target: LayeredTarget | None = None, **variant: bool
+    ) -> moderngl.VertexArray:
         """Program, matrices, buffers and state for drawing the batch into `target` (its
         attachments pick the program's outputs; None: a target of its own, e.g. a shadow map)."""
         self.program = self.program_for(gpu.textured, target is None or target.normals, **variant)
         self.program["u_view"].write(mat_bytes(view))
         self.program["u_proj"].write(mat_bytes(proj))
         scene = gpu.scene
-        self._cullable = (scene.closed & beyond_near(scene.aabb_min - scene.origin, scene.aabb_max - scene.origin,
-                                                     view, proj) if gpu.cull_closed else np.zeros(scene.count, bool))
+        self._cullable = (
+            scene.closed & beyond_near(scene.aabb_min - scene.origin, scene.aabb_max - scene.origin, view, proj)
+            if gpu.cull_closed
+            else np.zeros(scene.count, bool)
+        )
         gpu.bind_storage()
         gpu.bind_material(self.program)
         self.ctx.enable_only(moderngl.DEPTH_TEST)
@@ -109,7 +114,7 @@ class ScenePass:
             for first, count in runs:
                 vao.render(moderngl.TRIANGLES, vertices=int(count), first=int(first))
             return
-        commands = np.zeros((len(runs), 5), np.uint32)      # count, instances, first index, base vertex, base instance
+        commands = np.zeros((len(runs), 5), np.uint32)  # count, instances, first index, base vertex, base instance
         commands[:, 0], commands[:, 1], commands[:, 2] = runs[:, 1], 1, runs[:, 0]
         data = commands.tobytes()
         if self._indirect is None or self._indirect.size < len(data):
@@ -141,8 +146,17 @@ class CapturePass(ScenePass):
         else:
             super().__init__(ctx, geometry="capture.geom", CAPTURE_GS=True)
 
-    def render(self, *, gpu: GpuScene, records: Records, view: np.ndarray, proj: np.ndarray,
-               atlas: LayeredTarget, normals: bool = True, ids: bool = True) -> None:
+    def render(
+        self,
+        *,
+        gpu: GpuScene,
+        records: Records,
+        view: np.ndarray,
+        proj: np.ndarray,
+        atlas: LayeredTarget,
+        normals: bool = True,
+        ids: bool = True,
+    ) -> None:
         """Upload R, then draw the whole batch once into `atlas` (sized to records.atlas_size):
         one draw call, two on the vertex-shader path when some regions meet the viewport's edge
         (those alone are clipped); objects without a region (culled, hidden) are left out. normals=False
@@ -159,17 +173,25 @@ class CapturePass(ScenePass):
         atlas.bind((0, 0, tw, th))
         atlas.write_mask(normals, ids)
         try:
-            if self.path == "gs":            # the geometry shader clips every triangle
+            if self.path == "gs":  # the geometry shader clips every triangle
                 self._draw(gpu, view, proj, atlas, records.visible, clip=True)
-            else:                            # only regions on the viewport's edge clip
+            else:  # only regions on the viewport's edge clip
                 edge = records.visible & records.meets_edge
                 self._draw(gpu, view, proj, atlas, records.visible & ~edge, clip=False)
                 self._draw(gpu, view, proj, atlas, edge, clip=True)
         finally:
             atlas.write_mask()
 
-    def _draw(self, gpu: GpuScene, view: np.ndarray, proj: np.ndarray, atlas: LayeredTarget,
-              objects: np.ndarray, *, clip: bool) -> None:
+    def _draw(
+        self,
+        gpu: GpuScene,
+        view: np.ndarray,
+        proj: np.ndarray,
+        atlas: LayeredTarget,
+        objects: np.ndarray,
+        *,
+        clip: bool,
+    ) -> None:
         """Draw the objects in `objects` (bool [n]; culled and hidden ones are never in it),
         clipped to their regions or not, in one call."""
         if not objects.any():
@@ -190,9 +212,17 @@ class StdPass(ScenePass):
         super().__init__(ctx)
         self._painted: ScenePass | None = None
 
-    def render(self, *, gpu: GpuScene, view: np.ndarray, proj: np.ndarray,
-               target: LayeredTarget, viewport: tuple[int, int], projection=None,
-               objects: np.ndarray | None = None) -> None:
+    def render(
+        self,
+        *,
+        gpu: GpuScene,
+        view: np.ndarray,
+        proj: np.ndarray,
+        target: LayeredTarget,
+        viewport: tuple[int, int],
+        projection=None,
+        objects: np.ndarray | None = None,
+    ) -> None:
         """objects: bool [n], the objects to draw (None: all)."""
         target.ensure(viewport, 1)
         target.clear()
@@ -224,9 +254,17 @@ class RttPass(ScenePass):
     def __init__(self, ctx: moderngl.Context) -> None:
         super().__init__(ctx)
 
-    def render(self, *, gpu: GpuScene, view: np.ndarray, proj: np.ndarray,
-               target: LayeredTarget, viewport: tuple[int, int], objects,
-               consume: Callable[[int, LayeredTarget], None] | None = None) -> None:
+    def render(
+        self,
+        *,
+        gpu: GpuScene,
+        view: np.ndarray,
+        proj: np.ndarray,
+        target: LayeredTarget,
+        viewport: tuple[int, int],
+        objects,
+        consume: Callable[[int, LayeredTarget], None] | None = None,
+    ) -> None:
         target.ensure(viewport, 1)
         vao = self.setup(gpu, view, proj, target)
         ranges, closed = gpu.scene.index_ranges, self._cullable
@@ -235,7 +273,7 @@ class RttPass(ScenePass):
                 target.clear()
                 target.bind((0, 0, *viewport))
                 first, count = ranges[oid]
-                self.cull(bool(closed[oid]))       # as draw_objects does
+                self.cull(bool(closed[oid]))  # as draw_objects does
                 vao.render(moderngl.TRIANGLES, vertices=int(count), first=int(first))
                 if consume is not None:
                     consume(int(oid), target)

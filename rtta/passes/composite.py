@@ -29,18 +29,18 @@ from .oit import PixelOrderPass, blended_in_place, resolved_order
 from .outlines import hull_margin, worth_outlines
 
 MODES = ("sprites", "transparent", "ghosted", "ghosted-ao")
-LENS_MODES = ("ghosted", "ghosted-ao")    # where a lens cuts the context away
+LENS_MODES = ("ghosted", "ghosted-ao")  # where a lens cuts the context away
 BACKGROUND = (0.93, 0.93, 0.95, 1.0)
-UPSAMPLE_BELOW = 0.999                    # regions with fewer texels per pixel are upsampled
-ROLES = ("focus", "all")                  # which objects get AO / edges in ghosted-ao
+UPSAMPLE_BELOW = 0.999  # regions with fewer texels per pixel are upsampled
+ROLES = ("focus", "all")  # which objects get AO / edges in ghosted-ao
 
 
 @dataclass
 class Style:
     """What compositing needs besides the atlas; changing it never re-runs the capture."""
 
-    opacity: dict[int, float] = field(default_factory=dict)   # per object id
-    default_opacity: float = 0.5       # `transparent`: objects not in `opacity`
+    opacity: dict[int, float] = field(default_factory=dict)  # per object id
+    default_opacity: float = 0.5  # `transparent`: objects not in `opacity`
     focus: set[int] = field(default_factory=set)
     context_opacity: float = 0.3
     desaturate: float = 0.8
@@ -51,12 +51,12 @@ class Style:
     ao_radius: float = 6.0
     ao_strength: float = 1.0
     # defaults from `rtta bench composite` on the demo at 1024² (README, BENCHMARKS.md)
-    ao_objects: str = "focus"          # ghosted-ao: AO on 'focus' objects only (the paper) or on 'all'
-    edge_objects: str = "all"          # ghosted-ao: edges on 'focus' objects only or on 'all'
-    order: str = "auto"                # transparent and ghosted context: 'object' (bounds centres), 'pixel'
-                                       # (surface depths), or 'auto' (oit.resolved_order: pixel in transparent)
-    halo: int = 0                      # ghosted modes: halo width (pixels) around focus objects, 0: none
-    halo_color: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.6)   # (rgb, strength)
+    ao_objects: str = "focus"  # ghosted-ao: AO on 'focus' objects only (the paper) or on 'all'
+    edge_objects: str = "all"  # ghosted-ao: edges on 'focus' objects only or on 'all'
+    order: str = "auto"  # transparent and ghosted context: 'object' (bounds centres), 'pixel'
+    # (surface depths), or 'auto' (oit.resolved_order: pixel in transparent)
+    halo: int = 0  # ghosted modes: halo width (pixels) around focus objects, 0: none
+    halo_color: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.6)  # (rgb, strength)
 
     def shaded(self, n: int) -> tuple[np.ndarray, np.ndarray]:
         """(uses AO, uses edges) per object [n] bool, in ghosted-ao."""
@@ -75,9 +75,9 @@ def back_to_front(records: Records, view_depth: np.ndarray, ids: np.ndarray) -> 
     ids = np.asarray(ids, np.int64)
     ids = ids[records.visible[ids]]
     key = -view_depth[ids]
-    order = np.argsort(key)          # half a lexsort's time (7 against 15 ms at 10^5 objects)
+    order = np.argsort(key)  # half a lexsort's time (7 against 15 ms at 10^5 objects)
     ranked = key[order]
-    if (ranked[1:] == ranked[:-1]).any():      # a tie: the order among equals must be by id
+    if (ranked[1:] == ranked[:-1]).any():  # a tie: the order among equals must be by id
         return ids[np.lexsort((ids, key))]
     return ids[order]
 
@@ -91,20 +91,26 @@ class CompositePass:
         self._vaos: dict[tuple, moderngl.VertexArray] = {}
         self.styles = ctx.buffer(reserve=16)
         self.order = ctx.buffer(reserve=16)
-        self.passes: list[str] = []        # the draws of the last render, for inspection
-        self._pixel_order = None           # PixelOrderPass, made on first use
-        self._context_depth = self._context_fbo = None    # front-most context depth, for halos
-        self.fallbacks = 0                 # frames that asked for pixel order and got object order
+        self.passes: list[str] = []  # the draws of the last render, for inspection
+        self._pixel_order = None  # PixelOrderPass, made on first use
+        self._context_depth = self._context_fbo = None  # front-most context depth, for halos
+        self.fallbacks = 0  # frames that asked for pixel order and got object order
         self._projection = self._lens = self._inv_view_proj = None
-        self._hull = None                  # (P V bytes, eye): sprites over the projected outlines of B_world
-        self._opacity = np.zeros(0, np.float32)   # per object, as the last render draws them
-        self.hull_draws = 0                # draws of the last render whose sprites covered projected outlines
+        self._hull = None  # (P V bytes, eye): sprites over the projected outlines of B_world
+        self._opacity = np.zeros(0, np.float32)  # per object, as the last render draws them
+        self.hull_draws = 0  # draws of the last render whose sprites covered projected outlines
 
     def _program(self, **defines) -> tuple[moderngl.Program, moderngl.VertexArray]:
         key = tuple(sorted(defines.items()))
         if key not in self._programs:
-            sources = glsl.stage_sources({"vertex_shader": "composite.vert", "geometry_shader": "composite.geom",
-                                          "fragment_shader": "composite.frag"}, **defines)
+            sources = glsl.stage_sources(
+                {
+                    "vertex_shader": "composite.vert",
+                    "geometry_shader": "composite.geom",
+                    "fragment_shader": "composite.frag",
+                },
+                **defines,
+            )
             prog = glsl.program(self.ctx, **sources)
             self._programs[key] = prog
             self._vaos[key] = self.ctx.vertex_array(prog, [])
@@ -117,9 +123,22 @@ class CompositePass:
             buf.orphan(max(size, 2 * buf.size))
         buf.write(data)
 
-    def render(self, *, atlas: LayeredTarget, records: Records, gpu: GpuScene, style: Style, mode: str,
-               view_depth: np.ndarray, target: CompositeTarget, post=None, view_proj=None,
-               projection=None, lens=None, eye=None) -> None:
+    def render(
+        self,
+        *,
+        atlas: LayeredTarget,
+        records: Records,
+        gpu: GpuScene,
+        style: Style,
+        mode: str,
+        view_depth: np.ndarray,
+        target: CompositeTarget,
+        post=None,
+        view_proj=None,
+        projection=None,
+        lens=None,
+        eye=None,
+    ) -> None:
         """Composite the captured atlas into `target` (sized to the records' viewport).
         `projection`: (ProjectorPass, Projector, scene origin) to paint with; `lens`: (LensPass,
         Lens, scene origin) cutting the context away in the ghosted modes. Both need `view_proj`.
@@ -144,7 +163,7 @@ class CompositePass:
             ao, edges = style.shaded(n)
             params[:n, 2], params[:n, 3] = ao, edges
         self._upload(self.styles, params)
-        self._opacity = params[:n, 0]      # a view: as drawn (the ghosted context's too), for OrderMarks
+        self._opacity = params[:n, 0]  # a view: as drawn (the ghosted context's too), for OrderMarks
         self.passes = []
         self.hull_draws = 0
         target.ensure(records.viewport)
@@ -154,7 +173,7 @@ class CompositePass:
         gpu.bounds.bind_to_storage_buffer(4)
         self.styles.bind_to_storage_buffer(2)
         atlas.color.use(0)
-        glraw.bind_texture_array(1, atlas.depth.glo)     # depth-keyed: no id image is read
+        glraw.bind_texture_array(1, atlas.depth.glo)  # depth-keyed: no id image is read
         if projection is not None:
             atlas.normal.use(4)
         everyone = np.arange(n)
@@ -162,7 +181,7 @@ class CompositePass:
         if mode == "sprites":
             self._draw(everyone, style, records, sprite=True)
             if outlined:
-                self._draw(focus, style, records, outline=True)      # highlights, seen through
+                self._draw(focus, style, records, outline=True)  # highlights, seen through
         elif mode == "transparent":
             self._blend(back_to_front(records, view_depth, everyone), style, records, target, mode, desaturate=0.0)
             if outlined:
@@ -173,15 +192,26 @@ class CompositePass:
                 post.texture.use(3)
             in_context = np.ones(n, bool)
             in_context[focus] = False
-            context = everyone[in_context]      # (a mask: setdiff1d's sort took 1.6 ms at 10^4 objects)
+            context = everyone[in_context]  # (a mask: setdiff1d's sort took 1.6 ms at 10^4 objects)
             # the focus outlines in the focus sprites' pass (at depth 0, so that nothing drawn
             # after covers them), unless a focus region is upsampled (outlines read texels)
             fused = outlined and not (records.scale[focus[records.visible[focus]]] < UPSAMPLE_BELOW).any()
             self._draw(focus, style, records, sprite=True, ao=with_ao, outlined=fused)
             params[context, 0] = style.context_opacity * params[context, 0]
             self._upload(self.styles, params)
-            self._blend(back_to_front(records, view_depth, context), style, records, target, mode, behind=focus,
-                        behind_outlined=fused, desaturate=style.desaturate, depth_test=True, ao=with_ao, cut=True)
+            self._blend(
+                back_to_front(records, view_depth, context),
+                style,
+                records,
+                target,
+                mode,
+                behind=focus,
+                behind_outlined=fused,
+                desaturate=style.desaturate,
+                depth_test=True,
+                ao=with_ao,
+                cut=True,
+            )
             if style.halo > 0 and len(focus):
                 self._halo(focus, context, style, records, target)
             if outlined and not fused:
@@ -197,8 +227,17 @@ class CompositePass:
         self._sprite_depth(context, style, records, target, farthest=True, cut=True).use(5)
         self._draw(focus, style, records, halo=True, depth_test=True)
 
-    def _sprite_depth(self, ids, style: Style, records: Records, target: CompositeTarget, *, farthest: bool,
-                      cut: bool, outlined: bool = False) -> moderngl.Texture:
+    def _sprite_depth(
+        self,
+        ids,
+        style: Style,
+        records: Records,
+        target: CompositeTarget,
+        *,
+        farthest: bool,
+        cut: bool,
+        outlined: bool = False,
+    ) -> moderngl.Texture:
         """The nearest (or farthest) sprite depth of `ids` per pixel, in a depth texture of
         the target's size (1, or 0 for farthest, where none); the target is bound again after.
         `outlined`: their outlines at depth 0 (as the fused focus pass draws them)."""
@@ -220,8 +259,17 @@ class CompositePass:
             self._context_depth.release()
         self._context_depth = self._context_fbo = None
 
-    def _blend(self, ids, style: Style, records: Records, target: CompositeTarget, mode: str, behind=None,
-               behind_outlined: bool = False, **how) -> None:
+    def _blend(
+        self,
+        ids,
+        style: Style,
+        records: Records,
+        target: CompositeTarget,
+        mode: str,
+        behind=None,
+        behind_outlined: bool = False,
+        **how,
+    ) -> None:
         """Blend `ids` (back to front) over the target: object by object, or per pixel in the
         order of their surfaces (style.order 'pixel', or 'auto' in `transparent`; object order
         where PixelOrderPass.begin refuses: over MAX_NODES, or a view too large for its targets).
@@ -239,14 +287,23 @@ class CompositePass:
                 clip = behind is not None and len(behind) > 0
                 fetch = self._pixel_order.fetch
                 if clip:
-                    self._sprite_depth(behind, style, records, target, farthest=False, cut=False,
-                                       outlined=behind_outlined).use(7)
+                    self._sprite_depth(
+                        behind, style, records, target, farthest=False, cut=False, outlined=behind_outlined
+                    ).use(7)
                 self._pixel_order.collect_into(target, mark=not clip)
-                try:   # clip: collected only, writing no depth (clipped by the focus depth instead);
+                try:  # clip: collected only, writing no depth (clipped by the focus depth instead);
                     # else blended in object order and sorted where that is wrong (oit.OrderMarks)
                     tested = not clip and not fetch
-                    self._draw(ids, style, records, collect=True, blend=not clip, focus_clip=clip,
-                               first_fetched=fetch, **{**how, "depth_test": tested, "depth_write": tested})
+                    self._draw(
+                        ids,
+                        style,
+                        records,
+                        collect=True,
+                        blend=not clip,
+                        focus_clip=clip,
+                        first_fetched=fetch,
+                        **{**how, "depth_test": tested, "depth_write": tested},
+                    )
                 finally:
                     self._pixel_order.end_collect()
                 if clip:
@@ -284,27 +341,62 @@ class CompositePass:
         for run in np.split(ids, cuts):
             self._draw_run(run, style, records, upsample=bool(records.scale[run[0]] < UPSAMPLE_BELOW), **how)
 
-    def _draw_run(self, ids, style: Style, records: Records, *, sprite=False, blend=False, outline=False,
-                  desaturate=0.0, depth_test=False, ao=False, cut=False, upsample=False, collect=False,
-                  halo=False, farthest=False, focus_clip=False, outlined=False, depth_write=False,
-                  first_fetched=False) -> None:
+    def _draw_run(
+        self,
+        ids,
+        style: Style,
+        records: Records,
+        *,
+        sprite=False,
+        blend=False,
+        outline=False,
+        desaturate=0.0,
+        depth_test=False,
+        ao=False,
+        cut=False,
+        upsample=False,
+        collect=False,
+        halo=False,
+        farthest=False,
+        focus_clip=False,
+        outlined=False,
+        depth_write=False,
+        first_fetched=False,
+    ) -> None:
         self._upload(self.order, np.ascontiguousarray(ids, np.int32))
         self.order.bind_to_storage_buffer(3)
         projection = None if outline or halo else self._projection
         lens = self._lens if cut else None
         # upsampled pixels reach past the outline; small sprites do not repay the outline's cost
         hull = None if halo or upsample or self._hull is None or not worth_outlines(records, ids) else self._hull
-        mode = {"MODE_SPRITE": sprite, "MODE_BLEND": blend, "MODE_OUTLINE": outline, "MODE_COLLECT": collect,
-                "FIRST_FETCHED": collect and first_fetched,
-                "MODE_HALO": halo, "FOCUS_CLIP": focus_clip,
-                "SPRITE_OUTLINE": outlined and sprite,
-                "OUTLINE_QUAD": ((outline or outlined) and int(style.outline_width) == 1 and records.border >= 1
-                                 and bool((records.scale[ids] == 1.0).all())),
-                "WITH_AO": ao and not outline,
-                "PROJECTOR": projection is not None, "LENS": lens is not None, "UPSAMPLE": upsample}
+        mode = {
+            "MODE_SPRITE": sprite,
+            "MODE_BLEND": blend,
+            "MODE_OUTLINE": outline,
+            "MODE_COLLECT": collect,
+            "FIRST_FETCHED": collect and first_fetched,
+            "MODE_HALO": halo,
+            "FOCUS_CLIP": focus_clip,
+            "SPRITE_OUTLINE": outlined and sprite,
+            "OUTLINE_QUAD": (
+                (outline or outlined)
+                and int(style.outline_width) == 1
+                and records.border >= 1
+                and bool((records.scale[ids] == 1.0).all())
+            ),
+            "WITH_AO": ao and not outline,
+            "PROJECTOR": projection is not None,
+            "LENS": lens is not None,
+            "UPSAMPLE": upsample,
+        }
         on = [k for k, v in mode.items() if v]
-        self.passes.append("+".join(k.removeprefix("MODE_").removeprefix("SPRITE_").lower()
-                                    for k in on if k not in ("OUTLINE_QUAD", "FIRST_FETCHED")))
+        self.passes.append(
+            "+".join(
+                k.removeprefix("MODE_").removeprefix("SPRITE_").lower()
+                for k in on
+                if k not in ("OUTLINE_QUAD", "FIRST_FETCHED")
+            )
+        )
         prog, vao = self._program(**{k: True for k in on})
         prog["u_viewport"].value = tuple(float(v) for v in records.viewport)
         if projection is not None or lens is not None:
@@ -322,11 +414,15 @@ class CompositePass:
         if lens is not None:
             lens_pass, lens_, origin = lens
             lens_pass.bind(prog, lens_, origin)
-        for name, value in (("u_desaturate", desaturate), ("u_edge_color", style.edge_color),
-                            ("u_outline_color", style.outline_color),
-                            ("u_outline_width", style.outline_width), ("u_halo_width", int(style.halo)),
-                            ("u_halo_color", tuple(style.halo_color))):
-            if name in prog:       # the compiler drops what a variant does not use
+        for name, value in (
+            ("u_desaturate", desaturate),
+            ("u_edge_color", style.edge_color),
+            ("u_outline_color", style.outline_color),
+            ("u_outline_width", style.outline_width),
+            ("u_halo_width", int(style.halo)),
+            ("u_halo_color", tuple(style.halo_color)),
+        ):
+            if name in prog:  # the compiler drops what a variant does not use
                 prog[name].value = value
         flags = moderngl.NOTHING
         if sprite or depth_test:
@@ -338,7 +434,7 @@ class CompositePass:
         self.ctx.blend_func = moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA
         fbo = self.ctx.fbo
         fbo.depth_mask = bool(sprite or depth_write)
-        masked = collect and not blend and not first_fetched      # else the collect framebuffer masks it
+        masked = collect and not blend and not first_fetched  # else the collect framebuffer masks it
         if masked:
             fbo.color_mask = (False,) * 4
         fbo.use()

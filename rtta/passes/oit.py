@@ -41,15 +41,18 @@ from ..gl.targets import release_all
 # each pixel's first surfaces in colour attachments and its count and order mark in the stencil,
 # read and written in draw order by the shader (no atomics): where the driver has these (Mesa's
 # llvmpipe does; NVIDIA's driver not)
-FETCH_EXTENSIONS = ("GL_EXT_shader_framebuffer_fetch", "GL_ARM_shader_framebuffer_fetch_depth_stencil",
-                    "GL_ARB_shader_stencil_export")
-MAX_NODES = 1 << 23            # 8 Mi surfaces, 128 MiB of nodes
+FETCH_EXTENSIONS = (
+    "GL_EXT_shader_framebuffer_fetch",
+    "GL_ARM_shader_framebuffer_fetch_depth_stencil",
+    "GL_ARB_shader_stencil_export",
+)
+MAX_NODES = 1 << 23  # 8 Mi surfaces, 128 MiB of nodes
 # the fetched first surfaces take 33 bytes per pixel of the target (two RGBA32UI and a stencil),
 # the lists 12 (heads and a depth-stencil): a larger target keeps the lists (4K: 274 MiB, fetched)
 FETCHED_BYTES_PER_PIXEL = 33
 FETCH_MAX_BYTES = 384 * 2**20
 LIST_BYTES_PER_PIXEL = 12
-LISTS_MAX_BYTES = 768 * 2**20    # 64 Mpx (8K: 398 MiB); beyond, object order (refusal 'target')
+LISTS_MAX_BYTES = 768 * 2**20  # 64 Mpx (8K: 398 MiB); beyond, object order (refusal 'target')
 # OrderMarks: a pixel whose surfaces all came in depth order keeps the object-order blend,
 # rounded to 8 bits at each surface; the error each rounding leaves is damped by (1 - a) for
 # every surface blended over it, so n surfaces of opacity a or more leave at most
@@ -59,9 +62,9 @@ LISTS_MAX_BYTES = 768 * 2**20    # 64 Mpx (8K: 398 MiB); beyond, object order (r
 # every in-order pixel in place: 2/255 at most; opacity 0.1 with 4 in place: 3/255.
 ROUNDING_BUDGET = 2.5
 STENCIL_OUT_OF_ORDER = 255
-STENCIL_COUNT = 127              # with `fetched` marks: the count's bits (oit.glsl), the flag 128 above them
+STENCIL_COUNT = 127  # with `fetched` marks: the count's bits (oit.glsl), the flag 128 above them
 NODE_BYTES = 16
-ORDERS = ("auto", "object", "pixel")   # auto: pixel in `transparent`, object for the ghosted context
+ORDERS = ("auto", "object", "pixel")  # auto: pixel in `transparent`, object for the ghosted context
 
 
 def resolved_order(order: str, mode: str) -> str:
@@ -78,8 +81,8 @@ def blended_in_place(min_opacity: float) -> int:
     blend, when the drawn objects' opacity is at least `min_opacity` (ROUNDING_BUDGET)."""
     keep = 1.0 - min(max(float(min_opacity), 0.0), 1.0)
     total, n = 0.0, 0
-    while n < STENCIL_OUT_OF_ORDER - 1 and total + keep ** n <= ROUNDING_BUDGET:
-        total += keep ** n
+    while n < STENCIL_OUT_OF_ORDER - 1 and total + keep**n <= ROUNDING_BUDGET:
+        total += keep**n
         n += 1
     return max(n, 1)
 
@@ -112,14 +115,14 @@ class PixelOrderPass:
     def __init__(self, ctx: moderngl.Context, fetch: bool | None = None) -> None:
         self.ctx = ctx
         self.can_fetch = first_fetched(ctx) if fetch is None else bool(fetch)
-        self.fetch = self.can_fetch        # this frame's way (begin: FETCH_MAX_BYTES)
+        self.fetch = self.can_fetch  # this frame's way (begin: FETCH_MAX_BYTES)
         self.heads = ctx.buffer(reserve=4)
         self.nodes = ctx.buffer(reserve=NODE_BYTES)
         self.bases = ctx.buffer(reserve=4)
-        self.programs: dict[tuple[bool, bool], moderngl.Program] = {}     # (over, fetch), made on first use
+        self.programs: dict[tuple[bool, bool], moderngl.Program] = {}  # (over, fetch), made on first use
         self.vaos: dict[tuple[bool, bool], moderngl.VertexArray] = {}
-        self._marks: dict[bool, OrderMarks] = {}    # by fetch; one kept at a time
-        self.refusal: str | None = None       # why begin() last returned False
+        self._marks: dict[bool, OrderMarks] = {}  # by fetch; one kept at a time
+        self.refusal: str | None = None  # why begin() last returned False
         self._width = 1
         self._rect = (-1.0, -1.0, 1.0, 1.0)
 
@@ -134,24 +137,29 @@ class PixelOrderPass:
         bases, capacity = node_bases(records, ids)
         w, h = int(viewport[0]), int(viewport[1])
         self.fetch = self.can_fetch and w * h * FETCHED_BYTES_PER_PIXEL <= FETCH_MAX_BYTES
-        self.refusal = ("surfaces" if capacity > MAX_NODES else
-                        "target" if not self.fetch and w * h * LIST_BYTES_PER_PIXEL > LISTS_MAX_BYTES else None)
+        self.refusal = (
+            "surfaces"
+            if capacity > MAX_NODES
+            else "target"
+            if not self.fetch and w * h * LIST_BYTES_PER_PIXEL > LISTS_MAX_BYTES
+            else None
+        )
         if self.refusal:
             return False
         self._width = w
         rects = records.viewport_rect[ids].reshape(-1, 4)
         lo, hi = (rects[:, :2].min(axis=0), rects[:, 2:].max(axis=0)) if len(rects) else ((0, 0), (0, 0))
-        self._rect = (*(np.asarray(lo) / (w, h) * 2 - 1), *(np.asarray(hi) / (w, h) * 2 - 1))   # NDC
+        self._rect = (*(np.asarray(lo) / (w, h) * 2 - 1), *(np.asarray(hi) / (w, h) * 2 - 1))  # NDC
         if not self.fetch and self.heads.size < 4 * w * h:
             self.heads.orphan(4 * w * h)
         need = NODE_BYTES * max(capacity, 1)
-        if self.nodes.size < need or self.nodes.size > 4 * need:     # shrink when far too big
+        if self.nodes.size < need or self.nodes.size > 4 * need:  # shrink when far too big
             self.nodes.orphan(need)
         if self.bases.size < bases.nbytes:
             self.bases.orphan(max(bases.nbytes, 2 * self.bases.size))
         self.bases.write(bases.tobytes())
         if not self.fetch:
-            self.heads.clear(size=4 * w * h)       # 0: no node (a pattern clear took 8 ms at 1024²)
+            self.heads.clear(size=4 * w * h)  # 0: no node (a pattern clear took 8 ms at 1024²)
             self.heads.bind_to_storage_buffer(5)
         self.nodes.bind_to_storage_buffer(6)
         self.bases.bind_to_storage_buffer(7)
@@ -165,7 +173,7 @@ class PixelOrderPass:
             target.fbo.use()
             return
         if self.marks is None:
-            for other in self._marks.values():      # the other way's targets: released
+            for other in self._marks.values():  # the other way's targets: released
                 other.release()
             self._marks = {self.fetch: OrderMarks(self.ctx, fetched=self.fetch)}
         self.marks.begin(target, mark)
@@ -186,15 +194,17 @@ class PixelOrderPass:
         self.nodes.bind_to_storage_buffer(6)
         key = (over is not None, self.fetch)
         if key not in self.programs:
-            self.programs[key] = glsl.program(self.ctx, vertex_shader=glsl.load("oit_resolve.vert"),
-                                              fragment_shader=glsl.load("oit_resolve.frag", OVER=key[0],
-                                                                        FIRST_FETCHED=key[1]))
+            self.programs[key] = glsl.program(
+                self.ctx,
+                vertex_shader=glsl.load("oit_resolve.vert"),
+                fragment_shader=glsl.load("oit_resolve.frag", OVER=key[0], FIRST_FETCHED=key[1]),
+            )
             self.vaos[key] = self.ctx.vertex_array(self.programs[key], [])
         program = self.programs[key]
-        if "u_width" in program:           # the heads as a texture need no width
+        if "u_width" in program:  # the heads as a texture need no width
             program["u_width"].value = self._width
         program["u_rect"].value = tuple(float(v) for v in self._rect)
-        if over is not None:       # the stencil test, before the shader (it has no side effects)
+        if over is not None:  # the stencil test, before the shader (it has no side effects)
             program["u_background"].value = tuple(float(v) for v in over[:3])
             self.ctx.enable_only(moderngl.NOTHING)
             fbo = self.marks.fbo
@@ -202,7 +212,7 @@ class PixelOrderPass:
         else:
             self.ctx.enable_only(moderngl.BLEND)
             self.ctx.blend_func = moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA
-            if self.fetch:         # the counts are in OrderMarks' stencil: the covered pixels only
+            if self.fetch:  # the counts are in OrderMarks' stencil: the covered pixels only
                 fbo = self.marks.fbo
                 glraw.stencil_above(0)
         fbo.depth_mask = False
@@ -264,7 +274,7 @@ class OrderMarks:
             self.collect_fbo.color_mask = (on if mark else (False,) * 4, on, on)
             self.collect_fbo.depth_mask = False
             self.collect_fbo.use()
-            glraw.clear_stencil(0)           # no surface yet: `first` holds last frame's
+            glraw.clear_stencil(0)  # no surface yet: `first` holds last frame's
             glraw.stencil_from_shader()
             return self.collect_fbo
         self.fbo.depth_mask = True

@@ -7,7 +7,7 @@ import numpy as np
 
 from ..atlas.parameterize import Records
 
-HULL_MIN_AREA = 2048       # pixels per B_viewport, on average over a draw, for outline sprites
+HULL_MIN_AREA = 2048  # pixels per B_viewport, on average over a draw, for outline sprites
 
 
 def worth_outlines(records: Records, ids: np.ndarray) -> bool:

@@ -33,7 +33,7 @@ def objects_at(atlas, records: Records, x: int, y: int) -> list[tuple[int, float
         found = {"depth": depth[points[:, 2], points[:, 1], points[:, 0]]}
     else:
         found = atlas.texels(points, ids=False)
-    hit = found["depth"] < 1.0          # a region holds its own object's texels alone: depth < 1 is a hit
+    hit = found["depth"] < 1.0  # a region holds its own object's texels alone: depth < 1 is a hit
     hits = zip(oids[hit].tolist(), found["depth"][hit].tolist(), strict=True)
     return sorted(((int(o), float(d)) for o, d in hits), key=lambda h: (h[1], h[0]))
 
@@ -47,11 +47,13 @@ def _candidates(records: Records, x: int, y: int) -> tuple[np.ndarray, np.ndarra
     rect = records.viewport_rect
     inside = records.visible & (rect[:, 0] <= x) & (x < rect[:, 2]) & (rect[:, 1] <= y) & (y < rect[:, 3])
     oids = np.flatnonzero(inside)
-    points = np.array([[*(int(v) for v in to_atlas(records, int(oid), x, y)), int(records.layer[oid])]
-                       for oid in oids], np.int64).reshape(-1, 3)
+    points = np.array(
+        [[*(int(v) for v in to_atlas(records, int(oid), x, y)), int(records.layer[oid])] for oid in oids], np.int64
+    ).reshape(-1, 3)
     aw, ah, layers = (int(v) for v in records.atlas_size)
-    keep = (points[:, 0] >= 0) & (points[:, 0] < aw) & (points[:, 1] >= 0) & (points[:, 1] < ah) \
-        & (points[:, 2] < layers)
+    keep = (
+        (points[:, 0] >= 0) & (points[:, 0] < aw) & (points[:, 1] >= 0) & (points[:, 1] < ah) & (points[:, 2] < layers)
+    )
     return oids[keep], points[keep]
 
 

@@ -65,9 +65,9 @@ class AtlasPostPass:
 
     def __init__(self, ctx: moderngl.Context) -> None:
         self.ctx = ctx
-        self._variants: dict[tuple[str, ...], tuple] = {}     # defines -> (program, vao)
-        self._out = _LayerTarget(ctx, 4, "f1")    # (ao, edge)
-        self._list = ctx.buffer(reserve=16)       # the ids to shade
+        self._variants: dict[tuple[str, ...], tuple] = {}  # defines -> (program, vao)
+        self._out = _LayerTarget(ctx, 4, "f1")  # (ao, edge)
+        self._list = ctx.buffer(reserve=16)  # the ids to shade
 
     @property
     def texture(self):
@@ -84,8 +84,9 @@ class AtlasPostPass:
             self._variants[defines] = (prog, self.ctx.vertex_array(prog, []))
         return self._variants[defines]
 
-    def render(self, *, atlas: LayeredTarget, records: Records, gpu: GpuScene, proj: np.ndarray, style,
-               full=None, edges=()) -> None:
+    def render(
+        self, *, atlas: LayeredTarget, records: Records, gpu: GpuScene, proj: np.ndarray, style, full=None, edges=()
+    ) -> None:
         w, h = atlas.size
         self._out.ensure((w, h, atlas.layers), atlas)
         tw, th, td = records.atlas_size
@@ -110,12 +111,16 @@ class AtlasPostPass:
         self._list.write(data)
         self._list.bind_to_storage_buffer(3)
         prog, vao = self._variant(*defines)
-        uniforms = {"u_proj": (float(proj[0, 0]), float(proj[1, 1]), float(proj[2, 2]), float(proj[2, 3])),
-                    "u_viewport": tuple(float(v) for v in records.viewport), "u_target": (float(tw), float(th)),
-                    "u_ao_radius": float(style.ao_radius), "u_ao_strength": float(style.ao_strength),
-                    "u_edge_width": int(style.edge_width)}
+        uniforms = {
+            "u_proj": (float(proj[0, 0]), float(proj[1, 1]), float(proj[2, 2]), float(proj[2, 3])),
+            "u_viewport": tuple(float(v) for v in records.viewport),
+            "u_target": (float(tw), float(th)),
+            "u_ao_radius": float(style.ao_radius),
+            "u_ao_strength": float(style.ao_strength),
+            "u_edge_width": int(style.edge_width),
+        }
         for name, value in uniforms.items():
-            if name in prog:      # the compiler drops what a variant does not use
+            if name in prog:  # the compiler drops what a variant does not use
                 prog[name].value = value
         # quads at depth 1 pass only where the capture wrote the object (depth < 1):
         # empty texels of the rectangles are never shaded nor written

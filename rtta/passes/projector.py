@@ -22,7 +22,7 @@ from .capture import ScenePass, mat_bytes
 
 BIAS = np.array([[0.5, 0, 0, 0.5], [0, 0.5, 0, 0.5], [0, 0, 0.5, 0.5], [0, 0, 0, 1.0]])
 SHADOW_SIZE = 1024
-SHADOW_BIAS = 0.005     # a surface is shadowed when something is nearer to the projector by > 0.5%
+SHADOW_BIAS = 0.005  # a surface is shadowed when something is nearer to the projector by > 0.5%
 
 
 def default_image(size: int = 256) -> np.ndarray:
@@ -66,16 +66,16 @@ class Projector:
     far: float = 100.0
 
     @classmethod
-    def orbit(cls, center, radius: float, az: float, el: float, dist: float, up_axis: str = "y",
-              **kw) -> Projector:
+    def orbit(cls, center, radius: float, az: float, el: float, dist: float, up_axis: str = "y", **kw) -> Projector:
         cam = Camera.orbit(center, radius, az, el, dist, up_axis=up_axis)
         return cls(eye=cam.eye, target=cam.target, up=cam.up, **kw).fit_depth(center, radius)
 
     @classmethod
     def at_camera(cls, camera: Camera, center, radius: float, **kw) -> Projector:
         """Attached to a camera: the same eye, target and up."""
-        return cls(eye=camera.eye.copy(), target=camera.target.copy(), up=camera.up.copy(),
-                   **kw).fit_depth(center, radius)
+        return cls(eye=camera.eye.copy(), target=camera.target.copy(), up=camera.up.copy(), **kw).fit_depth(
+            center, radius
+        )
 
     def fit_depth(self, center, radius: float) -> Projector:
         cam = Camera(eye=self.eye, target=self.target, up=self.up).fit_depth(center, radius)
@@ -99,8 +99,18 @@ class Projector:
         return BIAS @ self.view_projection(origin)
 
     def key(self) -> tuple:
-        return (tuple(self.eye), tuple(self.target), tuple(self.up), self.fov_y, self.image_aspect,
-                self.near, self.far, id(self.image), self.strength, self.shadows)
+        return (
+            tuple(self.eye),
+            tuple(self.target),
+            tuple(self.up),
+            self.fov_y,
+            self.image_aspect,
+            self.near,
+            self.far,
+            id(self.image),
+            self.strength,
+            self.shadows,
+        )
 
 
 class ProjectorPass:
@@ -111,7 +121,7 @@ class ProjectorPass:
         self.ctx = ctx
         self.shadow = ScenePass(ctx, fragment="depth.frag")
         self.depth = ctx.depth_texture((SHADOW_SIZE, SHADOW_SIZE))
-        self.depth.compare_func = ""          # sampled as a plain depth value, compared in the shader
+        self.depth.compare_func = ""  # sampled as a plain depth value, compared in the shader
         self.depth.filter = (moderngl.NEAREST, moderngl.NEAREST)
         self.depth.repeat_x = self.depth.repeat_y = False
         self.fbo = ctx.framebuffer(depth_attachment=self.depth)
@@ -147,9 +157,12 @@ class ProjectorPass:
 
     def bind(self, program: moderngl.Program, projector: Projector, origin) -> None:
         program["u_projector"].write(mat_bytes(projector.matrix(origin)))
-        for name, value in (("u_projector_strength", float(projector.strength)),
-                            ("u_projector_shadows", int(projector.shadows)),
-                            ("u_projector_bias", SHADOW_BIAS), ("u_projector_range", (projector.near, projector.far))):
+        for name, value in (
+            ("u_projector_strength", float(projector.strength)),
+            ("u_projector_shadows", int(projector.shadows)),
+            ("u_projector_bias", SHADOW_BIAS),
+            ("u_projector_range", (projector.near, projector.far)),
+        ):
             if name in program:
                 program[name].value = value
         self.image.use(5)

@@ -43,17 +43,32 @@ from .renderer import Renderer, Settings
 from .snapshot import SNAPSHOT_MODES, make_lens, make_projector, render_modes, resolve_names
 
 SceneLike = Scene | str | os.PathLike | None
-CORE_STYLE = ("context_opacity", "edge_width", "ao_radius", "ao_strength", "ao_objects", "edge_objects", "order",
-              "halo")                  # checked by make_style, as the CLI's flags
+CORE_STYLE = (
+    "context_opacity",
+    "edge_width",
+    "ao_radius",
+    "ao_strength",
+    "ao_objects",
+    "edge_objects",
+    "order",
+    "halo",
+)  # checked by make_style, as the CLI's flags
 STYLE_KEYS = (*CORE_STYLE, "desaturate", "default_opacity", "outline_width", "outline_color", "edge_color")
-SCENE_CACHE = 4        # loaded scenes kept (CPU memory only)
+SCENE_CACHE = 4  # loaded scenes kept (CPU memory only)
 
 
 # ---- option builders shared with the CLI ------------------------------------------------
 
-def make_settings(border: int = 1, atlas_max: str | tuple[int, int] | None = None, max_layers: int | None = None,
-                  capture_path: str = "auto", region_scale: float = 1.0, bounds: str = "aabb",
-                  context_scale: float | None = None) -> Settings:
+
+def make_settings(
+    border: int = 1,
+    atlas_max: str | tuple[int, int] | None = None,
+    max_layers: int | None = None,
+    capture_path: str = "auto",
+    region_scale: float = 1.0,
+    bounds: str = "aabb",
+    context_scale: float | None = None,
+) -> Settings:
     """Checked Settings (the messages name the CLI flags, as `rtta snapshot` says them)."""
     if border < 0 or border > 64:
         raise RttaError(f"--border must be between 0 and 64, got {border}")
@@ -67,21 +82,40 @@ def make_settings(border: int = 1, atlas_max: str | tuple[int, int] | None = Non
     atlas_max = check_size(atlas_max, "--atlas-max") if atlas_max else None
     _choice("--capture-path", capture_path, ("auto", "vs", "gs"))
     _choice("--bounds", bounds, ("aabb", "obb"))
-    return Settings(border=border, atlas_max=atlas_max, max_layers=max_layers,
-                    capture_path=capture_path, region_scale=region_scale, bounds=bounds, context_scale=context_scale)
+    return Settings(
+        border=border,
+        atlas_max=atlas_max,
+        max_layers=max_layers,
+        capture_path=capture_path,
+        region_scale=region_scale,
+        bounds=bounds,
+        context_scale=context_scale,
+    )
 
 
-def make_style(focus: Iterable[int] = (), opacity: Mapping[int, float] | None = None, *,
-               context_opacity: float | None = None, edge_width: int = 1, ao_radius: float = 6.0,
-               ao_strength: float = 1.0, ao_objects: str | None = None, edge_objects: str | None = None,
-               order: str | None = None, halo: int = 0) -> Style:
+def make_style(
+    focus: Iterable[int] = (),
+    opacity: Mapping[int, float] | None = None,
+    *,
+    context_opacity: float | None = None,
+    edge_width: int = 1,
+    ao_radius: float = 6.0,
+    ao_strength: float = 1.0,
+    ao_objects: str | None = None,
+    edge_objects: str | None = None,
+    order: str | None = None,
+    halo: int = 0,
+) -> Style:
     """A checked Style from object ids (resolved by the caller) and the compositing flags."""
     style = Style(focus=set(focus), opacity=dict(opacity or {}))
     if not (1 <= edge_width <= 8 and 0 < ao_radius <= 64 and 0 <= ao_strength <= 4):
         raise RttaError("--edge-width must be 1..8, --ao-radius in (0, 64], --ao-strength in [0, 4]")
     style.edge_width, style.ao_radius, style.ao_strength = edge_width, ao_radius, ao_strength
-    roles = (("--ao-objects", ao_objects, ("focus", "all")), ("--edge-objects", edge_objects, ("focus", "all")),
-             ("--order", order, ORDERS))
+    roles = (
+        ("--ao-objects", ao_objects, ("focus", "all")),
+        ("--edge-objects", edge_objects, ("focus", "all")),
+        ("--order", order, ORDERS),
+    )
     for what, value, choices in roles:
         if value is not None:
             _choice(what, value, choices)
@@ -100,7 +134,7 @@ def orbit_camera(scene: Scene, camera: Camera | str | Sequence[float] | None, fo
     """A Camera as given, or the orbit AZ,EL,DIST (degrees, degrees, scene radii) about the scene."""
     if isinstance(camera, Camera):
         return camera
-    if not 1.0 <= fov <= 170.0:          # NaN fails too
+    if not 1.0 <= fov <= 170.0:  # NaN fails too
         raise RttaError(f"--fov must be between 1 and 170 degrees, got {fov}")
     if camera is None:
         orbit = DEFAULT_ORBIT
@@ -131,13 +165,14 @@ def _choice(what: str, value: str, choices: Sequence[str]) -> None:
 
 # ---- the process's context, scenes and renderer -----------------------------------------
 
+
 class _Session:
     """Loaded scenes (LRU, CPU only) and one Renderer for the last scene used."""
 
     def __init__(self) -> None:
         self.scenes: OrderedDict[tuple, Scene] = OrderedDict()
         self.renderer: Renderer | None = None
-        self.image: np.ndarray | None = None    # the last projector image, kept alive (see _prepare)
+        self.image: np.ndarray | None = None  # the last projector image, kept alive (see _prepare)
 
     def scene(self, scene: SceneLike, smooth_angle: float, smooth: bool) -> Scene:
         if isinstance(scene, Scene):
@@ -167,7 +202,7 @@ class _Session:
 
     def renderer_for(self, scene: Scene, settings: Settings) -> Renderer:
         ctx = shared_context()
-        Capabilities.of(ctx).capture_path(settings.capture_path)   # a path the driver lacks: error first
+        Capabilities.of(ctx).capture_path(settings.capture_path)  # a path the driver lacks: error first
         if self.renderer is None or self.renderer.scene is not scene:
             self.release()
             self.renderer = Renderer(ctx, scene, settings)
@@ -196,16 +231,32 @@ def context() -> moderngl.Context:
 
 # ---- the calls --------------------------------------------------------------------------
 
-def snapshot(scene: SceneLike = None, mode: str = "ghosted-ao", *, focus: str | Iterable[str] = (),
-             opacity: Mapping[str, float] | None = None, camera: Camera | str | Sequence[float] | None = None,
-             size: Sequence[int] = (1024, 768), fov: float = 45.0, border: int = 1,
-             atlas_max: str | tuple[int, int] | None = None,
-             max_layers: int | None = None, capture_path: str = "auto",
-             region_scale: float = 1.0, context_scale: float | None = None, bounds: str = "aabb",
-             projector: str | Projector | None = None,
-             projector_fov: float = 30.0, projector_shadows: bool = True, lens: str | Lens | None = None,
-             lens_at: str | Sequence[float] | None = None, smooth_angle: float = DEFAULT_SMOOTH_ANGLE,
-             smooth: bool = False, **style) -> np.ndarray:
+
+def snapshot(
+    scene: SceneLike = None,
+    mode: str = "ghosted-ao",
+    *,
+    focus: str | Iterable[str] = (),
+    opacity: Mapping[str, float] | None = None,
+    camera: Camera | str | Sequence[float] | None = None,
+    size: Sequence[int] = (1024, 768),
+    fov: float = 45.0,
+    border: int = 1,
+    atlas_max: str | tuple[int, int] | None = None,
+    max_layers: int | None = None,
+    capture_path: str = "auto",
+    region_scale: float = 1.0,
+    context_scale: float | None = None,
+    bounds: str = "aabb",
+    projector: str | Projector | None = None,
+    projector_fov: float = 30.0,
+    projector_shadows: bool = True,
+    lens: str | Lens | None = None,
+    lens_at: str | Sequence[float] | None = None,
+    smooth_angle: float = DEFAULT_SMOOTH_ANGLE,
+    smooth: bool = False,
+    **style,
+) -> np.ndarray:
     """The picture `rtta snapshot --mode MODE --out` writes, as RGBA uint8 [H, W, 4], row 0 at
     the top (as images are; pixel for pixel the PNG). `mode`: std, sprites, transparent,
     ghosted or ghosted-ao. `focus`: object names; `opacity`: name -> alpha; `camera`: (AZ, EL,
@@ -219,8 +270,7 @@ def snapshot(scene: SceneLike = None, mode: str = "ghosted-ao", *, focus: str | 
     viewport = check_size(size)
     cam = orbit_camera(scene, camera, fov)
     focus_ids = resolve_names(scene, [focus] if isinstance(focus, str) else list(focus), "focus")
-    st = make_style(focus_ids, _opacities(scene, opacity or {}),
-                    **{k: style[k] for k in CORE_STYLE if k in style})
+    st = make_style(focus_ids, _opacities(scene, opacity or {}), **{k: style[k] for k in CORE_STYLE if k in style})
     for key, value in extra.items():
         setattr(st, key, value)
     settings = make_settings(border, atlas_max, max_layers, capture_path, region_scale, bounds, context_scale)
@@ -236,32 +286,55 @@ def snapshot(scene: SceneLike = None, mode: str = "ghosted-ao", *, focus: str | 
     return np.ascontiguousarray(rgba[::-1])
 
 
-def capture(scene: SceneLike = None, *, camera: Camera | str | Sequence[float] | None = None,
-            size: Sequence[int] = (1024, 768), fov: float = 45.0, border: int = 1,
-            atlas_max: str | tuple[int, int] | None = None,
-            max_layers: int | None = None, capture_path: str = "auto",
-            region_scale: float = 1.0, bounds: str = "aabb", smooth_angle: float = DEFAULT_SMOOTH_ANGLE,
-            smooth: bool = False) -> Capture:
+def capture(
+    scene: SceneLike = None,
+    *,
+    camera: Camera | str | Sequence[float] | None = None,
+    size: Sequence[int] = (1024, 768),
+    fov: float = 45.0,
+    border: int = 1,
+    atlas_max: str | tuple[int, int] | None = None,
+    max_layers: int | None = None,
+    capture_path: str = "auto",
+    region_scale: float = 1.0,
+    bounds: str = "aabb",
+    smooth_angle: float = DEFAULT_SMOOTH_ANGLE,
+    smooth: bool = False,
+) -> Capture:
     """Capture one frame and give what `rtta export` writes as arrays (see `Capture`):
     every object's amodal (unoccluded) images in the atlas, their records and the direct render."""
     scene = _session.scene(scene, smooth_angle, smooth)
     viewport = check_size(size)
     cam = orbit_camera(scene, camera, fov)
-    renderer = _prepare(scene, make_settings(border, atlas_max, max_layers, capture_path, region_scale, bounds),
-                        None, None)
+    renderer = _prepare(
+        scene, make_settings(border, atlas_max, max_layers, capture_path, region_scale, bounds), None, None
+    )
     try:
         records, atlas, std = read_frame(renderer, cam, viewport)
     except ValueError as exc:
         raise RttaError(str(exc)) from None
     meta = records_json(renderer, cam, records, viewport)
     if atlas is None:
-        atlas = {"color": np.zeros((0, 0, 0, 4), np.uint8), "normal": np.zeros((0, 0, 0, 3), np.float32),
-                 "depth": np.ones((0, 0, 0), np.float32), "id": np.full((0, 0, 0), -1, np.int32)}
-    return Capture(records=records, names=tuple(scene.names), camera=cam, view=np.array(meta["view"]),
-                   proj=np.array(meta["proj"]), color=atlas["color"], normal=atlas.get("normal"),
-                   depth=atlas["depth"].astype(np.float32, copy=False), id=atlas["id"].astype(np.int32, copy=False),
-                   std_color=std["color"][0], std_depth=std["depth"][0].astype(np.float32, copy=False),
-                   std_id=std["id"][0].astype(np.int32, copy=False))
+        atlas = {
+            "color": np.zeros((0, 0, 0, 4), np.uint8),
+            "normal": np.zeros((0, 0, 0, 3), np.float32),
+            "depth": np.ones((0, 0, 0), np.float32),
+            "id": np.full((0, 0, 0), -1, np.int32),
+        }
+    return Capture(
+        records=records,
+        names=tuple(scene.names),
+        camera=cam,
+        view=np.array(meta["view"]),
+        proj=np.array(meta["proj"]),
+        color=atlas["color"],
+        normal=atlas.get("normal"),
+        depth=atlas["depth"].astype(np.float32, copy=False),
+        id=atlas["id"].astype(np.int32, copy=False),
+        std_color=std["color"][0],
+        std_depth=std["depth"][0].astype(np.float32, copy=False),
+        std_id=std["id"][0].astype(np.int32, copy=False),
+    )
 
 
 def _prepare(scene: Scene, settings: Settings, projector: Projector | None, lens: Lens | None) -> Renderer:
@@ -301,7 +374,7 @@ def _opacities(scene: Scene, opacity: Mapping[str, float]) -> dict[int, float]:
     for name, alpha in opacity.items():
         if not (isinstance(alpha, (int, float)) and np.isfinite(alpha) and 0.0 <= alpha <= 1.0):
             raise RttaError(f"opacity expects name -> alpha in [0, 1], got {name!r}: {alpha!r}")
-        for oid in resolve_names(scene, [name], "opacity"):       # a group or glob sets each of its objects
+        for oid in resolve_names(scene, [name], "opacity"):  # a group or glob sets each of its objects
             out[oid] = float(alpha)
     return out
 
@@ -378,7 +451,7 @@ class Capture:
         if not self.visible[oid]:
             return {k: np.zeros((0, 0, *v.shape[3:]), v.dtype) for k, v in self._atlas().items()}
         x, y, w, h = (int(v) for v in self.atlas_rect[oid])
-        return {k: v[self.layer[oid], y:y + h, x:x + w].copy() for k, v in self._atlas().items()}
+        return {k: v[self.layer[oid], y : y + h, x : x + w].copy() for k, v in self._atlas().items()}
 
     def amodal(self, obj: str | int) -> dict[str, np.ndarray]:
         """The object's amodal images mapped back to the viewport [H, W(, C)] (nearest texel),

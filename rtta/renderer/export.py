@@ -31,17 +31,31 @@ def records_json(renderer: Renderer, camera: Camera, records, viewport) -> dict:
     objects = []
     for oid, name in enumerate(renderer.scene.names):
         vis = bool(records.visible[oid])
-        objects.append({
-            "id": oid, "name": name, "visible": vis,
-            "viewport_rect": [int(v) for v in records.viewport_rect[oid]],
-            "atlas_rect": [int(v) for v in records.atlas_rect[oid]],
-            "layer": int(records.layer[oid]), "scale": float(records.scale[oid]),
-        })
+        objects.append(
+            {
+                "id": oid,
+                "name": name,
+                "visible": vis,
+                "viewport_rect": [int(v) for v in records.viewport_rect[oid]],
+                "atlas_rect": [int(v) for v in records.atlas_rect[oid]],
+                "layer": int(records.layer[oid]),
+                "scale": float(records.scale[oid]),
+            }
+        )
     return {
-        "view": view.tolist(), "proj": proj.tolist(), "viewport": list(viewport),
-        "atlas": list(records.atlas_size), "border": records.border,
-        "camera": {"eye": camera.eye.tolist(), "target": camera.target.tolist(), "up": camera.up.tolist(),
-                   "fov_y": camera.fov_y, "near": camera.near, "far": camera.far},
+        "view": view.tolist(),
+        "proj": proj.tolist(),
+        "viewport": list(viewport),
+        "atlas": list(records.atlas_size),
+        "border": records.border,
+        "camera": {
+            "eye": camera.eye.tolist(),
+            "target": camera.target.tolist(),
+            "up": camera.up.tolist(),
+            "fov_y": camera.fov_y,
+            "near": camera.near,
+            "far": camera.far,
+        },
         "objects": objects,
     }
 
@@ -57,8 +71,13 @@ def read_frame(renderer: Renderer, camera: Camera, viewport: tuple[int, int]) ->
     return records, atlas, std
 
 
-def export(renderer: Renderer, camera: Camera, viewport: tuple[int, int], out_dir: str | Path,
-           inputs: list[str | Path] | None = None) -> Path:
+def export(
+    renderer: Renderer,
+    camera: Camera,
+    viewport: tuple[int, int],
+    out_dir: str | Path,
+    inputs: list[str | Path] | None = None,
+) -> Path:
     """Capture once and write the export format (see README) to out_dir atomically. An
     existing out_dir is replaced only when rtta export wrote it (see rtta.outputs), never
     when it holds an input (the scene's files, and `inputs`)."""

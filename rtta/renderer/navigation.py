@@ -17,8 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-MIN_OBJECTS = 500          # smaller scenes are never thinned: their frames are bound by pixels, not parts
-FULL = 0.98                # a share kept at or above this leaves nothing out
+MIN_OBJECTS = 500  # smaller scenes are never thinned: their frames are bound by pixels, not parts
+FULL = 0.98  # a share kept at or above this leaves nothing out
 # Frame times scatter from frame to frame (±8-15% on llvmpipe), and a budget steered to sit
 # at its target in the mean of log(ms) gives a mean frame time above it: fewer frames per
 # second than asked (9.5-9.9 instead of 10 in a simulation of the 10,000-part assembly's
@@ -45,8 +45,13 @@ class FrameBudget:
         self.keep = float(min(1.0, max(self.min_keep, self.keep * step)))
 
 
-def left_out(visible: np.ndarray, viewport_rect: np.ndarray, triangles: np.ndarray, keep: float,
-             protect: np.ndarray | None = None) -> np.ndarray | None:
+def left_out(
+    visible: np.ndarray,
+    viewport_rect: np.ndarray,
+    triangles: np.ndarray,
+    keep: float,
+    protect: np.ndarray | None = None,
+) -> np.ndarray | None:
     """bool [n]: the objects to leave out of a frame drawn while moving, or None for none.
     Of the `visible` objects (bool [n], after culling, as atlas.parameterize's `thin` gets
     them, with their inner B_viewport [n, 4] in pixels), the largest on screen are kept until
@@ -67,7 +72,7 @@ def left_out(visible: np.ndarray, viewport_rect: np.ndarray, triangles: np.ndarr
     order = np.argsort(-area, kind="stable")
     tri = np.where(visible, np.asarray(triangles, np.float64), 0.0)[order]
     budget = max(0.0, keep) * tri.sum()
-    kept = np.cumsum(tri) - tri <= budget          # every object that starts within the budget
+    kept = np.cumsum(tri) - tri <= budget  # every object that starts within the budget
     kept |= area[order] == np.inf
     out = np.zeros(n, bool)
     out[order[~kept]] = True

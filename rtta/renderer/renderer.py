@@ -33,14 +33,14 @@ class Settings:
     """What a user can choose per frame."""
 
     border: int = 1
-    atlas_max: tuple[int, int] | None = None   # None: viewport + 2 * border
-    max_layers: int | None = None              # None: GL_MAX_ARRAY_TEXTURE_LAYERS
-    capture_path: str = "auto"                 # 'auto', 'vs' or 'gs'
-    region_scale: float = 1.0                  # atlas texels per viewport pixel
-    context_scale: float = 1.0                 # of region_scale, for objects outside the focus
-    bounds: str = "aabb"                       # B_world: 'aabb' (the paper's) or 'obb' (tighter)
-    cull_closed: bool = True                   # cull the back faces of closed parts (scene.closure); the
-                                               # images are the same, False draws all double-sided
+    atlas_max: tuple[int, int] | None = None  # None: viewport + 2 * border
+    max_layers: int | None = None  # None: GL_MAX_ARRAY_TEXTURE_LAYERS
+    capture_path: str = "auto"  # 'auto', 'vs' or 'gs'
+    region_scale: float = 1.0  # atlas texels per viewport pixel
+    context_scale: float = 1.0  # of region_scale, for objects outside the focus
+    bounds: str = "aabb"  # B_world: 'aabb' (the paper's) or 'obb' (tighter)
+    cull_closed: bool = True  # cull the back faces of closed parts (scene.closure); the
+    # images are the same, False draws all double-sided
 
 
 class Renderer:
@@ -59,21 +59,21 @@ class Renderer:
         self._composite: CompositePass | None = None
         self._post: AtlasPostPass | None = None
         self._post_key: tuple | None = None
-        self._post_done = np.zeros(0, np.int8)     # per object: 0 nothing, 1 edges, 2 AO + edges
-        self._view: tuple | None = None            # (camera, viewport, path) of the last capture
-        self.captured_focus: frozenset[int] = frozenset()   # the focus the last capture was scaled for
+        self._post_done = np.zeros(0, np.int8)  # per object: 0 nothing, 1 edges, 2 AO + edges
+        self._view: tuple | None = None  # (camera, viewport, path) of the last capture
+        self.captured_focus: frozenset[int] = frozenset()  # the focus the last capture was scaled for
         self._captures = 0
         self.target = CompositeTarget(ctx)
-        self.last: tuple | None = None     # (records, view, proj) of the last capture
-        self.projector = None              # a Projector painting the scene, or None
+        self.last: tuple | None = None  # (records, view, proj) of the last capture
+        self.projector = None  # a Projector painting the scene, or None
         self._projector_pass = None
-        self.lens = None                   # a Lens cutting the context away in the ghosted modes, or None
+        self.lens = None  # a Lens cutting the context away in the ghosted modes, or None
         self._lens_pass = None
-        self.hidden: set[int] = set()      # objects the user hid: not packed, captured, composited or drawn
-        self.measure = False               # time each stage (waits for the GPU after each)
+        self.hidden: set[int] = set()  # objects the user hid: not packed, captured, composited or drawn
+        self.measure = False  # time each stage (waits for the GPU after each)
         self.timings: dict[str, float] = {}  # stage -> ms of its last run, when measuring
-        self.warnings: list[str] = []      # what was degraded (each said once)
-        self.python_warnings = True        # also say it through warnings.warn (a viewer shows `warnings`)
+        self.warnings: list[str] = []  # what was degraded (each said once)
+        self.python_warnings = True  # also say it through warnings.warn (a viewer shows `warnings`)
         self._throttle = glraw.Throttle()  # one flushed batch in flight (glraw.Throttle)
 
     @contextmanager
@@ -110,8 +110,9 @@ class Renderer:
         scale[[o for o in focus if 0 <= o < self.scene.count]] = s.region_scale
         return scale
 
-    def parameterize(self, camera: Camera, viewport: tuple[int, int], matrices=None, focus=(),
-                     thin: Thinning | None = None) -> Records:
+    def parameterize(
+        self, camera: Camera, viewport: tuple[int, int], matrices=None, focus=(), thin: Thinning | None = None
+    ) -> Records:
         """`thin`: picks objects not packed this time besides the hidden ones, from this
         frame's projection (fast navigation, rtta.renderer.navigation; atlas.parameterize)."""
         view, proj = matrices or self.matrices(camera, viewport)
@@ -121,9 +122,17 @@ class Renderer:
         atlas_max = s.atlas_max or default_atlas_max(viewport, s.border, largest)
         atlas_max = (min(atlas_max[0], self.caps.max_texture), min(atlas_max[1], self.caps.max_texture))
         max_layers = min(s.max_layers or self.caps.max_layers, self.caps.max_layers)
-        return parameterize(self.scene.box_corners(s.bounds), proj @ view, viewport, border=s.border,
-                            atlas_max=atlas_max, max_layers=max_layers, region_scale=self.region_scales(focus),
-                            hidden=hidden, thin=thin)
+        return parameterize(
+            self.scene.box_corners(s.bounds),
+            proj @ view,
+            viewport,
+            border=s.border,
+            atlas_max=atlas_max,
+            max_layers=max_layers,
+            region_scale=self.region_scales(focus),
+            hidden=hidden,
+            thin=thin,
+        )
 
     def hidden_mask(self) -> np.ndarray | None:
         """bool [n] of the hidden objects (None when none is hidden)."""
@@ -159,8 +168,16 @@ class Renderer:
             self._capture[path] = CapturePass(self.ctx, path)
         return self._capture[path]
 
-    def capture(self, camera: Camera, viewport: tuple[int, int], path: str | None = None, focus=(),
-                normals: bool = True, ids: bool = True, thin: Thinning | None = None) -> Records:
+    def capture(
+        self,
+        camera: Camera,
+        viewport: tuple[int, int],
+        path: str | None = None,
+        focus=(),
+        normals: bool = True,
+        ids: bool = True,
+        thin: Thinning | None = None,
+    ) -> Records:
         """Parameterize and capture every visible object into the atlas; returns R. With a
         context scale below 1, `focus` objects get full-scale regions and the rest smaller ones.
         normals=False leaves the normal image unwritten, for modes that read none
@@ -173,9 +190,10 @@ class Renderer:
         with self._timed("parameterize"):
             records = self.parameterize(camera, viewport, (view, proj), self.captured_focus, thin)
         with self._timed("capture"):
-            self.capture_pass(path).render(gpu=self.gpu, records=records, view=view, proj=proj,
-                                           atlas=self.atlas, normals=normals, ids=ids)
-            self._throttle.flush()   # rasterize while Python goes on; bounds the driver's memory
+            self.capture_pass(path).render(
+                gpu=self.gpu, records=records, view=view, proj=proj, atlas=self.atlas, normals=normals, ids=ids
+            )
+            self._throttle.flush()  # rasterize while Python goes on; bounds the driver's memory
         self.last = (records, view, proj)
         self._captures += 1
         return records
@@ -188,8 +206,9 @@ class Renderer:
         missing = self.needs_normals(mode) and not self.captured_normals
         if self.scaled_for(style.focus) != self.captured_focus or missing:
             # the focus decides the region scales; AO, edges and the projector read normals
-            self.capture(*self._view, focus=style.focus, normals=self.captured_normals or missing,
-                         ids=self.atlas.ids_written)
+            self.capture(
+                *self._view, focus=style.focus, normals=self.captured_normals or missing, ids=self.atlas.ids_written
+            )
         records, view, proj = self.last
         if self._composite is None:
             self._composite = CompositePass(self.ctx)
@@ -207,24 +226,38 @@ class Renderer:
 
                 self._lens_pass = LensPass(self.ctx)
             with self._timed("lens"):
-                self._lens_pass.textures(self.lens)     # built once per lens geometry, before compositing
+                self._lens_pass.textures(self.lens)  # built once per lens geometry, before compositing
             lens = (self._lens_pass, self.lens, origin)
         fallbacks = self._composite.fallbacks
         with self._timed("composite"):
-            self._composite.render(atlas=self.atlas, records=records, gpu=self.gpu, style=style,
-                                   mode=mode, view_depth=view_depth, target=self.target, post=post,
-                                   view_proj=proj @ view, projection=projection, lens=lens,
-                                   eye=np.linalg.inv(view)[:3, 3])
+            self._composite.render(
+                atlas=self.atlas,
+                records=records,
+                gpu=self.gpu,
+                style=style,
+                mode=mode,
+                view_depth=view_depth,
+                target=self.target,
+                post=post,
+                view_proj=proj @ view,
+                projection=projection,
+                lens=lens,
+                eye=np.linalg.inv(view)[:3, 3],
+            )
             self._throttle.flush()
         if self._composite.fallbacks > fallbacks:
             if self._composite.pixel_order_refusal == "target":
                 w, h = records.viewport
                 need = w * h * oit.LIST_BYTES_PER_PIXEL / 2**20
-                self._warn(f"per-pixel order would need {need:,.0f} MiB of per-pixel targets for this {w}x{h} "
-                           "view: blended in object order (a smaller viewport keeps it per pixel)")
+                self._warn(
+                    f"per-pixel order would need {need:,.0f} MiB of per-pixel targets for this {w}x{h} "
+                    "view: blended in object order (a smaller viewport keeps it per pixel)"
+                )
             else:
-                self._warn(f"per-pixel order would need more than {oit.MAX_NODES:,} surfaces in this view: "
-                           "blended in object order (a smaller viewport or fewer objects keep it per pixel)")
+                self._warn(
+                    f"per-pixel order would need more than {oit.MAX_NODES:,} surfaces in this view: "
+                    "blended in object order (a smaller viewport or fewer objects keep it per pixel)"
+                )
         return self.target
 
     def needs_normals(self, mode: str) -> bool:
@@ -261,8 +294,9 @@ class Renderer:
         edge_only = np.flatnonzero((need == 1) & (self._post_done < 1))
         if len(full) or len(edge_only) or self._post.texture is None:
             with self._timed("post"):
-                self._post.render(atlas=self.atlas, records=records, gpu=self.gpu, proj=proj, style=style,
-                                  full=full, edges=edge_only)
+                self._post.render(
+                    atlas=self.atlas, records=records, gpu=self.gpu, proj=proj, style=style, full=full, edges=edge_only
+                )
             self._post_done = np.maximum(self._post_done, need)
         return self._post
 
@@ -278,8 +312,15 @@ class Renderer:
         view, proj = self.matrices(camera, viewport)
         projection = self._projection()
         with self._timed("std"):
-            self._std.render(gpu=self.gpu, view=view, proj=proj, target=self.single_target, viewport=viewport,
-                             projection=projection, objects=self.shown_mask())
+            self._std.render(
+                gpu=self.gpu,
+                view=view,
+                proj=proj,
+                target=self.single_target,
+                viewport=viewport,
+                projection=projection,
+                objects=self.shown_mask(),
+            )
             self._throttle.flush()
         return self.single_target
 
@@ -287,8 +328,15 @@ class Renderer:
         if self._rtt is None:
             self._rtt = RttPass(self.ctx)
         view, proj = self.matrices(camera, viewport)
-        self._rtt.render(gpu=self.gpu, view=view, proj=proj, target=self.single_target,
-                         viewport=viewport, objects=objects, consume=consume)
+        self._rtt.render(
+            gpu=self.gpu,
+            view=view,
+            proj=proj,
+            target=self.single_target,
+            viewport=viewport,
+            objects=objects,
+            consume=consume,
+        )
 
     def trim(self) -> None:
         """Shrink the lazily sized targets (atlas, composite) to the last capture's needs now;
@@ -311,8 +359,15 @@ class Renderer:
 
     def release(self) -> None:
         self._throttle.release()
-        for p in [*self._capture.values(), self._std, self._rtt, self._composite, self._post, self._projector_pass,
-                  self._lens_pass]:
+        for p in [
+            *self._capture.values(),
+            self._std,
+            self._rtt,
+            self._composite,
+            self._post,
+            self._projector_pass,
+            self._lens_pass,
+        ]:
             if p is not None:
                 p.release()
         self._capture.clear()
@@ -322,4 +377,4 @@ class Renderer:
             if t is not None:
                 t.release()
         self.gpu.release()
-        scratch.release()          # Algorithm 1's temporaries, sized for this scene (27 MB at 10^5 objects)
+        scratch.release()  # Algorithm 1's temporaries, sized for this scene (27 MB at 10^5 objects)

@@ -46,7 +46,7 @@ def make_lens(scene: Scene, spec: str, at: str | Sequence[float] | None, focus: 
             center = np.array([float(v) for v in text.split(",")], float)
         except ValueError:
             center = np.zeros(0)
-        if center.shape != (3,) or not (np.abs(center) <= 1e15).all():       # NaN fails too
+        if center.shape != (3,) or not (np.abs(center) <= 1e15).all():  # NaN fails too
             raise RttaError(f"--lens-at must be X,Y,Z with |values| up to 1e15, got '{text}'")
     kind, _, size = spec.partition(",")
     if kind in SHAPES:
@@ -75,7 +75,7 @@ def make_projector(scene: Scene, camera: Camera, spec: str, fov: float = 30.0, s
         try:
             orbit = parse_orbit(",".join(parts[1:]), "--projector", spec)
             name = parts[0]
-        except RttaError:                # a file name with commas, or an image with a bad orbit
+        except RttaError:  # a file name with commas, or an image with a bad orbit
             if not Path(spec).exists() and (parts[0] == "default" or Path(parts[0]).exists()):
                 raise
             orbit = None
@@ -108,8 +108,9 @@ def render_modes(renderer: Renderer, camera: Camera, viewport: tuple[int, int], 
     """One capture, then each requested mode composited from it: {mode: rgba [H, W, 4] (row 0 bottom)}."""
     out = {}
     if any(m != "std" for m in modes):
-        renderer.capture(camera, viewport, focus=style.focus, normals=any(map(renderer.needs_normals, modes)),
-                         ids=False)                 # no mode reads the id image
+        renderer.capture(
+            camera, viewport, focus=style.focus, normals=any(map(renderer.needs_normals, modes)), ids=False
+        )  # no mode reads the id image
     for mode in modes:
         if mode == "std":
             out[mode] = over_background(renderer.std(camera, viewport).read(viewport, 1)["color"][0])

@@ -15,8 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-CHUNK_CORNERS = 100_000          # corners per pass (bounds the temporary memory: one pass per thread)
-THREADS = min(4, os.cpu_count() or 1)   # passes run at once
+CHUNK_CORNERS = 100_000  # corners per pass (bounds the temporary memory: one pass per thread)
+THREADS = min(4, os.cpu_count() or 1)  # passes run at once
 
 
 _MIX = np.uint64(0x9E3779B97F4A7C15)
@@ -43,13 +43,14 @@ def unique_rows(*cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
                 h = (h ^ w[:, j].astype(np.uint64)) * _MIX
                 h ^= h >> np.uint64(31)
     first, inverse = _distinct(h)
-    if not all((w[first][inverse] == w).all() for w in words):       # a collision: exact but slower
+    if not all((w[first][inverse] == w).all() for w in words):  # a collision: exact but slower
         key = np.ascontiguousarray(np.hstack([w.view(np.uint8).reshape(len(w), -1) for w in words]))
-        _, first, inverse = np.unique(key.view(np.dtype((np.void, key.shape[1]))).ravel(), return_index=True,
-                                      return_inverse=True)
+        _, first, inverse = np.unique(
+            key.view(np.dtype((np.void, key.shape[1]))).ravel(), return_index=True, return_inverse=True
+        )
         inverse = inverse.reshape(-1)
-    mark = np.full(len(h), -1, np.int64)           # the distinct values in order of first appearance:
-    mark[first] = np.arange(len(first))            # first indices are distinct rows, so no sort is needed
+    mark = np.full(len(h), -1, np.int64)  # the distinct values in order of first appearance:
+    mark[first] = np.arange(len(first))  # first indices are distinct rows, so no sort is needed
     order = mark[mark >= 0]
     rank = np.empty_like(order)
     rank[order] = np.arange(len(order))
@@ -72,8 +73,14 @@ def _distinct(h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return first, inverse
 
 
-def index_grouped(v: np.ndarray, f: np.ndarray, group: np.ndarray, n: np.ndarray | None = None,
-                  uv: np.ndarray | None = None, position: np.ndarray | None = None) -> tuple:
+def index_grouped(
+    v: np.ndarray,
+    f: np.ndarray,
+    group: np.ndarray,
+    n: np.ndarray | None = None,
+    uv: np.ndarray | None = None,
+    position: np.ndarray | None = None,
+) -> tuple:
     """index_vertices for many meshes at once: `group` names each vertex's mesh, and f's
     indices are into the concatenated `v` (which is in group order). Returns (v, f, n, uv,
     group), the kept vertices in group order, so each mesh's stay contiguous. `position`,
@@ -90,8 +97,7 @@ def index_grouped(v: np.ndarray, f: np.ndarray, group: np.ndarray, n: np.ndarray
     return np.asarray(v)[keep], remap[f], n, uv, np.asarray(group)[keep]
 
 
-def smooth_grouped(v: np.ndarray, f: np.ndarray, group: np.ndarray, uv: np.ndarray | None,
-                   angle: float) -> tuple:
+def smooth_grouped(v: np.ndarray, f: np.ndarray, group: np.ndarray, uv: np.ndarray | None, angle: float) -> tuple:
     """smooth_normals for many meshes at once (see index_grouped for the arguments)."""
     v = np.asarray(v, np.float64)
     f = np.asarray(f, np.int64)
@@ -105,12 +111,19 @@ def smooth_grouped(v: np.ndarray, f: np.ndarray, group: np.ndarray, uv: np.ndarr
     nlen = np.linalg.norm(normals, axis=1, keepdims=True)
     normals = np.where(nlen > 0, normals / np.where(nlen > 0, nlen, 1.0), unit[corner_face])
     corner_uv = None if uv is None else np.asarray(uv)[corner_vertex]
-    return index_grouped(v[corner_vertex], np.arange(len(corner_vertex)).reshape(-1, 3), group[corner_vertex],
-                         normals.astype(np.float32), corner_uv, position=position)
+    return index_grouped(
+        v[corner_vertex],
+        np.arange(len(corner_vertex)).reshape(-1, 3),
+        group[corner_vertex],
+        normals.astype(np.float32),
+        corner_uv,
+        position=position,
+    )
 
 
-def grouped_sums(position: np.ndarray, corner_face: np.ndarray, unit: np.ndarray, fn: np.ndarray,
-                 cos_limit: float) -> np.ndarray:
+def grouped_sums(
+    position: np.ndarray, corner_face: np.ndarray, unit: np.ndarray, fn: np.ndarray, cos_limit: float
+) -> np.ndarray:
     """preprocess._grouped_sums, faster: per corner, the sum of fn over corners at the same
     position whose face normal is within the angle of this corner's face normal (itself
     included). Where every face normal at a position lies within half the angle of their
@@ -133,16 +146,17 @@ def grouped_sums(position: np.ndarray, corner_face: np.ndarray, unit: np.ndarray
     return out
 
 
-PAIR_BLOCK = 1 << 21            # corner pairs per block of _pair_sums (bounds its temporary memory)
+PAIR_BLOCK = 1 << 21  # corner pairs per block of _pair_sums (bounds its temporary memory)
 
 
-def _pair_sums(position: np.ndarray, corner_face: np.ndarray, unit: np.ndarray, fn: np.ndarray,
-               cos_limit: float) -> np.ndarray:
+def _pair_sums(
+    position: np.ndarray, corner_face: np.ndarray, unit: np.ndarray, fn: np.ndarray, cos_limit: float
+) -> np.ndarray:
     """grouped_sums by comparing every pair of corners at a position. Positions are taken
     by their corner count s, all positions of one count as dense [P, s] blocks: the s x s
     dot products, the within-angle mask and the masked sums are whole-block products, so
     each corner's normal and weight are gathered once, not once per partner."""
-    small = position.max(initial=0) < 1 << 16           # a pass's positions mostly are: radix sort, O(n)
+    small = position.max(initial=0) < 1 << 16  # a pass's positions mostly are: radix sort, O(n)
     order = np.argsort(position.astype(np.uint16) if small else position, kind="stable")
     sorted_pos = position[order]
     starts = np.flatnonzero(np.r_[True, sorted_pos[1:] != sorted_pos[:-1]])
@@ -153,12 +167,12 @@ def _pair_sums(position: np.ndarray, corner_face: np.ndarray, unit: np.ndarray, 
         first = starts[sizes == s]
         step = max(1, PAIR_BLOCK // (s * s))
         for b in range(0, len(first), step):
-            corners = first[b:b + step, None] + np.arange(s)                  # [P, s] sorted corners
-            u = unit[faces[corners]]                                          # [P, s, 3]
+            corners = first[b : b + step, None] + np.arange(s)  # [P, s] sorted corners
+            u = unit[faces[corners]]  # [P, s, 3]
             w = fn[faces[corners]]
             dots = u[:, :, None, 0] * u[:, None, :, 0]
             dots += u[:, :, None, 1] * u[:, None, :, 1]
-            dots += u[:, :, None, 2] * u[:, None, :, 2]                       # [P, s, s]
+            dots += u[:, :, None, 2] * u[:, None, :, 2]  # [P, s, s]
             near = (dots >= cos_limit).astype(np.float64)
             out[order[corners.reshape(-1)]] = np.matmul(near, w).reshape(-1, 3)
     return out
@@ -238,8 +252,9 @@ def parallel(fn, jobs: list) -> list:
         pool.shutdown(wait=True, cancel_futures=True)
 
 
-def _pass(meshes: Meshes, sel: np.ndarray, vstart: np.ndarray, fstart: np.ndarray, smoothed: bool,
-          angle: float) -> tuple:
+def _pass(
+    meshes: Meshes, sel: np.ndarray, vstart: np.ndarray, fstart: np.ndarray, smoothed: bool, angle: float
+) -> tuple:
     vi = np.repeat(vstart[sel], meshes.vcount[sel]) + ramp(meshes.vcount[sel])
     fi = np.repeat(fstart[sel], meshes.fcount[sel]) + ramp(meshes.fcount[sel])
     local_base = np.repeat(np.concatenate([[0], np.cumsum(meshes.vcount[sel])[:-1]]), meshes.fcount[sel])
@@ -300,8 +315,11 @@ def similar(m: np.ndarray) -> np.ndarray:
 def rows_within(v: np.ndarray, limit: float) -> np.ndarray:
     """bool [V]: every coordinate of the row within ±limit (NaN is not); in chunks, no copy of all."""
     step = 1 << 18
-    return np.concatenate([np.abs(v[a:a + step]).max(axis=1) <= limit
-                           for a in range(0, len(v), step)]) if len(v) else np.zeros(0, bool)
+    return (
+        np.concatenate([np.abs(v[a : a + step]).max(axis=1) <= limit for a in range(0, len(v), step)])
+        if len(v)
+        else np.zeros(0, bool)
+    )
 
 
 def has_area(meshes: Meshes) -> np.ndarray:
@@ -312,8 +330,8 @@ def has_area(meshes: Meshes) -> np.ndarray:
     owner = np.repeat(np.arange(len(meshes.fcount)), meshes.fcount)
     step = 1 << 16
     for a in range(0, len(meshes.faces), step):
-        o = owner[a:a + step]
-        f = meshes.faces[a:a + step] + vstart[o][:, None]
+        o = owner[a : a + step]
+        f = meshes.faces[a : a + step] + vstart[o][:, None]
         cross = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
         area = np.maximum(area, _max_by(o, np.einsum("ij,ij->i", cross, cross), len(area)))
     return (extent > 0) & (area > (extent * 1e-12) ** 4)
@@ -337,20 +355,20 @@ def instance(meshes: Meshes, mesh_of: np.ndarray, transforms: np.ndarray, consum
     vi = None if once else np.repeat(meshes.vstart[mesh_of], vcount) + ramp(vcount)
     r = transforms[:, :3, :3]
     with np.errstate(all="ignore"):
-        normal_matrix = np.linalg.inv(r)            # n' = n @ inv(R) is (inv(R)^T n)^T
+        normal_matrix = np.linalg.inv(r)  # n' = n @ inv(R) is (inv(R)^T n)^T
     total = int(vcount.sum())
     world = meshes.vertices if once else np.empty((total, 3))
     normals = meshes.normals if once else np.empty((total, 3), np.float32)
     owner = np.repeat(np.arange(len(mesh_of)), vcount)
     step = 1 << 16
 
-    def place(a: int) -> None:                      # rows a..a+step: each chunk reads and writes its own
-        rows = slice(a, a + step) if once else vi[a:a + step]
-        o, local = owner[a:a + step], meshes.vertices[rows]
+    def place(a: int) -> None:  # rows a..a+step: each chunk reads and writes its own
+        rows = slice(a, a + step) if once else vi[a : a + step]
+        o, local = owner[a : a + step], meshes.vertices[rows]
         n = np.einsum("vj,vji->vi", meshes.normals[rows].astype(np.float64), normal_matrix[o])
-        world[a:a + step] = np.einsum("vj,vij->vi", local, r[o]) + transforms[o, :3, 3]
+        world[a : a + step] = np.einsum("vj,vij->vi", local, r[o]) + transforms[o, :3, 3]
         length = np.linalg.norm(n, axis=1, keepdims=True)
-        normals[a:a + step] = n / np.where(length > 0, length, 1.0)
+        normals[a : a + step] = n / np.where(length > 0, length, 1.0)
 
     parallel(place, list(range(0, total, step)))
     if once:

@@ -9,7 +9,7 @@ import numpy as np
 from ..errors import RttaError
 
 DEFAULT_ORBIT = (35.0, 25.0, 2.2)
-NEAR_RATIO = 1e-3   # near >= far * NEAR_RATIO: float32 depth keeps ~1e-4 relative precision at far
+NEAR_RATIO = 1e-3  # near >= far * NEAR_RATIO: float32 depth keeps ~1e-4 relative precision at far
 MAX_FAR_NEAR = 1e4  # beyond this, window depth loses the surfaces' order (`rtta bench report`, section 4)
 
 
@@ -22,8 +22,10 @@ def parse_orbit(text: str, option: str = "--camera", given: str | None = None) -
     except ValueError:
         raise RttaError(f"{option} expects AZ,EL,DIST (three numbers), got '{given}'") from None
     if not all(np.isfinite([az, el, dist])) or not 1e-6 <= dist <= 1e6 or max(abs(az), abs(el)) > 1e6:
-        raise RttaError(f"{option} '{given}': AZ and EL must be finite degrees (|value| up to 1e6) and DIST "
-                        "between 1e-6 and 1e6 scene radii")
+        raise RttaError(
+            f"{option} '{given}': AZ and EL must be finite degrees (|value| up to 1e6) and DIST "
+            "between 1e-6 and 1e6 scene radii"
+        )
     return az, el, dist
 
 
@@ -75,8 +77,9 @@ class Camera:
     far: float = 100.0
 
     @classmethod
-    def orbit(cls, center, radius: float, az: float, el: float, dist: float,
-              fov_y: float = 45.0, up_axis: str = "y") -> Camera:
+    def orbit(
+        cls, center, radius: float, az: float, el: float, dist: float, fov_y: float = 45.0, up_axis: str = "y"
+    ) -> Camera:
         """Azimuth about the up axis (+Y, or +Z for up_axis 'z') starting at +Z (-Y),
         elevation up from the ground plane; dist in radii."""
         a, e = np.radians(az), np.radians(el)
@@ -104,8 +107,10 @@ class Camera:
             return self, None
         far = self.far if self.far > 0 else 1.0
         near = far / MAX_FAR_NEAR
-        msg = (f"far/near {self.far:g}/{self.near:g} exceeds {MAX_FAR_NEAR:g}: near plane raised to {near:g} "
-               "(closer geometry is clipped)")
+        msg = (
+            f"far/near {self.far:g}/{self.near:g} exceeds {MAX_FAR_NEAR:g}: near plane raised to {near:g} "
+            "(closer geometry is clipped)"
+        )
         return replace(self, near=near, far=far), msg
 
     def view(self, origin) -> np.ndarray:

@@ -31,14 +31,15 @@ def _mix(x: np.ndarray) -> np.ndarray:
 def _position_hashes(positions: np.ndarray) -> np.ndarray:
     """A 64-bit hash of each vertex's exact float32 position (equal positions, equal hashes)."""
     bits = np.ascontiguousarray(positions, np.float32).view(np.uint32).astype(np.uint64)
-    bits[bits == np.uint64(0x80000000)] = 0                # -0.0 is 0.0
+    bits[bits == np.uint64(0x80000000)] = 0  # -0.0 is 0.0
     h = _mix(bits[:, 0] + _K)
     h = _mix(h ^ bits[:, 1])
     return _mix(h ^ (bits[:, 2] << np.uint64(7)))
 
 
-def closed_objects(positions: np.ndarray, indices: np.ndarray, index_ranges: np.ndarray,
-                   centers: np.ndarray) -> np.ndarray:
+def closed_objects(
+    positions: np.ndarray, indices: np.ndarray, index_ranges: np.ndarray, centers: np.ndarray
+) -> np.ndarray:
     """bool [N]: whether object i (triangles indices[first:first + count] of index_ranges,
     in object order) is a closed surface with positive volume. `centers`: float64 [N, 3], a
     point near each object (its bounds' centre), so the volume is summed in small numbers."""
@@ -50,18 +51,18 @@ def closed_objects(positions: np.ndarray, indices: np.ndarray, index_ranges: np.
     tris = np.asarray(indices).reshape(-1, 3)
     imbalance = np.zeros(n, np.uint64)
     volume = np.zeros(n, np.float64)
-    offset = tri_first - (np.cumsum(tri_count) - tri_count)   # triangle k of the scene lies at row k + offset
+    offset = tri_first - (np.cumsum(tri_count) - tri_count)  # triangle k of the scene lies at row k + offset
     used = offset[tri_count > 0]
     uniform = len(used) == 0 or bool((used == used[0]).all())
     with np.errstate(over="ignore"):
         for a in range(0, total, CHUNK_TRIANGLES):
-            o = owner[a:a + CHUNK_TRIANGLES]
+            o = owner[a : a + CHUNK_TRIANGLES]
             k = np.arange(a, a + len(o))
             t = tris[k + (offset[o[0]] if uniform else offset[o])]
-            h = hp[t]                                          # [k, 3]
-            fwd = _mix(h * _K + np.roll(h, -1, axis=1))        # edges (a, b), (b, c), (c, a)
-            rev = _mix(np.roll(h, -1, axis=1) * _K + h)        # the same edges reversed
-            diff = fwd.sum(axis=1) - rev.sum(axis=1)           # wraps: exact modulo 2^64
+            h = hp[t]  # [k, 3]
+            fwd = _mix(h * _K + np.roll(h, -1, axis=1))  # edges (a, b), (b, c), (c, a)
+            rev = _mix(np.roll(h, -1, axis=1) * _K + h)  # the same edges reversed
+            diff = fwd.sum(axis=1) - rev.sum(axis=1)  # wraps: exact modulo 2^64
             p = positions[t].astype(np.float64) - centers[o][:, None, :]
             vol = np.einsum("ij,ij->i", p[:, 0], np.cross(p[:, 1], p[:, 2]))
             cuts = np.flatnonzero(np.r_[True, o[1:] != o[:-1]])
@@ -75,8 +76,8 @@ def beyond_near(aabb_min: np.ndarray, aabb_max: np.ndarray, view: np.ndarray, pr
     wholly beyond the near plane of the perspective `proj`. Culling back faces is exact only
     there: where the near plane cuts an object (or the camera is inside it), its back faces
     show through the cut, as the file's surface does without culling."""
-    near = proj[2, 3] / (proj[2, 2] - 1.0)             # GL perspective: P22 = -(f+n)/(f-n), P23 = -2fn/(f-n)
+    near = proj[2, 3] / (proj[2, 2] - 1.0)  # GL perspective: P22 = -(f+n)/(f-n), P23 = -2fn/(f-n)
     row = np.asarray(view, np.float64)[2]
     center, half = (aabb_max + aabb_min) / 2.0, (aabb_max - aabb_min) / 2.0
-    nearest = center @ row[:3] + row[3] + half @ np.abs(row[:3])    # the box's largest view z (forward is -z)
+    nearest = center @ row[:3] + row[3] + half @ np.abs(row[:3])  # the box's largest view z (forward is -z)
     return nearest < -near

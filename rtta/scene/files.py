@@ -19,11 +19,11 @@ from ..errors import RttaError
 
 DEFAULT_LIMIT_MB = 4096
 MAX_FILE_BYTES = 2 * 1024**3
-MAX_TEXTURE_PIXELS = 8192 * 8192       # 256 MiB as RGBA8; the material atlas halves anything over 4032 anyway
-TEXTURE_BYTES_PER_PIXEL = 12           # decoded RGBA, the atlas copy, its mip levels
-MAX_OBJECTS = 10_000                   # objects any scene file may make (loading costs ~0.25 ms each, OBJ ~0.5)
-BYTES_PER_OBJECT = 256                 # larger files: one object per this many bytes of the file
-MAX_OBJECTS_LARGE = 1_000_000          # and never more than this
+MAX_TEXTURE_PIXELS = 8192 * 8192  # 256 MiB as RGBA8; the material atlas halves anything over 4032 anyway
+TEXTURE_BYTES_PER_PIXEL = 12  # decoded RGBA, the atlas copy, its mip levels
+MAX_OBJECTS = 10_000  # objects any scene file may make (loading costs ~0.25 ms each, OBJ ~0.5)
+BYTES_PER_OBJECT = 256  # larger files: one object per this many bytes of the file
+MAX_OBJECTS_LARGE = 1_000_000  # and never more than this
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tga", ".tif", ".tiff", ".gif", ".webp")
 
 
@@ -62,7 +62,7 @@ def regular_file(path: Path, what: str = "file") -> int:
         raise RttaError("no such file (a part of the path is not a folder)", path) from None
     except OSError as exc:
         raise RttaError(f"cannot read the {what} ({exc.strerror or type(exc).__name__})", path) from None
-    except ValueError:                                  # NUL byte in the path
+    except ValueError:  # NUL byte in the path
         raise RttaError("the path contains a NUL byte", str(path).replace("\0", "\\0")) from None
     if stat.S_ISDIR(st.st_mode):
         raise RttaError(f"is a directory, expected a {what}", path)
@@ -192,7 +192,7 @@ class SafeResolver:
             try:
                 target = local_file(candidate, self.scene, "file")
                 data = read_limited(target, self.scene, "")
-            except RttaError as exc:             # said of the name by _warn: not twice
+            except RttaError as exc:  # said of the name by _warn: not twice
                 problem = problem or exc.message.removeprefix(f"file '{candidate[:80]}' ").strip()
                 continue
             if target.suffix.lower() in IMAGE_SUFFIXES:

@@ -28,7 +28,7 @@ from .readers.trimesh_io import base_color, trimesh_load
 from .textures import TextureTable
 
 F32_MAX = float(np.finfo(np.float32).max)
-MAX_COORDINATE = 1e15    # float64 keeps ~0.1 units of precision there; float32 offsets stay finite
+MAX_COORDINATE = 1e15  # float64 keeps ~0.1 units of precision there; float32 offsets stay finite
 BEYOND = f"coordinates up to {{:.3g}}, beyond the ±{MAX_COORDINATE:.0e} this program handles"
 
 
@@ -37,9 +37,9 @@ def load_scene(path: str | Path, smooth_angle: float = DEFAULT_SMOOTH_ANGLE, smo
     normals are smoothed by `smooth_angle` degrees where the file has none, or everywhere
     with `smooth`."""
     enabled = gc.isenabled()
-    gc.disable()            # the document's 10^5-10^6 objects would be traversed again and again by
-    try:                    # automatic collections while the load allocates; trimesh's cycles are
-        return _load(Path(path), smooth_angle, smooth)      # collected explicitly (_read)
+    gc.disable()  # the document's 10^5-10^6 objects would be traversed again and again by
+    try:  # automatic collections while the load allocates; trimesh's cycles are
+        return _load(Path(path), smooth_angle, smooth)  # collected explicitly (_read)
     finally:
         if enabled:
             gc.enable()
@@ -49,8 +49,10 @@ def _load(path: Path, smooth_angle: float, smooth: bool) -> Scene:
     size = regular_file(path, "scene file")
     suffix = path.suffix.lower()
     if suffix not in SUPPORTED + readers.SUFFIXES:
-        raise RttaError(f"unsupported file type '{suffix[:16] or '(none)'}'; "
-                        f"supported: {', '.join(SUPPORTED + readers.SUFFIXES)}", path)
+        raise RttaError(
+            f"unsupported file type '{suffix[:16] or '(none)'}'; supported: {', '.join(SUPPORTED + readers.SUFFIXES)}",
+            path,
+        )
     if size == 0:
         raise RttaError("file is empty", path)
     if size > MAX_FILE_BYTES:
@@ -65,10 +67,14 @@ def _load(path: Path, smooth_angle: float, smooth: bool) -> Scene:
         placed, names, colors, texture_ids, textures, dropped, paths = _parts(read, path, smooth_angle)
         notes += read[0].textures.notes
     if dropped:
-        notes.append(f"{len(dropped)} object(s) with only degenerate (zero-area) triangles left out: "
-                     + ", ".join(dropped[:5]) + (" ..." if len(dropped) > 5 else ""))
-    scene = from_batch(names, placed, colors, source=str(path), texture_ids=texture_ids, textures=textures,
-                       consume=True)
+        notes.append(
+            f"{len(dropped)} object(s) with only degenerate (zero-area) triangles left out: "
+            + ", ".join(dropped[:5])
+            + (" ..." if len(dropped) > 5 else "")
+        )
+    scene = from_batch(
+        names, placed, colors, source=str(path), texture_ids=texture_ids, textures=textures, consume=True
+    )
     del placed
     scene.paths = paths
     scene.warnings = notes + scene.warnings + _texture_notes(scene)
@@ -93,7 +99,7 @@ def _read(path: Path, suffix: str, smooth: bool) -> tuple[list[str], list[Path],
     paths = [tuple(item[3]) for item in items]
     gathered = _Gathered(items, transforms, textures)
     trimeshes = records.trimesh
-    del items, records                    # the per-geometry arrays go as they are concatenated
+    del items, records  # the per-geometry arrays go as they are concatenated
     meshes = gathered.concatenated()
     if trimeshes:
         gc.collect()
@@ -106,11 +112,15 @@ def _check_shapes(record: Decoded, name: str, path: Path) -> None:
     v, f = record.vertices, record.faces
     if v.ndim != 2 or v.shape[1] != 3:
         width = v.shape[1] if v.ndim == 2 else 1
-        raise RttaError(f"object '{name}' has vertices of {width} coordinate(s) instead of 3 "
-                        "(is the file truncated or damaged?)", path)
+        raise RttaError(
+            f"object '{name}' has vertices of {width} coordinate(s) instead of 3 (is the file truncated or damaged?)",
+            path,
+        )
     if f.ndim != 2 or f.shape[1] != 3:
-        raise RttaError(f"object '{name}' has faces that are not triangles of 3 vertex indices "
-                        "(is the file truncated or damaged?)", path)
+        raise RttaError(
+            f"object '{name}' has faces that are not triangles of 3 vertex indices (is the file truncated or damaged?)",
+            path,
+        )
 
 
 class _Records:
@@ -122,7 +132,7 @@ class _Records:
 
     def __init__(self, smooth: bool) -> None:
         self.smooth = smooth
-        self.trimesh = False               # a trimesh mesh was converted: its cycles want collecting
+        self.trimesh = False  # a trimesh mesh was converted: its cycles want collecting
         self._made: dict[int, Decoded | None] = {}
         self._color_of: dict = {}
 
@@ -134,7 +144,7 @@ class _Records:
         return self._made[id(mesh)]
 
     def _record(self, mesh, textures: TextureTable) -> Decoded | None:
-        if isinstance(mesh, Decoded):         # read directly: trimesh need not even be imported
+        if isinstance(mesh, Decoded):  # read directly: trimesh need not even be imported
             return replace(mesh, normals=None) if self.smooth and mesh.normals is not None else mesh
         import trimesh
 
@@ -143,14 +153,23 @@ class _Records:
             return None
         uv, texture = textures.of(mesh)
         material = getattr(mesh.visual, "material", None)
-        key = id(material) if material is not None and getattr(mesh.visual, "kind", None) not in ("face", "vertex") \
+        key = (
+            id(material)
+            if material is not None and getattr(mesh.visual, "kind", None) not in ("face", "vertex")
             else None
+        )
         color = self._color_of[key] if key in self._color_of else base_color(mesh)
         if key is not None:
             self._color_of[key] = color
-        faces = np.asarray(mesh.faces).astype(np.int32, copy=False)   # an index past 2^31 wraps negative: out of range
-        return Decoded(np.asarray(mesh.vertices, np.float64), faces, None if self.smooth else _file_normals(mesh),
-                       color, uv, texture)
+        faces = np.asarray(mesh.faces).astype(np.int32, copy=False)  # an index past 2^31 wraps negative: out of range
+        return Decoded(
+            np.asarray(mesh.vertices, np.float64),
+            faces,
+            None if self.smooth else _file_normals(mesh),
+            color,
+            uv,
+            texture,
+        )
 
 
 def _items(path: Path, suffix: str) -> tuple[list[str], list[Path], list[tuple]]:
@@ -171,15 +190,21 @@ def _items(path: Path, suffix: str) -> tuple[list[str], list[Path], list[tuple]]
         data, names = obj_objects(path)
         limit = max_objects(path)
         if len(names) > limit:
-            raise RttaError(f"OBJ file has {len(names):,} objects ('o' statements, or 'g' groups where there are "
-                            f"fewer than two; at most {limit:,} for a file of its size)", path)
+            raise RttaError(
+                f"OBJ file has {len(names):,} objects ('o' statements, or 'g' groups where there are "
+                f"fewer than two; at most {limit:,} for a file of its size)",
+                path,
+            )
         decoded = obj_read.decode(data, names)
-        materials = SafeResolver(path)           # the skeleton's reads: kept only when its colours are
+        materials = SafeResolver(path)  # the skeleton's reads: kept only when its colours are
         if decoded is not None and obj_read.has_materials(data):
             decoded = material_colors(decoded, data, path, materials)
-        if decoded is not None:        # a plain file: its geometry without trimesh (whose split is quadratic)
-            return (notes + materials.warnings, materials.inputs,
-                    [(names[k], geometry, np.eye(4), ()) for k, geometry in decoded])
+        if decoded is not None:  # a plain file: its geometry without trimesh (whose split is quadratic)
+            return (
+                notes + materials.warnings,
+                materials.inputs,
+                [(names[k], geometry, np.eye(4), ()) for k, geometry in decoded],
+            )
         source = io.BytesIO(data)
     loaded = trimesh_load(source, suffix[1:], path, resolver)
     items = []
@@ -193,7 +218,7 @@ def _items(path: Path, suffix: str) -> tuple[list[str], list[Path], list[tuple]]
         if k is not None and k < len(names):
             name, key = names[k], k
         items.append((key, name, loaded.geometry.get(geom_name), np.asarray(transform, np.float64), tree))
-    items.sort(key=lambda item: item[0])                  # file order
+    items.sort(key=lambda item: item[0])  # file order
     return notes + resolver.warnings, resolver.inputs, [item[1:] for item in items]
 
 
@@ -223,7 +248,7 @@ def _parts(read: tuple, path: Path, smooth_angle: float) -> tuple:
     area = batch.has_area(meshes)[mesh_of]
     placing = np.where(gathered.baked[:, None, None], np.eye(4), transforms)
     flat = np.flatnonzero(~area)
-    if len(flat):     # an object spread beyond the range is flat relative to its size: say the range
+    if len(flat):  # an object spread beyond the range is flat relative to its size: say the range
         _check_world(batch.instance(meshes, mesh_of[flat], placing[flat]), [names[i] for i in flat], path)
     if not area.any():
         raise RttaError("every triangle of the scene is degenerate (zero area)", path)
@@ -232,7 +257,7 @@ def _parts(read: tuple, path: Path, smooth_angle: float) -> tuple:
     del meshes
     with np.errstate(all="ignore"):
         mirrored = ~gathered.baked[keep] & (np.linalg.det(transforms[keep, :3, :3]) < 0)
-    if mirrored.any():                    # instances under a mirror: turn the winding back (see _Gathered)
+    if mirrored.any():  # instances under a mirror: turn the winding back (see _Gathered)
         rows = np.repeat(mirrored, placed.fcount)
         placed.faces[rows] = placed.faces[rows][:, ::-1]
     kept = [names[i] for i in keep]
@@ -240,8 +265,15 @@ def _parts(read: tuple, path: Path, smooth_angle: float) -> tuple:
     colors = [gathered.colors[mesh_of[i]] for i in keep]
     texture_ids = [gathered.texture_ids[mesh_of[i]] for i in keep]
     kept_paths = None if paths is None else [paths[i] for i in keep]
-    return (placed, kept, colors, texture_ids, gathered.textures.images, [names[i] for i in np.flatnonzero(~area)],
-            kept_paths)
+    return (
+        placed,
+        kept,
+        colors,
+        texture_ids,
+        gathered.textures.images,
+        [names[i] for i in np.flatnonzero(~area)],
+        kept_paths,
+    )
 
 
 class _Gathered:
@@ -263,7 +295,7 @@ class _Gathered:
         similar = batch.similar(transforms) & usable
         self.baked = np.zeros(len(items), bool)
         seen: dict = {}
-        for i, (_, mesh, _, _) in enumerate(items):     # the items hold every mesh, so ids stay unique
+        for i, (_, mesh, _, _) in enumerate(items):  # the items hold every mesh, so ids stay unique
             bake = usable[i] and mesh.normals is None and not similar[i]
             key = (id(mesh), i) if bake else id(mesh)
             if key not in seen:
@@ -277,7 +309,7 @@ class _Gathered:
         if transform is not None:
             v = v @ transform[:3, :3].T + transform[:3, 3]
             if np.linalg.det(transform[:3, :3]) < 0:
-                f = f[:, ::-1]             # a mirroring transform turns the winding: keep faces front-facing
+                f = f[:, ::-1]  # a mirroring transform turns the winding: keep faces front-facing
         self._arrays.append((v, f, mesh.normals, mesh.uv))
         self.smoothed.append(mesh.normals is None)
         self.texture_ids.append(mesh.texture)
@@ -290,9 +322,14 @@ class _Gathered:
         normals = [np.zeros((len(a[0]), 3), np.float32) if a[2] is None else a[2] for a in arrays]
         textured = any(a[3] is not None for a in arrays)
         uvs = [np.zeros((len(a[0]), 2), np.float32) if a[3] is None else a[3] for a in arrays] if textured else None
-        return batch.Meshes(np.concatenate([a[0] for a in arrays]), np.concatenate([a[1] for a in arrays]),
-                            vcount, np.array([len(a[1]) for a in arrays], np.int64), np.concatenate(normals),
-                            None if uvs is None else np.concatenate(uvs))
+        return batch.Meshes(
+            np.concatenate([a[0] for a in arrays]),
+            np.concatenate([a[1] for a in arrays]),
+            vcount,
+            np.array([len(a[1]) for a in arrays], np.int64),
+            np.concatenate(normals),
+            None if uvs is None else np.concatenate(uvs),
+        )
 
 
 def _check(meshes: batch.Meshes, mesh_of: np.ndarray, transforms: np.ndarray, names: list[str], path: Path) -> None:
@@ -308,9 +345,13 @@ def _check(meshes: batch.Meshes, mesh_of: np.ndarray, transforms: np.ndarray, na
     if bad.any():
         i = int(np.flatnonzero(bad)[0])
         if not finite[mesh_of[i]]:
-            v = meshes.vertices[meshes.vstart[mesh_of[i]]:][:meshes.vcount[mesh_of[i]]]
-            raise RttaError(f"object '{names[i]}' has NaN or infinite vertex coordinates" if not np.isfinite(v).all()
-                            else f"object '{names[i]}' has " + BEYOND.format(np.abs(v).max()), path)
+            v = meshes.vertices[meshes.vstart[mesh_of[i]] :][: meshes.vcount[mesh_of[i]]]
+            raise RttaError(
+                f"object '{names[i]}' has NaN or infinite vertex coordinates"
+                if not np.isfinite(v).all()
+                else f"object '{names[i]}' has " + BEYOND.format(np.abs(v).max()),
+                path,
+            )
         if not in_range[mesh_of[i]]:
             raise RttaError(f"object '{names[i]}' has face indices out of range", path)
         raise RttaError(f"object '{names[i]}' has a transform that makes coordinates non-finite", path)
@@ -328,7 +369,7 @@ def _check_world(placed: batch.Meshes, names: list[str], path: Path) -> None:
     if not bad.any():
         return
     i = int(np.searchsorted(placed.vstart, np.flatnonzero(bad)[0], side="right") - 1)
-    peak = np.abs(placed.vertices[placed.vstart[i]:placed.vstart[i] + placed.vcount[i]]).max()
+    peak = np.abs(placed.vertices[placed.vstart[i] : placed.vstart[i] + placed.vcount[i]]).max()
     if not np.isfinite(peak):
         raise RttaError(f"object '{names[i]}' has a transform that makes coordinates non-finite", path)
     raise RttaError(f"object '{names[i]}' has " + BEYOND.format(peak), path)

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 DEFAULT_LEVELS = 5
-DEFAULT_MAX_SIZE = 4096      # a multiple of 2**levels
+DEFAULT_MAX_SIZE = 4096  # a multiple of 2**levels
 
 
 @dataclass
@@ -35,7 +35,7 @@ class MaterialAtlas:
     texture lies: rects[i] = (layer, x, y, w, h) of texture i in texels, border excluded."""
 
     image: np.ndarray
-    rects: np.ndarray          # int64 [T, 5]
+    rects: np.ndarray  # int64 [T, 5]
     levels: int
 
     @property
@@ -65,8 +65,9 @@ def original_nbytes(textures: list[np.ndarray]) -> int:
     return total
 
 
-def build_atlas(textures: list[np.ndarray], levels: int = DEFAULT_LEVELS,
-                max_size: int = DEFAULT_MAX_SIZE) -> MaterialAtlas:
+def build_atlas(
+    textures: list[np.ndarray], levels: int = DEFAULT_LEVELS, max_size: int = DEFAULT_MAX_SIZE
+) -> MaterialAtlas:
     """Pack `textures` (uint8 [h, w, 4], row 0 = v 0) into atlas layers of at most max_size."""
     if not 0 <= levels <= 8:
         raise ValueError(f"material atlas mip levels must be 0..8, got {levels}")
@@ -82,7 +83,7 @@ def build_atlas(textures: list[np.ndarray], levels: int = DEFAULT_LEVELS,
         h, w = tex.shape[:2]
         rows = (np.arange(sh) - border) % h
         cols = (np.arange(sw) - border) % w
-        image[layer, y:y + sh, x:x + sw] = tex[rows[:, None], cols[None, :]]
+        image[layer, y : y + sh, x : x + sw] = tex[rows[:, None], cols[None, :]]
         rects[i] = (layer, x + border, y + border, w, h)
     return MaterialAtlas(image=image, rects=rects, levels=levels)
 
@@ -91,7 +92,7 @@ def pack_slots(slots: list[tuple[int, int]], size: int) -> list[tuple[int, int, 
     """(layer, x, y) per slot: largest first, each into the smallest free rectangle that
     holds it (guillotine split of the rest); a new size x size layer when none does."""
     order = sorted(range(len(slots)), key=lambda i: (-max(slots[i]), -slots[i][0] * slots[i][1], i))
-    free: list[tuple[int, int, int, int, int]] = []       # (layer, x, y, w, h)
+    free: list[tuple[int, int, int, int, int]] = []  # (layer, x, y, w, h)
     places: list[tuple[int, int, int]] = [(0, 0, 0)] * len(slots)
     layers = 0
     for i in order:
@@ -152,8 +153,9 @@ def fitted_shape(shape: tuple[int, int], limit: int) -> tuple[int, int]:
     return h, w
 
 
-def oversized_note(textures: list[np.ndarray], users: list[list[str]], levels: int = DEFAULT_LEVELS,
-                   max_size: int = DEFAULT_MAX_SIZE) -> str | None:
+def oversized_note(
+    textures: list[np.ndarray], users: list[list[str]], levels: int = DEFAULT_LEVELS, max_size: int = DEFAULT_MAX_SIZE
+) -> str | None:
     """One warning line for the textures the atlas will store halved (too large for a layer
     with their borders), naming each texture's size, stored size and first user; None when
     all fit."""
@@ -168,5 +170,7 @@ def oversized_note(textures: list[np.ndarray], users: list[list[str]], levels: i
             big.append(f"{shape[1]}x{shape[0]} -> {fit[1]}x{fit[0]} ({who})")
     if not big:
         return None
-    return (f"{len(big)} texture(s) larger than the material atlas holds ({limit} texels a side) stored "
-            "at reduced resolution: " + ", ".join(big[:5]) + (" ..." if len(big) > 5 else ""))
+    return (
+        f"{len(big)} texture(s) larger than the material atlas holds ({limit} texels a side) stored "
+        "at reduced resolution: " + ", ".join(big[:5]) + (" ..." if len(big) > 5 else "")
+    )

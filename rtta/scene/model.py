@@ -17,8 +17,9 @@ from .closure import closed_objects
 SUPPORTED = (".glb", ".gltf", ".obj", ".stl", ".ply", ".3mf", ".off")
 
 # Corner i of a box has bit 0 -> x max, bit 1 -> y max, bit 2 -> z max.
-BOX_EDGES = np.array([(0, 1), (2, 3), (4, 5), (6, 7), (0, 2), (1, 3), (4, 6), (5, 7),
-                      (0, 4), (1, 5), (2, 6), (3, 7)], dtype=np.intp)
+BOX_EDGES = np.array(
+    [(0, 1), (2, 3), (4, 5), (6, 7), (0, 2), (1, 3), (4, 6), (5, 7), (0, 4), (1, 5), (2, 6), (3, 7)], dtype=np.intp
+)
 _BITS = np.array([[(i >> k) & 1 for k in range(3)] for i in range(8)], dtype=bool)
 BOUNDS = ("aabb", "obb")
 # scene extent below which a GPU may draw nothing (scripts/probe_tiny.py: llvmpipe draws a box
@@ -32,24 +33,24 @@ class Scene:
     """A batched scene. Per object: name, colour, index range, vertex range, world AABB."""
 
     names: list[str]
-    positions: np.ndarray      # float32 [V, 3], relative to origin
-    normals: np.ndarray        # float32 [V, 3]
-    object_ids: np.ndarray     # uint32 [V]
-    indices: np.ndarray        # uint32 [F*3]
-    index_ranges: np.ndarray   # int64 [N, 2]: (first, count) into indices
-    colors: np.ndarray         # float32 [N, 4]
-    aabb_min: np.ndarray       # float64 [N, 3], world (B_world)
-    aabb_max: np.ndarray       # float64 [N, 3]
-    origin: np.ndarray         # float64 [3]
+    positions: np.ndarray  # float32 [V, 3], relative to origin
+    normals: np.ndarray  # float32 [V, 3]
+    object_ids: np.ndarray  # uint32 [V]
+    indices: np.ndarray  # uint32 [F*3]
+    index_ranges: np.ndarray  # int64 [N, 2]: (first, count) into indices
+    colors: np.ndarray  # float32 [N, 4]
+    aabb_min: np.ndarray  # float64 [N, 3], world (B_world)
+    aabb_max: np.ndarray  # float64 [N, 3]
+    origin: np.ndarray  # float64 [3]
     source: str = "<memory>"
-    warnings: list[str] = field(default_factory=list)   # problems loading worked around
-    inputs: list[str] = field(default_factory=list)     # the files it was read from (outputs never replace them)
-    uvs: np.ndarray | None = None          # float32 [V, 2] when the scene has textures
-    textures: list[np.ndarray] = field(default_factory=list)   # uint8 [h, w, 4], row 0 = v 0, each once
+    warnings: list[str] = field(default_factory=list)  # problems loading worked around
+    inputs: list[str] = field(default_factory=list)  # the files it was read from (outputs never replace them)
+    uvs: np.ndarray | None = None  # float32 [V, 2] when the scene has textures
+    textures: list[np.ndarray] = field(default_factory=list)  # uint8 [h, w, 4], row 0 = v 0, each once
     texture_ids: np.ndarray | None = None  # int32 [N]: index into textures, -1 = material colour only
-    paths: list[tuple[str, ...]] | None = None   # per object: its groups in the file's tree, root first
-    unit: str = ""                         # length unit of the coordinates ('m', 'mm', 'in'...; '' = unstated)
-    up_axis: str = "y"                     # the file's up axis: 'y' (glTF) or 'z' (CAD, BIM)
+    paths: list[tuple[str, ...]] | None = None  # per object: its groups in the file's tree, root first
+    unit: str = ""  # length unit of the coordinates ('m', 'mm', 'in'...; '' = unstated)
+    up_axis: str = "y"  # the file's up axis: 'y' (glTF) or 'z' (CAD, BIM)
     _corners: dict = field(default_factory=dict, repr=False)
 
     @property
@@ -88,11 +89,11 @@ class Scene:
         the object, so the intersection does too, and it is never larger than the AABB's)."""
         if kind not in BOUNDS:
             raise ValueError(f"unknown bounds '{kind}' (choose from {', '.join(BOUNDS)})")
-        if "aabb" not in self._corners:      # stored planar [3, 8, N]: parameterize projects rows
+        if "aabb" not in self._corners:  # stored planar [3, 8, N]: parameterize projects rows
             lo = (self.aabb_min - self.origin).T[:, None, :]
             hi = (self.aabb_max - self.origin).T[:, None, :]
             planar = np.where(_BITS.T[:, :, None], hi, lo)
-            planar.flags.writeable = False   # fixed, so parameterize checks their alignment once
+            planar.flags.writeable = False  # fixed, so parameterize checks their alignment once
             self._corners["aabb"] = planar.transpose(2, 1, 0)
         if kind == "obb" and "obb" not in self._corners:
             obb = oriented_corners(self.positions, self.object_ids, self.count)
@@ -116,7 +117,7 @@ class Scene:
         if not len(keep):
             return np.zeros((0, 2), np.int64)
         first, count = self.index_ranges[keep, 0], self.index_ranges[keep, 1]
-        begin = np.flatnonzero(np.r_[True, first[1:] != first[:-1] + count[:-1]])   # not continuing a run
+        begin = np.flatnonzero(np.r_[True, first[1:] != first[:-1] + count[:-1]])  # not continuing a run
         end = np.r_[begin[1:], len(keep)] - 1
         return np.stack([first[begin], first[end] + count[end] - first[begin]], axis=1)
 
@@ -164,16 +165,30 @@ def unique_names(raw: list[str]) -> list[str]:
     return out
 
 
-PALETTE = np.array([
-    [0.80, 0.36, 0.30], [0.30, 0.56, 0.80], [0.45, 0.72, 0.38], [0.86, 0.70, 0.30],
-    [0.62, 0.45, 0.78], [0.35, 0.75, 0.72], [0.85, 0.50, 0.65], [0.60, 0.60, 0.62],
-], dtype=np.float32)
+PALETTE = np.array(
+    [
+        [0.80, 0.36, 0.30],
+        [0.30, 0.56, 0.80],
+        [0.45, 0.72, 0.38],
+        [0.86, 0.70, 0.30],
+        [0.62, 0.45, 0.78],
+        [0.35, 0.75, 0.72],
+        [0.85, 0.50, 0.65],
+        [0.60, 0.60, 0.62],
+    ],
+    dtype=np.float32,
+)
 
 
-def from_meshes(parts: list[tuple[str, np.ndarray, np.ndarray, np.ndarray | None]],
-                colors: list | None = None, source: str = "<memory>", *,
-                uvs: list[np.ndarray | None] | None = None, texture_ids: list[int] | None = None,
-                textures: list[np.ndarray] | None = None) -> Scene:
+def from_meshes(
+    parts: list[tuple[str, np.ndarray, np.ndarray, np.ndarray | None]],
+    colors: list | None = None,
+    source: str = "<memory>",
+    *,
+    uvs: list[np.ndarray | None] | None = None,
+    texture_ids: list[int] | None = None,
+    textures: list[np.ndarray] | None = None,
+) -> Scene:
     """Batch (name, vertices float64 [V,3] world, faces int [F,3], normals or None) parts;
     optionally with texture coordinates per part and an index into `textures` per part."""
     if not parts:
@@ -182,13 +197,28 @@ def from_meshes(parts: list[tuple[str, np.ndarray, np.ndarray, np.ndarray | None
     batch = Batch(
         vertices=np.concatenate([np.asarray(p[1], np.float64).reshape(-1, 3) for p in parts]),
         faces=np.concatenate([np.asarray(p[2], np.int64).reshape(-1, 3) for p in parts]),
-        vcount=np.array([len(p[1]) for p in parts], np.int64), fcount=np.array([len(p[2]) for p in parts], np.int64),
-        normals=np.concatenate([_vertex_normals(v, f) if n is None else np.asarray(n, np.float32)
-                                for _, v, f, n in parts]),
-        uvs=np.concatenate([np.zeros((len(p[1]), 2), np.float32) if uv is None else np.asarray(uv, np.float32)
-                            for p, uv in zip(parts, uvs, strict=True)]) if textured else None)
-    return from_batch([p[0] for p in parts], batch, colors, source, texture_ids=texture_ids if textured else None,
-                      textures=textures if textured else None)
+        vcount=np.array([len(p[1]) for p in parts], np.int64),
+        fcount=np.array([len(p[2]) for p in parts], np.int64),
+        normals=np.concatenate(
+            [_vertex_normals(v, f) if n is None else np.asarray(n, np.float32) for _, v, f, n in parts]
+        ),
+        uvs=np.concatenate(
+            [
+                np.zeros((len(p[1]), 2), np.float32) if uv is None else np.asarray(uv, np.float32)
+                for p, uv in zip(parts, uvs, strict=True)
+            ]
+        )
+        if textured
+        else None,
+    )
+    return from_batch(
+        [p[0] for p in parts],
+        batch,
+        colors,
+        source,
+        texture_ids=texture_ids if textured else None,
+        textures=textures if textured else None,
+    )
 
 
 @dataclass
@@ -205,9 +235,16 @@ class Batch:
     uvs: np.ndarray | None = None
 
 
-def from_batch(names: list[str], batch, colors: list | None = None, source: str = "<memory>", *,
-               texture_ids: list[int] | None = None, textures: list[np.ndarray] | None = None,
-               consume: bool = False) -> Scene:
+def from_batch(
+    names: list[str],
+    batch,
+    colors: list | None = None,
+    source: str = "<memory>",
+    *,
+    texture_ids: list[int] | None = None,
+    textures: list[np.ndarray] | None = None,
+    consume: bool = False,
+) -> Scene:
     """The Scene of objects given as one batch (a Batch, or anything with its fields), in
     whole-array passes: no loop per object. `consume`: the batch is not used afterwards, so
     int32 faces become the indices in place (a copy fewer at the load's peak)."""
@@ -227,8 +264,8 @@ def from_batch(names: list[str], batch, colors: list | None = None, source: str 
     indices = (faces.view(np.uint32) if reuse else faces.astype(np.uint32)).reshape(-1, 3)
     indices += np.repeat(vstart.astype(np.uint32), fcount)[:, None]
     positions = np.empty(v.shape, np.float32)
-    for a in range(0, len(v), 1 << 18):                  # no float64 copy of every vertex
-        positions[a:a + (1 << 18)] = v[a:a + (1 << 18)] - origin
+    for a in range(0, len(v), 1 << 18):  # no float64 copy of every vertex
+        positions[a : a + (1 << 18)] = v[a : a + (1 << 18)] - origin
     cols = np.empty((n, 4), np.float32)
     cols[:] = np.hstack([PALETTE[np.arange(n) % len(PALETTE)], np.ones((n, 1), np.float32)])
     for i, c in enumerate(colors or []):
@@ -237,14 +274,26 @@ def from_batch(names: list[str], batch, colors: list | None = None, source: str 
     raw = list(names)
     names = unique_names(raw)
     renamed = [f"{printable(a)} -> {printable(b)}" for a, b in zip(raw, names, strict=True) if a and a != b]
-    scene = Scene(names=names, positions=positions,
-                  normals=np.asarray(batch.normals, np.float32),
-                  object_ids=np.repeat(np.arange(n, dtype=np.uint32), vcount), indices=indices.reshape(-1),
-                  index_ranges=np.stack([3 * fstart, 3 * fcount], axis=1).astype(np.int64), colors=cols,
-                  aabb_min=lo, aabb_max=hi, origin=origin, source=source, warnings=_collapsed(names, lo, hi, origin))
+    scene = Scene(
+        names=names,
+        positions=positions,
+        normals=np.asarray(batch.normals, np.float32),
+        object_ids=np.repeat(np.arange(n, dtype=np.uint32), vcount),
+        indices=indices.reshape(-1),
+        index_ranges=np.stack([3 * fstart, 3 * fcount], axis=1).astype(np.int64),
+        colors=cols,
+        aabb_min=lo,
+        aabb_max=hi,
+        origin=origin,
+        source=source,
+        warnings=_collapsed(names, lo, hi, origin),
+    )
     if renamed:
-        scene.warnings.insert(0, f"{len(renamed)} object name(s) repeated, numbered in file order to keep names "
-                                 "unique: " + ", ".join(renamed[:5]) + (" ..." if len(renamed) > 5 else ""))
+        scene.warnings.insert(
+            0,
+            f"{len(renamed)} object name(s) repeated, numbered in file order to keep names "
+            "unique: " + ", ".join(renamed[:5]) + (" ..." if len(renamed) > 5 else ""),
+        )
     if textures and batch.uvs is not None and texture_ids is not None and any(t >= 0 for t in texture_ids):
         scene.textures = list(textures)
         scene.texture_ids = np.asarray(texture_ids, np.int32)
@@ -261,16 +310,22 @@ def _collapsed(names: list[str], lo: np.ndarray, hi: np.ndarray, origin: np.ndar
     notes = []
     if small.size:
         listed = ", ".join(printable(names[i]) for i in small[:5]) + (" ..." if small.size > 5 else "")
-        notes.append(f"{small.size} object(s) smaller than 16 float32 steps at their distance from the scene "
-                     f"centre draw collapsed: {listed}")
+        notes.append(
+            f"{small.size} object(s) smaller than 16 float32 steps at their distance from the scene "
+            f"centre draw collapsed: {listed}"
+        )
     extent = float(np.linalg.norm(hi.max(axis=0) - lo.min(axis=0)))
     if extent < TINY_SCENE:
-        notes.append(f"the scene is only {extent:.3g} units across: below {TINY_SCENE:g} units GPUs lose it in "
-                     "clipping or float32 underflow, so views may be blank; scale the model up")
+        notes.append(
+            f"the scene is only {extent:.3g} units across: below {TINY_SCENE:g} units GPUs lose it in "
+            "clipping or float32 underflow, so views may be blank; scale the model up"
+        )
     elif extent < 100 * float(np.spacing(np.abs(origin).max())):
-        notes.append(f"the scene is only {extent:.3g} units across at {np.abs(origin).max():.3g} units from the "
-                     "world origin: cameras cannot be placed that finely there, so views may be blank or "
-                     "off-centre; move the model nearer the origin")
+        notes.append(
+            f"the scene is only {extent:.3g} units across at {np.abs(origin).max():.3g} units from the "
+            "world origin: cameras cannot be placed that finely there, so views may be blank or "
+            "off-centre; move the model nearer the origin"
+        )
     return notes
 
 
@@ -286,7 +341,6 @@ def _vertex_normals(v: np.ndarray, f: np.ndarray) -> np.ndarray:
     return (out / np.where(length > 0, length, 1.0)).astype(np.float32)
 
 
-
 def oriented_corners(positions: np.ndarray, object_ids: np.ndarray, n: int) -> np.ndarray:
     """Principal-axes bounding box of each object's vertices (which lie contiguously, in
     object order), as 8 corners in the BOX_EDGES order: float64 [n, 8, 3]."""
@@ -298,10 +352,10 @@ def oriented_corners(positions: np.ndarray, object_ids: np.ndarray, n: int) -> n
     i, j = [0, 0, 0, 1, 1, 2], [0, 1, 2, 1, 2, 2]
     m = np.add.reduceat(q[:, i] * q[:, j], starts, axis=0)
     cov = m[:, [0, 1, 2, 1, 3, 4, 2, 4, 5]].reshape(n, 3, 3)
-    axes = np.linalg.eigh(cov)[1]                          # columns: principal axes
+    axes = np.linalg.eigh(cov)[1]  # columns: principal axes
     local = np.einsum("vi,vij->vj", q, axes[object_ids])
     lo = np.minimum.reduceat(local, starts, axis=0)
     hi = np.maximum.reduceat(local, starts, axis=0)
     pad = 1e-9 * np.maximum(np.abs(hi - lo).max(axis=1, keepdims=True), 1e-30)
-    box = np.where(_BITS[None], (hi + pad)[:, None], (lo - pad)[:, None])    # [n, 8, 3] local
+    box = np.where(_BITS[None], (hi + pad)[:, None], (lo - pad)[:, None])  # [n, 8, 3] local
     return mean[:, None, :] + np.einsum("nkj,nij->nki", box, axes)

@@ -20,8 +20,16 @@ from .files import MAX_OBJECTS_LARGE, max_objects, memory_limit
 
 # what reading a damaged zip archive raises (3MF, 3DXML, ZAE): the directory, or a member's
 # compressed data (deflate, lzma), unreadable
-ZIP_ERRORS = (zipfile.BadZipFile, zipfile.LargeZipFile, EOFError, NotImplementedError, OSError, ValueError,
-              zlib.error, lzma.LZMAError)
+ZIP_ERRORS = (
+    zipfile.BadZipFile,
+    zipfile.LargeZipFile,
+    EOFError,
+    NotImplementedError,
+    OSError,
+    ValueError,
+    zlib.error,
+    lzma.LZMAError,
+)
 
 # Peak memory of loading, measured (RELIABILITY.md): with normals smoothed at load (a file
 # without normals) about 170 bytes per vertex and 1,300 per triangle (163,842 vertices and
@@ -29,7 +37,7 @@ ZIP_ERRORS = (zipfile.BadZipFile, zipfile.LargeZipFile, EOFError, NotImplemented
 # worst case is charged, so a scene the limit admits peaks below twice the limit.
 BYTES_PER_VERTEX = 120
 BYTES_PER_TRIANGLE = 720
-XML_BYTES_FACTOR = 24      # trimesh's 3MF reader: 559 MiB peak for a 27 MiB model (21 per byte)
+XML_BYTES_FACTOR = 24  # trimesh's 3MF reader: 559 MiB peak for a 27 MiB model (21 per byte)
 MAX_ZIP_MEMBERS = 10_000
 
 
@@ -38,9 +46,12 @@ def check_size(vertices: int, triangles: int, path: Path, what: str = "") -> Non
     need = vertices * BYTES_PER_VERTEX + triangles * BYTES_PER_TRIANGLE
     limit = memory_limit()
     if need > limit:
-        raise RttaError(f"{what or 'the scene has'} {vertices:,} vertices and {triangles:,} triangles, about "
-                        f"{need / 2**20:,.0f} MiB, over the memory limit of {limit / 2**20:,.0f} MiB "
-                        "(RTTA_MEMORY_LIMIT_MB)", path)
+        raise RttaError(
+            f"{what or 'the scene has'} {vertices:,} vertices and {triangles:,} triangles, about "
+            f"{need / 2**20:,.0f} MiB, over the memory limit of {limit / 2**20:,.0f} MiB "
+            "(RTTA_MEMORY_LIMIT_MB)",
+            path,
+        )
 
 
 def precheck(path: Path) -> list[str]:
@@ -61,15 +72,17 @@ def _stl(path: Path) -> None:
     with open(path, "rb") as f:
         head = f.read(84)
     if head[:5].lower() == b"solid" and b"\0" not in head:
-        return        # ASCII STL: trimesh parses it; its size is checked after loading
+        return  # ASCII STL: trimesh parses it; its size is checked after loading
     if len(head) < 84:
-        raise RttaError(f"not an STL file (no 'solid' line, and {size} bytes is shorter than a "
-                        "binary STL header)", path)
+        raise RttaError(
+            f"not an STL file (no 'solid' line, and {size} bytes is shorter than a binary STL header)", path
+        )
     count = struct.unpack_from("<I", head, 80)[0]
     check_size(3 * count, count, path, "the binary STL declares")
     if 84 + 50 * count != size:
-        raise RttaError(f"binary STL declares {count:,} triangles ({84 + 50 * count:,} bytes) "
-                        f"but the file has {size:,} bytes", path)
+        raise RttaError(
+            f"binary STL declares {count:,} triangles ({84 + 50 * count:,} bytes) but the file has {size:,} bytes", path
+        )
 
 
 def _ply(path: Path) -> None:
@@ -105,9 +118,12 @@ def _threemf(path: Path) -> None:
                 raise RttaError(f"3MF archive has {len(infos):,} members (at most {MAX_ZIP_MEMBERS:,})", path)
             total = sum(i.file_size for i in infos)
             if total * XML_BYTES_FACTOR > memory_limit():
-                raise RttaError(f"3MF archive unpacks to {total:,} bytes, which needs about "
-                                f"{total * XML_BYTES_FACTOR / 2**20:,.0f} MiB to read, over the memory limit of "
-                                f"{memory_limit() / 2**20:,.0f} MiB (RTTA_MEMORY_LIMIT_MB)", path)
+                raise RttaError(
+                    f"3MF archive unpacks to {total:,} bytes, which needs about "
+                    f"{total * XML_BYTES_FACTOR / 2**20:,.0f} MiB to read, over the memory limit of "
+                    f"{memory_limit() / 2**20:,.0f} MiB (RTTA_MEMORY_LIMIT_MB)",
+                    path,
+                )
             model = next((i for i in infos if "3d/3dmodel.model" in i.filename.lower()), None)
             if model is None:
                 raise RttaError("3MF archive has no 3D/3dmodel.model", path)
@@ -128,8 +144,15 @@ def _threemf_graph(stream, head: bytes, path: Path) -> None:
     children: dict[str, list[str]] = {}
     items: list[str] = []
     try:
-        for _, el in etree.iterparse(stream, events=("end",), tag=("{*}object", "{*}item"),
-                                     resolve_entities=False, no_network=True, load_dtd=False, huge_tree=False):
+        for _, el in etree.iterparse(
+            stream,
+            events=("end",),
+            tag=("{*}object", "{*}item"),
+            resolve_entities=False,
+            no_network=True,
+            load_dtd=False,
+            huge_tree=False,
+        ):
             if el.tag.endswith("object"):
                 children[el.get("id", "")] = [c.get("objectid", "") for c in el.iter("{*}component")]
                 el.clear(keep_tail=False)
@@ -140,7 +163,7 @@ def _threemf_graph(stream, head: bytes, path: Path) -> None:
     paths: dict[str, int] = {}
     for root in items:
         stack, state = [root], {}
-        while stack:                     # iterative post-order: paths(o) = 1 or the sum over components
+        while stack:  # iterative post-order: paths(o) = 1 or the sum over components
             node = stack[-1]
             if node in paths:
                 stack.pop()
@@ -160,5 +183,6 @@ def _threemf_graph(stream, head: bytes, path: Path) -> None:
     total = sum(paths.get(r, 0) for r in items)
     limit = max_objects(path)
     if total > limit:
-        raise RttaError(f"3MF build makes {total:,} objects through its components (at most {limit:,} "
-                        "for a file of its size)", path)
+        raise RttaError(
+            f"3MF build makes {total:,} objects through its components (at most {limit:,} for a file of its size)", path
+        )

@@ -12,17 +12,19 @@ import numpy as np
 from .batch import ramp
 
 DEFAULT_SMOOTH_ANGLE = 30.0
-_PAIR_CHUNK = 4_000_000      # corner pairs compared at once (bounds the temporary memory)
+_PAIR_CHUNK = 4_000_000  # corner pairs compared at once (bounds the temporary memory)
 
 
-def index_vertices(v: np.ndarray, f: np.ndarray, n: np.ndarray | None = None,
-                   uv: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray | None]:
+def index_vertices(
+    v: np.ndarray, f: np.ndarray, n: np.ndarray | None = None, uv: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray | None]:
     """Merge vertices whose position, normal and uv are all identical; unused vertices go."""
     return _index(v, f, n, uv)
 
 
-def smooth_normals(v: np.ndarray, f: np.ndarray, uv: np.ndarray | None = None,
-                   angle: float = DEFAULT_SMOOTH_ANGLE) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
+def smooth_normals(
+    v: np.ndarray, f: np.ndarray, uv: np.ndarray | None = None, angle: float = DEFAULT_SMOOTH_ANGLE
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
     """(vertices, faces, normals, uv) with one normal per corner, smoothed across faces
     within `angle` degrees at the same position, then indexed again."""
     return _smooth(v, f, uv, angle)
@@ -46,7 +48,7 @@ def _index(v, f, n, uv):
 def _smooth(v, f, uv, angle):
     v = np.asarray(v, np.float64)
     f = np.asarray(f, np.int64)
-    fn = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])        # area-weighted
+    fn = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])  # area-weighted
     length = np.linalg.norm(fn, axis=1, keepdims=True)
     unit = fn / np.where(length > 0, length, 1.0)
     corner_vertex = f.reshape(-1)
@@ -57,19 +59,19 @@ def _smooth(v, f, uv, angle):
     nlen = np.linalg.norm(normals, axis=1, keepdims=True)
     normals = np.where(nlen > 0, normals / np.where(nlen > 0, nlen, 1.0), unit[corner_face])
     corner_uv = None if uv is None else np.asarray(uv)[corner_vertex]
-    return _index(v[corner_vertex], np.arange(len(corner_vertex)).reshape(-1, 3), normals.astype(np.float32),
-                  corner_uv)
+    return _index(v[corner_vertex], np.arange(len(corner_vertex)).reshape(-1, 3), normals.astype(np.float32), corner_uv)
 
 
-def _grouped_sums(position: np.ndarray, corner_face: np.ndarray, unit: np.ndarray, fn: np.ndarray,
-                  cos_limit: float) -> np.ndarray:
+def _grouped_sums(
+    position: np.ndarray, corner_face: np.ndarray, unit: np.ndarray, fn: np.ndarray, cos_limit: float
+) -> np.ndarray:
     """Per corner: the sum of fn over corners at the same position whose face normal is
     within the angle of this corner's face normal (itself included)."""
     order = np.argsort(position, kind="stable")
     sorted_pos = position[order]
     starts = np.flatnonzero(np.r_[True, sorted_pos[1:] != sorted_pos[:-1]])
     sizes = np.diff(np.r_[starts, len(order)])
-    group_start = np.repeat(starts, sizes)            # per sorted corner
+    group_start = np.repeat(starts, sizes)  # per sorted corner
     group_size = np.repeat(sizes, sizes)
     out = np.zeros((len(order), 3))
     cumulative = np.cumsum(group_size)
@@ -78,8 +80,8 @@ def _grouped_sums(position: np.ndarray, corner_face: np.ndarray, unit: np.ndarra
         end = int(np.searchsorted(cumulative, cumulative[begin] - group_size[begin] + _PAIR_CHUNK, side="right"))
         end = max(end, begin + 1)
         k = group_size[begin:end]
-        i = np.repeat(np.arange(begin, end), k)                  # sorted corner
-        j = np.repeat(group_start[begin:end], k) + ramp(k)      # its partners
+        i = np.repeat(np.arange(begin, end), k)  # sorted corner
+        j = np.repeat(group_start[begin:end], k) + ramp(k)  # its partners
         fi, fj = corner_face[order[i]], corner_face[order[j]]
         near = np.einsum("ij,ij->i", unit[fi], unit[fj]) >= cos_limit
         np.add.at(out, order[i[near]], fn[fj[near]])

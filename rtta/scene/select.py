@@ -46,7 +46,7 @@ def _lookup(scene: Scene, name: str) -> list[int]:
     if short:
         return [i for g in short for i in tree[g]]
     kind = [i for i, n in enumerate(scene.names) if n.startswith((f"{name} '", f"{name} #"))]
-    if kind:                                    # a class of labelled objects: 'IfcWall' -> IfcWall 'a', ...
+    if kind:  # a class of labelled objects: 'IfcWall' -> IfcWall 'a', ...
         return kind
     if not GLOB & set(name):
         return []

@@ -15,9 +15,9 @@ class TextureTable:
         self.images: list[np.ndarray] = []
         self._by_object: dict[int, int] = {}
         self._by_digest: dict[bytes, int] = {}
-        self._keep: list = []          # the images keyed by id() stay alive while loading
+        self._keep: list = []  # the images keyed by id() stay alive while loading
         self._failed: set[int] = set()
-        self.notes: list[str] = []     # textures that could not be decoded (their objects keep their colour)
+        self.notes: list[str] = []  # textures that could not be decoded (their objects keep their colour)
 
     def of(self, mesh) -> tuple[np.ndarray | None, int]:
         visual = getattr(mesh, "visual", None)
@@ -38,12 +38,14 @@ class TextureTable:
             return -1
         try:
             rgba = to_rgba(image)
-        except Exception as exc:      # truncated or damaged data found while decoding
+        except Exception as exc:  # truncated or damaged data found while decoding
             self._failed.add(id(image))
             self._keep.append(image)
             name = image.info.get("file_path") or getattr(image, "filename", "") or "an embedded image"
-            self.notes.append(f"texture '{name}' cannot be decoded ({type(exc).__name__}); objects using it keep "
-                              "their material colour")
+            self.notes.append(
+                f"texture '{name}' cannot be decoded ({type(exc).__name__}); objects using it keep "
+                "their material colour"
+            )
             return -1
         digest = hashlib.sha1(rgba.tobytes() + str(rgba.shape).encode()).digest()
         if digest not in self._by_digest:
@@ -67,7 +69,7 @@ def base_color_image(material):
 
 def to_rgba(image) -> np.ndarray:
     """PIL image (any mode: L, LA, P, RGB, RGBA, I;16 ...) -> uint8 [h, w, 4], row 0 = bottom."""
-    if image.mode in ("I", "I;16", "I;16B", "F"):       # 16-bit or float grey: scale to 8 bits
+    if image.mode in ("I", "I;16", "I;16B", "F"):  # 16-bit or float grey: scale to 8 bits
         from PIL import Image
 
         a = np.asarray(image, np.float64)

@@ -15,15 +15,26 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-MATERIALS = ((0.80, 0.36, 0.30), (0.30, 0.56, 0.80), (0.45, 0.72, 0.38), (0.86, 0.70, 0.30),
-             (0.62, 0.45, 0.78), (0.60, 0.60, 0.62))
+MATERIALS = (
+    (0.80, 0.36, 0.30),
+    (0.30, 0.56, 0.80),
+    (0.45, 0.72, 0.38),
+    (0.86, 0.70, 0.30),
+    (0.62, 0.45, 0.78),
+    (0.60, 0.60, 0.62),
+)
 
 
 def _bases() -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
-    shapes = (trimesh.creation.box(), trimesh.creation.cylinder(radius=0.5, height=1.0, sections=16),
-              trimesh.creation.icosphere(subdivisions=1, radius=0.5))
-    return [(np.asarray(m.vertices, np.float32), np.asarray(m.faces, np.uint32),
-             np.asarray(m.vertex_normals, np.float32)) for m in shapes]
+    shapes = (
+        trimesh.creation.box(),
+        trimesh.creation.cylinder(radius=0.5, height=1.0, sections=16),
+        trimesh.creation.icosphere(subdivisions=1, radius=0.5),
+    )
+    return [
+        (np.asarray(m.vertices, np.float32), np.asarray(m.faces, np.uint32), np.asarray(m.vertex_normals, np.float32))
+        for m in shapes
+    ]
 
 
 def _quaternions(rng: np.random.Generator, n: int) -> np.ndarray:
@@ -46,9 +57,19 @@ def write_assembly(path: str | Path, n: int, seed: int = 0, normals: bool = Fals
     for i in range(n):
         v, f, vn = bases[kind[i]]
         pv = (v * sizes[i]).astype(np.float32)
-        arrays = [(pv, {"componentType": 5126, "type": "VEC3", "count": len(pv),
-                        "min": pv.min(0).tolist(), "max": pv.max(0).tolist()}),
-                  (f.reshape(-1), {"componentType": 5125, "type": "SCALAR", "count": f.size})]
+        arrays = [
+            (
+                pv,
+                {
+                    "componentType": 5126,
+                    "type": "VEC3",
+                    "count": len(pv),
+                    "min": pv.min(0).tolist(),
+                    "max": pv.max(0).tolist(),
+                },
+            ),
+            (f.reshape(-1), {"componentType": 5125, "type": "SCALAR", "count": f.size}),
+        ]
         if normals:
             nn = vn / sizes[i]
             nn = (nn / np.linalg.norm(nn, axis=1, keepdims=True)).astype(np.float32)
@@ -60,18 +81,36 @@ def write_assembly(path: str | Path, n: int, seed: int = 0, normals: bool = Fals
             offset += data.nbytes
             accessors.append(acc)
         attributes = {"POSITION": per * i} | ({"NORMAL": per * i + 2} if normals else {})
-        meshes.append({"primitives": [{"attributes": attributes, "indices": per * i + 1,
-                                       "material": int(rng.integers(0, len(MATERIALS)))}]})
+        meshes.append(
+            {
+                "primitives": [
+                    {"attributes": attributes, "indices": per * i + 1, "material": int(rng.integers(0, len(MATERIALS)))}
+                ]
+            }
+        )
     translation = rng.uniform(-side / 2, side / 2, (n, 3))
     rotation = _quaternions(rng, n)
     buffer_views = [{"buffer": 0, "byteOffset": off, "byteLength": length} for off, length in views]
     for i in range(n):
-        nodes.append({"name": f"part{i:06d}", "mesh": i, "translation": translation[i].tolist(),
-                      "rotation": rotation[i].tolist()})
-    doc = {"asset": {"version": "2.0", "generator": "rtta assembly"}, "scene": 0,
-           "scenes": [{"nodes": list(range(n))}], "nodes": nodes, "meshes": meshes,
-           "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [*c, 1.0]}} for c in MATERIALS],
-           "accessors": accessors, "bufferViews": buffer_views, "buffers": [{"byteLength": offset}]}
+        nodes.append(
+            {
+                "name": f"part{i:06d}",
+                "mesh": i,
+                "translation": translation[i].tolist(),
+                "rotation": rotation[i].tolist(),
+            }
+        )
+    doc = {
+        "asset": {"version": "2.0", "generator": "rtta assembly"},
+        "scene": 0,
+        "scenes": [{"nodes": list(range(n))}],
+        "nodes": nodes,
+        "meshes": meshes,
+        "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [*c, 1.0]}} for c in MATERIALS],
+        "accessors": accessors,
+        "bufferViews": buffer_views,
+        "buffers": [{"byteLength": offset}],
+    }
     return _write_glb(Path(path), doc, b"".join(blobs))
 
 

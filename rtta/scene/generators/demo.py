@@ -17,10 +17,19 @@ import trimesh
 DEMO_NAME = "brake_assembly.glb"
 
 COLORS = {
-    "rotor": (150, 150, 155), "hub": (110, 112, 120), "stud": (200, 190, 120),
-    "nut": (215, 215, 220), "spindle": (80, 80, 88), "shield": (60, 64, 70),
-    "caliper": (200, 40, 35), "pad": (70, 140, 200), "piston": (240, 170, 40),
-    "pin": (180, 180, 190), "bracket": (90, 100, 90), "bleed": (230, 230, 90), "fitting": (160, 110, 70),
+    "rotor": (150, 150, 155),
+    "hub": (110, 112, 120),
+    "stud": (200, 190, 120),
+    "nut": (215, 215, 220),
+    "spindle": (80, 80, 88),
+    "shield": (60, 64, 70),
+    "caliper": (200, 40, 35),
+    "pad": (70, 140, 200),
+    "piston": (240, 170, 40),
+    "pin": (180, 180, 190),
+    "bracket": (90, 100, 90),
+    "bleed": (230, 230, 90),
+    "fitting": (160, 110, 70),
 }
 
 
@@ -56,14 +65,14 @@ def _rotor() -> trimesh.Trimesh:
 def _caliper() -> trimesh.Trimesh:
     """Boxes that touch but never overlap, so no two exterior faces are coplanar (no z-fighting)."""
     parts = [
-        _box((-0.75, 1.02, 0.2), (0.75, 1.68, 0.52)),     # outer half
-        _box((-0.75, 1.02, -0.62), (0.75, 1.68, -0.2)),   # inner half (holds the pistons)
-        _box((-0.75, 1.68, -0.62), (0.75, 2.02, 0.52)),   # bridge over the rotor rim
-        _box((0.62, 1.02, 0.12), (0.75, 1.68, 0.2)),      # end caps closing the pad pockets
+        _box((-0.75, 1.02, 0.2), (0.75, 1.68, 0.52)),  # outer half
+        _box((-0.75, 1.02, -0.62), (0.75, 1.68, -0.2)),  # inner half (holds the pistons)
+        _box((-0.75, 1.68, -0.62), (0.75, 2.02, 0.52)),  # bridge over the rotor rim
+        _box((0.62, 1.02, 0.12), (0.75, 1.68, 0.2)),  # end caps closing the pad pockets
         _box((-0.75, 1.02, 0.12), (-0.62, 1.68, 0.2)),
         _box((0.62, 1.02, -0.2), (0.75, 1.68, -0.12)),
         _box((-0.75, 1.02, -0.2), (-0.62, 1.68, -0.12)),
-        _box((-0.62, 1.02, 0.12), (0.62, 1.1, 0.2)),      # lower lips
+        _box((-0.62, 1.02, 0.12), (0.62, 1.1, 0.2)),  # lower lips
         _box((-0.62, 1.02, -0.2), (0.62, 1.1, -0.12)),
     ]
     return trimesh.util.concatenate(parts)
@@ -73,11 +82,21 @@ def build_brake_assembly() -> trimesh.Scene:
     """The demo scene, rotor axis along +Z, caliper on top (+Y)."""
     parts: list[tuple[str, str, trimesh.Trimesh]] = [
         ("rotor", "rotor", _rotor()),
-        ("hub", "hub", trimesh.creation.annulus(r_min=0.3, r_max=0.85, height=0.4,
-                                                transform=trimesh.transformations.translation_matrix((0, 0, 0.34)))),
+        (
+            "hub",
+            "hub",
+            trimesh.creation.annulus(
+                r_min=0.3, r_max=0.85, height=0.4, transform=trimesh.transformations.translation_matrix((0, 0, 0.34))
+            ),
+        ),
         ("spindle", "spindle", _cyl_z(0.28, -1.1, 0.5)),
-        ("dust_shield", "shield", trimesh.creation.annulus(
-            r_min=0.4, r_max=1.75, height=0.03, transform=trimesh.transformations.translation_matrix((0, 0, -0.8)))),
+        (
+            "dust_shield",
+            "shield",
+            trimesh.creation.annulus(
+                r_min=0.4, r_max=1.75, height=0.03, transform=trimesh.transformations.translation_matrix((0, 0, -0.8))
+            ),
+        ),
     ]
     for k in range(5):
         a = 2 * np.pi * k / 5 + np.pi / 2
@@ -92,20 +111,35 @@ def build_brake_assembly() -> trimesh.Scene:
         ("piston_2", "piston", _cyl_z(0.17, -0.46, -0.2, 0.3, 1.37)),
         ("guide_pin_1", "pin", _cyl_z(0.07, -0.95, -0.55, -0.88, 1.35, 16)),
         ("guide_pin_2", "pin", _cyl_z(0.07, -0.95, -0.55, 0.88, 1.35, 16)),
-        ("bracket", "bracket", trimesh.util.concatenate([
-            _box((-1.05, 1.15, -0.9), (1.05, 1.55, -0.68)),
-            _box((-1.05, 0.2, -0.9), (-0.75, 1.15, -0.68)),
-            _box((0.75, 0.2, -0.9), (1.05, 1.15, -0.68))])),
-        ("bleed_screw", "bleed", _cyl_z(0.05, -0.18, 0.0, 0.45, 2.1, 12).apply_transform(
-            trimesh.transformations.rotation_matrix(0.0, (1, 0, 0)))),
+        (
+            "bracket",
+            "bracket",
+            trimesh.util.concatenate(
+                [
+                    _box((-1.05, 1.15, -0.9), (1.05, 1.55, -0.68)),
+                    _box((-1.05, 0.2, -0.9), (-0.75, 1.15, -0.68)),
+                    _box((0.75, 0.2, -0.9), (1.05, 1.15, -0.68)),
+                ]
+            ),
+        ),
+        (
+            "bleed_screw",
+            "bleed",
+            _cyl_z(0.05, -0.18, 0.0, 0.45, 2.1, 12).apply_transform(
+                trimesh.transformations.rotation_matrix(0.0, (1, 0, 0))
+            ),
+        ),
         ("brake_line_fitting", "fitting", _cyl_z(0.08, -0.9, -0.62, -0.4, 1.85, 12)),
     ]
     scene = trimesh.Scene()
     for name, kind, mesh in parts:
         r, g, b = COLORS[kind]
         mesh = mesh.smooth_shaded  # split vertices at sharp edges so normals stay crisp
-        mesh.visual = trimesh.visual.TextureVisuals(material=trimesh.visual.material.PBRMaterial(
-            name=kind, baseColorFactor=[r, g, b, 255], metallicFactor=0.0, roughnessFactor=0.8))
+        mesh.visual = trimesh.visual.TextureVisuals(
+            material=trimesh.visual.material.PBRMaterial(
+                name=kind, baseColorFactor=[r, g, b, 255], metallicFactor=0.0, roughnessFactor=0.8
+            )
+        )
         scene.add_geometry(mesh, node_name=name, geom_name=name)
     return scene
 

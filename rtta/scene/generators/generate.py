@@ -14,8 +14,14 @@ def _sphere(subdiv_target: int) -> trimesh.Trimesh:
     return trimesh.creation.uv_sphere(radius=1.0, count=[count, 2 * count])
 
 
-def random_scene(n: int, seed: int = 0, vertices_per_object: int = 24, spread: float = 10.0,
-                 size_range: tuple[float, float] = (0.3, 1.5), offset=(0.0, 0.0, 0.0)) -> Scene:
+def random_scene(
+    n: int,
+    seed: int = 0,
+    vertices_per_object: int = 24,
+    spread: float = 10.0,
+    size_range: tuple[float, float] = (0.3, 1.5),
+    offset=(0.0, 0.0, 0.0),
+) -> Scene:
     """n boxes and spheres scattered in a cube of side `spread`, moved by `offset`."""
     rng = np.random.default_rng(seed)
     base_box = trimesh.creation.box()

@@ -10,12 +10,19 @@ import numpy as np
 from ..model import Scene, from_meshes
 
 # (name, width, height, kind): what the acceptance asks the atlas to handle
-TEXTURE_KINDS = (("checker", 64, 64, "rgb"), ("stripes_npot", 48, 80, "rgb"), ("odd_npot", 37, 21, "rgb"),
-                 ("one_texel", 1, 1, "rgb"), ("grey", 32, 32, "grey"), ("rgba", 128, 64, "rgba"),
-                 ("rings", 256, 256, "rgb"), ("wide", 96, 16, "rgb"))
+TEXTURE_KINDS = (
+    ("checker", 64, 64, "rgb"),
+    ("stripes_npot", 48, 80, "rgb"),
+    ("odd_npot", 37, 21, "rgb"),
+    ("one_texel", 1, 1, "rgb"),
+    ("grey", 32, 32, "grey"),
+    ("rgba", 128, 64, "rgba"),
+    ("rings", 256, 256, "rgb"),
+    ("wide", 96, 16, "rgb"),
+)
 
 
-REPEATS = (1.0, 2.5, 3.0)     # tilings per face, object i takes REPEATS[i % 3] by default
+REPEATS = (1.0, 2.5, 3.0)  # tilings per face, object i takes REPEATS[i % 3] by default
 
 
 def make_texture(width: int, height: int, kind: str, seed: int) -> np.ndarray:
@@ -27,7 +34,7 @@ def make_texture(width: int, height: int, kind: str, seed: int) -> np.ndarray:
     channels = []
     for _ in range(3):
         fu, fv, phase = rng.integers(1, 4), rng.integers(1, 4), rng.uniform(0, 2 * np.pi)
-        wave = 0.5 + 0.45 * np.sin(2 * np.pi * (fu * u + fv * v) + phase)     # periodic: wraps cleanly
+        wave = 0.5 + 0.45 * np.sin(2 * np.pi * (fu * u + fv * v) + phase)  # periodic: wraps cleanly
         channels.append(wave)
     rgb = np.stack(channels, -1)
     lines = ((x % max(2, width // 4)) < 1) | ((y % max(2, height // 4)) < 1)
@@ -57,8 +64,14 @@ def textured_box(repeat: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return np.concatenate(verts), np.concatenate(faces), np.concatenate(uvs)
 
 
-def textured_scene(n: int = 24, seed: int = 0, untextured_every: int = 7, repeat_choices=REPEATS,
-                   textures: int | None = None, spacing: float = 1.6) -> Scene:
+def textured_scene(
+    n: int = 24,
+    seed: int = 0,
+    untextured_every: int = 7,
+    repeat_choices=REPEATS,
+    textures: int | None = None,
+    spacing: float = 1.6,
+) -> Scene:
     """n textured boxes on a square grid in the x-y plane (facing +z), turned a little so
     three faces show; every `untextured_every`-th object keeps only its material colour."""
     rng = np.random.default_rng(seed)
@@ -78,5 +91,4 @@ def textured_scene(n: int = 24, seed: int = 0, untextured_every: int = 7, repeat
         uvs.append(uv if textured else None)
         ids.append(i % count if textured else -1)
         colors.append([1.0, 1.0, 1.0, 1.0] if textured else [0.8, 0.4, 0.3, 1.0])
-    return from_meshes(parts, colors, source=f"<textured {n} seed {seed}>", uvs=uvs, texture_ids=ids,
-                       textures=images)
+    return from_meshes(parts, colors, source=f"<textured {n} seed {seed}>", uvs=uvs, texture_ids=ids, textures=images)

@@ -27,16 +27,20 @@ from ..precheck import ZIP_ERRORS, check_size
 
 # suffix -> (module here, the import it needs, the extra that installs it)
 READERS = {
-    ".step": ("step", "cascadio", "cad"), ".stp": ("step", "cascadio", "cad"),
+    ".step": ("step", "cascadio", "cad"),
+    ".stp": ("step", "cascadio", "cad"),
     ".ifc": ("ifc", "ifcopenshell", "bim"),
-    ".dae": ("collada", "collada", "all"), ".zae": ("collada", "collada", "all"),
-    ".usd": ("usd", "pxr", "usd"), ".usda": ("usd", "pxr", "usd"), ".usdc": ("usd", "pxr", "usd"),
+    ".dae": ("collada", "collada", "all"),
+    ".zae": ("collada", "collada", "all"),
+    ".usd": ("usd", "pxr", "usd"),
+    ".usda": ("usd", "pxr", "usd"),
+    ".usdc": ("usd", "pxr", "usd"),
     ".usdz": ("usd", "pxr", "usd"),
     ".3dxml": ("threedxml", "trimesh", "all"),
 }
 SUFFIXES = tuple(READERS)
-ISOLATED = {"step": "OpenCASCADE (cascadio)", "ifc": "ifcopenshell", "usd": "USD"}   # read in a child process
-MAX_COORDINATE = 1e15    # as the mesh loader's: float64 keeps ~0.1 units of precision there
+ISOLATED = {"step": "OpenCASCADE (cascadio)", "ifc": "ifcopenshell", "usd": "USD"}  # read in a child process
+MAX_COORDINATE = 1e15  # as the mesh loader's: float64 keeps ~0.1 units of precision there
 
 
 @dataclass
@@ -68,9 +72,10 @@ def read(path: Path) -> Assembly:
     except (ImportError, ValueError):
         found = False
     if not found:
-        raise RttaError(f"reading {path.suffix.lower()} files needs {needs}: "
-                        f"pip install 'rtta[{extra}]'", path) from None
-    if module in ISOLATED:                # native libraries: a crash or a hang stays in a child
+        raise RttaError(
+            f"reading {path.suffix.lower()} files needs {needs}: pip install 'rtta[{extra}]'", path
+        ) from None
+    if module in ISOLATED:  # native libraries: a crash or a hang stays in a child
         from . import isolated
 
         return isolated.read(f"{__name__}.{module}", path, ISOLATED[module])
@@ -87,7 +92,7 @@ def native_output():
     sys.stdout.flush()
     sys.stderr.flush()
     saved = os.dup(1), os.dup(2)
-    with tempfile.TemporaryFile() as sink:       # anonymous: never next to the user's file
+    with tempfile.TemporaryFile() as sink:  # anonymous: never next to the user's file
         try:
             os.dup2(sink.fileno(), 1)
             os.dup2(sink.fileno(), 2)
@@ -171,8 +176,11 @@ def load(path: Path, smooth_angle: float) -> Scene:
     scene.paths, scene.unit, scene.up_axis = [paths[i] for i in keep], asm.unit, asm.up_axis
     dropped = [names[i] for i in np.flatnonzero(~area)]
     if dropped:
-        asm.warnings.append(f"{len(dropped)} part(s) with only degenerate (zero-area) triangles left out: "
-                            + ", ".join(dropped[:5]) + (" ..." if len(dropped) > 5 else ""))
+        asm.warnings.append(
+            f"{len(dropped)} part(s) with only degenerate (zero-area) triangles left out: "
+            + ", ".join(dropped[:5])
+            + (" ..." if len(dropped) > 5 else "")
+        )
     scene.warnings = asm.warnings + scene.warnings
     return scene
 
@@ -180,9 +188,13 @@ def load(path: Path, smooth_angle: float) -> Scene:
 def _meshes(arrays: list[tuple[np.ndarray, np.ndarray]]) -> batch.Meshes:
     """Parts (vertices, faces) as one batch.Meshes, normals to be smoothed."""
     vcount = np.array([len(v) for v, _ in arrays], np.int64)
-    return batch.Meshes(np.concatenate([np.asarray(v, np.float64) for v, _ in arrays]),
-                        np.concatenate([np.asarray(f, np.int64) for _, f in arrays]), vcount,
-                        np.array([len(f) for _, f in arrays], np.int64), np.zeros((int(vcount.sum()), 3), np.float32))
+    return batch.Meshes(
+        np.concatenate([np.asarray(v, np.float64) for v, _ in arrays]),
+        np.concatenate([np.asarray(f, np.int64) for _, f in arrays]),
+        vcount,
+        np.array([len(f) for _, f in arrays], np.int64),
+        np.zeros((int(vcount.sum()), 3), np.float32),
+    )
 
 
 def graph_paths(loaded, nodes: list[str]) -> list[tuple[str, ...]] | None:

@@ -20,9 +20,8 @@ def read(path: Path) -> Assembly:
     if path.suffix.lower() == ".zae":
         check_archive(path)
     try:
-        dae = collada.Collada(str(path), ignore=[collada.common.DaeUnsupportedError,
-                                                collada.common.DaeBrokenRefError])
-    except Exception as exc:        # pycollada raises many types for bad files
+        dae = collada.Collada(str(path), ignore=[collada.common.DaeUnsupportedError, collada.common.DaeBrokenRefError])
+    except Exception as exc:  # pycollada raises many types for bad files
         reason = (str(exc).strip().splitlines() or [type(exc).__name__])[0][:160]
         raise RttaError(f"cannot read COLLADA file ({reason})", path) from None
     info = dae.assetInfo
@@ -45,7 +44,7 @@ def _visit(node, parent: np.ndarray, groups: tuple[str, ...], out: Assembly, dep
 
     if depth > MAX_DEPTH:
         return
-    if isinstance(node, scene.NodeNode):          # <instance_node>: the referenced node, here
+    if isinstance(node, scene.NodeNode):  # <instance_node>: the referenced node, here
         node = node.node
     if not isinstance(node, scene.Node):
         return

@@ -75,7 +75,7 @@ def _decode(blobs: list[bytes], path: Path) -> list[dict]:
         job.write_bytes(pickle.dumps(blobs, protocol=5))
         try:
             return isolated.read("rtta.scene.readers.draco", job, "Draco")
-        except RttaError as exc:             # named the job: name the user's file
+        except RttaError as exc:  # named the job: name the user's file
             raise RttaError(exc.message, path) from None
 
 
@@ -123,18 +123,24 @@ def _replace(doc: dict, buffers: list[bytes], prim: dict, ext: dict, decoded: di
             data = data / float(np.iinfo(data.dtype).max)
         width = TYPE_WIDTH[declared["type"]]
         if data.shape[1] != width or len(data) > declared["count"]:
-            raise RttaError(f"glTF {where}: its Draco data decodes {name} to {len(data):,} values of "
-                            f"{data.shape[1]}, where the file declares {declared['count']:,} of {width}", path)
+            raise RttaError(
+                f"glTF {where}: its Draco data decodes {name} to {len(data):,} values of "
+                f"{data.shape[1]}, where the file declares {declared['count']:,} of {width}",
+                path,
+            )
         attrs[name] = append_accessor(doc, buffers, data.astype(np.float32), declared["type"])
     vertices = accessors[attrs["POSITION"]]["count"]
     if vertices < 1:
         raise RttaError(f"glTF {where}: its Draco data decodes to no vertices", path)
     faces = decoded["faces"].reshape(-1)
-    if not len(faces):               # a point cloud: one flat triangle, which the loader leaves out
+    if not len(faces):  # a point cloud: one flat triangle, which the loader leaves out
         faces = np.zeros(3, np.uint32)
     if "indices" in prim and len(faces) > accessors[prim["indices"]]["count"]:
-        raise RttaError(f"glTF {where}: its Draco data decodes to {len(faces):,} indices, where the file "
-                        f"declares {accessors[prim['indices']]['count']:,}", path)
+        raise RttaError(
+            f"glTF {where}: its Draco data decodes to {len(faces):,} indices, where the file "
+            f"declares {accessors[prim['indices']]['count']:,}",
+            path,
+        )
     if int(faces.max()) >= vertices:
         raise RttaError(f"glTF {where}: its Draco data has indices beyond its {vertices:,} vertices", path)
     prim["indices"] = append_accessor(doc, buffers, faces.astype(np.uint32), "SCALAR")

@@ -31,8 +31,8 @@ from .gltf_check import COMPONENT_BYTES, TYPE_WIDTH, check, read_document
 from .gltf_read import Decoded, decode, densify_sparse, extension, transform_texcoords, view_bytes
 from .gltf_rewrite import fan_indices, geometry_name, rewrite
 
-MAX_DEPTH = 1000            # levels of the node graph
-BUFFER_COPIES = 4           # the file, the rewritten blob, trimesh's slices of it, the GLB it reads
+MAX_DEPTH = 1000  # levels of the node graph
+BUFFER_COPIES = 4  # the file, the rewritten blob, trimesh's slices of it, the GLB it reads
 
 
 @dataclass
@@ -40,20 +40,20 @@ class Instance:
     """One object: a primitive of a mesh at the end of one path through the node graph."""
 
     name: str
-    geometry: str            # the mesh name trimesh gives the rewritten single-primitive mesh
-    matrix: np.ndarray       # float64 [4, 4] world transform
-    path: tuple[str, ...] = ()   # the groups above it in the node tree, root first
+    geometry: str  # the mesh name trimesh gives the rewritten single-primitive mesh
+    matrix: np.ndarray  # float64 [4, 4] world transform
+    path: tuple[str, ...] = ()  # the groups above it in the node tree, root first
 
 
 @dataclass
 class Prepared:
     instances: list[Instance]
     warnings: list[str] = field(default_factory=list)
-    inputs: list[Path] = field(default_factory=list)       # files it refers to
-    doc: dict = field(default_factory=dict)               # the checked document
-    pairs: list[tuple[int, int]] = field(default_factory=list)   # drawn (mesh, primitive), file order
+    inputs: list[Path] = field(default_factory=list)  # files it refers to
+    doc: dict = field(default_factory=dict)  # the checked document
+    pairs: list[tuple[int, int]] = field(default_factory=list)  # drawn (mesh, primitive), file order
     buffers: list[bytes] = field(default_factory=list)
-    images: dict[int, bytes] = field(default_factory=dict)      # usable base-colour images
+    images: dict[int, bytes] = field(default_factory=dict)  # usable base-colour images
 
     def decoded(self) -> dict[str, Decoded] | None:
         """Every drawn primitive read directly (rtta.scene.readers.gltf_read), keyed like
@@ -66,8 +66,14 @@ class Prepared:
         new, blob = rewrite(self.doc, self.pairs, self.buffers, self.images)
         text = json.dumps(new, allow_nan=False).encode()
         text += b" " * (-len(text) % 4)
-        return (struct.pack("<4sIII", b"glTF", 2, 28 + len(text) + len(blob), len(text)) + b"JSON" + text
-                + struct.pack("<I", len(blob)) + b"BIN\0" + blob)
+        return (
+            struct.pack("<4sIII", b"glTF", 2, 28 + len(text) + len(blob), len(text))
+            + b"JSON"
+            + text
+            + struct.pack("<I", len(blob))
+            + b"BIN\0"
+            + blob
+        )
 
 
 def prepare(path: Path) -> Prepared:
@@ -83,7 +89,7 @@ def prepare(path: Path) -> Prepared:
         densify_sparse(doc, out.buffers)
     except ValueError as exc:
         raise RttaError(f"glTF {exc}", path) from None
-    limit = max_objects(path, sum(target.stat().st_size for target in out.inputs))   # buffer files so far
+    limit = max_objects(path, sum(target.stat().st_size for target in out.inputs))  # buffer files so far
     walk = _walk(doc, path, out.warnings, limit)
     out.pairs = _primitives(doc, walk, out.buffers, path, out.warnings)
     if draco.available():
@@ -94,12 +100,20 @@ def prepare(path: Path) -> Prepared:
     per_mesh: dict[int, list[int]] = {}
     for m, p in out.pairs:
         per_mesh.setdefault(m, []).append(p)
-    out.instances = [Instance(name, geometry_name(mesh, p), matrix,       # a node's primitives: a group of its own
-                              (*tree, name.replace("/", "\u2215")) if len(per_mesh[mesh]) > 1 else tree)
-                     for name, mesh, matrix, tree in walk for p in per_mesh.get(mesh, [])]
+    out.instances = [
+        Instance(
+            name,
+            geometry_name(mesh, p),
+            matrix,  # a node's primitives: a group of its own
+            (*tree, name.replace("/", "\u2215")) if len(per_mesh[mesh]) > 1 else tree,
+        )
+        for name, mesh, matrix, tree in walk
+        for p in per_mesh.get(mesh, [])
+    ]
     if len(out.instances) > limit:
-        raise RttaError(f"the node graph makes {len(out.instances):,} objects (at most {limit:,} for a file of its "
-                        "size)", path)
+        raise RttaError(
+            f"the node graph makes {len(out.instances):,} objects (at most {limit:,} for a file of its size)", path
+        )
     _check_size(doc, walk, out.pairs, path)
     return out
 
@@ -148,12 +162,18 @@ def _data_uri(uri: str, path: Path, where: str) -> bytes:
 def _check_memory(doc: dict, buffers: list[bytes], path: Path) -> None:
     """Accessors without a bufferView become arrays of zeros, sparse ones dense copies: their
     sizes count too; and the buffers are held about BUFFER_COPIES times while trimesh reads them."""
-    zeros = sum(a["count"] * COMPONENT_BYTES[a["componentType"]] * TYPE_WIDTH[a["type"]]
-                for a in doc.get("accessors", []) if "bufferView" not in a or "sparse" in a)
+    zeros = sum(
+        a["count"] * COMPONENT_BYTES[a["componentType"]] * TYPE_WIDTH[a["type"]]
+        for a in doc.get("accessors", [])
+        if "bufferView" not in a or "sparse" in a
+    )
     need = zeros + BUFFER_COPIES * sum(len(b) for b in buffers)
     if need > memory_limit():
-        raise RttaError(f"reading the file's buffers and accessors needs about {need / 2**20:,.0f} MiB, over "
-                        f"the memory limit of {memory_limit() / 2**20:,.0f} MiB (RTTA_MEMORY_LIMIT_MB)", path)
+        raise RttaError(
+            f"reading the file's buffers and accessors needs about {need / 2**20:,.0f} MiB, over "
+            f"the memory limit of {memory_limit() / 2**20:,.0f} MiB (RTTA_MEMORY_LIMIT_MB)",
+            path,
+        )
 
 
 def _check_size(doc: dict, walk: list, pairs: list, path: Path) -> None:
@@ -201,9 +221,20 @@ def _rotations(q: np.ndarray) -> np.ndarray:
     with np.errstate(all="ignore"):
         q = np.where(n > 0, q / np.where(n > 0, n, 1.0), [0.0, 0.0, 0.0, 1.0])
     x, y, z, w = q.T
-    return np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w),
-                     2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w),
-                     2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], axis=1).reshape(-1, 3, 3)
+    return np.stack(
+        [
+            1 - 2 * (y * y + z * z),
+            2 * (x * y - z * w),
+            2 * (x * z + y * w),
+            2 * (x * y + z * w),
+            1 - 2 * (x * x + z * z),
+            2 * (y * z - x * w),
+            2 * (x * z - y * w),
+            2 * (y * z + x * w),
+            1 - 2 * (x * x + y * y),
+        ],
+        axis=1,
+    ).reshape(-1, 3, 3)
 
 
 def _walk(doc: dict, path: Path, warnings: list[str], limit: int) -> list[tuple[str, int, np.ndarray, tuple]]:
@@ -221,8 +252,10 @@ def _walk(doc: dict, path: Path, warnings: list[str], limit: int) -> list[tuple[
     _measure(nodes, roots, path, limit)
     shared = [i for i, p in enumerate(parents) if p > 1]
     if shared:
-        warnings.append(f"{len(shared)} node(s) have more than one parent (glTF allows one); each is drawn "
-                        "under every parent: " + ", ".join(_node_name(nodes, i) for i in shared[:5]))
+        warnings.append(
+            f"{len(shared)} node(s) have more than one parent (glTF allows one); each is drawn "
+            "under every parent: " + ", ".join(_node_name(nodes, i) for i in shared[:5])
+        )
     found: list[tuple[str, int, np.ndarray, tuple]] = []
     local = _locals(nodes)
     stack: list[tuple[int, np.ndarray | None, tuple]] = [(r, None, ()) for r in reversed(roots)]
@@ -241,9 +274,9 @@ def _walk(doc: dict, path: Path, warnings: list[str], limit: int) -> list[tuple[
 def _measure(nodes: list, roots: list[int], path: Path, limit: int) -> None:
     """Cycle, depth and path-count checks over the nodes reachable from `roots`, iteratively
     (each node once: a graph of shared children is not unfolded to count its paths)."""
-    state = [0] * len(nodes)           # 0 new, 1 on the current path, 2 done
-    depth = [0] * len(nodes)           # levels below and including the node
-    meshes = [0] * len(nodes)          # mesh nodes on all paths below and including it
+    state = [0] * len(nodes)  # 0 new, 1 on the current path, 2 done
+    depth = [0] * len(nodes)  # levels below and including the node
+    meshes = [0] * len(nodes)  # mesh nodes on all paths below and including it
     for root in roots:
         stack = [root]
         while stack:
@@ -261,16 +294,20 @@ def _measure(nodes: list, roots: list[int], path: Path, limit: int) -> None:
             state[i] = 1
             for c in children:
                 if state[c] == 1:
-                    raise RttaError(f"glTF node graph has a cycle: node {c} ('{_node_name(nodes, c)}') is its "
-                                    "own ancestor", path)
+                    raise RttaError(
+                        f"glTF node graph has a cycle: node {c} ('{_node_name(nodes, c)}') is its own ancestor", path
+                    )
                 if state[c] == 0:
                     stack.append(c)
     if max((depth[r] for r in roots), default=0) > MAX_DEPTH:
         raise RttaError(f"glTF node graph is deeper than {MAX_DEPTH} levels", path)
     total = sum(meshes[r] for r in roots)
     if total > limit:
-        raise RttaError(f"glTF node graph has {total:,} or more node paths to meshes (at most {limit:,} objects "
-                        "for a file of its size)", path)
+        raise RttaError(
+            f"glTF node graph has {total:,} or more node paths to meshes (at most {limit:,} objects "
+            "for a file of its size)",
+            path,
+        )
 
 
 def _node_name(nodes: list, i: int) -> str:
@@ -383,5 +420,7 @@ def _colors(doc: dict, warnings: list[str]) -> None:
             fixed.append(mat.get("name") or f"materials[{i}]")
             pbr["baseColorFactor"] = clean
     if fixed:
-        warnings.append(f"{len(fixed)} material(s) with a baseColorFactor that is NaN, infinite or outside [0, 1] "
-                        "(NaN and infinite components drawn as 1, the rest clamped): " + ", ".join(fixed[:5]))
+        warnings.append(
+            f"{len(fixed)} material(s) with a baseColorFactor that is NaN, infinite or outside [0, 1] "
+            "(NaN and infinite components drawn as 1, the rest clamped): " + ", ".join(fixed[:5])
+        )

@@ -20,8 +20,8 @@ COMPONENT_BYTES = {5120: 1, 5121: 1, 5122: 2, 5123: 2, 5125: 4, 5126: 4}
 TYPE_WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
 INDEX_TYPES = (5121, 5123, 5125)
 FLOAT = 5126
-MAX_COUNT = 2**31 - 1          # counts, lengths and offsets: anything larger is no real file
-MAX_ARRAY = 10_000_000         # entries of one top-level array
+MAX_COUNT = 2**31 - 1  # counts, lengths and offsets: anything larger is no real file
+MAX_ARRAY = 10_000_000  # entries of one top-level array
 GLB_JSON, GLB_BIN = 0x4E4F534A, 0x004E4942
 _MISSING = object()
 _REAL = {int, float}
@@ -43,7 +43,7 @@ def read_document(path: Path) -> tuple[dict, bytes | None]:
         raise RttaError(f"GLB file is truncated (header says {total:,} bytes, file has {len(data):,})", path)
     if kind != GLB_JSON:
         raise RttaError("GLB file's first chunk is not JSON", path)
-    doc = decode(data[20:20 + length], path, "GLB JSON chunk")
+    doc = decode(data[20 : 20 + length], path, "GLB JSON chunk")
     start = 20 + length
     if start + 8 > min(total, len(data)):
         return doc, None
@@ -52,7 +52,7 @@ def read_document(path: Path) -> tuple[dict, bytes | None]:
         return doc, None
     if start + 8 + blen > len(data):
         raise RttaError(f"GLB binary chunk is truncated (says {blen:,} bytes, {len(data) - start - 8:,} remain)", path)
-    return doc, data[start + 8:start + 8 + blen]
+    return doc, data[start + 8 : start + 8 + blen]
 
 
 def decode(raw: bytes, path: Path, what: str) -> dict:
@@ -63,11 +63,12 @@ def decode(raw: bytes, path: Path, what: str) -> dict:
     try:
         doc = json.loads(text)
     except json.JSONDecodeError as exc:
-        raise RttaError(f"{what} is not valid JSON ({exc.msg} at line {exc.lineno}, column {exc.colno})",
-                        path) from None
+        raise RttaError(
+            f"{what} is not valid JSON ({exc.msg} at line {exc.lineno}, column {exc.colno})", path
+        ) from None
     except RecursionError:
         raise RttaError(f"{what} is nested too deeply", path) from None
-    except ValueError as exc:           # e.g. an integer of more than 4,300 digits
+    except ValueError as exc:  # e.g. an integer of more than 4,300 digits
         raise RttaError(f"{what} is not valid JSON ({str(exc)[:100]})", path) from None
     if not isinstance(doc, dict):
         raise RttaError(f"{what} is not a JSON object", path)
@@ -95,17 +96,26 @@ class Checker:
                 self.fail(f"{key}[{i}]", f"must be an object, not {_kind(item)}")
         return value
 
-    def integer(self, obj: dict, key: str, where: str, *, below: int | None = None, least: int = 0,
-                required: bool = False, default: int | None = None) -> int | None:
+    def integer(
+        self,
+        obj: dict,
+        key: str,
+        where: str,
+        *,
+        below: int | None = None,
+        least: int = 0,
+        required: bool = False,
+        default: int | None = None,
+    ) -> int | None:
         value = obj.get(key, _MISSING)
         if type(value) is int and least <= value <= MAX_COUNT and (below is None or value < below):
-            return value                            # the common case, first
+            return value  # the common case, first
         if value is _MISSING:
             if required:
                 self.fail(where, f"has no '{key}'")
             return default
         if isinstance(value, float) and value.is_integer() and abs(value) <= MAX_COUNT:
-            value = obj[key] = int(value)           # 3.0 is 3 in JSON
+            value = obj[key] = int(value)  # 3.0 is 3 in JSON
         if not isinstance(value, int) or isinstance(value, bool):
             self.fail(f"{where}.{key}", f"must be an integer, not {_kind(value)}")
         if value < least or value > MAX_COUNT:
@@ -123,14 +133,17 @@ class Checker:
             return None
         value = obj[key]
         if type(value) is list and len(value) == n and {type(v) for v in value} <= _REAL and _finite(sum(value)):
-            obj[key] = value = [float(v) for v in value]   # the common case: a finite sum, so all are finite
+            obj[key] = value = [float(v) for v in value]  # the common case: a finite sum, so all are finite
             return value
-        if (not isinstance(value, list) or len(value) != n
-                or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)):
+        if (
+            not isinstance(value, list)
+            or len(value) != n
+            or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
+        ):
             self.fail(f"{where}.{key}", f"must be an array of {n} numbers")
         if finite and not all(_finite(v) for v in value):
             self.fail(f"{where}.{key}", "holds NaN or infinite numbers")
-        obj[key] = value = [_float(v) for v in value]        # the loader reads floats only
+        obj[key] = value = [_float(v) for v in value]  # the loader reads floats only
         return value
 
     def obj(self, parent: dict, key: str, where: str) -> dict:
@@ -178,15 +191,35 @@ def _float(v: float) -> float:
 
 
 def _kind(value) -> str:
-    return {dict: "an object", list: "an array", str: "a string", bool: "a boolean", int: "an integer",
-            float: "a number", type(None): "null"}.get(type(value), type(value).__name__)
+    return {
+        dict: "an object",
+        list: "an array",
+        str: "a string",
+        bool: "a boolean",
+        int: "an integer",
+        float: "a number",
+        type(None): "null",
+    }.get(type(value), type(value).__name__)
 
 
 def check(doc: dict, path: Path, bin_size: int | None) -> None:
     """Validate every field the loader reads; RttaError for the first that is wrong."""
     c = Checker(doc, path)
-    for key in ("buffers", "bufferViews", "accessors", "meshes", "nodes", "scenes", "materials", "textures",
-                "images", "samplers", "cameras", "skins", "animations"):
+    for key in (
+        "buffers",
+        "bufferViews",
+        "accessors",
+        "meshes",
+        "nodes",
+        "scenes",
+        "materials",
+        "textures",
+        "images",
+        "samplers",
+        "cameras",
+        "skins",
+        "animations",
+    ):
         c.array(key)
     if "scene" in doc:
         c.index(doc, "scene", "document", "scenes")
@@ -247,8 +280,11 @@ def _accessors(c: Checker) -> None:
         stride = view.get("byteStride") or element
         end = offset + (count - 1) * stride + element
         if end > view["byteLength"]:
-            c.fail(where, f"needs {end:,} bytes of bufferView {v}, which has {view['byteLength']:,} "
-                          f"({count:,} x {kind} of {COMPONENT_BYTES[ctype]}-byte components)")
+            c.fail(
+                where,
+                f"needs {end:,} bytes of bufferView {v}, which has {view['byteLength']:,} "
+                f"({count:,} x {kind} of {COMPONENT_BYTES[ctype]}-byte components)",
+            )
         if offset % COMPONENT_BYTES[ctype]:
             c.fail(f"{where}.byteOffset", f"is {offset}, not a multiple of the component size")
 
@@ -272,8 +308,11 @@ def _sparse(c: Checker, sparse, views: list, where: str, count: int, element: in
                 c.fail(f"{where}.indices.componentType", f"is {ctype}, not an index type")
             size = COMPONENT_BYTES[ctype]
         if offset + n * size > views[v]["byteLength"]:
-            c.fail(f"{where}.{key}", f"needs bytes {offset:,} to {offset + n * size:,} of bufferView {v}, "
-                                     f"which has {views[v]['byteLength']:,}")
+            c.fail(
+                f"{where}.{key}",
+                f"needs bytes {offset:,} to {offset + n * size:,} of bufferView {v}, "
+                f"which has {views[v]['byteLength']:,}",
+            )
 
 
 def _meshes(c: Checker) -> None:
@@ -297,33 +336,49 @@ def _meshes(c: Checker) -> None:
             for name in list(attrs):
                 c.index(attrs, name, f"{pw}.attributes", "accessors")
             if mode < 4:
-                continue                      # points and lines: left out, only their indices matter
+                continue  # points and lines: left out, only their indices matter
             pos = c.index(attrs, "POSITION", f"{pw}.attributes", "accessors", required=True)
-            _accessor_is(c, accessors, pos, f"{pw}.attributes.POSITION", ("VEC3",),
-                         (FLOAT, 5120, 5121, 5122, 5123) if quantized else (FLOAT,))
+            _accessor_is(
+                c,
+                accessors,
+                pos,
+                f"{pw}.attributes.POSITION",
+                ("VEC3",),
+                (FLOAT, 5120, 5121, 5122, 5123) if quantized else (FLOAT,),
+            )
             n = accessors[pos]["count"]
-            for name, kinds, types in (("NORMAL", ("VEC3",), (FLOAT, 5120, 5122) if quantized else (FLOAT,)),
-                                       ("TEXCOORD_0", ("VEC2",), (FLOAT, 5121, 5123, 5120, 5122)),
-                                       ("COLOR_0", ("VEC3", "VEC4"), (FLOAT, 5121, 5123))):
+            for name, kinds, types in (
+                ("NORMAL", ("VEC3",), (FLOAT, 5120, 5122) if quantized else (FLOAT,)),
+                ("TEXCOORD_0", ("VEC2",), (FLOAT, 5121, 5123, 5120, 5122)),
+                ("COLOR_0", ("VEC3", "VEC4"), (FLOAT, 5121, 5123)),
+            ):
                 if name in attrs:
                     _accessor_is(c, accessors, attrs[name], f"{pw}.attributes.{name}", kinds, types)
                     if accessors[attrs[name]]["count"] != n:
-                        c.fail(f"{pw}.attributes.{name}", f"has {accessors[attrs[name]]['count']:,} values "
-                                                          f"for {n:,} positions")
+                        c.fail(
+                            f"{pw}.attributes.{name}",
+                            f"has {accessors[attrs[name]]['count']:,} values for {n:,} positions",
+                        )
             idx = c.index(prim, "indices", pw, "accessors")
             if idx is not None:
                 _accessor_is(c, accessors, idx, f"{pw}.indices", ("SCALAR",), INDEX_TYPES)
             count = n if idx is None else accessors[idx]["count"]
             if mode == 4 and count % 3:
-                c.fail(pw, f"is a triangle list of {count:,} {'indices' if idx is not None else 'vertices'}, "
-                           "not a multiple of 3")
+                c.fail(
+                    pw,
+                    f"is a triangle list of {count:,} {'indices' if idx is not None else 'vertices'}, "
+                    "not a multiple of 3",
+                )
 
 
 def _accessor_is(c: Checker, accessors: list, i: int, where: str, kinds: tuple, types: tuple) -> None:
     acc = accessors[i]
     if acc["type"] not in kinds or acc["componentType"] not in types:
-        c.fail(where, f"is accessor {i} of {acc['type']} / componentType {acc['componentType']}; "
-                      f"expected {' or '.join(kinds)} of {' or '.join(map(str, types))}")
+        c.fail(
+            where,
+            f"is accessor {i} of {acc['type']} / componentType {acc['componentType']}; "
+            f"expected {' or '.join(kinds)} of {' or '.join(map(str, types))}",
+        )
 
 
 def _nodes(c: Checker) -> None:

@@ -19,7 +19,7 @@ import numpy as np
 from .gltf_check import FLOAT, TYPE_WIDTH
 
 DTYPES = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32, 5126: np.float32}
-NO_FACTOR = [102 / 255, 102 / 255, 102 / 255, 1.0]   # trimesh's colour for a material without baseColorFactor
+NO_FACTOR = [102 / 255, 102 / 255, 102 / 255, 1.0]  # trimesh's colour for a material without baseColorFactor
 
 
 @dataclass
@@ -84,8 +84,11 @@ def transform_texcoords(doc: dict, pairs: list[tuple[int, int]], buffers: list[b
     materials, bad = doc.get("materials", []), 0
     for m, p in pairs:
         prim = doc["meshes"][m]["primitives"][p]
-        texture = materials[prim["material"]].get("pbrMetallicRoughness", {}).get("baseColorTexture") \
-            if "material" in prim else None
+        texture = (
+            materials[prim["material"]].get("pbrMetallicRoughness", {}).get("baseColorTexture")
+            if "material" in prim
+            else None
+        )
         _use_texcoord_set(doc, prim, texture)
         if "TEXCOORD_0" not in prim["attributes"]:
             continue
@@ -97,8 +100,9 @@ def transform_texcoords(doc: dict, pairs: list[tuple[int, int]], buffers: list[b
             bad += 1
             continue
         uv = _float_texcoords(doc, prim["attributes"]["TEXCOORD_0"], buffers)
-        prim["attributes"]["TEXCOORD_0"] = append_accessor(doc, buffers, (uv @ matrix[:, :2].T + matrix[:, 2])
-                                                           .astype(np.float32), "VEC2")
+        prim["attributes"]["TEXCOORD_0"] = append_accessor(
+            doc, buffers, (uv @ matrix[:, :2].T + matrix[:, 2]).astype(np.float32), "VEC2"
+        )
     if bad:
         warnings.append(f"{bad} primitive(s) with a KHR_texture_transform that is not numbers: drawn untransformed")
 
@@ -110,8 +114,12 @@ def _use_texcoord_set(doc: dict, prim: dict, texture) -> None:
     index = prim["attributes"].get(f"TEXCOORD_{n}") if type(n) is int and n > 0 else None
     acc = doc["accessors"][index] if type(index) is int and 0 <= index < len(doc["accessors"]) else None
     positions = doc["accessors"][prim["attributes"]["POSITION"]]["count"]
-    if (acc is not None and acc.get("type") == "VEC2" and acc.get("count") == positions
-            and acc.get("componentType") in (5126, 5121, 5123, 5120, 5122)):
+    if (
+        acc is not None
+        and acc.get("type") == "VEC2"
+        and acc.get("count") == positions
+        and acc.get("componentType") in (5126, 5121, 5123, 5120, 5122)
+    ):
         prim["attributes"]["TEXCOORD_0"] = index
 
 
@@ -149,7 +157,7 @@ def view_bytes(doc: dict, buffers: list[bytes], v: int) -> bytes:
     """The bytes of bufferView `v` (the document has been checked: they lie in their buffer)."""
     view = doc["bufferViews"][v]
     start = view.get("byteOffset", 0)
-    return bytes(buffers[view["buffer"]][start:start + view["byteLength"]])
+    return bytes(buffers[view["buffer"]][start : start + view["byteLength"]])
 
 
 def append_view(doc: dict, buffers: list[bytes], raw: bytes) -> int:
@@ -164,8 +172,9 @@ def append_accessor(doc: dict, buffers: list[bytes], data: np.ndarray, kind: str
     """A new buffer, view and accessor holding `data` (float32 or uint32, tightly packed); its index."""
     view = append_view(doc, buffers, np.ascontiguousarray(data).tobytes())
     component = 5125 if data.dtype == np.uint32 else 5126
-    doc.setdefault("accessors", []).append({"bufferView": view, "componentType": component,
-                                            "count": len(data), "type": kind})
+    doc.setdefault("accessors", []).append(
+        {"bufferView": view, "componentType": component, "count": len(data), "type": kind}
+    )
     return len(doc["accessors"]) - 1
 
 
@@ -174,7 +183,7 @@ def _packed(doc: dict, buffers: list[bytes], part: dict, ctype: int, width: int,
     view = doc["bufferViews"][part["bufferView"]]
     start = view.get("byteOffset", 0) + part.get("byteOffset", 0)
     dtype = np.dtype(DTYPES[ctype])
-    return np.frombuffer(buffers[view["buffer"]][start:start + n * width * dtype.itemsize], dtype).reshape(n, width)
+    return np.frombuffer(buffers[view["buffer"]][start : start + n * width * dtype.itemsize], dtype).reshape(n, width)
 
 
 def plain(doc: dict, pairs: list[tuple[int, int]]) -> bool:
@@ -187,8 +196,11 @@ def plain(doc: dict, pairs: list[tuple[int, int]]) -> bool:
         attrs = prim["attributes"]
         if prim.get("mode", 4) not in (4, 6) or "extensions" in prim or "COLOR_0" in attrs:
             return False
-        used = [attrs["POSITION"], *[attrs[k] for k in ("NORMAL",) if k in attrs],
-                *([prim["indices"]] if "indices" in prim else [])]
+        used = [
+            attrs["POSITION"],
+            *[attrs[k] for k in ("NORMAL",) if k in attrs],
+            *([prim["indices"]] if "indices" in prim else []),
+        ]
         if any("sparse" in accessors[a] for a in used):
             return False
         if any(accessors[attrs[k]]["componentType"] != FLOAT for k in ("POSITION", "NORMAL") if k in attrs):
@@ -212,13 +224,14 @@ def decode(doc: dict, pairs: list[tuple[int, int]], buffers: list[bytes]) -> dic
         if "NORMAL" in attrs:
             normals = np.array(accessor_array(doc, attrs["NORMAL"], buffers), np.float32)
             normals = normals if np.isfinite(normals).all() else None
-        out[(m, p)] = Decoded(v, _faces(doc, prim, buffers, len(v)), normals,
-                              colors[prim["material"]] if "material" in prim else None)
+        out[(m, p)] = Decoded(
+            v, _faces(doc, prim, buffers, len(v)), normals, colors[prim["material"]] if "material" in prim else None
+        )
     return out
 
 
 def _faces(doc: dict, prim: dict, buffers: list[bytes], vertices: int) -> np.ndarray:
-    if "_fan" in prim:                              # a fan, made a triangle list by gltf._primitives
+    if "_fan" in prim:  # a fan, made a triangle list by gltf._primitives
         fan = prim["_fan"]
         return fan.astype(np.int32).reshape(-1, 3) if len(fan) else np.zeros((1, 3), np.int32)
     if "indices" in prim:
@@ -234,4 +247,3 @@ def _color(material: dict) -> list[float]:
         return list(NO_FACTOR)
     c = np.round(np.clip(np.asarray(factor, np.float64), 0.0, 1.0) * 255.0) / 255.0
     return [float(x) for x in c]
-

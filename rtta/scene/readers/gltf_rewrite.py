@@ -43,11 +43,20 @@ def rewrite(doc: dict, pairs: list, buffers: list[bytes], images: dict[int, byte
         base.append(len(blob))
         blob += data
         blob += b"\0" * (-len(blob) % 4)
-    views = [{"buffer": 0, "byteOffset": base[v["buffer"]] + v.get("byteOffset", 0), "byteLength": v["byteLength"],
-              **({"byteStride": v["byteStride"]} if "byteStride" in v else {})} for v in doc.get("bufferViews", [])]
-    accessors = [{k: a[k] for k in ("bufferView", "byteOffset", "componentType", "count", "type") if k in a}
-                 | ({"normalized": a["normalized"]} if type(a.get("normalized")) is bool else {})
-                 for a in doc.get("accessors", [])]
+    views = [
+        {
+            "buffer": 0,
+            "byteOffset": base[v["buffer"]] + v.get("byteOffset", 0),
+            "byteLength": v["byteLength"],
+            **({"byteStride": v["byteStride"]} if "byteStride" in v else {}),
+        }
+        for v in doc.get("bufferViews", [])
+    ]
+    accessors = [
+        {k: a[k] for k in ("bufferView", "byteOffset", "componentType", "count", "type") if k in a}
+        | ({"normalized": a["normalized"]} if type(a.get("normalized")) is bool else {})
+        for a in doc.get("accessors", [])
+    ]
 
     def append(data: bytes) -> int:
         views.append({"buffer": 0, "byteOffset": len(blob), "byteLength": len(data)})
@@ -58,25 +67,44 @@ def rewrite(doc: dict, pairs: list, buffers: list[bytes], images: dict[int, byte
     meshes = []
     for m, p in pairs:
         prim = doc["meshes"][m]["primitives"][p]
-        new = {"attributes": {k: v for k, v in prim["attributes"].items()
-                              if k in ("POSITION", "NORMAL", "TEXCOORD_0", "COLOR_0")}, "mode": prim.get("mode", 4)}
+        new = {
+            "attributes": {
+                k: v for k, v in prim["attributes"].items() if k in ("POSITION", "NORMAL", "TEXCOORD_0", "COLOR_0")
+            },
+            "mode": prim.get("mode", 4),
+        }
         new.update({k: prim[k] for k in ("indices", "material") if k in prim})
         if "_fan" in prim:
             fan = prim["_fan"]
             new["mode"] = 4
             new["indices"] = len(accessors)
-            accessors.append({"bufferView": append(fan.tobytes()), "componentType": 5125, "count": len(fan),
-                              "type": "SCALAR"} if len(fan) else {"componentType": 5125, "count": 3, "type": "SCALAR"})
+            accessors.append(
+                {"bufferView": append(fan.tobytes()), "componentType": 5125, "count": len(fan), "type": "SCALAR"}
+                if len(fan)
+                else {"componentType": 5125, "count": 3, "type": "SCALAR"}
+            )
         meshes.append({"name": geometry_name(m, p), "primitives": [new]})
-    new_images = [{"bufferView": append(images[i]), "mimeType": "image/png"} if i in images else {}
-                  for i in range(len(doc.get("images", [])))]
-    materials = [{"pbrMetallicRoughness": _base_color(mat.get("pbrMetallicRoughness", {}))}
-                 for mat in doc.get("materials", [])]
+    new_images = [
+        {"bufferView": append(images[i]), "mimeType": "image/png"} if i in images else {}
+        for i in range(len(doc.get("images", [])))
+    ]
+    materials = [
+        {"pbrMetallicRoughness": _base_color(mat.get("pbrMetallicRoughness", {}))} for mat in doc.get("materials", [])
+    ]
     textures = [{"source": t["source"]} if "source" in t else {} for t in doc.get("textures", [])]
-    new_doc = {"asset": {"version": "2.0"}, "buffers": [{"byteLength": len(blob)}], "bufferViews": views,
-               "accessors": accessors, "meshes": meshes, "materials": materials, "textures": textures,
-               "images": new_images, "nodes": [{"mesh": j, "name": f"rtta.{j}"} for j in range(len(meshes))],
-               "scenes": [{"nodes": list(range(len(meshes)))}], "scene": 0}
+    new_doc = {
+        "asset": {"version": "2.0"},
+        "buffers": [{"byteLength": len(blob)}],
+        "bufferViews": views,
+        "accessors": accessors,
+        "meshes": meshes,
+        "materials": materials,
+        "textures": textures,
+        "images": new_images,
+        "nodes": [{"mesh": j, "name": f"rtta.{j}"} for j in range(len(meshes))],
+        "scenes": [{"nodes": list(range(len(meshes)))}],
+        "scene": 0,
+    }
     return new_doc, bytes(blob)
 
 

@@ -25,14 +25,14 @@ THREADS = min(32, max(8, os.cpu_count() or 1))
 
 def read(path: Path, left_out: tuple[str, ...] = LEFT_OUT) -> Assembly:
     _check_text(path)
-    with signals_held():                 # a signal during a native module's initialisation crashes it
+    with signals_held():  # a signal during a native module's initialisation crashes it
         import ifcopenshell
         import ifcopenshell.geom
         import ifcopenshell.util.unit
 
     try:
         model = ifcopenshell.open(str(path))
-    except Exception as exc:      # ifcopenshell raises several types for bad files
+    except Exception as exc:  # ifcopenshell raises several types for bad files
         raise RttaError(f"cannot read IFC file ({_reason(exc)})", path) from None
     try:
         scale = float(ifcopenshell.util.unit.calculate_unit_scale(model))
@@ -59,7 +59,7 @@ def read(path: Path, left_out: tuple[str, ...] = LEFT_OUT) -> Assembly:
         f = np.asarray(geometry.faces, np.int64).reshape(-1, 3)
         found.append((tree_path(element, memo), element.id(), label(element), v, f, _color(geometry)))
         ok = it.next()
-    for group, _, name, v, f, color in sorted(found, key=lambda t: t[:2]):   # the iterator's threads vary the order
+    for group, _, name, v, f, color in sorted(found, key=lambda t: t[:2]):  # the iterator's threads vary the order
         out.add(name, v, f, color, group)
     return out
 
@@ -111,7 +111,7 @@ def tree_path(element, memo: dict | None = None) -> tuple[str, ...]:
         if parent.id() in memo:
             above = memo[parent.id()]
             break
-        if parent.id() in seen:            # a cycle: the path stops there
+        if parent.id() in seen:  # a cycle: the path stops there
             break
         seen.add(parent.id())
         chain.append(parent)

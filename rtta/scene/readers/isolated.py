@@ -21,8 +21,8 @@ from pathlib import Path
 
 from ...errors import RttaError
 
-BASE_S = 60.0          # seconds any file gets
-PER_MB_S = 30.0        # and per megabyte (OpenCASCADE meshes a 20 MB assembly in about a minute)
+BASE_S = 60.0  # seconds any file gets
+PER_MB_S = 30.0  # and per megabyte (OpenCASCADE meshes a 20 MB assembly in about a minute)
 ENV = "RTTA_READER_TIMEOUT"
 
 _CHILD = r"""
@@ -53,7 +53,7 @@ def time_limit(path: Path) -> float:
             value = float(text)
         except ValueError:
             value = 0.0
-        if value > 0:                      # NaN is not
+        if value > 0:  # NaN is not
             return value
     try:
         size = path.stat().st_size
@@ -70,13 +70,21 @@ def read(module: str, path: Path, library: str):
     with tempfile.TemporaryDirectory(prefix="rtta-reader-") as tmp:
         out = Path(tmp) / "assembly.pickle"
         with open(Path(tmp) / "stderr", "w+b") as err:
-            proc = subprocess.Popen([sys.executable, "-c", _CHILD, module, str(path), str(out)],
-                                    stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=err, env=env)
+            proc = subprocess.Popen(
+                [sys.executable, "-c", _CHILD, module, str(path), str(out)],
+                stdin=subprocess.DEVNULL,
+                stdout=subprocess.DEVNULL,
+                stderr=err,
+                env=env,
+            )
             try:
                 rc = proc.wait(timeout=limit)
             except subprocess.TimeoutExpired:
-                raise RttaError(f"the {library} reader did not finish within {limit:.0f} s (the file may be "
-                                f"damaged; {ENV}=SECONDS allows longer)", path) from None
+                raise RttaError(
+                    f"the {library} reader did not finish within {limit:.0f} s (the file may be "
+                    f"damaged; {ENV}=SECONDS allows longer)",
+                    path,
+                ) from None
             finally:
                 if proc.poll() is None:
                     proc.kill()
@@ -84,14 +92,15 @@ def read(module: str, path: Path, library: str):
             err.seek(0)
             said = err.read()[-4096:].decode("utf-8", "replace").strip().splitlines()
         if rc < 0:
-            raise RttaError(f"the {library} reader crashed on this file ({_signal_name(-rc)}); "
-                            "it is probably damaged", path)
+            raise RttaError(
+                f"the {library} reader crashed on this file ({_signal_name(-rc)}); it is probably damaged", path
+            )
         if not out.exists():
             last = said[-1][:160] if said else f"exit status {rc}"
             raise RttaError(f"the {library} reader failed ({last})", path)
         with open(out, "rb") as f:
             status, value = pickle.load(f)
-    if status == "failed":               # an exception the reader did not expect
+    if status == "failed":  # an exception the reader did not expect
         raise RttaError(f"the {library} reader failed ({value})", path)
     if status != "ok":
         raise RttaError(value, path)

@@ -18,7 +18,7 @@ def obj_objects(path: Path) -> tuple[bytes, list[str]]:
     as UTF-8 or else Windows-1252. A file with fewer than two `o` lines but several `g NAME`
     groups has its groups made the objects so (its one `o` line left out): CAD exporters
     write the parts of a model as groups."""
-    data = b"\n" + path.read_bytes()         # every line after a newline: _line's patterns start there
+    data = b"\n" + path.read_bytes()  # every line after a newline: _line's patterns start there
     names: list[str] = []
 
     def rename(match: re.Match) -> bytes:
@@ -68,5 +68,6 @@ def material_colors(decoded: list, data: bytes, path: Path, resolver) -> list | 
         k = object_number(str(node))
         if k is not None and mesh is not None:
             color_of[k] = base_color(mesh)
-    return [(k, replace(geometry, color=color_of.get(stands_for.get(k, -1), geometry.color)))
-            for k, geometry in decoded]
+    return [
+        (k, replace(geometry, color=color_of.get(stands_for.get(k, -1), geometry.color))) for k, geometry in decoded
+    ]

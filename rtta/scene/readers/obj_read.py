@@ -32,7 +32,7 @@ _KEPT = re.compile(rb"\n[ \t]*(?:(?:usemtl|mtllib|o|g)[ \t][^\r\n]*|f[ \t][^\r\n
 # a v or vn line of other than 3 numbers (w, vertex colours, a damaged row); a continued line
 _ODD = re.compile(rb"\n[ \t]*vn?[ \t](?![ \t]*[^ \t\r\n]+[ \t]+[^ \t\r\n]+[ \t]+[^ \t\r\n]+[ \t]*\r?(?:\n|$))")
 _CONTINUED = re.compile(rb"\\[ \t]*\r?(?:\n|$)")
-_OBJECT = re.compile(rb"\no rtta\.o\.(\d+)(?=\r?(?:\n|$))")      # as rtta.scene.readers.obj writes them
+_OBJECT = re.compile(rb"\no rtta\.o\.(\d+)(?=\r?(?:\n|$))")  # as rtta.scene.readers.obj writes them
 _POLYGON = re.compile(rb"\n[ \t]*f[ \t](?![ \t]*[^ \t\r\n]+[ \t]+[^ \t\r\n]+[ \t]+[^ \t\r\n]+[ \t]*\r?(?:\n|$))")
 _FACE = re.compile(rb"\n[ \t]*f[ \t]+([^\r\n]*)")
 _V = re.compile(rb"\n[ \t]*v[ \t]+([^\r\n]*)")
@@ -44,14 +44,14 @@ def decode(data: bytes, names: list[str]) -> list[tuple[int, Decoded]] | None:
     """(object number K, geometry) per object with faces, in file order, for a plain OBJ whose
     objects are `o rtta.o.K` lines (rtta.scene.readers.obj.obj_objects, K indexes `names`); None for
     any other file."""
-    data = b"\n" + data                      # each line after a newline (the patterns above)
+    data = b"\n" + data  # each line after a newline (the patterns above)
     if _OTHER.search(data) or _ODD.search(data) or _CONTINUED.search(data):
         return None
-    parts = _OBJECT.split(data)              # [before any object, K, its lines, K, its lines ...]
-    if _FACE.search(parts[0]):                # faces before any object: trimesh names them itself
+    parts = _OBJECT.split(data)  # [before any object, K, its lines, K, its lines ...]
+    if _FACE.search(parts[0]):  # faces before any object: trimesh names them itself
         return None
     polygons = _POLYGON.search(data) is not None
-    face_rows, face_sizes, face_object = [], [], []     # per object: its face rows joined, their sizes
+    face_rows, face_sizes, face_object = [], [], []  # per object: its face rows joined, their sizes
     for k, chunk in zip(parts[1::2], parts[2::2], strict=True):
         rows = _FACE.findall(chunk)
         if rows:
@@ -67,7 +67,7 @@ def decode(data: bytes, names: list[str]) -> list[tuple[int, Decoded]] | None:
         v, vn = (_numbers(pattern.findall(data), np.float64).reshape(-1, 3) for pattern in (_V, _VN))
         n_vt = _texture_rows(data)
         corners = None if n_vt is None else _corners(face_rows, face_sizes, face_object, len(v), len(vn), n_vt)
-    except (ValueError, OverflowError):      # a number or an index that does not parse
+    except (ValueError, OverflowError):  # a number or an index that does not parse
         return None
     if corners is None:
         return None
@@ -95,9 +95,9 @@ def material_skeleton(data: bytes) -> tuple[bytes, dict[int, int]]:
     for m in _KEPT.finditer(b"\n" + data):
         line = m.group(0).strip()
         if line.startswith(b"mtllib"):
-            libraries.append(line)                 # trimesh reads the first one in the file
+            libraries.append(line)  # trimesh reads the first one in the file
         elif line.startswith(b"o "):
-            content = contents.setdefault(int(line[len(b"o rtta.o."):]), [])
+            content = contents.setdefault(int(line[len(b"o rtta.o.") :]), [])
             if material is not None:
                 content.append(material)
         elif line.startswith(b"f"):
@@ -105,11 +105,11 @@ def material_skeleton(data: bytes) -> tuple[bytes, dict[int, int]]:
             form = b"/".join([b"%d"] + [b"1" if part else b"" for part in corner[1:]])
             if content is not None:
                 content.append(b"f " + b" ".join(form % i for i in (1, 2, 3)))
-        else:                                      # usemtl, g
+        else:  # usemtl, g
             usemtl = line.startswith(b"usemtl")
             material = line if usemtl else material
             if content is not None and usemtl and content and content[-1].startswith(b"usemtl"):
-                content[-1] = line                 # a material no face used: as if not there
+                content[-1] = line  # a material no face used: as if not there
             elif content is not None:
                 content.append(line)
     lines = [*libraries, b"v 0 0 0", b"v 1 0 0", b"v 0 1 0", b"vt 0 0", b"vn 0 0 1"]
@@ -129,7 +129,7 @@ def _numbers(rows: list[bytes], dtype) -> np.ndarray:
     if not rows:
         return np.zeros(0, dtype)
     with warnings.catch_warnings():
-        warnings.simplefilter("error")       # numpy warns, and stops, at what it cannot parse
+        warnings.simplefilter("error")  # numpy warns, and stops, at what it cannot parse
         return np.fromstring(b" ".join(rows), dtype=dtype, sep=" ")
 
 
@@ -145,8 +145,9 @@ def _texture_rows(data: bytes) -> int | None:
     return len(rows)
 
 
-def _corners(face_rows: list[bytes], face_sizes: list[list[int]], face_object: list[int], n_v: int, n_vn: int,
-             n_vt: int):
+def _corners(
+    face_rows: list[bytes], face_sizes: list[list[int]], face_object: list[int], n_v: int, n_vn: int, n_vt: int
+):
     """(triangle corners' vertex indices [T, 3], their normal indices [T, 3] or None, the
     object of each triangle [T], whether the corners name texture coordinates) with 0-based
     indices checked, or None. Per object with faces: its face rows joined, their sizes, its number."""
@@ -159,15 +160,15 @@ def _corners(face_rows: list[bytes], face_sizes: list[list[int]], face_object: l
     total = int(sizes.sum())
     if slashes == 0:
         index, normal, uv = _numbers([flat], np.int64), None, False
-    elif flat.count(b"//") == total and slashes == 2 * total:    # every corner a//n
+    elif flat.count(b"//") == total and slashes == 2 * total:  # every corner a//n
         parts = _numbers([flat.replace(b"//", b" ")], np.int64).reshape(-1, 2)
         index, normal, uv = parts[:, 0], parts[:, 1], False
     else:
         pieces = [c.split(b"/") for c in flat.split()]
         widths = {len(p) for p in pieces}
-        if widths == {2}:                 # a/t: texture coordinates only
+        if widths == {2}:  # a/t: texture coordinates only
             index, normal, uv = np.array([int(p[0]) for p in pieces], np.int64), None, True
-        elif widths == {3} and all(p[2] for p in pieces):      # a/t/n (a//n mixed in: trimesh's)
+        elif widths == {3} and all(p[2] for p in pieces):  # a/t/n (a//n mixed in: trimesh's)
             if not all(p[1] for p in pieces):
                 return None
             index = np.array([int(p[0]) for p in pieces], np.int64)
@@ -176,30 +177,37 @@ def _corners(face_rows: list[bytes], face_sizes: list[list[int]], face_object: l
         else:
             return None
         texture = np.array([int(p[1]) for p in pieces], np.int64)
-        if texture.min() < 1 or texture.max() > n_vt:      # trimesh drops such an object's uvs: its colour
+        if texture.min() < 1 or texture.max() > n_vt:  # trimesh drops such an object's uvs: its colour
             return None
-    if len(index) != total or index.min() < 1 or index.max() > n_v:       # relative indices go to trimesh
+    if len(index) != total or index.min() < 1 or index.max() > n_v:  # relative indices go to trimesh
         return None
     if normal is not None and (normal.min() < 1 or normal.max() > n_vn):
         return None
-    index = index.astype(np.int32) - 1       # int32 from here: half the memory of the corner arrays
+    index = index.astype(np.int32) - 1  # int32 from here: half the memory of the corner arrays
     normal = None if normal is None else normal.astype(np.int32) - 1
     poly, at = fans(np.cumsum(sizes) - sizes, sizes)
     objects = np.repeat(np.asarray(face_object, np.int32), per_object)[poly]
     return index[at], None if normal is None else normal[at], objects, uv
 
 
-def _objects(names: list[str], v: np.ndarray, vn: np.ndarray, tri: np.ndarray, tri_n: np.ndarray | None,
-             objects: np.ndarray, color: list[float] | None) -> list[tuple[int, Decoded]]:
+def _objects(
+    names: list[str],
+    v: np.ndarray,
+    vn: np.ndarray,
+    tri: np.ndarray,
+    tri_n: np.ndarray | None,
+    objects: np.ndarray,
+    color: list[float] | None,
+) -> list[tuple[int, Decoded]]:
     """Per object its own vertices (each (vertex, normal) pair once, in file order) and faces;
     `objects` [T] is ascending (decode checks it)."""
     corner_object = np.repeat(objects, 3)
     keys = [tri.reshape(-1)] if tri_n is None else [tri_n.reshape(-1), tri.reshape(-1)]
-    rank = np.lexsort((*keys, corner_object))          # by object, then vertex (then normal)
+    rank = np.lexsort((*keys, corner_object))  # by object, then vertex (then normal)
     sorted_keys = np.stack([corner_object[rank], *(k[rank] for k in reversed(keys))], axis=1)
     new = np.ones(len(rank), bool)
     new[1:] = (sorted_keys[1:] != sorted_keys[:-1]).any(axis=1)
-    unique_id = np.cumsum(new, dtype=np.int32) - 1    # per sorted corner: its distinct (object, vertex[, normal])
+    unique_id = np.cumsum(new, dtype=np.int32) - 1  # per sorted corner: its distinct (object, vertex[, normal])
     firsts = np.flatnonzero(new)
     distinct_object = sorted_keys[firsts, 0]
     object_start = np.searchsorted(distinct_object, np.arange(len(names) + 1))
@@ -216,6 +224,7 @@ def _objects(names: list[str], v: np.ndarray, vn: np.ndarray, tri: np.ndarray, t
             continue
         lo, hi = object_start[o], object_start[o + 1]
         n = None if normals is None else normals[lo:hi]
-        out.append((o, Decoded(positions[lo:hi], local[a:b],
-                                      n if n is not None and np.isfinite(n).all() else None, color)))
+        out.append(
+            (o, Decoded(positions[lo:hi], local[a:b], n if n is not None and np.isfinite(n).all() else None, color))
+        )
     return out

@@ -27,14 +27,14 @@ CONVERTED = {"INCH": "in", "FOOT": "ft", "MILLIMETRE": "mm", "METRE": "m", "CENT
 GENERIC = re.compile(r"^(=>\[[\d:]*\]|NAUO\d*|)$")
 COMPONENTS = {5126: np.float32, 5125: np.uint32, 5123: np.uint16, 5121: np.uint8}
 WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4}
-TOLERANCE = 0.002   # mesher's linear deflection, relative to the edge length
+TOLERANCE = 0.002  # mesher's linear deflection, relative to the edge length
 
 
 def read(path: Path) -> Assembly:
     data = path.read_bytes()
     text = data.decode("latin-1")
     _check_text(text, path)
-    with signals_held():                 # a signal during a native module's initialisation crashes it
+    with signals_held():  # a signal during a native module's initialisation crashes it
         import cascadio
 
     with native_output() as said:
@@ -58,16 +58,18 @@ def _check_text(text: str, path: Path) -> None:
     for ref in re.findall(r"(?:EXTERNAL_SOURCE|DOCUMENT_FILE)\s*\(\s*'([^']*)'", text):
         name = ref.replace("\\", "/")
         if re.match(r"^[a-zA-Z][a-zA-Z0-9+.-]*:", name) or name.startswith("/") or ".." in name.split("/"):
-            raise RttaError(f"external reference '{ref}' is outside the file's folder; only the file itself "
-                            "is read", path)
+            raise RttaError(
+                f"external reference '{ref}' is outside the file's folder; only the file itself is read", path
+            )
 
 
 def length_unit(text: str) -> str:
     """The length unit of the file's unit contexts (GLOBAL_UNIT_ASSIGNED_CONTEXT), the one
     most of them name ('' when none is found). Units that only define others (the
     millimetre an inch is converted from) do not count."""
-    contexts = [re.findall(r"#(\d+)", refs)
-                for refs in re.findall(r"GLOBAL_UNIT_ASSIGNED_CONTEXT\s*\(\s*\(([^)]*)\)", text)]
+    contexts = [
+        re.findall(r"#(\d+)", refs) for refs in re.findall(r"GLOBAL_UNIT_ASSIGNED_CONTEXT\s*\(\s*\(([^)]*)\)", text)
+    ]
     wanted = {ref for refs in contexts for ref in refs}
     # every unit entity found in one pass over the file: a search per reference scanned the
     # whole text each time (a 2,000-part assembly has a context per part: 31 s of a 40 s read)
@@ -105,14 +107,18 @@ def _entities(text: str, kind: str) -> dict[int, list[str]]:
 
 def _product_names(text: str) -> dict[tuple, str]:
     """Sub-assembly names by the sorted names of the parts below them (with repeats)."""
+
     def ref(a: str) -> int:
         return int(a.lstrip("#")) if a.startswith("#") else -1
 
     def unquote(a: str) -> str:
         return a[1:-1].replace("''", "'") if len(a) >= 2 and a[0] == "'" else ""
+
     products = {k: unquote(a[1]) or unquote(a[0]) for k, a in _entities(text, "PRODUCT").items() if len(a) > 1}
-    formations = {**_entities(text, "PRODUCT_DEFINITION_FORMATION"),
-                  **_entities(text, "PRODUCT_DEFINITION_FORMATION_WITH_SPECIFIED_SOURCE")}
+    formations = {
+        **_entities(text, "PRODUCT_DEFINITION_FORMATION"),
+        **_entities(text, "PRODUCT_DEFINITION_FORMATION_WITH_SPECIFIED_SOURCE"),
+    }
     name_of = {}
     for k, a in _entities(text, "PRODUCT_DEFINITION").items():
         f = formations.get(ref(a[2])) if len(a) > 2 else None
@@ -126,9 +132,13 @@ def _product_names(text: str) -> dict[tuple, str]:
     def leaves(pd: int, depth: int = 0) -> tuple:
         if pd not in memo:
             kids = children.get(pd, [])
-            memo[pd] = ((name_of.get(pd, ""),) if not kids or depth > 64 else
-                        tuple(sorted(x for k in kids for x in leaves(k, depth + 1))))
+            memo[pd] = (
+                (name_of.get(pd, ""),)
+                if not kids or depth > 64
+                else tuple(sorted(x for k in kids for x in leaves(k, depth + 1)))
+            )
         return memo[pd]
+
     return {leaves(pd): name_of[pd] for pd in children if name_of.get(pd)}
 
 
@@ -162,6 +172,7 @@ def _walk(glb: bytes, out: Assembly, scale: float, assemblies: dict, path: Path)
                 name = assemblies.get(leaves(i), "") or f"assembly {len(groups) + 1}"
             for c in n["children"]:
                 visit(c, m, (*groups, name))
+
     for scene in doc.get("scenes", [{}])[:1]:
         for root in scene.get("nodes", []):
             visit(root, np.identity(4), ())
@@ -170,8 +181,8 @@ def _walk(glb: bytes, out: Assembly, scale: float, assemblies: dict, path: Path)
 def _split_glb(glb: bytes, path: Path) -> tuple[dict, bytes]:
     try:
         n = struct.unpack_from("<I", glb, 12)[0]
-        doc = json.loads(glb[20:20 + n])
-        binary = glb[28 + n:] if len(glb) > 28 + n else b""
+        doc = json.loads(glb[20 : 20 + n])
+        binary = glb[28 + n :] if len(glb) > 28 + n else b""
     except (struct.error, ValueError):
         raise RttaError("cannot read STEP file (OpenCASCADE's mesh is unreadable)", path) from None
     return doc, binary
@@ -182,9 +193,11 @@ def _matrix(node: dict) -> np.ndarray:
         return np.asarray(node["matrix"], np.float64).reshape(4, 4).T
     m = np.identity(4)
     x, y, z, w = node.get("rotation", (0.0, 0.0, 0.0, 1.0))
-    m[:3, :3] = [[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                 [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                 [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]
+    m[:3, :3] = [
+        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+    ]
     m[:3, :3] *= np.asarray(node.get("scale", (1.0, 1.0, 1.0)))[None, :]
     m[:3, 3] = node.get("translation", (0.0, 0.0, 0.0))
     return m
@@ -197,8 +210,9 @@ def _accessor(doc: dict, binary: bytes, i: int) -> np.ndarray:
     width, count = WIDTH[a["type"]], a["count"]
     start = view.get("byteOffset", 0) + a.get("byteOffset", 0)
     stride = view.get("byteStride") or dtype.itemsize * width
-    raw = np.frombuffer(binary, np.uint8, count=(count - 1) * stride + dtype.itemsize * width if count else 0,
-                        offset=start)
+    raw = np.frombuffer(
+        binary, np.uint8, count=(count - 1) * stride + dtype.itemsize * width if count else 0, offset=start
+    )
     rows = np.lib.stride_tricks.as_strided(raw, (count, dtype.itemsize * width), (stride, 1))
     return np.ascontiguousarray(rows).view(dtype).reshape(count, width)
 

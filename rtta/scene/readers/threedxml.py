@@ -23,7 +23,7 @@ def read(path: Path) -> Assembly:
     products = _products(path)
     try:
         loaded = trimesh.load(str(path), file_type="3dxml", force="scene", process=False)
-    except Exception as exc:        # trimesh raises many types for corrupt files
+    except Exception as exc:  # trimesh raises many types for corrupt files
         reason = (str(exc).strip().splitlines() or [type(exc).__name__])[0][:160]
         raise RttaError(f"cannot read 3DXML file ({reason})", path) from None
     out = Assembly(unit="mm", up_axis="z")
@@ -48,9 +48,10 @@ def _products(path: Path) -> dict[str, str]:
         with zipfile.ZipFile(path) as z:
             root = etree.fromstring(z.read("Manifest.xml"), etree.XMLParser(resolve_entities=False, no_network=True))
             main = root.find("{*}Root")
-            doc = etree.fromstring(z.read(main.text.strip()), etree.XMLParser(resolve_entities=False,
-                                                                              no_network=True, huge_tree=True))
-    except (KeyError, AttributeError, etree.XMLSyntaxError, *ZIP_ERRORS) as exc:     # a damaged member too
+            doc = etree.fromstring(
+                z.read(main.text.strip()), etree.XMLParser(resolve_entities=False, no_network=True, huge_tree=True)
+            )
+    except (KeyError, AttributeError, etree.XMLSyntaxError, *ZIP_ERRORS) as exc:  # a damaged member too
         raise RttaError(f"cannot read 3DXML file (no readable product structure: {str(exc)[:120]})", path) from None
     return {r.get("id"): r.get("name") or r.get("id") for r in doc.iter("{*}Reference3D")}
 

@@ -20,7 +20,7 @@ MAX_LAYERS = 256
 
 
 def read(path: Path) -> Assembly:
-    with signals_held():                 # a signal during a native module's initialisation crashes it
+    with signals_held():  # a signal during a native module's initialisation crashes it
         from pxr import Usd, UsdGeom
 
     if path.suffix.lower() == ".usdz":
@@ -29,14 +29,16 @@ def read(path: Path) -> Assembly:
     with native_output() as said:
         try:
             stage = Usd.Stage.Open(str(path))
-        except Exception as exc:              # pxr.Tf.ErrorException and others
+        except Exception as exc:  # pxr.Tf.ErrorException and others
             stage, said = None, [*said, _error_text(exc)]
     if stage is None:
         raise RttaError(f"cannot read USD file ({_short(chr(10).join(said))})", path)
-    out = Assembly(unit=unit_name(float(UsdGeom.GetStageMetersPerUnit(stage))),
-                   up_axis="z" if UsdGeom.GetStageUpAxis(stage) == UsdGeom.Tokens.z else "y")
+    out = Assembly(
+        unit=unit_name(float(UsdGeom.GetStageMetersPerUnit(stage))),
+        up_axis="z" if UsdGeom.GetStageUpAxis(stage) == UsdGeom.Tokens.z else "y",
+    )
     cache = UsdGeom.XformCache(Usd.TimeCode.Default())
-    prototypes: dict = {}       # prototype prim path -> (points, triangles, colour): read once for all its instances
+    prototypes: dict = {}  # prototype prim path -> (points, triangles, colour): read once for all its instances
     for prim in Usd.PrimRange.Stage(stage, Usd.TraverseInstanceProxies(Usd.PrimDefaultPredicate)):
         if not prim.IsA(UsdGeom.Mesh) or UsdGeom.Imageable(prim).ComputeVisibility() == UsdGeom.Tokens.invisible:
             continue
@@ -49,7 +51,7 @@ def read(path: Path) -> Assembly:
             (v, f), color = _mesh(UsdGeom.Mesh(prim)), _color(prim)
         if not len(f):
             continue
-        m = np.array(cache.GetLocalToWorldTransform(prim), np.float64)      # row vectors: p @ M
+        m = np.array(cache.GetLocalToWorldTransform(prim), np.float64)  # row vectors: p @ M
         name, groups = _name(prim)
         out.add(name, v @ m[:3, :3] + m[3, :3], f, color, groups)
     return out
@@ -78,7 +80,7 @@ def _short(text: str) -> str:
     first = next((line.strip() for line in text.splitlines() if line.strip()), "not a USD stage")
     messages = [m for m in messages if m] or [first]
     cause = next((m for m in messages if not m.startswith("Failed to open layer")), messages[0])
-    cause = re.sub(r"parse error matching .*? at '", "syntax error at '", cause)   # pegtl's grammar rule: noise
+    cause = re.sub(r"parse error matching .*? at '", "syntax error at '", cause)  # pegtl's grammar rule: noise
     cause = _PLACE.sub(lambda m: f"line {m.group(1)}, column {m.group(2)}: ", _NAMESPACE.sub("", cause), count=1)
     return re.sub(r"\s+", " ", cause).strip()[:160]
 
@@ -105,7 +107,7 @@ def _check_layers(path: Path) -> None:
                 raise RttaError(f"cannot read USD file ({_short(chr(10).join(said) or 'not a USD layer')})", path)
             raise RttaError(f"layer '{current.name}' it refers to cannot be read", path)
         for asset in layer.GetCompositionAssetDependencies():
-            if not asset:                        # an internal reference: this layer itself
+            if not asset:  # an internal reference: this layer itself
                 continue
             if re.match(r"^[a-zA-Z][a-zA-Z0-9+.-]*:", asset):
                 raise RttaError(f"layer reference '{asset}' is a URL; only files next to the scene are read", path)
@@ -127,21 +129,22 @@ def _check_text(layer: Path, path: Path) -> None:
         with open(layer, "rb") as fh:
             while chunk := fh.read(1 << 20):
                 if first and not chunk.startswith(b"#usda"):
-                    return                        # binary (usdc) or not USD: the reader says
+                    return  # binary (usdc) or not USD: the reader says
                 first = False
-                pending = len(decoder.getstate()[0])     # bytes of a character cut by the last chunk
+                pending = len(decoder.getstate()[0])  # bytes of a character cut by the last chunk
                 try:
                     decoder.decode(chunk)
                 except UnicodeDecodeError as exc:
                     line = lines + chunk.count(b"\n", 0, max(0, exc.start - pending))
-                    raise RttaError(f"{_which(layer, path)}not UTF-8 text at line {line} (USDA layers are UTF-8)",
-                                    path) from None
+                    raise RttaError(
+                        f"{_which(layer, path)}not UTF-8 text at line {line} (USDA layers are UTF-8)", path
+                    ) from None
                 lines += chunk.count(b"\n")
             decoder.decode(b"", final=True)
     except UnicodeDecodeError:
         raise RttaError(f"{_which(layer, path)}not UTF-8 text: it ends inside a character", path) from None
     except OSError:
-        return                                    # unreadable: Sdf says so
+        return  # unreadable: Sdf says so
 
 
 def _which(layer: Path, path: Path) -> str:

@@ -23,7 +23,7 @@ from test_gltf_fuzz import BASE, BINARY, PATHS, VALUES, _apply
 from rtta.errors import RttaError
 from rtta.scene.generators.assembly import write_assembly
 from rtta.scene.loader import load_scene
-from rtta.scene.readers import gltf
+from rtta.scene.readers import gltf, gltf_graph
 from rtta.scene.readers.gltf_read import plain
 
 
@@ -173,7 +173,7 @@ def test_malformed_files_load_alike(folder, monkeypatch, mutations):
 
 
 def test_node_transforms_equal_trimesh_transformations():
-    """gltf._locals (whole-array TRS) against trimesh.transformations composed node by node."""
+    """gltf_graph.local_transforms (whole-array TRS) against trimesh.transformations composed node by node."""
     import trimesh.transformations as tf
 
     rng = np.random.default_rng(5)
@@ -197,7 +197,7 @@ def test_node_transforms_equal_trimesh_transformations():
                 m = m @ np.diag([*node["scale"], 1.0])
         nodes.append(node)
         expect.append(m)
-    np.testing.assert_allclose(gltf._locals(nodes), np.array(expect), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(gltf_graph.local_transforms(nodes), np.array(expect), rtol=0, atol=1e-12)
 
 
 def test_automatic_collection_is_paused_only_during_a_load(folder):
@@ -216,7 +216,7 @@ def test_automatic_collection_is_paused_only_during_a_load(folder):
         return original(p)
 
     with pytest.MonkeyPatch.context() as m:
-        m.setattr("rtta.scene.loader.prepare", spy)
+        m.setattr("rtta.scene.readers.mesh.prepare", spy)
         load_scene(path)
         with pytest.raises(RttaError):
             load_scene(bad)

@@ -1,13 +1,11 @@
 """Outputs and messages (issue 26): an output never replaces an input of the same run or a
-folder rtta did not write; what cannot be written is one line; an interrupted run leaves the
-old output or the new one whole and no temporary; bad flag values are one line, never a
-usage block or a RuntimeWarning."""
+folder rtta did not write; what cannot be written is one line; bad flag values are one line,
+never a usage block or a RuntimeWarning. (Interruptions: test_interrupts.py.)"""
 
 from __future__ import annotations
 
 import json
 import os
-import random
 import resource
 import shutil
 import signal
@@ -294,116 +292,3 @@ def test_viewer_flags_are_one_line():
     )
     assert proc.returncode == 2 and proc.stderr.count("\n") == 1 and "usage" not in proc.stderr, proc.stderr
     assert view_main is not None
-
-
-# ---- interruptions ----------------------------------------------------------------------
-def test_an_interrupted_export_leaves_the_old_or_the_new_whole(tmp_path):
-    """SIGINT or SIGTERM at random moments: exit 0 with the new export in place and no word of
-    an interruption, or exit 130 saying so with the old export intact; never a temporary."""
-    out = tmp_path / "out"
-    assert _run(["export", "--out", out, "--size", "64x48"]).returncode == 0
-    old = _snapshot(out)
-    rng = random.Random(26)
-    outcomes = set()
-    for sig in (signal.SIGINT, signal.SIGTERM) * 4:
-        proc = subprocess.Popen(
-            [RTTA, "export", "--out", str(out), "--size", "480x360"],
-            stderr=subprocess.PIPE,
-            stdout=subprocess.PIPE,
-            text=True,
-        )
-        time.sleep(rng.uniform(0.1, 2.5))
-        proc.send_signal(sig)
-        _, err = proc.communicate(timeout=120)
-        if proc.returncode == 0:
-            assert "interrupted" not in err and json.loads((out / "records.json").read_text())["viewport"] == [480, 360]
-            outcomes.add("new")
-        else:  # 130 once rtta runs; during Python's own start-up the signal's default
-            assert proc.returncode in (130, -sig, 1), (proc.returncode, err)
-            if proc.returncode == 130:
-                assert err == "rtta: interrupted\n", err
-            assert _snapshot(out) == old
-            outcomes.add("old")
-        assert [p.name for p in tmp_path.iterdir()] == ["out"], list(tmp_path.iterdir())
-        if proc.returncode == 0:
-            old = _snapshot(out)
-    assert outcomes  # (both kinds happen on a typical run; either is correct)
-
-
-@pytest.fixture
-def rtta_handlers():
-    """rtta's signal handlers for the test (rtta.outputs), then the previous ones and a clean
-    state for the tests after."""
-    from rtta import outputs
-
-    old = outputs.install_signal_handlers()
-    try:
-        yield outputs
-    finally:
-        outputs.restore_signal_handlers(old)
-        outputs.install_signal_handlers()  # resets the state for the tests after
-        outputs.restore_signal_handlers(old)
-
-
-def test_a_signal_waits_while_native_libraries_import(rtta_handlers):
-    """A signal during signals_held() (the import of trimesh and OpenCASCADE) raises nothing
-    inside the block, where it would kill the process from inside a native module's start,
-    and stops the run as soon as the block ends."""
-    outputs = rtta_handlers
-    reached = []
-    with pytest.raises(outputs.Interrupted):
-        with outputs.signals_held():
-            os.kill(os.getpid(), signal.SIGINT)
-            for _ in range(1000):  # bytecodes, where Python runs the handler
-                pass
-            reached.append("end of block")
-    assert reached == ["end of block"]
-
-
-def test_a_signal_waits_while_a_program_is_made(gl, rtta_handlers):
-    """A signal while moderngl makes a shader program (rtta.gl.glsl.program) is raised once the
-    program is made: raised among moderngl's own Python calls it crashed the process
-    (SIGSEGV in Context.program, 3 of 3 runs of 200 interrupted frames)."""
-    from rtta.gl import glsl
-
-    outputs = rtta_handlers
-    made = []
-
-    class Ctx:  # the real context, with the signal arriving mid-call
-        def program(self, **sources):
-            os.kill(os.getpid(), signal.SIGINT)
-            for _ in range(1000):  # bytecodes, where Python runs the handler
-                pass
-            made.append(gl.program(**sources))
-            return made[-1]
-
-    try:
-        with pytest.raises(outputs.Interrupted):
-            glsl.program(Ctx(), vertex_shader=glsl.load("view.vert"), fragment_shader=glsl.load("view.frag"))
-        assert len(made) == 1 and made[0].glo > 0
-    finally:
-        for p in made:
-            p.release()
-
-
-_LATE_SIGNAL = """
-import os, signal, sys, time
-from rtta import outputs
-outputs.install_signal_handlers()
-with outputs.committing(final=True):
-    pass
-class Late:
-    def __del__(self):          # runs while the interpreter shuts down
-        os.kill(os.getpid(), signal.SIGINT)
-        time.sleep(0.2)
-        sys.stderr.write("finished\\n")
-late = Late()
-"""
-
-
-def test_a_signal_while_the_finished_run_shuts_down_does_not_kill_it():
-    """Once the final output is in place the run finishes with exit 0, also when the signal
-    comes while Python shuts down (which puts SIG_DFL back for handlers written in Python: an
-    export interrupted in its last milliseconds exited -2 with its new output in place)."""
-    proc = subprocess.run([sys.executable, "-c", _LATE_SIGNAL], capture_output=True, text=True, timeout=60)
-    assert (proc.returncode, proc.stderr) == (0, "finished\n")

@@ -1,0 +1,113 @@
+"""What the `rtta` commands share: the scene argument, the load and view flags, and the
+scene, Settings and Renderer made from them (checked; failures are RttaErrors)."""
+
+from __future__ import annotations
+
+import argparse
+
+from ..errors import RttaError
+from ..scene.preprocess import DEFAULT_SMOOTH_ANGLE
+from .guard import say
+
+
+def parse_size(text: str, what: str = "--size") -> tuple[int, int]:
+    """(W, H) from WxH, checked as the library checks it."""
+    from ..renderer.options import check_size
+
+    return check_size(text, what)
+
+
+def scene_arg(p: argparse.ArgumentParser) -> None:
+    """The optional scene file and the load options."""
+    p.add_argument(
+        "scene",
+        nargs="?",
+        help="glTF/GLB/OBJ/STL/PLY/3MF/OFF, STEP, IFC, COLLADA, USD or 3DXML file (default: the built-in demo)",
+    )
+    add_load_options(p)
+
+
+def add_load_options(p: argparse.ArgumentParser) -> None:
+    """Mesh preprocessing options of every command that loads a scene (the viewer's too)."""
+    p.add_argument(
+        "--smooth-angle",
+        type=float,
+        default=DEFAULT_SMOOTH_ANGLE,
+        metavar="DEG",
+        help="normals are smoothed across edges below this angle where the file has none "
+        f"(default {DEFAULT_SMOOTH_ANGLE:g}; 0 = faceted, 180 = smooth everywhere)",
+    )
+    p.add_argument(
+        "--smooth", action="store_true", help="recompute normals by --smooth-angle even where the file has its own"
+    )
+
+
+def view_args(p: argparse.ArgumentParser) -> None:
+    """The camera, viewport and atlas flags of export and snapshot."""
+    p.add_argument("--camera", default=None, help="AZ,EL,DIST orbit (degrees, degrees, scene radii)")
+    p.add_argument("--size", default="1024x768", help="viewport WxH")
+    p.add_argument("--fov", type=float, default=45.0, help="vertical field of view in degrees")
+    p.add_argument("--border", type=int, default=1, help="border around each atlas region in pixels")
+    p.add_argument("--atlas-max", default=None, help="maximum atlas layer size WxH (default: viewport + border)")
+    p.add_argument("--max-layers", type=int, default=None, help="cap on atlas layers")
+    p.add_argument("--capture-path", choices=("auto", "vs", "gs"), default="auto")
+    p.add_argument(
+        "--region-scale", type=float, default=1.0, help="atlas texels per viewport pixel (0.25 to 4; default 1)"
+    )
+    p.add_argument(
+        "--bounds",
+        choices=("aabb", "obb"),
+        default="aabb",
+        help="object bounds projected per frame: the paper's AABB or the tighter oriented box",
+    )
+    p.add_argument(
+        "--context-scale",
+        type=float,
+        default=None,
+        help="region scale of objects outside the focus, as a fraction of --region-scale "
+        "(0.25 to 1; default: the library's, see README); upsampled depth-aware when composited",
+    )
+
+
+def load_options(args: argparse.Namespace) -> dict:
+    """The loader's keyword arguments from add_load_options' flags (checked)."""
+    if not 0.0 <= args.smooth_angle <= 180.0:
+        raise RttaError(f"--smooth-angle must be between 0 and 180 degrees, got {args.smooth_angle:g}")
+    return {"smooth_angle": args.smooth_angle, "smooth": args.smooth}
+
+
+def load(args):
+    """The scene of args.scene (the demo without one), its warnings said on stderr."""
+    from ..scene.loader import load_scene_or_demo
+
+    scene = load_scene_or_demo(args.scene, **load_options(args))
+    for note in scene.warnings:
+        say("warning", note, scene.source)
+    return scene
+
+
+def settings_of(args):
+    """Checked Settings from view_args' flags."""
+    from ..renderer.options import make_settings
+
+    return make_settings(
+        args.border,
+        args.atlas_max,
+        args.max_layers,
+        args.capture_path,
+        args.region_scale,
+        args.bounds,
+        getattr(args, "context_scale", None),
+    )
+
+
+def make_renderer(ctx, scene, settings):
+    """A Renderer; what the driver lacks and the fallback used are said once on stderr."""
+    from ..gl.context import Capabilities
+    from ..renderer.renderer import Renderer
+
+    caps = Capabilities.of(ctx)
+    caps.capture_path(settings.capture_path)  # a path the driver lacks is an error, before any work
+    for note in caps.notes if settings.capture_path == "auto" else []:
+        say("note", note)
+    return Renderer(ctx, scene, settings)

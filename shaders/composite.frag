@@ -46,10 +46,10 @@ layout(location = 2) inout uvec4 fetched_more;    // surface 2, the list of the 
 #endif
 #endif
 
-layout(binding = 0) uniform sampler2DArray u_color;
-layout(binding = 1) uniform sampler2DArray u_depth;
-layout(binding = 3) uniform sampler2DArray u_post;   // (ao, edge) per atlas texel, WITH_AO only
-layout(binding = 4) uniform sampler2DArray u_normal;  // view-space normal * 0.5 + 0.5 per atlas texel, PROJECTOR only
+layout(binding = BINDING_ATLAS_COLOR) uniform sampler2DArray u_color;
+layout(binding = BINDING_ATLAS_DEPTH) uniform sampler2DArray u_depth;
+layout(binding = BINDING_ATLAS_POST) uniform sampler2DArray u_post;   // (ao, edge) per atlas texel, WITH_AO only
+layout(binding = BINDING_ATLAS_NORMAL) uniform sampler2DArray u_normal;  // view-space normal * 0.5 + 0.5 per atlas texel, PROJECTOR only
 uniform mat4 u_inv_view_proj;   // (P V)^-1: viewport NDC + depth -> world relative to the origin
 uniform mat4 u_lens_to_crop;        // world relative to the origin -> the lens LDI's crop space
 uniform ivec2 u_lens_crop_size;     // (its layers are image unit 0: ldi.glsl)
@@ -63,9 +63,9 @@ uniform vec4 u_outline_color;  // MODE_OUTLINE, SPRITE_OUTLINE
 uniform int u_outline_width;    // pixels (MODE_OUTLINE)
 uniform int u_halo_width;       // pixels (MODE_HALO)
 uniform vec4 u_halo_color;      // (rgb, strength)
-layout(binding = 5) uniform sampler2D u_context_depth;   // farthest context depth per pixel, 0: none (MODE_HALO)
+layout(binding = BINDING_CONTEXT_DEPTH) uniform sampler2D u_context_depth;   // farthest context depth per pixel, 0: none (MODE_HALO)
 #ifdef FOCUS_CLIP
-layout(binding = 7) uniform sampler2D u_focus_depth;     // nearest focus depth per pixel, 1: none (MODE_COLLECT)
+layout(binding = BINDING_FOCUS_DEPTH) uniform sampler2D u_focus_depth;     // nearest focus depth per pixel, 1: none (MODE_COLLECT)
 #endif
 
 flat in int g_object;

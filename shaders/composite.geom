@@ -22,7 +22,7 @@ flat out ivec4 g_rect;     // B_atlas's first and last texel (x0, y0, x1, y1), b
 flat out float g_opacity;  // the style's opacity
 flat out vec2 g_shade;     // the style's (uses AO, uses edges)
 #ifdef MODE_COLLECT
-layout(std430, binding = 7) readonly buffer NodeBase { uint node_base[]; };
+layout(std430, binding = BINDING_OIT_BASES) readonly buffer NodeBase { uint node_base[]; };
 flat out uint g_node_base; // the object's first node: one per pixel of its B_viewport (oit.glsl)
 flat out int g_vp_width;   // B_viewport's width in pixels
 #endif
@@ -31,7 +31,7 @@ flat out int g_vp_width;   // B_viewport's width in pixels
 uniform int u_halo_width;  // the quad reaches this far beyond B_viewport (pixels)
 #endif
 
-layout(std430, binding = 4) readonly buffer BoundsBuffer { vec4 bounds[]; };  // B_world (min, max) per object, scene origin at 0
+layout(std430, binding = BINDING_BOUNDS) readonly buffer BoundsBuffer { vec4 bounds[]; };  // B_world (min, max) per object, scene origin at 0
 uniform bool u_hull;
 uniform mat4 u_view_proj;
 uniform vec3 u_eye;        // the camera's position, scene origin at 0

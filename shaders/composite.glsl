@@ -4,8 +4,8 @@
 struct Style {
     vec4 params;   // (opacity, focus, uses AO, uses edges)
 };
-layout(std430, binding = 2) readonly buffer StyleBuffer { Style styles[]; };
-layout(std430, binding = 3) readonly buffer OrderBuffer { int order[]; };
+layout(std430, binding = BINDING_STYLES) readonly buffer StyleBuffer { Style styles[]; };
+layout(std430, binding = BINDING_DRAW_LIST) readonly buffer OrderBuffer { int order[]; };
 
 uniform vec2 u_viewport;   // composite target size in pixels
 

@@ -10,7 +10,7 @@
 // line: random points over a layer-major array missed the cache once per layer (the test
 // ran ~30% slower). The division is done in float (exact for x < 2^16): an integer division
 // per point is scalarized on llvmpipe and cost more than the layout gained.
-layout(binding = 0, r32f) readonly uniform image2D u_ldi_layers;
+layout(binding = BINDING_LDI_LAYERS, r32f) readonly uniform image2D u_ldi_layers;
 
 bool ldi_in_box(vec3 q, ivec2 crop_size) {
     return all(greaterThanEqual(q, vec3(0.0))) && q.x < float(crop_size.x) && q.y < float(crop_size.y)

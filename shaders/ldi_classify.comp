@@ -8,9 +8,9 @@
 #include "ldi.glsl"
 
 layout(local_size_x = LOCAL_SIZE) in;     // given by ldi_gpu.py, which dispatches by it
-layout(binding = 0) uniform samplerBuffer u_points;   // RGB32F, row-major over the dispatch
-layout(binding = 2) uniform usampler2D u_packed;
-layout(binding = 1, r8ui) writeonly uniform uimage2D u_inside;
+layout(binding = BINDING_LDI_POINTS) uniform samplerBuffer u_points;   // RGB32F, row-major over the dispatch
+layout(binding = BINDING_LDI_RANGES) uniform usampler2D u_packed;
+layout(binding = BINDING_LDI_INSIDE, r8ui) writeonly uniform uimage2D u_inside;
 uniform mat4 u_to_crop;       // points -> the LDI's crop space
 uniform ivec2 u_crop_size;
 uniform int u_per_row;     // crop texels per row of the layers image (ldi.glsl)

@@ -3,7 +3,7 @@
 // Depth peeling into linear depth (orthographic: gl_FragCoord.z is linear). Pass k keeps
 // fragments strictly behind layer k-1; MIN blending on the float target keeps the nearest,
 // exactly (no depth buffer quantization). COUNT: every fragment adds 1 (depth complexity).
-layout(binding = 0) uniform sampler2D u_prev;   // layer k-1, NIL (> 1) where it has no surface
+layout(binding = BINDING_PEEL_PREVIOUS) uniform sampler2D u_prev;   // layer k-1, NIL (> 1) where it has no surface
 uniform int u_pass;
 layout(location = 0) out float out_depth;
 

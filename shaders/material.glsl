@@ -4,8 +4,8 @@ struct Material {
     vec4 rect;     // texture origin (x, y) and size (w, h) in atlas texels, border excluded
     ivec4 info;    // (layer, 0, 0, has texture)
 };
-layout(std430, binding = 2) readonly buffer MaterialBuffer { Material materials[]; };
-uniform sampler2DArray u_material_atlas;
+layout(std430, binding = BINDING_MATERIALS) readonly buffer MaterialBuffer { Material materials[]; };
+layout(binding = BINDING_MATERIAL_ATLAS) uniform sampler2DArray u_material_atlas;
 
 // What a fragment needs of the object's material: (rect, layer), layer -1 without a texture.
 // The vertex stage reads it and passes it flat, so no fragment reads the buffer.

@@ -26,8 +26,8 @@ uniform int u_width;
 // the first three surfaces and the list of the later ones as composite.frag's FIRST_FETCHED left
 // them: this frame's, where the stencil test lets the shader run (a pixel's first surface
 // writes both), an empty one 0
-layout(binding = 0) uniform usampler2D u_first;
-layout(binding = 1) uniform usampler2D u_more;
+layout(binding = BINDING_OIT_FIRST) uniform usampler2D u_first;
+layout(binding = BINDING_OIT_MORE) uniform usampler2D u_more;
 #endif
 #ifdef OVER
 uniform vec3 u_background;

@@ -16,8 +16,8 @@
 // two other neighbours, so two normals and one gather are fetched.
 // EDGES_ONLY: no AO (written as 1), for objects shaded with edges alone (--ao-objects focus).
 
-layout(binding = 0) uniform sampler2DArray u_depth;    // window depth, 1 where empty
-layout(binding = 1) uniform sampler2DArray u_normal;   // view normal * 0.5 + 0.5 (RGBA8); stale where empty
+layout(binding = BINDING_ATLAS_DEPTH) uniform sampler2DArray u_depth;    // window depth, 1 where empty
+layout(binding = BINDING_ATLAS_NORMAL) uniform sampler2DArray u_normal;   // view normal * 0.5 + 0.5 (RGBA8); stale where empty
 
 uniform vec4 u_proj;           // (P00, P11, P22, P23) of the perspective projection
 uniform float u_ao_radius;     // pixels

@@ -6,8 +6,8 @@ uniform float u_projector_strength;  // 1: the image replaces the surface's albe
 uniform int u_projector_shadows;
 uniform vec2 u_projector_range;      // the projector's (near, far): window depth -> distance
 uniform float u_projector_bias;      // relative shadow bias: occluded when nearer by more than this fraction
-layout(binding = 5) uniform sampler2D u_projector_image;
-layout(binding = 6) uniform sampler2D u_projector_depth;
+layout(binding = BINDING_PROJECTOR_IMAGE) uniform sampler2D u_projector_image;
+layout(binding = BINDING_PROJECTOR_DEPTH) uniform sampler2D u_projector_depth;
 
 float surface_light(vec3 view_normal) {
     return 0.25 + 0.75 * abs(view_normal.z);   // the headlight of scene.frag

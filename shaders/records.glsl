@@ -6,8 +6,8 @@ struct Record {
     vec4 viewport;    // inner B_viewport in pixels (x0, y0, x1, y1)
     ivec4 info;       // (layer, visible, border, floatBitsToInt(scale))
 };
-layout(std430, binding = 0) readonly buffer RecordBuffer { Record records[]; };
-layout(std430, binding = 1) readonly buffer ObjectBuffer { vec4 object_colors[]; };
+layout(std430, binding = BINDING_RECORDS) readonly buffer RecordBuffer { Record records[]; };
+layout(std430, binding = BINDING_OBJECTS) readonly buffer ObjectBuffer { vec4 object_colors[]; };
 
 // Screen-space vertex displacement, done in clip space: T is affine in NDC, so
 // (T * (v / w)) * w == (s * v.xy + t * v.w, v.z, v.w), exact and safe for any w.

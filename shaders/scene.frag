@@ -9,7 +9,7 @@
 layout(location = 5) in vec2 f_uv;
 #ifdef SEPARATE
 // the unbatched reference: each object drawn alone with its own texture, REPEAT sampling
-uniform sampler2D u_texture;
+layout(binding = BINDING_SCENE_TEXTURE) uniform sampler2D u_texture;
 uniform bool u_textured;
 #else
 #include "material.glsl"

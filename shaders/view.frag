@@ -4,11 +4,11 @@
 // over u_background where its alpha is below 1 (STD background) or, for the depth-keyed
 // atlas, where its depth is 1 (empty texels, whose colour is stale: targets.py).
 #ifdef ARRAY
-layout(binding = 0) uniform sampler2DArray u_texture;
-layout(binding = 1) uniform sampler2DArray u_depth;
+layout(binding = BINDING_VIEW_TEXTURE) uniform sampler2DArray u_texture;
+layout(binding = BINDING_ATLAS_DEPTH) uniform sampler2DArray u_depth;
 uniform int u_layer;
 #else
-uniform sampler2D u_texture;
+layout(binding = BINDING_VIEW_TEXTURE) uniform sampler2D u_texture;
 #endif
 uniform vec2 u_extent;       // fraction of the texture shown (the used part of the atlas)
 uniform vec3 u_background;

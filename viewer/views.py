@@ -12,6 +12,7 @@ import moderngl
 import numpy as np
 
 from rtta.gl import glraw, glsl
+from rtta.gl.bindings import Texture
 from rtta.passes.composite import BACKGROUND
 
 PANEL_WIDTH = 320
@@ -124,9 +125,9 @@ class ViewPass:
             prog["u_layer"].value = int(layer)
         prog["u_extent"].value = tuple(float(v) for v in extent)
         prog["u_background"].value = tuple(float(v) for v in background)
-        texture.use(0)
+        texture.use(Texture.VIEW_TEXTURE)
         if layer is not None:
-            glraw.bind_texture_array(1, depth.glo)
+            glraw.bind_texture_array(Texture.ATLAS_DEPTH, depth.glo)
         self.ctx.enable_only(moderngl.NOTHING)
         target.viewport = (int(rx), int(window_height - ry - rh), int(rw), int(rh))
         target.use()

@@ -1,5 +1,6 @@
 """The one GLSL loader: files shipped in the package `rtta.shaders`, cached,
 `#include "file"` resolved, defines injected after `#version`; unknown defines rejected.
+Every shader also gets the binding points of `bindings` as `#define BINDING_<NAME> <n>`.
 
 Each shader file declares the defines it understands on a line `// defines: A B C`.
 """
@@ -12,12 +13,14 @@ from importlib import resources
 from typing import TYPE_CHECKING
 
 from ..outputs import signals_held
+from . import bindings
 
 if TYPE_CHECKING:
     import moderngl
 
 _INCLUDE = re.compile(r'^\s*#include\s+"([^"]+)"\s*$', re.MULTILINE)
 _DECLARED = re.compile(r"^//\s*defines:(.*)$", re.MULTILINE)
+_BINDINGS = tuple(bindings.defines().items())  # after the pass's own defines
 
 
 @cache
@@ -44,7 +47,7 @@ def _load(name: str, defines: tuple[tuple[str, str], ...]) -> str:
     first, _, rest = text.partition("\n")
     if not first.startswith("#version"):
         raise ValueError(f"shader {name}: first line must be #version")
-    extra = "".join(f"#define {k} {v}\n" for k, v in defines)
+    extra = "".join(f"#define {k} {v}\n" for k, v in (*defines, *_BINDINGS))
     return f"{first}\n{extra}#line 2\n{rest}"
 
 

@@ -9,10 +9,10 @@ import numpy as np
 
 from ..atlas.records import RECORD_DTYPE, Records
 from ..scene.model import Scene
+from .bindings import Storage, Texture
 
 VERTEX_LAYOUT = (("in_position", "3f", "12x"), ("in_normal", "3f", "12x"), ("in_object", "u4", "4x"))
 UV_LAYOUT = (("in_uv", "2f", "8x"),)
-MATERIAL_UNIT = 15  # texture unit of the material atlas
 MATERIAL_DTYPE = np.dtype([("rect", "<f4", 4), ("info", "<i4", 4)])
 
 
@@ -86,20 +86,19 @@ class GpuScene:
         self.materials = self.ctx.buffer(rows.tobytes())
 
     def bind_material(self, program: moderngl.Program) -> None:
-        """The material atlas on MATERIAL_UNIT for a program that samples it."""
+        """The material atlas on Texture.MATERIAL_ATLAS for a program that samples it."""
         if self.material_atlas is not None and "u_material_atlas" in program:
-            program["u_material_atlas"].value = MATERIAL_UNIT
-            self.material_atlas.use(MATERIAL_UNIT)
+            self.material_atlas.use(Texture.MATERIAL_ATLAS)
 
     def upload_records(self, records: Records) -> None:
         """Write R for this frame (same size every frame: no reallocation)."""
         self.records.write(records.packed(reuse=True))  # no copy to bytes: 8 MB a frame at 10^5 objects
 
     def bind_storage(self) -> None:
-        self.records.bind_to_storage_buffer(0)
-        self.objects.bind_to_storage_buffer(1)
+        self.records.bind_to_storage_buffer(Storage.RECORDS)
+        self.objects.bind_to_storage_buffer(Storage.OBJECTS)
         if self.materials is not None:
-            self.materials.bind_to_storage_buffer(2)
+            self.materials.bind_to_storage_buffer(Storage.MATERIALS)
 
     def release(self) -> None:
         for vao in self._vaos.values():

@@ -9,6 +9,7 @@ import moderngl
 import numpy as np
 
 from ..gl import glraw, glsl
+from ..gl.bindings import Image, Texture
 from ..gl.targets import release_all
 from ..passes.capture import mat_bytes
 from .pack import CompressedLDI, compress
@@ -53,10 +54,10 @@ class LdiTextures:
             t.filter = moderngl.NEAREST, moderngl.NEAREST
 
     def bind(self, prog: moderngl.Program, to_world: np.ndarray, *, packed_unit: int, prefix: str = "u_") -> None:
-        """Bind the layers (image unit 0, ldi.glsl) and the ranges (texture unit `packed_unit`),
+        """Bind the layers (Image.LDI_LAYERS, ldi.glsl) and the ranges (texture unit `packed_unit`),
         and set <prefix>to_crop (point space -> crop space, for `to_world`: point -> world),
         crop_size, depth and per_row, where the program uses them."""
-        self.layers.bind_to_image(0, read=True, write=False)
+        self.layers.bind_to_image(Image.LDI_LAYERS, read=True, write=False)
         self.ranges.use(packed_unit)
         if f"{prefix}to_crop" in prog:
             prog[f"{prefix}to_crop"].write(mat_bytes(self.ldi.crop_matrix @ to_world))
@@ -133,9 +134,9 @@ class ParityTest:
         self.points.write_points(points - center if center.any() else points, rows * POINTS_WIDTH)
         t1 = time.perf_counter()
         prog = self._program(compressed)
-        self.textures.bind(prog, shift, packed_unit=2)
-        self.points.use(0)
-        self.inside.bind_to_image(1, read=False, write=True)
+        self.textures.bind(prog, shift, packed_unit=Texture.LDI_RANGES)
+        self.points.use(Texture.LDI_POINTS)
+        self.inside.bind_to_image(Image.LDI_INSIDE, read=False, write=True)
         prog.run(POINTS_WIDTH // LOCAL_SIZE, rows)
         self.ctx.finish()
         t2 = time.perf_counter()

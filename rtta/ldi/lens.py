@@ -12,6 +12,7 @@ import moderngl
 import numpy as np
 
 from ..errors import RttaError
+from ..gl.bindings import Texture
 from ..scene.model import Scene
 from .gpu import LdiTextures
 from .peel import Peeler, build, closed_mesh
@@ -94,7 +95,8 @@ class LensPass:
 
     def bind(self, prog: moderngl.Program, lens: Lens, origin) -> None:
         tex = self.textures(lens)
-        tex.bind(prog, lens.to_local(origin), packed_unit=6, prefix="u_lens_")
+        # not on PROJECTOR_DEPTH: a projector and a lens are bound for the same draws
+        tex.bind(prog, lens.to_local(origin), packed_unit=Texture.LDI_RANGES, prefix="u_lens_")
         if "u_lens_object" in prog:
             prog["u_lens_object"].value = lens.object_id
 

@@ -22,6 +22,7 @@ import numpy as np
 
 from ..errors import RttaError
 from ..gl import glraw, glsl
+from ..gl.bindings import Texture
 from ..gl.targets import release_all
 from ..passes.capture import mat_bytes
 
@@ -192,7 +193,7 @@ class Peeler:
                 out, prev = self.fbos[k % 2], self.tex[(k + 1) % 2]
                 out.use()
                 out.clear(NIL)
-                prev.use(0)
+                prev.use(Texture.PEEL_PREVIOUS)
                 self.peel_prog["u_pass"].value = k
                 with self.query:
                     vao.render(moderngl.TRIANGLES)

@@ -13,6 +13,7 @@ from __future__ import annotations
 import moderngl
 import numpy as np
 
+from ..gl.bindings import Texture
 from ..gl.gpu import GpuScene
 from ..gl.targets import LayeredTarget
 from .bvh import Bvh, build_bvh, visible_leaves
@@ -48,8 +49,6 @@ class SeparatePass(ScenePass):
         vao = self.setup(gpu, view, proj, target)
         target.bind((0, 0, *viewport))
         textures = self._uploaded(gpu) if gpu.textured else []
-        if "u_texture" in self.program:
-            self.program["u_texture"].value = 0
         ids = gpu.scene.texture_ids if gpu.textured else None
         self.draw_calls = 0
         try:
@@ -58,7 +57,7 @@ class SeparatePass(ScenePass):
                     has = ids[oid] >= 0
                     self.program["u_textured"].value = bool(has)
                     if has:
-                        textures[ids[oid]].use(0)
+                        textures[ids[oid]].use(Texture.SCENE_TEXTURE)
                 self.cull(bool(self._cullable[oid]))  # as STD culls (ScenePass.draw_objects)
                 vao.render(moderngl.TRIANGLES, vertices=int(count), first=int(first))
                 self.draw_calls += 1

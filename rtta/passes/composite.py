@@ -22,6 +22,7 @@ import numpy as np
 
 from ..atlas.parameterize import Records
 from ..gl import glraw, glsl
+from ..gl.bindings import Storage, Texture
 from ..gl.gpu import GpuScene
 from ..gl.targets import CompositeTarget, LayeredTarget, release_framebuffer
 from .capture import mat_bytes
@@ -170,12 +171,12 @@ class CompositePass:
         target.fbo.use()
         target.fbo.clear(*BACKGROUND, depth=1.0)
         gpu.bind_storage()
-        gpu.bounds.bind_to_storage_buffer(4)
-        self.styles.bind_to_storage_buffer(2)
-        atlas.color.use(0)
-        glraw.bind_texture_array(1, atlas.depth.glo)  # depth-keyed: no id image is read
+        gpu.bounds.bind_to_storage_buffer(Storage.BOUNDS)
+        self.styles.bind_to_storage_buffer(Storage.STYLES)
+        atlas.color.use(Texture.ATLAS_COLOR)
+        glraw.bind_texture_array(Texture.ATLAS_DEPTH, atlas.depth.glo)  # depth-keyed: no id image is read
         if projection is not None:
-            atlas.normal.use(4)
+            atlas.normal.use(Texture.ATLAS_NORMAL)
         everyone = np.arange(n)
         outlined = style.outline_width >= 1
         if mode == "sprites":
@@ -189,7 +190,7 @@ class CompositePass:
         else:
             with_ao = mode == "ghosted-ao"
             if with_ao:
-                post.texture.use(3)
+                post.texture.use(Texture.ATLAS_POST)
             in_context = np.ones(n, bool)
             in_context[focus] = False
             context = everyone[in_context]  # (a mask: setdiff1d's sort took 1.6 ms at 10^4 objects)
@@ -224,7 +225,7 @@ class CompositePass:
         quad per focus object reaching `style.halo` pixels beyond its B_viewport."""
         if not 1 <= int(style.halo) <= 32:
             raise ValueError(f"halo width must be 0..32 pixels, got {style.halo}")
-        self._sprite_depth(context, style, records, target, farthest=True, cut=True).use(5)
+        self._sprite_depth(context, style, records, target, farthest=True, cut=True).use(Texture.CONTEXT_DEPTH)
         self._draw(focus, style, records, halo=True, depth_test=True)
 
     def _sprite_depth(
@@ -289,7 +290,7 @@ class CompositePass:
                 if clip:
                     self._sprite_depth(
                         behind, style, records, target, farthest=False, cut=False, outlined=behind_outlined
-                    ).use(7)
+                    ).use(Texture.FOCUS_DEPTH)
                 self._pixel_order.collect_into(target, mark=not clip)
                 try:  # clip: collected only, writing no depth (clipped by the focus depth instead);
                     # else blended in object order and sorted where that is wrong (oit.OrderMarks)
@@ -364,7 +365,7 @@ class CompositePass:
         first_fetched=False,
     ) -> None:
         self._upload(self.order, np.ascontiguousarray(ids, np.int32))
-        self.order.bind_to_storage_buffer(3)
+        self.order.bind_to_storage_buffer(Storage.DRAW_LIST)
         projection = None if outline or halo else self._projection
         lens = self._lens if cut else None
         # upsampled pixels reach past the outline; small sprites do not repay the outline's cost

@@ -36,6 +36,7 @@ import numpy as np
 
 from ..atlas.parameterize import Records
 from ..gl import glraw, glsl
+from ..gl.bindings import Storage, Texture
 from ..gl.targets import release_all
 
 # each pixel's first surfaces in colour attachments and its count and order mark in the stencil,
@@ -160,9 +161,9 @@ class PixelOrderPass:
         self.bases.write(bases.tobytes())
         if not self.fetch:
             self.heads.clear(size=4 * w * h)  # 0: no node (a pattern clear took 8 ms at 1024²)
-            self.heads.bind_to_storage_buffer(5)
-        self.nodes.bind_to_storage_buffer(6)
-        self.bases.bind_to_storage_buffer(7)
+            self.heads.bind_to_storage_buffer(Storage.OIT_HEADS)
+        self.nodes.bind_to_storage_buffer(Storage.OIT_NODES)
+        self.bases.bind_to_storage_buffer(Storage.OIT_BASES)
         return True
 
     def collect_into(self, target, mark: bool) -> None:
@@ -187,11 +188,11 @@ class PixelOrderPass:
         out of order, or with more than `in_place` surfaces (blended_in_place)."""
         self.ctx.memory_barrier(moderngl.SHADER_STORAGE_BARRIER_BIT)
         if self.fetch:
-            for unit, texture in enumerate(self.marks.first):
+            for unit, texture in zip((Texture.OIT_FIRST, Texture.OIT_MORE), self.marks.first, strict=True):
                 texture.use(unit)
         else:
-            self.heads.bind_to_storage_buffer(5)
-        self.nodes.bind_to_storage_buffer(6)
+            self.heads.bind_to_storage_buffer(Storage.OIT_HEADS)
+        self.nodes.bind_to_storage_buffer(Storage.OIT_NODES)
         key = (over is not None, self.fetch)
         if key not in self.programs:
             self.programs[key] = glsl.program(

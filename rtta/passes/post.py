@@ -18,6 +18,7 @@ import numpy as np
 
 from ..atlas.parameterize import Records
 from ..gl import glraw, glsl
+from ..gl.bindings import Storage, Texture
 from ..gl.gpu import GpuScene
 from ..gl.targets import LayeredTarget, release_framebuffer
 
@@ -95,8 +96,8 @@ class AtlasPostPass:
         if td == 0 or n == 0:
             return
         gpu.bind_storage()
-        glraw.bind_texture_array(0, atlas.depth.glo)
-        atlas.normal.use(1)
+        glraw.bind_texture_array(Texture.ATLAS_DEPTH, atlas.depth.glo)
+        atlas.normal.use(Texture.ATLAS_NORMAL)
         quad = ("EDGE_QUAD",) if int(style.edge_width) == 1 else ()
         for ids, defines in ((full, quad), (np.asarray(edges, np.int64), (*quad, "EDGES_ONLY"))):
             ids = ids[records.visible[ids]] if len(ids) else ids
@@ -109,7 +110,7 @@ class AtlasPostPass:
         if self._list.size < len(data):
             self._list.orphan(max(len(data), 2 * self._list.size))
         self._list.write(data)
-        self._list.bind_to_storage_buffer(3)
+        self._list.bind_to_storage_buffer(Storage.DRAW_LIST)
         prog, vao = self._variant(*defines)
         uniforms = {
             "u_proj": (float(proj[0, 0]), float(proj[1, 1]), float(proj[2, 2]), float(proj[2, 3])),

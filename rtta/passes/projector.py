@@ -16,6 +16,7 @@ from pathlib import Path
 import moderngl
 import numpy as np
 
+from ..gl.bindings import Texture
 from ..gl.gpu import GpuScene
 from ..scene.camera import Camera
 from .capture import ScenePass, mat_bytes
@@ -165,8 +166,8 @@ class ProjectorPass:
         ):
             if name in program:
                 program[name].value = value
-        self.image.use(5)
-        self.depth.use(6)
+        self.image.use(Texture.PROJECTOR_IMAGE)
+        self.depth.use(Texture.PROJECTOR_DEPTH)
 
     def release(self) -> None:
         from ..gl.targets import release_framebuffer

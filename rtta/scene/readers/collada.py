@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import RttaError
-from . import Assembly, check_archive, unit_name
+from . import Assembly, check_archive, hidden, unit_name
 
 MAX_DEPTH = 256
 
@@ -30,8 +30,10 @@ def read(path: Path) -> Assembly:
     out = Assembly(unit=unit_name(meters), up_axis="z" if axis.startswith("Z") else "y")
     if dae.scene is None:
         raise RttaError("the COLLADA file has no scene", path)
+    hiders: dict[str, None] = {}  # nodes whose singular transform hid a geometry, in file order
     for node in dae.scene.nodes:
-        _visit(node, np.identity(4), (), out, 0)
+        _visit(node, np.identity(4), (), out, 0, (hiders, None))
+    hidden.note_hidden(list(hiders), len(out.names), path, out.warnings)
     return out
 
 
@@ -39,7 +41,10 @@ def _label(node) -> str:
     return str(getattr(node, "name", None) or getattr(node, "id", None) or "node")
 
 
-def _visit(node, parent: np.ndarray, groups: tuple[str, ...], out: Assembly, depth: int) -> None:
+def _visit(node, parent: np.ndarray, groups: tuple[str, ...], out: Assembly, depth: int, hiding: tuple) -> None:
+    """The node's geometries and its children's. Below a singular transform (a zero scale)
+    nothing is drawn; `hiding` is (the names of the nodes that hid a geometry, the node whose
+    transform flattens this subtree or None)."""
     from collada import scene
 
     if depth > MAX_DEPTH:
@@ -50,16 +55,20 @@ def _visit(node, parent: np.ndarray, groups: tuple[str, ...], out: Assembly, dep
         return
     m = parent @ np.asarray(node.matrix, np.float64)
     name = _label(node)
+    hiders, hider = hiding
+    hider = hider or (name if hidden.singular(m) else None)
     geometries = [c for c in node.children if isinstance(c, scene.GeometryNode)]
     for k, g in enumerate(geometries):
         v, f, color = _geometry(g)
-        if len(f):
+        if len(f) and hider is not None:
+            hiders[hider] = None
+        elif len(f):
             world = v @ m[:3, :3].T + m[:3, 3]
             label = name if len(geometries) == 1 else f"{name} {g.geometry.name or g.geometry.id or k + 1}"
             out.add(label, world, f, color, groups)
     for child in node.children:
         if isinstance(child, scene.Node | scene.NodeNode):
-            _visit(child, m, (*groups, name), out, depth + 1)
+            _visit(child, m, (*groups, name), out, depth + 1, (hiders, hider))
 
 
 def _geometry(gnode) -> tuple[np.ndarray, np.ndarray, list[float] | None]:

@@ -12,6 +12,7 @@ import numpy as np
 
 from ...errors import RttaError
 from ..files import MAX_OBJECTS_LARGE
+from . import hidden
 
 MAX_DEPTH = 1000  # levels of the node graph
 
@@ -67,7 +68,9 @@ def walk(doc: dict, path: Path, warnings: list[str], limit: int) -> list[tuple[s
     file order, each
     path through the graph once. Cycles, graphs deeper than MAX_DEPTH and graphs whose paths
     make more objects than files.max_objects allows are errors (found in one pass over the nodes, before
-    any path is followed); a node with several parents is drawn under each, with a warning."""
+    any path is followed); a node with several parents is drawn under each, with a warning.
+    A node whose transform is singular (a zero scale: glTF's way to hide a node) draws nothing,
+    nor does anything below it: one warning names those nodes."""
     nodes, scenes = doc.get("nodes", []), doc.get("scenes", [])
     parents = [0] * len(nodes)
     for node in nodes:
@@ -83,16 +86,27 @@ def walk(doc: dict, path: Path, warnings: list[str], limit: int) -> list[tuple[s
         )
     found: list[tuple[str, int, np.ndarray, tuple]] = []
     local = local_transforms(nodes)
-    stack: list[tuple[int, np.ndarray | None, tuple]] = [(r, None, ()) for r in reversed(roots)]
+    flat = hidden.singular(local)
+    hiders: dict[str, None] = {}  # nodes whose singular transform hid a mesh, in file order
+    stack: list[tuple[int, np.ndarray | None, tuple, str | None]] = [(r, None, (), None) for r in reversed(roots)]
     while stack:
-        i, parent, tree = stack.pop()
+        i, parent, tree, hider = stack.pop()
         node = nodes[i]
         world = local[i] if parent is None else parent @ local[i]
         name = _node_name(nodes, i)
+        hider = hider or (name if flat[i] else None)
         if "mesh" in node:
-            found.append((name, node["mesh"], world, tree))
+            if hider is None:
+                found.append((name, node["mesh"], world, tree))
+            else:
+                hiders[hider] = None
         below = (*tree, name.replace("/", "\u2215"))
-        stack.extend((c, world, below) for c in reversed(node.get("children", [])))
+        stack.extend((c, world, below, hider) for c in reversed(node.get("children", [])))
+    if found:  # products of regular transforms that flatten to float64's precision
+        squashed = hidden.singular(np.array([f[2] for f in found]))
+        hiders.update((f[0], None) for f, s in zip(found, squashed, strict=True) if s)
+        found = [f for f, s in zip(found, squashed, strict=True) if not s]
+    hidden.note_hidden(list(hiders), len(found), path, warnings)
     return found
 
 

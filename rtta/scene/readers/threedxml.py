@@ -13,7 +13,7 @@ from lxml import etree
 
 from ...errors import RttaError
 from ..precheck import ZIP_ERRORS
-from . import Assembly, check_archive
+from . import Assembly, check_archive, hidden
 
 
 def read(path: Path) -> Assembly:
@@ -28,6 +28,7 @@ def read(path: Path) -> Assembly:
         raise RttaError(f"cannot read 3DXML file ({reason})", path) from None
     out = Assembly(unit="mm", up_axis="z")
     graph = loaded.graph
+    hiders: dict[str, None] = {}  # parts placed by a singular transform (trimesh keeps no other nodes)
     for node in graph.nodes_geometry:
         transform, geom = graph[node]
         mesh = loaded.geometry.get(geom)
@@ -37,8 +38,12 @@ def read(path: Path) -> Assembly:
         chain = ids.split(":") if ids else []
         groups = tuple(products[i] for i in chain[:-3] if i in products)
         m = np.asarray(transform, np.float64)
+        if hidden.singular(m):
+            hiders[name or str(geom)] = None
+            continue
         v = np.asarray(mesh.vertices, np.float64) @ m[:3, :3].T + m[:3, 3]
         out.add(name or str(geom), v, mesh.faces, _color(mesh), groups)
+    hidden.note_hidden(list(hiders), len(out.names), path, out.warnings)
     return out
 
 

@@ -14,7 +14,7 @@ import numpy as np
 from ...errors import RttaError
 from ...outputs import signals_held
 from ..batch import fans
-from . import Assembly, check_archive, native_output, unit_name
+from . import Assembly, check_archive, hidden, native_output, unit_name
 
 MAX_LAYERS = 256
 
@@ -39,6 +39,7 @@ def read(path: Path) -> Assembly:
     )
     cache = UsdGeom.XformCache(Usd.TimeCode.Default())
     prototypes: dict = {}  # prototype prim path -> (points, triangles, colour): read once for all its instances
+    hiders: dict[str, None] = {}  # prims whose singular transform hid a mesh, in file order
     for prim in Usd.PrimRange.Stage(stage, Usd.TraverseInstanceProxies(Usd.PrimDefaultPredicate)):
         if not prim.IsA(UsdGeom.Mesh) or UsdGeom.Imageable(prim).ComputeVisibility() == UsdGeom.Tokens.invisible:
             continue
@@ -52,9 +53,25 @@ def read(path: Path) -> Assembly:
         if not len(f):
             continue
         m = np.array(cache.GetLocalToWorldTransform(prim), np.float64)  # row vectors: p @ M
+        if hidden.singular(m.T):
+            hiders[_hider(prim, cache)] = None
+            continue
         name, groups = _name(prim)
         out.add(name, v @ m[:3, :3] + m[3, :3], f, color, groups)
+    hidden.note_hidden(list(hiders), len(out.names), path, out.warnings)
     return out
+
+
+def _hider(prim, cache) -> str:
+    """The path of the topmost prim above (or at) `prim` whose own transform is singular (a
+    zero scale); `prim`'s where only their product is."""
+    found, current = prim, prim
+    while current and not current.IsPseudoRoot():
+        local, _ = cache.GetLocalTransformation(current)
+        if hidden.singular(np.array(local, np.float64).T):
+            found = current
+        current = current.GetParent()
+    return found.GetPath().pathString
 
 
 _TF_ERROR = re.compile(r"\s*Error in '[^']*' at line \d+ in file .*? : '")

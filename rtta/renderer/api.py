@@ -159,13 +159,79 @@ def snapshot(
     smooth: bool = False,
     **style,
 ) -> np.ndarray:
-    """The picture `rtta snapshot --mode MODE --out` writes, as RGBA uint8 [H, W, 4], row 0 at
-    the top (as images are; pixel for pixel the PNG). `mode`: std, sprites, transparent,
-    ghosted or ghosted-ao. `focus`: object names; `opacity`: name -> alpha; `camera`: (AZ, EL,
-    DIST) orbit, 'AZ,EL,DIST' or a Camera; `size`: (W, H). `projector`/`lens` take the CLI's
-    strings (or a Projector / Lens). Style keywords: context_opacity, edge_width, ao_radius,
-    ao_strength, ao_objects, edge_objects, order, halo, desaturate, default_opacity, outline_width,
-    outline_color, edge_color."""
+    """Render one picture of a scene in a compositing mode, headless.
+
+    The picture `rtta snapshot --mode MODE --out` writes, pixel for pixel. The process's one
+    headless context is made on the first call and reused; scenes are cached by path and
+    modification time.
+
+    Parameters
+    ----------
+    scene : str, Path, Scene or None
+        A scene file, a loaded `Scene`, or None for the built-in demo.
+    mode : str, default "ghosted-ao"
+        "std", "sprites", "transparent", "ghosted" or "ghosted-ao".
+    focus : str or iterable of str
+        Objects highlighted (the focus set of the ghosted modes): names, group names or globs.
+    opacity : mapping of str to float, optional
+        Opacity per object or group name, in `transparent`.
+    camera : Camera, str or sequence of float, optional
+        An orbit (azimuth, elevation, distance in bounding radii), "AZ,EL,DIST", or a `Camera`;
+        default (35, 25, 2.2).
+    size : sequence of int, default (1024, 768)
+        Width and height in pixels.
+    fov : float, default 45
+        Vertical field of view in degrees.
+    border : int, default 1
+        Empty texels around each atlas region.
+    atlas_max : str or tuple of int, optional
+        The atlas's largest layer, "WxH" or (W, H); default the viewport plus the border.
+    max_layers : int, optional
+        The most atlas layers; regions are scaled down beyond them.
+    capture_path : str, default "auto"
+        "vs" (vertex shader, `GL_ARB_shader_viewport_layer_array`), "gs" (geometry shader) or "auto".
+    region_scale : float, default 1
+        Atlas texels per viewport pixel.
+    context_scale : float, optional
+        Texels per pixel of objects outside the focus, as a share of `region_scale` (0.25-1).
+    bounds : str, default "aabb"
+        The bounds projected for each region: "aabb", or "obb" (tighter for rotated parts).
+    projector : str or Projector, optional
+        "IMAGE[,AZ,EL,DIST]" as `--projector` takes it ("default" is the shipped grid).
+    projector_fov : float, default 30
+        The projector's field of view in degrees.
+    projector_shadows : bool, default True
+        Whether objects shadow the projected image.
+    lens : str or Lens, optional
+        "sphere[,R]", "box[,R]" or an object's name: cuts the context away in the ghosted modes.
+    lens_at : str or sequence of float, optional
+        The lens's centre "X,Y,Z" (default: the centre of the focus).
+    smooth_angle : float, default 30
+        Normals made at load are smoothed across faces within this angle (degrees).
+    smooth : bool, default False
+        Smooth the file's own normals too.
+    **style
+        Style keywords (see `Style`): context_opacity, desaturate, edge_width, edge_color,
+        outline_width, outline_color, ao_radius, ao_strength, ao_objects, edge_objects, order,
+        halo, default_opacity.
+
+    Returns
+    -------
+    numpy.ndarray
+        RGBA uint8 [H, W, 4], row 0 at the top (as images are).
+
+    Raises
+    ------
+    RttaError
+        An unreadable scene, an unknown object or keyword (with the close matches), a bad value.
+
+    Examples
+    --------
+    >>> import rtta
+    >>> rgba = rtta.snapshot(None, mode="ghosted", focus=["piston_1", "piston_2"], size=(320, 240))
+    >>> rgba.shape
+    (240, 320, 4)
+    """
     check_choice("mode", mode, SNAPSHOT_MODES)
     extra = style_keywords(style)
     scene = _session.scene(scene, smooth_angle, smooth)
@@ -203,8 +269,52 @@ def capture(
     smooth_angle: float = DEFAULT_SMOOTH_ANGLE,
     smooth: bool = False,
 ) -> Capture:
-    """Capture one frame and give what `rtta export` writes as arrays (see `Capture`):
-    every object's amodal (unoccluded) images in the atlas, their records and the direct render."""
+    """Capture one frame: every object's unoccluded images, as arrays.
+
+    What `rtta export` writes: the atlas (every object's amodal colour, normal, depth and id in
+    its region), the records of Algorithm 1 and the direct render. The atlas options are those
+    of `snapshot`.
+
+    Parameters
+    ----------
+    scene : str, Path, Scene or None
+        A scene file, a loaded `Scene`, or None for the built-in demo.
+    camera : Camera, str or sequence of float, optional
+        An orbit (azimuth, elevation, distance in bounding radii), "AZ,EL,DIST", or a `Camera`.
+    size : sequence of int, default (1024, 768)
+        Width and height in pixels.
+    fov : float, default 45
+        Vertical field of view in degrees.
+    border : int, default 1
+        Empty texels around each atlas region.
+    atlas_max : str or tuple of int, optional
+        The atlas's largest layer, "WxH" or (W, H).
+    max_layers : int, optional
+        The most atlas layers.
+    capture_path : str, default "auto"
+        "vs", "gs" or "auto".
+    region_scale : float, default 1
+        Atlas texels per viewport pixel.
+    bounds : str, default "aabb"
+        "aabb" or "obb".
+    smooth_angle : float, default 30
+        Normals made at load are smoothed across faces within this angle (degrees).
+    smooth : bool, default False
+        Smooth the file's own normals too.
+
+    Returns
+    -------
+    Capture
+        The frame's arrays; row 0 is the bottom row (GL's order, as in the export's .npy files).
+
+    Examples
+    --------
+    >>> import rtta
+    >>> cap = rtta.capture(None, size=(320, 240))
+    >>> alone = cap.amodal("piston_1")  # the whole piston, where the caliper hides it too
+    >>> alone["color"].shape
+    (240, 320, 4)
+    """
     scene = _session.scene(scene, smooth_angle, smooth)
     viewport = check_size(size)
     cam = orbit_camera(scene, camera, fov)

@@ -15,13 +15,38 @@ from ..scene.camera import Camera
 
 @dataclass
 class Capture:
-    """One captured frame, as `rtta export` writes it (README, "Export format"), in arrays.
+    """One captured frame in arrays, as `rtta export` writes it (docs: Library, "Export format").
 
-    Atlas arrays are [layers, Th, Tw(, C)]: `color` RGBA uint8 (alpha 255 where an object
-    covers the texel), `normal` float32 xyz, `depth` float32 window depth (1.0 where empty),
-    `id` int32 (-1 where empty); `std_*` the direct render [H, W(, C)]. Rows follow GL window
-    coordinates like the .npy files and the rectangles: row 0 is the BOTTOM row (the PNGs,
-    and `snapshot`, are top row first: flip with [::-1]). `view`/`proj` are world-space.
+    What `rtta.capture` returns. Rows follow GL window coordinates like the export's .npy files
+    and the rectangles: row 0 is the BOTTOM row (the PNGs, and `snapshot`, are top row first:
+    flip with ``[::-1]``).
+
+    Attributes
+    ----------
+    records : Records
+        Algorithm 1's records of the frame (regions, transforms, layers, scales).
+    names : tuple of str
+        The object names, indexed by object id.
+    camera : Camera
+        The camera of the frame.
+    view, proj : numpy.ndarray
+        World-space view and projection matrices, 4x4: ``clip = proj @ view @ [x, y, z, 1]``.
+    color : numpy.ndarray
+        The atlas colour, RGBA uint8 [layers, Th, Tw, 4], alpha 255 where an object covers the texel.
+    normal : numpy.ndarray or None
+        The atlas normals, float32 xyz [layers, Th, Tw, 3].
+    depth : numpy.ndarray
+        The atlas window depth, float32 [layers, Th, Tw], 1.0 where empty.
+    id : numpy.ndarray
+        The object id per atlas texel, int32 [layers, Th, Tw], -1 where empty.
+    std_color, std_depth, std_id : numpy.ndarray
+        The direct render [H, W(, 4)], same conventions.
+
+    Examples
+    --------
+    >>> import rtta
+    >>> cap = rtta.capture(None, size=(320, 240))
+    >>> x, y, w, h = cap.atlas_rect[cap.index("piston_1")]  # its region, border included
     """
 
     records: Records

@@ -9,7 +9,6 @@ from __future__ import annotations
 import time
 import warnings
 from contextlib import contextmanager
-from dataclasses import dataclass
 
 import moderngl
 import numpy as np
@@ -26,24 +25,25 @@ from ..passes.composite import LENS_MODES, CompositePass, CompositeTarget, Style
 from ..passes.post import AtlasPostPass
 from ..scene.camera import Camera
 from ..scene.model import Scene
-
-
-@dataclass
-class Settings:
-    """What a user can choose per frame."""
-
-    border: int = 1
-    atlas_max: tuple[int, int] | None = None  # None: viewport + 2 * border
-    max_layers: int | None = None  # None: GL_MAX_ARRAY_TEXTURE_LAYERS
-    capture_path: str = "auto"  # 'auto', 'vs' or 'gs'
-    region_scale: float = 1.0  # atlas texels per viewport pixel
-    context_scale: float = 1.0  # of region_scale, for objects outside the focus
-    bounds: str = "aabb"  # B_world: 'aabb' (the paper's) or 'obb' (tighter)
-    cull_closed: bool = True  # cull the back faces of closed parts (scene.closure); the
-    # images are the same, False draws all double-sided
+from .settings import Settings
 
 
 class Renderer:
+    """One frame of RTTA for a scene, on a moderngl context (OpenGL 4.3 core) of your own.
+
+    `capture` packs and draws every visible object into the atlas; `composite` renders a mode
+    from it, re-running only what changed. `release()` frees the GPU resources it keeps.
+
+    Parameters
+    ----------
+    ctx : moderngl.Context
+        The context (`create_headless_context`, or a window's).
+    scene : Scene
+        The batched scene (`load_scene`, `from_meshes`).
+    settings : Settings, optional
+        Atlas settings; they may change between captures.
+    """
+
     def __init__(self, ctx: moderngl.Context, scene: Scene, settings: Settings | None = None) -> None:
         self.ctx = ctx
         self.caps = Capabilities.of(ctx)

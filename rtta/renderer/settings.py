@@ -1,0 +1,48 @@
+"""`Settings`: the atlas settings of a `Renderer`, what a user can choose per frame."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass
+class Settings:
+    """The atlas settings of a `Renderer`: what a user can choose per frame.
+
+    Parameters
+    ----------
+    border : int, default 1
+        Empty texels around each region (the `ghosted-ao` filters read neighbours).
+    atlas_max : tuple of int, optional
+        The largest atlas layer (W, H); None: the viewport plus twice the border.
+    max_layers : int, optional
+        The most atlas layers; None: the driver's GL_MAX_ARRAY_TEXTURE_LAYERS. Regions are
+        scaled down (the scale recorded) rather than dropped when they do not fit.
+    capture_path : str, default "auto"
+        "vs" (vertex shader with GL_ARB_shader_viewport_layer_array), "gs" (the paper's
+        geometry shader) or "auto" (vs where the driver has it).
+    region_scale : float, default 1
+        Atlas texels per viewport pixel (below 1 saves fill, above 1 supersamples).
+    context_scale : float, default 1
+        Of `region_scale`, for objects outside the focus (0.25-1); the focus stays exact.
+    bounds : str, default "aabb"
+        B_world: "aabb" (the paper's) or "obb" (the projections of the AABB and of the
+        principal-axes box intersected: tighter for long, rotated parts).
+    cull_closed : bool, default True
+        Cull the back faces of closed parts (`rtta.scene.closure`); the images are the same,
+        False draws every object double-sided.
+
+    Examples
+    --------
+    >>> import rtta
+    >>> settings = rtta.Settings(border=2, bounds="obb")
+    """
+
+    border: int = 1
+    atlas_max: tuple[int, int] | None = None
+    max_layers: int | None = None
+    capture_path: str = "auto"
+    region_scale: float = 1.0
+    context_scale: float = 1.0
+    bounds: str = "aabb"
+    cull_closed: bool = True

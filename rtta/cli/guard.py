@@ -32,35 +32,66 @@ class StdoutError(Exception):
 
 
 class _GuardedStdout:
-    """sys.stdout whose write errors (other than a closed pipe) are a StdoutError."""
+    """sys.stdout whose write errors (other than a closed pipe) are a StdoutError; with no
+    stream (the process started with its standard output closed, `>&-`) every write is one."""
 
     def __init__(self, stream) -> None:
         self._stream = stream
 
     def write(self, text: str) -> int:
+        if self._stream is None:
+            raise StdoutError("it is closed")
         try:
             return self._stream.write(text)
         except BrokenPipeError:
             raise
         except OSError as exc:
-            raise StdoutError(exc.strerror or str(exc)) from None
+            raise StdoutError(exc.strerror or "an input/output error") from None
 
     def flush(self) -> None:
+        if self._stream is None:
+            return
         try:
             self._stream.flush()
         except BrokenPipeError:
             raise
         except OSError as exc:
-            raise StdoutError(exc.strerror or str(exc)) from None
+            raise StdoutError(exc.strerror or "an input/output error") from None
+
+
+def hold_closed_streams() -> None:
+    """A process started with standard input, output or error closed (`>&-`, `2>&-`): /dev/null
+    takes the descriptor, so no file the run opens gets it (a native library printing to fd 1
+    would write into it); sys.stdout stays None (writing to it is then a StdoutError, see
+    _GuardedStdout) and sys.stderr writes to /dev/null (a failure is told by the exit status)."""
+    for fd in (0, 1, 2):
+        try:
+            os.fstat(fd)
+        except OSError:
+            try:
+                null = os.open(os.devnull, os.O_RDONLY if fd == 0 else os.O_WRONLY)
+                if null != fd:
+                    os.dup2(null, fd)
+                    os.close(null)
+            except OSError:
+                pass
+    if sys.stderr is None:
+        sys.stderr = open(os.devnull, "w")  # noqa: SIM115 (for the rest of the process)
 
     def __getattr__(self, name):
         return getattr(self._stream, name)
 
 
 def say(kind: str, text: str, path: str | None = None) -> None:
-    """`rtta: <kind>: [path: ]text` on stderr, escaped to one line."""
+    """`rtta: <kind>: [path: ]text` on stderr, escaped to one line; nothing where stderr is
+    closed (print would fall back to stdout) or cannot be written."""
     where = f"{printable(path)}: " if path else ""
-    print(f"rtta: {kind}: {where}{printable(text)}", file=sys.stderr)
+    if sys.stderr is None:
+        return
+    try:
+        print(f"rtta: {kind}: {where}{printable(text)}", file=sys.stderr)
+    except OSError:  # a full or broken stderr: the exit status still tells
+        pass
 
 
 def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
@@ -144,15 +175,28 @@ def _failed(exc: Exception, args) -> int:
         say("error", "out of memory (RTTA_MEMORY_LIMIT_MB sets how much a scene may need)", _subject(args))
         return 2
     except OSError as exc:
-        say("error", f"{exc.strerror or type(exc).__name__}", exc.filename or _subject(args))
+        say("error", exc.strerror or "the system refused to read or write it", exc.filename or _subject(args))
         return 2
     except Exception as exc:
         if os.environ.get("RTTA_DEBUG"):
             raise
-        reason = str(exc).strip().splitlines()[0][:200] if str(exc).strip() else ""
-        say(
-            "error",
-            f"cannot process ({type(exc).__name__}{': ' + reason if reason else ''}); RTTA_DEBUG=1 shows where",
-            _subject(args),
-        )
+        say("error", unexpected(exc), _subject(args))
         return 2
+
+
+_PLAIN = {  # an unexpected exception's class (or a base's) -> what happened, in the user's terms
+    "RecursionError": "its structure is nested too deeply",
+    "OverflowError": "a number in it is too large to compute with",
+    "ZeroDivisionError": "a computation on it divided by zero",
+    "FloatingPointError": "a computation on it gave no finite number",
+    "LinAlgError": "a matrix computation on it failed (a transform that cannot be inverted?)",
+    "UnicodeError": "it holds text that is not valid in its encoding",
+}
+
+
+def unexpected(exc: BaseException) -> str:
+    """The one line for a failure rtta did not foresee: what happened in the user's terms,
+    never the exception's class or Python's own text, and how to see where."""
+    names = [kind.__name__ for kind in type(exc).__mro__]
+    what = next((_PLAIN[n] for n in names if n in _PLAIN), "rtta met a case it does not handle")
+    return f"cannot process this input: {what}; this is a bug in rtta (RTTA_DEBUG=1 shows where)"

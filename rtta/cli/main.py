@@ -10,7 +10,7 @@ from .bench import add_parsers as add_bench
 from .bench import cmd_bench
 from .common import add_load_options, load_options, parse_size, scene_arg
 from .common import load as _load
-from .guard import OneLineParser, run_command, say
+from .guard import OneLineParser, hold_closed_streams, run_command, say
 from .render import add_parsers as add_render
 from .render import cmd_export, cmd_snapshot
 
@@ -46,6 +46,8 @@ def main(argv: list[str] | None = None) -> int:
     from .dataset import cmd_dataset
     from .ldi import cmd_ldi
 
+    if argv is None:  # the whole process: `rtta info x.glb >&-` must not hand fd 1 to a file it opens
+        hold_closed_streams()
     try:
         args = build_parser().parse_args(argv)
     except RttaError as exc:

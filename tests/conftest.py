@@ -2,9 +2,19 @@
 
 from __future__ import annotations
 
+import atexit
+import os
+import shutil
+import tempfile
+
 import pytest
 
 from rtta.gl.context import shared_context
+
+# the scene cache (rtta.scene.cache) in a folder of this session's own, never the user's;
+# the commands the tests run in subprocesses inherit it; removed when the session ends
+os.environ["RTTA_CACHE_DIR"] = tempfile.mkdtemp(prefix="rtta-test-cache-")
+atexit.register(shutil.rmtree, os.environ["RTTA_CACHE_DIR"], True)
 
 
 def pytest_addoption(parser):

@@ -10,8 +10,7 @@ from pathlib import Path
 
 from imgui_bundle import imgui
 
-from rtta.scene.model import SUPPORTED
-from rtta.scene.readers import SUFFIXES as ASSEMBLIES
+from rtta.scene.readers import SUFFIXES
 
 POPUP = "Open scene"
 
@@ -29,7 +28,7 @@ def listing(folder: Path) -> tuple[list[Path], list[Path]]:
         try:
             if p.is_dir():
                 dirs.append(p)
-            elif p.suffix.lower() in SUPPORTED + ASSEMBLIES:
+            elif p.suffix.lower() in SUFFIXES:
                 files.append(p)
         except OSError:
             continue

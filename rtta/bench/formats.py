@@ -12,7 +12,6 @@ from pathlib import Path
 from ..errors import RttaError
 from ..scene import readers
 from ..scene.loader import load_scene
-from ..scene.model import SUPPORTED
 from .tables import print_table
 
 COLUMNS = ["format", "file", "parts", "triangles", "library load s", "rtta load s", "overhead s"]
@@ -54,7 +53,7 @@ def _files(paths: list[str]) -> list[Path]:
         return [Path(p) for p in paths]
     if not SHARED.is_dir():
         raise RttaError(f"no files given and {SHARED} does not exist")
-    known = SUPPORTED + readers.SUFFIXES
+    known = readers.SUFFIXES
     return sorted(p for p in SHARED.iterdir() if p.suffix.lower() in known)
 
 
@@ -73,7 +72,7 @@ def run_formats(paths: list[str], json_path: str | None = None) -> int:
     with readers.native_output():
         for path in _files(paths):
             lib, _ = _best(lambda p=path: library_load(p))
-            ours, scene = _best(lambda p=path: load_scene(p))
+            ours, scene = _best(lambda p=path: load_scene(p, cache=False))
             rows.append(
                 [
                     path.suffix.lower()[1:],

@@ -44,7 +44,7 @@ else:
     from rtta.memory import steady_heap
     steady_heap()
     t = time.perf_counter()
-    load_scene(path)
+    load_scene(path, cache=False)
 seconds = time.perf_counter() - t
 peak = [ln for ln in open("/proc/self/status") if ln.startswith("VmHWM:")][0].split()[1]
 print(seconds, int(peak) * 1024)

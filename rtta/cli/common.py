@@ -6,6 +6,8 @@ from __future__ import annotations
 import argparse
 
 from ..errors import RttaError
+from ..scene.camera import PROJECTIONS
+from ..scene.framing import STANDARD_VIEWS
 from ..scene.preprocess import DEFAULT_SMOOTH_ANGLE
 from .guard import say
 
@@ -40,11 +42,36 @@ def add_load_options(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--smooth", action="store_true", help="recompute normals by --smooth-angle even where the file has its own"
     )
+    p.add_argument(
+        "--no-cache",
+        action="store_true",
+        help="read the file itself, neither reading nor writing the scene cache "
+        "($RTTA_CACHE_DIR, else ~/.cache/rtta: a file opened before loads from there)",
+    )
 
 
 def view_args(p: argparse.ArgumentParser) -> None:
     """The camera, viewport and atlas flags of export and snapshot."""
-    p.add_argument("--camera", default=None, help="AZ,EL,DIST orbit (degrees, degrees, scene radii)")
+    p.add_argument(
+        "--camera",
+        default=None,
+        help="AZ,EL,DIST orbit (degrees, degrees, scene radii), or AZ,EL: the distance that frames "
+        "the visible parts (default: 35,25)",
+    )
+    p.add_argument(
+        "--view",
+        choices=tuple(STANDARD_VIEWS),
+        default=None,
+        help="a standard view relative to the file's up axis (Z in CAD/BIM files, Y in glTF), framed",
+    )
+    p.add_argument(
+        "--projection",
+        choices=PROJECTIONS,
+        default=None,
+        help="perspective (default) or ortho: an orthographic view keeps the scale the perspective "
+        "one shows at the target",
+    )
+    p.add_argument("--hide", nargs="+", default=[], metavar="NAME", help="objects left out (names, groups, globs)")
     p.add_argument("--size", default="1024x768", help="viewport WxH")
     p.add_argument("--fov", type=float, default=45.0, help="vertical field of view in degrees")
     p.add_argument("--border", type=int, default=1, help="border around each atlas region in pixels")
@@ -73,7 +100,7 @@ def load_options(args: argparse.Namespace) -> dict:
     """The loader's keyword arguments from add_load_options' flags (checked)."""
     if not 0.0 <= args.smooth_angle <= 180.0:
         raise RttaError(f"--smooth-angle must be between 0 and 180 degrees, got {args.smooth_angle:g}")
-    return {"smooth_angle": args.smooth_angle, "smooth": args.smooth}
+    return {"smooth_angle": args.smooth_angle, "smooth": args.smooth, "cache": not args.no_cache}
 
 
 def load(args):
@@ -111,3 +138,21 @@ def make_renderer(ctx, scene, settings):
     for note in caps.notes if settings.capture_path == "auto" else []:
         say("note", note)
     return Renderer(ctx, scene, settings)
+
+
+def camera_of(args, scene, viewport: tuple[int, int]):
+    """(Camera, hidden object ids) of view_args' flags: --camera or --view, --projection, --fov, --hide."""
+    from ..renderer.options import orbit_camera
+    from ..renderer.snapshot import resolve_names
+
+    hidden = resolve_names(scene, args.hide, "--hide")
+    camera = orbit_camera(
+        scene,
+        args.camera,
+        args.fov,
+        projection=args.projection or "perspective",
+        view=args.view,
+        aspect=viewport[0] / viewport[1],
+        hidden=hidden,
+    )
+    return camera, hidden

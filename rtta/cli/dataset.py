@@ -155,6 +155,7 @@ def cmd_dataset(args: argparse.Namespace) -> int:
         workers=args.workers,
         keep_going=args.keep_going,
         progress=False if args.no_progress else None,
+        cache=load["cache"],
     )
     main_thread = threading.current_thread() is threading.main_thread()
     previous = signal.signal(signal.SIGTERM, _interrupted) if main_thread else None  # a scheduler's kill

@@ -22,7 +22,7 @@ import numpy as np
 from ..errors import RttaError
 from ..outputs import atomic_write
 from ..scene.camera import Camera
-from ..scene.model import SUPPORTED
+from ..scene.readers import MESHES
 from . import coco
 
 FORMAT = "rtta-dataset 1"
@@ -58,6 +58,7 @@ class Run:
     workers: int = 1
     keep_going: bool = False
     progress: bool | None = None  # None: a bar when stderr is a terminal
+    cache: bool = True  # scenes through the scene cache (rtta.scene.cache)
 
 
 def expand_scenes(args: list[str]) -> list[str]:
@@ -73,9 +74,9 @@ def expand_scenes(args: list[str]) -> list[str]:
                 raise RttaError("matches no file", arg)
             found += hits
         elif Path(arg).is_dir():
-            hits = sorted(str(p) for p in Path(arg).rglob("*") if p.suffix.lower() in SUPPORTED and p.is_file())
+            hits = sorted(str(p) for p in Path(arg).rglob("*") if p.suffix.lower() in MESHES and p.is_file())
             if not hits:
-                raise RttaError(f"folder holds no scene file ({', '.join(SUPPORTED)})", arg)
+                raise RttaError(f"folder holds no scene file ({', '.join(MESHES)})", arg)
             found += hits
         else:
             found.append(arg)

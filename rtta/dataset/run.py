@@ -23,8 +23,8 @@ from .view import MAX_PNG_ID, annotate, camera_entry, depth_scale, render_rtta, 
 class Worker:
     """Renders views, one scene loaded at a time (the last one is kept for the next chunk)."""
 
-    def __init__(self, s: dict, out: Path, scenes: dict | None = None) -> None:
-        self.s, self.out = s, Path(out)
+    def __init__(self, s: dict, out: Path, scenes: dict | None = None, cache: bool = True) -> None:
+        self.s, self.out, self.cache = s, Path(out), cache
         self.given = scenes or {}  # in-memory scenes by their SCENE argument (library, tests)
         self.index: int | None = None
         self.renderer = None
@@ -43,7 +43,7 @@ class Worker:
         self.close()
         sc = self.s["scenes"][index]
         scene = self.given.get(sc["file"]) or load_scene(
-            sc["file"], smooth_angle=self.s["smooth_angle"], smooth=self.s["smooth"]
+            sc["file"], smooth_angle=self.s["smooth_angle"], smooth=self.s["smooth"], cache=self.cache
         )
         for note in scene.warnings:
             print(f"rtta: warning: {printable(scene.source)}: {printable(note)}", file=sys.stderr)
@@ -203,11 +203,11 @@ def chunks(todo: list[tuple[int, int]], size: int) -> list[list[tuple[int, int]]
 _worker: Worker | None = None
 
 
-def _init(s: dict, out: str) -> None:
+def _init(s: dict, out: str, cache: bool = True) -> None:
     global _worker
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent handles Ctrl+C
     signal.signal(signal.SIGTERM, _exit)  # temporaries are removed on the way out
-    _worker = Worker(s, Path(out))
+    _worker = Worker(s, Path(out), cache=cache)
 
 
 def _exit(*_):
@@ -231,7 +231,7 @@ def execute(s: dict, how: Run, todo: list[tuple[int, int]], scenes: dict | None 
     workers = max(1, min(how.workers, len(todo)))
     try:
         if workers == 1:
-            worker = Worker(s, how.out, scenes)
+            worker = Worker(s, how.out, scenes, how.cache)
             try:
                 for chunk in chunks(todo, 1):
                     if chunk[0][0] in failed:
@@ -244,7 +244,7 @@ def execute(s: dict, how: Run, todo: list[tuple[int, int]], scenes: dict | None 
             if scenes:
                 raise ValueError("in-memory scenes are rendered in this process: workers must be 1")
             size = max(1, min(8, len(todo) // (workers * 4)))
-            pool = multiprocessing.get_context("spawn").Pool(workers, _init, (s, str(how.out)))
+            pool = multiprocessing.get_context("spawn").Pool(workers, _init, (s, str(how.out), how.cache))
             try:
                 for results in pool.imap_unordered(_task, chunks(todo, size)):
                     if not _collect(results, failed, how, bar):

@@ -1,33 +1,59 @@
-"""Load glTF/GLB/OBJ/STL/PLY/3MF/OFF through trimesh into a batched Scene.
-
-Every scene-graph node with triangle geometry is one object (instances are separate
-objects). Expected failures raise RttaError naming the file and the problem.
+"""Load a scene file into a batched Scene: the file checked (a regular file, a known suffix,
+not empty, within the size limit), then read by its format's reader in the one table of
+rtta.scene.readers. Expected failures raise RttaError naming the file and the problem.
 """
 
 from __future__ import annotations
 
 import gc
+import time
 import warnings
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import RttaError
+from . import cache as scene_cache
 from . import readers
 from .files import MAX_FILE_BYTES, regular_file
-from .model import SUPPORTED, Scene, from_batch
+from .model import Scene
 from .preprocess import DEFAULT_SMOOTH_ANGLE
-from .readers.mesh import _parts, _read, _texture_notes
 
 
-def load_scene(path: str | Path, smooth_angle: float = DEFAULT_SMOOTH_ANGLE, smooth: bool = False) -> Scene:
-    """Read a scene file; see the module docstring for the rules. Vertices are indexed;
-    normals are smoothed by `smooth_angle` degrees where the file has none, or everywhere
-    with `smooth`."""
+def load_scene(
+    path: str | Path, smooth_angle: float = DEFAULT_SMOOTH_ANGLE, smooth: bool = False, *, cache: bool = True
+) -> Scene:
+    """Read a scene file.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file; see the module docstring for the rules.
+    smooth_angle : float
+        Normals are smoothed across edges below this angle (degrees) where the file has none.
+    smooth : bool
+        Recompute normals by `smooth_angle` even where the file has its own.
+    cache : bool
+        Use the scene cache on disk (rtta.scene.cache): a file loaded before with the same
+        options, unchanged since, is read back from it; a file read is stored there.
+
+    Returns
+    -------
+    Scene
+        The batched scene; vertices are indexed.
+    """
+    path = Path(path)
+    options = {"smooth_angle": float(smooth_angle), "smooth": bool(smooth)}
+    started = time.time_ns()
     enabled = gc.isenabled()
     gc.disable()  # the document's 10^5-10^6 objects would be traversed again and again by
     try:  # automatic collections while the load allocates; trimesh's cycles are
-        return _load(Path(path), smooth_angle, smooth)  # collected explicitly (_read)
+        scene = scene_cache.load(path, options) if cache else None  # collected explicitly (mesh._read)
+        if scene is None:
+            scene = _load(path, smooth_angle, smooth)
+            if cache:
+                scene_cache.store(path, options, scene, started)
+        return scene
     finally:
         if enabled:
             gc.enable()
@@ -36,10 +62,9 @@ def load_scene(path: str | Path, smooth_angle: float = DEFAULT_SMOOTH_ANGLE, smo
 def _load(path: Path, smooth_angle: float, smooth: bool) -> Scene:
     size = regular_file(path, "scene file")
     suffix = path.suffix.lower()
-    if suffix not in SUPPORTED + readers.SUFFIXES:
+    if suffix not in readers.SUFFIXES:
         raise RttaError(
-            f"unsupported file type '{suffix[:16] or '(none)'}'; supported: {', '.join(SUPPORTED + readers.SUFFIXES)}",
-            path,
+            f"unsupported file type '{suffix[:16] or '(none)'}'; supported: {', '.join(readers.SUFFIXES)}", path
         )
     if size == 0:
         raise RttaError("file is empty", path)
@@ -47,31 +72,14 @@ def _load(path: Path, smooth_angle: float, smooth: bool) -> Scene:
         raise RttaError(f"file is larger than the {MAX_FILE_BYTES >> 30} GiB limit", path)
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")
-        if suffix in readers.SUFFIXES:
-            scene = readers.load(path, 180.0 if smooth else smooth_angle)
-            scene.inputs = [str(path.resolve())]
-            return scene
-        notes, inputs, read = _read(path, suffix, smooth)
-        placed, names, colors, texture_ids, textures, dropped, paths = _parts(read, path, smooth_angle)
-        notes += read[0].textures.notes
-    if dropped:
-        notes.append(
-            f"{len(dropped)} object(s) with only degenerate (zero-area) triangles left out: "
-            + ", ".join(dropped[:5])
-            + (" ..." if len(dropped) > 5 else "")
-        )
-    scene = from_batch(
-        names, placed, colors, source=str(path), texture_ids=texture_ids, textures=textures, consume=True
-    )
-    del placed
-    scene.paths = paths
-    scene.warnings = notes + scene.warnings + _texture_notes(scene)
-    scene.inputs = [str(p) for p in dict.fromkeys([path.resolve(), *inputs])]
-    return scene
+        return readers.load(path, smooth_angle, smooth)
 
 
 def load_scene_or_demo(path: str | None, **options) -> Scene:
-    """The scene at `path`, or the built-in demo assembly when no path is given."""
+    """The scene at `path`, or the built-in demo assembly when no path is given (not cached:
+    it is small and ships with rtta)."""
     from .generators.demo import demo_path
 
-    return load_scene(path or str(demo_path()), **options)
+    if path:
+        return load_scene(path, **options)
+    return load_scene(str(demo_path()), **{**options, "cache": False})

@@ -1,9 +1,12 @@
-"""Readers for assembly formats trimesh does not read with their tree: STEP (cascadio),
-IFC (ifcopenshell). Each returns an `Assembly`: the parts in world coordinates, in the
-file's own length unit, with their colours and their path in the file's part tree.
+"""Every format's reader, in one table (READERS: suffix -> module here, the import it needs,
+the extra that installs it, what it gives), and the one dispatch the loader calls (`load`).
 
-The libraries are extras (`rtta[cad]`, `rtta[bim]`); a file whose extra is missing is
-refused with one line naming it.
+The mesh formats (glTF/GLB, OBJ, STL, PLY, 3MF, OFF) are gathered by `mesh` (rtta's own
+readers, else trimesh) into a Scene. The assembly formats' readers (STEP: cascadio, IFC:
+ifcopenshell, USD, COLLADA, 3DXML) each return an `Assembly`: the parts in world
+coordinates, in the file's own length unit, with their colours and their path in the
+file's part tree; `load` batches it. A file whose extra is missing is refused with one line
+naming it.
 """
 
 from __future__ import annotations
@@ -17,6 +20,7 @@ import tempfile
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Literal, NamedTuple
 
 import numpy as np
 
@@ -25,20 +29,40 @@ from .. import batch
 from ..model import Scene, from_batch
 from ..precheck import ZIP_ERRORS, check_size
 
-# suffix -> (module here, the import it needs, the extra that installs it)
+
+class Reader(NamedTuple):
+    """How a format is read: `module` here, the import it `needs`, the `extra` that installs
+    it ('' = the base install) and what the module `gives`: a 'scene' (its `load(path,
+    smooth_angle, smooth)`) or an 'assembly' (its `read(path)`, batched by `load` here)."""
+
+    module: str
+    needs: str
+    extra: str
+    gives: Literal["scene", "assembly"]
+
+
+_MESH = Reader("mesh", "trimesh", "", "scene")
 READERS = {
-    ".step": ("step", "cascadio", "cad"),
-    ".stp": ("step", "cascadio", "cad"),
-    ".ifc": ("ifc", "ifcopenshell", "bim"),
-    ".dae": ("collada", "collada", "all"),
-    ".zae": ("collada", "collada", "all"),
-    ".usd": ("usd", "pxr", "usd"),
-    ".usda": ("usd", "pxr", "usd"),
-    ".usdc": ("usd", "pxr", "usd"),
-    ".usdz": ("usd", "pxr", "usd"),
-    ".3dxml": ("threedxml", "trimesh", "all"),
+    ".glb": _MESH,
+    ".gltf": _MESH,
+    ".obj": _MESH,
+    ".stl": _MESH,
+    ".ply": _MESH,
+    ".3mf": _MESH,
+    ".off": _MESH,
+    ".step": Reader("step", "cascadio", "cad", "assembly"),
+    ".stp": Reader("step", "cascadio", "cad", "assembly"),
+    ".ifc": Reader("ifc", "ifcopenshell", "bim", "assembly"),
+    ".dae": Reader("collada", "collada", "all", "assembly"),
+    ".zae": Reader("collada", "collada", "all", "assembly"),
+    ".usd": Reader("usd", "pxr", "usd", "assembly"),
+    ".usda": Reader("usd", "pxr", "usd", "assembly"),
+    ".usdc": Reader("usd", "pxr", "usd", "assembly"),
+    ".usdz": Reader("usd", "pxr", "usd", "assembly"),
+    ".3dxml": Reader("threedxml", "trimesh", "all", "assembly"),
 }
-SUFFIXES = tuple(READERS)
+SUFFIXES = tuple(READERS)  # every format rtta reads
+MESHES = tuple(s for s, r in READERS.items() if r.gives == "scene")  # those read by `mesh`
 ISOLATED = {"step": "OpenCASCADE (cascadio)", "ifc": "ifcopenshell", "usd": "USD"}  # read in a child process
 MAX_COORDINATE = 1e15  # as the mesh loader's: float64 keeps ~0.1 units of precision there
 
@@ -64,17 +88,34 @@ class Assembly:
         self.paths.append(tuple(p.replace("/", "\u2215") for p in path))
 
 
-def read(path: Path) -> Assembly:
-    """The assembly in `path` (suffix in SUFFIXES); RttaError when it cannot be read."""
-    module, needs, extra = READERS[path.suffix.lower()]
+def load(path: Path, smooth_angle: float, smooth: bool) -> Scene:
+    """The Scene of `path` (suffix in SUFFIXES) through its reader in READERS; normals
+    smoothed by `smooth_angle` degrees where the file has none, or everywhere with `smooth`.
+    RttaError when it cannot be read."""
+    if READERS[path.suffix.lower()].gives == "assembly":
+        scene = _assembled(read(path), path, 180.0 if smooth else smooth_angle)
+        scene.inputs = [str(path.resolve())]
+        return scene
+    module = importlib.import_module(f"{__name__}.{_reader(path).module}")
+    return module.load(path, smooth_angle, smooth)
+
+
+def _reader(path: Path) -> Reader:
+    """The format's reader, once the import it needs is found (else one line naming the extra)."""
+    reader = READERS[path.suffix.lower()]
     try:
-        found = importlib.util.find_spec(needs) is not None
+        found = importlib.util.find_spec(reader.needs) is not None
     except (ImportError, ValueError):
         found = False
     if not found:
-        raise RttaError(
-            f"reading {path.suffix.lower()} files needs {needs}: pip install 'rtta[{extra}]'", path
-        ) from None
+        install = f"pip install 'rtta[{reader.extra}]'" if reader.extra else "pip install rtta"
+        raise RttaError(f"reading {path.suffix.lower()} files needs {reader.needs}: {install}", path) from None
+    return reader
+
+
+def read(path: Path) -> Assembly:
+    """The assembly in `path` (an assembly format of READERS); RttaError when it cannot be read."""
+    module = _reader(path).module
     if module in ISOLATED:  # native libraries: a crash or a hang stays in a child
         from . import isolated
 
@@ -144,12 +185,11 @@ def srgb_from_linear(c) -> list[float]:
     return [*rgb.tolist(), *(c[3:4].tolist() or [1.0])]
 
 
-def load(path: Path, smooth_angle: float) -> Scene:
-    """The Scene of an assembly file: parts checked (finite, in range, within the memory
+def _assembled(asm: Assembly, path: Path, smooth_angle: float) -> Scene:
+    """The Scene of an assembly file's parts: checked (finite, in range, within the memory
     limit), degenerate ones left out with a warning, normals smoothed by `smooth_angle`
     in the loader's whole-scene passes (rtta.scene.batch: no Python loop per part, so a
     building of 10^5 elements smooths as fast as a glTF assembly)."""
-    asm = read(path)
     names, arrays, colors, paths = [], [], [], []
     vertices = triangles = 0
     for name, v, f, color, group in zip(asm.names, asm.vertices, asm.faces, asm.colors, asm.paths, strict=True):

@@ -16,7 +16,7 @@ import numpy as np
 from ...errors import RttaError
 from .. import batch
 from ..files import SafeResolver, max_objects
-from ..model import Scene
+from ..model import Scene, from_batch
 from ..precheck import BYTES_PER_TRIANGLE, BYTES_PER_VERTEX, check_size, memory_limit, precheck
 from ..textures import TextureTable
 from . import graph_paths, obj_read
@@ -28,6 +28,28 @@ from .trimesh_io import base_color, trimesh_load
 F32_MAX = float(np.finfo(np.float32).max)
 MAX_COORDINATE = 1e15  # float64 keeps ~0.1 units of precision there; float32 offsets stay finite
 BEYOND = f"coordinates up to {{:.3g}}, beyond the ±{MAX_COORDINATE:.0e} this program handles"
+
+
+def load(path: Path, smooth_angle: float, smooth: bool) -> Scene:
+    """The Scene of a mesh file: normals smoothed by `smooth_angle` degrees where the file
+    has none, or everywhere with `smooth` (then the file's normals are dropped)."""
+    notes, inputs, read = _read(path, path.suffix.lower(), smooth)
+    placed, names, colors, texture_ids, textures, dropped, paths = _parts(read, path, smooth_angle)
+    notes += read[0].textures.notes
+    if dropped:
+        notes.append(
+            f"{len(dropped)} object(s) with only degenerate (zero-area) triangles left out: "
+            + ", ".join(dropped[:5])
+            + (" ..." if len(dropped) > 5 else "")
+        )
+    scene = from_batch(
+        names, placed, colors, source=str(path), texture_ids=texture_ids, textures=textures, consume=True
+    )
+    del placed
+    scene.paths = paths
+    scene.warnings = notes + scene.warnings + _texture_notes(scene)
+    scene.inputs = [str(p) for p in dict.fromkeys([path.resolve(), *inputs])]
+    return scene
 
 
 def _read(path: Path, suffix: str, smooth: bool) -> tuple[list[str], list[Path], tuple]:

@@ -1,0 +1,353 @@
+"""Loaded scenes cached on disk, one entry per file and load options, so that opening a file
+a second time skips its reading, checks and batching.
+
+Where: `$RTTA_CACHE_DIR`, else `$XDG_CACHE_HOME/rtta`, else `~/.cache/rtta`; at most
+`$RTTA_CACHE_MAX_BYTES` (default 2 GiB), the least recently used entries evicted after a
+write. An entry is found by the file's resolved path, size and mtime, rtta's version, a
+fingerprint of the scene code (the size and mtime of every module of rtta.scene, so a reader
+edited in a checkout never hands back its old scenes) and the load options; it is used
+only when every file the scene was read from (a glTF's buffers and textures, an OBJ's
+materials) still has its size and mtime.
+
+An entry is one file: a magic line, a JSON head (format version, blake2b checksum of what
+follows), the scene's JSON metadata (names, tree paths, warnings, inputs, unit, up axis,
+the arrays' dtypes, shapes and offsets) and the arrays' raw bytes. Nothing in it is
+unpickled; an entry that is damaged, truncated, of another format or version, or whose
+arrays do not fit together is ignored (and replaced by the next load), never trusted.
+Entries are written to a temporary file in the folder and renamed into place, so
+processes loading the same file at once each write a whole entry and the last one stays.
+A folder that cannot be written means no cache, never an error.
+
+A file modified less than RACY_NS before its load began is not cached: its next change
+could fall within the same timestamp tick (a few ms on Linux, 2 s on FAT) and leave its
+size and mtime as they were.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import stat
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .model import Scene
+
+FORMAT = 1
+MAGIC = b"rtta-scene-cache"
+SUFFIX = ".scene"
+DEFAULT_MAX_BYTES = 2 << 30
+RACY_NS = 2_000_000_000
+STALE_TEMP_S = 3600  # a temporary file this old was left by a process that died while writing
+ALIGN = 64
+DTYPES = {  # the Scene's arrays (and texture_0, texture_1 ... uint8): nothing else is read
+    "positions": "float32",
+    "normals": "float32",
+    "object_ids": "uint32",
+    "indices": "uint32",
+    "index_ranges": "int64",
+    "colors": "float32",
+    "aabb_min": "float64",
+    "aabb_max": "float64",
+    "origin": "float64",
+    "uvs": "float32",
+    "texture_ids": "int32",
+}
+ARRAYS = tuple(DTYPES)[:9]  # those every scene has
+
+
+def folder() -> Path:
+    """The cache folder: $RTTA_CACHE_DIR, else $XDG_CACHE_HOME/rtta, else ~/.cache/rtta."""
+    if os.environ.get("RTTA_CACHE_DIR"):
+        return Path(os.environ["RTTA_CACHE_DIR"])
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base) / "rtta"
+
+
+def max_bytes() -> int:
+    """The folder's bound: $RTTA_CACHE_MAX_BYTES (bytes), else DEFAULT_MAX_BYTES."""
+    try:
+        return max(0, int(os.environ.get("RTTA_CACHE_MAX_BYTES", DEFAULT_MAX_BYTES)))
+    except ValueError:
+        return DEFAULT_MAX_BYTES
+
+
+def load(path: Path, options: dict) -> Scene | None:
+    """The cached Scene of `path` loaded with `options`, or None (no entry, or one not to be
+    trusted: it is removed)."""
+    key = _key(path, options)
+    if key is None:
+        return None
+    entry = folder() / f"{_digest(key)}{SUFFIX}"
+    try:
+        st = entry.stat()
+        if not stat.S_ISREG(st.st_mode) or st.st_size > max_bytes():
+            return None
+        with open(entry, "rb") as f:
+            data = bytearray(st.st_size)
+            if f.readinto(data) != st.st_size:
+                raise ValueError("short read")
+    except OSError:
+        return None
+    try:
+        scene = _decode(data, key, str(path))
+    except Exception:  # anything wrong with an entry makes it a miss, never an error
+        scene = None
+    if scene is None:
+        _remove(entry)
+        return None
+    try:
+        os.utime(entry)  # its last use, for the eviction
+    except OSError:
+        pass
+    return scene
+
+
+def store(path: Path, options: dict, scene: Scene, started_ns: int) -> None:
+    """Write the entry of `scene`, loaded from `path` with `options` by a load that began at
+    `started_ns` (time.time_ns()); then evict down to the bound. Failures are ignored."""
+    key = _key(path, options)
+    if key is None:
+        return
+    try:
+        stats = {p: _stat(Path(p)) for p in scene.inputs}
+    except OSError:
+        return
+    if _stat(path.resolve()) != (key["size"], key["mtime_ns"]):
+        return  # changed while it was read
+    if any(mtime > started_ns - RACY_NS for _, mtime in stats.values()):
+        return
+    head, chunks, size = _encode(scene, key, stats)
+    where = folder()
+    if size > max_bytes():  # never kept: the others still fit the bound, which may have shrunk
+        evict(where, max_bytes())
+        return
+    try:
+        where.mkdir(parents=True, exist_ok=True)
+        fd, temp = tempfile.mkstemp(dir=where, prefix=".tmp-", suffix=SUFFIX)
+    except OSError:
+        return
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(head)
+            for chunk in chunks:
+                f.write(chunk)
+        os.replace(temp, where / f"{_digest(key)}{SUFFIX}")
+    except OSError:
+        _remove(Path(temp))
+        return
+    evict(where, max_bytes())
+
+
+def evict(where: Path, bound: int) -> None:
+    """Remove the least recently used entries until the folder's entries fit in `bound`
+    bytes, and temporary files left by processes that died while writing."""
+    entries = []
+    now = time.time()
+    try:
+        names = os.listdir(where)
+    except OSError:
+        return
+    for name in names:
+        if not name.endswith(SUFFIX):
+            continue
+        try:
+            st = os.stat(where / name)
+        except OSError:
+            continue
+        if name.startswith(".tmp-"):
+            if now - st.st_mtime > STALE_TEMP_S:
+                _remove(where / name)
+            continue
+        entries.append((st.st_mtime_ns, st.st_size, name))
+    total = sum(size for _, size, _ in entries)
+    for _, size, name in sorted(entries):
+        if total <= bound:
+            break
+        _remove(where / name)
+        total -= size
+
+
+def _key(path: Path, options: dict) -> dict | None:
+    try:
+        resolved = path.resolve()
+        size, mtime_ns = _stat(resolved)
+    except (OSError, RuntimeError):
+        return None
+    return {
+        "path": str(resolved),
+        "size": size,
+        "mtime_ns": mtime_ns,
+        "version": _version(),
+        "code": _code(),
+        "options": {k: options[k] for k in sorted(options)},
+    }
+
+
+def _stat(path: Path) -> tuple[int, int]:
+    st = path.stat()
+    return st.st_size, st.st_mtime_ns
+
+
+def _digest(key: dict) -> str:
+    return hashlib.blake2b(json.dumps(key, sort_keys=True).encode(), digest_size=20).hexdigest()
+
+
+def _version() -> str:
+    """rtta.__version__, read from the imported package rather than imported here (which
+    would make the scene layer import every layer above it)."""
+    return str(getattr(sys.modules.get(__name__.split(".")[0]), "__version__", "unknown"))
+
+
+_CODE: list[str] = []
+
+
+def _code() -> str:
+    """A fingerprint of rtta.scene's modules (names, sizes, mtimes), made once a process."""
+    if not _CODE:
+        here = Path(__file__).parent
+        rows = []
+        for p in sorted(here.rglob("*.py")):
+            try:
+                st = p.stat()
+            except OSError:
+                continue
+            rows.append(f"{p.relative_to(here)}:{st.st_size}:{st.st_mtime_ns}")
+        _CODE.append(hashlib.blake2b("\n".join(rows).encode(), digest_size=12).hexdigest())
+    return _CODE[0]
+
+
+def _remove(path: Path) -> None:
+    try:
+        path.unlink()
+    except OSError:
+        pass
+
+
+def _encode(scene: Scene, key: dict, stats: dict) -> tuple[bytes, list, int]:
+    """(the head: magic, head length, head JSON; the chunks after it: metadata JSON, padding
+    and arrays; the entry's size in bytes)."""
+    arrays = {name: getattr(scene, name) for name in ARRAYS}
+    if scene.uvs is not None:
+        arrays["uvs"] = scene.uvs
+    if scene.texture_ids is not None:
+        arrays["texture_ids"] = scene.texture_ids
+    arrays.update({f"texture_{i}": t for i, t in enumerate(scene.textures)})
+    table, offset = [], 0
+    for name, a in arrays.items():
+        table.append([name, a.dtype.name, list(a.shape), offset])
+        offset += -(-a.nbytes // ALIGN) * ALIGN
+    meta = {
+        "key": key,
+        "inputs": [[p, *stats[p]] for p in scene.inputs],
+        "names": scene.names,
+        "paths": None if scene.paths is None else [list(p) for p in scene.paths],
+        "warnings": scene.warnings,
+        "unit": scene.unit,
+        "up_axis": scene.up_axis,
+        "textures": len(scene.textures),
+        "arrays": table,
+    }
+    body = json.dumps(meta).encode()
+    chunks: list = [body, bytes(-len(body) % ALIGN)]
+    for a in arrays.values():
+        chunks += [memoryview(np.ascontiguousarray(a)).cast("B"), bytes(-a.nbytes % ALIGN)]
+    checksum = hashlib.blake2b(digest_size=32)
+    for chunk in chunks:
+        checksum.update(chunk)
+    head = json.dumps({"format": FORMAT, "checksum": checksum.hexdigest(), "meta": len(body)}).encode()
+    head = MAGIC + len(head).to_bytes(8, "little") + head
+    head += bytes(-len(head) % ALIGN)
+    return head, chunks, len(head) + sum(len(c) for c in chunks)
+
+
+def _decode(data: bytearray, key: dict, source: str) -> Scene | None:
+    """The Scene in an entry's bytes, or None where anything is amiss."""
+    if data[: len(MAGIC)] != MAGIC:
+        return None
+    n = int.from_bytes(data[len(MAGIC) : len(MAGIC) + 8], "little")
+    start = len(MAGIC) + 8
+    head = json.loads(bytes(data[start : start + n]))
+    start += n + (-(start + n) % ALIGN)
+    if not isinstance(head, dict) or head.get("format") != FORMAT:
+        return None
+    view = memoryview(data)[start:]
+    if hashlib.blake2b(view, digest_size=32).hexdigest() != head.get("checksum"):
+        return None
+    length = int(head["meta"])
+    meta = json.loads(bytes(view[:length]))
+    if meta["key"] != key or not _inputs_unchanged(meta["inputs"]):
+        return None
+    payload = start + length + (-length % ALIGN)
+    arrays = {}
+    for name, dtype, shape, offset in meta["arrays"]:
+        if dtype != DTYPES.get(name, "uint8") or not all(isinstance(s, int) and s >= 0 for s in shape):
+            return None
+        count = int(np.prod(shape, dtype=np.int64))
+        arrays[name] = np.frombuffer(data, dtype, count, payload + int(offset)).reshape(shape)
+    return _scene(arrays, meta, source)
+
+
+def _inputs_unchanged(inputs: list) -> bool:
+    for p, size, mtime_ns in inputs:
+        try:
+            if _stat(Path(p)) != (size, mtime_ns):
+                return False
+        except OSError:
+            return False
+    return True
+
+
+def _scene(a: dict, meta: dict, source: str) -> Scene | None:
+    """The Scene of an entry's arrays and metadata when their shapes fit together."""
+    names, paths, warnings = meta["names"], meta["paths"], meta["warnings"]
+    if any(name not in a for name in ARRAYS):
+        return None
+    n, v = len(names), len(a["positions"])
+    shapes = {
+        "positions": (v, 3),
+        "normals": (v, 3),
+        "object_ids": (v,),
+        "index_ranges": (n, 2),
+        "colors": (n, 4),
+        "aabb_min": (n, 3),
+        "aabb_max": (n, 3),
+        "origin": (3,),
+        "uvs": (v, 2),
+        "texture_ids": (n,),
+    }
+    if any(name in a and a[name].shape != shape for name, shape in shapes.items()):
+        return None
+    indices, ranges = a["indices"], a["index_ranges"]
+    textures = [a.pop(f"texture_{i}") for i in range(int(meta["textures"]))]
+    if (
+        n == 0
+        or indices.ndim != 1
+        or len(indices) % 3
+        or not all(isinstance(s, str) for s in [*names, *warnings, meta["unit"], meta["up_axis"]])
+        or (paths is not None and (len(paths) != n or not all(isinstance(s, str) for p in paths for s in p)))
+        or (len(indices) and int(indices.max()) >= v)
+        or (v and int(a["object_ids"].max()) >= n)
+        or ranges.min() < 0
+        or int((ranges[:, 0] + ranges[:, 1]).max()) > len(indices)
+        or set(a) - set(DTYPES)
+        or any(t.ndim != 3 or t.shape[2] != 4 for t in textures)
+        or ("texture_ids" in a and int(a["texture_ids"].max()) >= len(textures))
+    ):
+        return None
+    return Scene(
+        names=list(names),
+        source=source,
+        warnings=list(warnings),
+        inputs=[p for p, _, _ in meta["inputs"]],
+        textures=textures,
+        paths=None if paths is None else [tuple(p) for p in paths],
+        unit=meta["unit"],
+        up_axis=meta["up_axis"],
+        **a,
+    )

@@ -8,12 +8,11 @@ that cross the near plane or surround the camera get a conservative, finite B_vi
 
 from __future__ import annotations
 
-import weakref
 from collections.abc import Callable
 
 import numpy as np
 
-from ..scene.model import BOX_EDGES
+from .corners import CornerClip, axis_aligned, clipped_bounds, points_clip
 from .packing import Packing, pack_shelves
 from .records import Records
 from .scratch import result_block, scratch
@@ -39,7 +38,7 @@ def project_bounds(corners: np.ndarray, vpm: np.ndarray, reuse: bool = False):
     hi = new("bounds.hi", (3, n))
     all_front = new("bounds.all_front", n, bool)
     some_front = new("bounds.some_front", n, bool)
-    clip = _CornerClip(m, min(n, CHUNK), _axis_aligned(planar))
+    clip = CornerClip(m, min(n, CHUNK), axis_aligned(planar))
     for s in range(0, n, CHUNK):
         e = min(n, s + CHUNK)
         _project_chunk(clip, planar[:, :, s:e], lo[:, s:e], hi[:, s:e], all_front[s:e], some_front[s:e])
@@ -48,14 +47,14 @@ def project_bounds(corners: np.ndarray, vpm: np.ndarray, reuse: bool = False):
         hi[:, ~all_front] = 0
         rows = np.flatnonzero(some_front & ~all_front)  # crossing the near plane: clipped
         if rows.size:
-            pts = _points_clip(np.asarray(corners[rows], np.float64), m)
-            a, b = _clipped_bounds(pts, pts[..., 2] + pts[..., 3])
+            pts = points_clip(np.asarray(corners[rows], np.float64), m)
+            a, b = clipped_bounds(pts, pts[..., 2] + pts[..., 3])
             lo[:, rows], hi[:, rows] = a.T, b.T
     in_frustum = some_front & (lo[0] <= 1) & (hi[0] >= -1) & (lo[1] <= 1) & (hi[1] >= -1) & (lo[2] <= 1)
     return in_frustum, lo[:2].T, hi[:2].T
 
 
-def _project_chunk(clip: _CornerClip, planar, lo, hi, all_front, some_front) -> None:
+def _project_chunk(clip: CornerClip, planar, lo, hi, all_front, some_front) -> None:
     """project_bounds on one chunk (planar [3, 8, c]) into the chunk's views of its outputs."""
     c = planar.shape[2]
     lo[:] = np.inf
@@ -76,85 +75,6 @@ def _project_chunk(clip: _CornerClip, planar, lo, hi, all_front, some_front) -> 
                 np.maximum(hi[j], q, out=hi[j])
 
 
-def _points_clip(points: np.ndarray, m: np.ndarray) -> np.ndarray:
-    """m @ (p, 1) for points [..., 3] as [..., 4] (few: the boxes crossing the near plane)."""
-    return points[..., 0, None] * m[:, 0] + points[..., 1, None] * m[:, 1] + points[..., 2, None] * m[:, 2] + m[:, 3]
-
-
-class _CornerClip:
-    """Clip rows (x, y, z, w) of corner k of every box in a chunk, in buffers reused from chunk
-    to chunk. Axis-aligned boxes (corner k built from corners 0 and 7 by its bits, as Scene's
-    are) reuse per-axis products: two adds per row and corner instead of three multiply-adds."""
-
-    def __init__(self, m: np.ndarray, size: int, aligned: bool):
-        self.m, self.aligned = m, aligned
-        self.out = scratch("clip.out", (4, size))
-        self.prod = scratch("clip.prod", (3, 2, 4, size)) if aligned else None  # axis, end, clip row
-        self.q = scratch("clip.q", size)
-        self.front = scratch("clip.front", size, bool)
-
-    def start(self, planar: np.ndarray):
-        """The function k -> rows [4, c] for the chunk planar [3, 8, c] (overwritten per call)."""
-        c, m = planar.shape[2], self.m
-        out = self.out[:, :c]
-        if not self.aligned:
-
-            def rows(k: int) -> np.ndarray:
-                p = planar[:, k]
-                for r in range(4):
-                    row = np.multiply(p[0], m[r, 0], out=out[r])
-                    row += p[1] * m[r, 1]
-                    row += p[2] * m[r, 2]
-                    row += m[r, 3]
-                return out
-
-            return rows
-        prod = self.prod[..., :c]
-        for j in range(3):
-            for e, corner in enumerate((0, 7)):  # min and max corner
-                np.multiply(m[:, j, None], planar[j, corner], out=prod[j, e])
-        prod[0] += m[:, 3, None]
-
-        def rows_aabb(k: int) -> np.ndarray:
-            np.add(prod[0, k & 1], prod[1, (k >> 1) & 1], out=out)
-            np.add(out, prod[2, k >> 2], out=out)
-            return out
-
-        return rows_aabb
-
-
-_ALIGNED: dict[int, tuple[weakref.ref, dict]] = {}  # id of a read-only corner array: (its ref, answers per view)
-
-
-def _axis_aligned(planar: np.ndarray) -> bool:
-    """True if every corner k of planar [3, 8, n] takes coordinate j from corner 7 where
-    bit j of k is set and from corner 0 where not (the AABB corner order of Scene). Read-only
-    arrays (Scene's corners) are checked once: 18 comparisons of n values each, ~2 ms at
-    10^5 objects, were a tenth of every frame's parameterization."""
-    owner = planar
-    while isinstance(owner.base, np.ndarray):
-        owner = owner.base
-    if owner.flags.writeable:
-        return _check_aligned(planar)
-    view = (planar.__array_interface__["data"][0], planar.shape, planar.strides)
-    entry = _ALIGNED.get(id(owner))
-    if entry is None or entry[0]() is not owner:
-        key = id(owner)
-        entry = _ALIGNED[key] = (weakref.ref(owner, lambda _, key=key: _ALIGNED.pop(key, None)), {})
-    known = entry[1]
-    if view not in known:
-        known[view] = _check_aligned(planar)
-    return known[view]
-
-
-def _check_aligned(planar: np.ndarray) -> bool:
-    for k in range(1, 7):
-        for j in range(3):
-            if not np.array_equal(planar[j, k], planar[j, 7 if (k >> j) & 1 else 0]):
-                return False
-    return True
-
-
 def _intersected(boxes: np.ndarray, vpm: np.ndarray):
     """Several enclosing boxes per object [k, n, 8, 3]: the intersection of their projections."""
     vis, lo, hi = project_bounds(boxes[0], vpm)
@@ -162,22 +82,6 @@ def _intersected(boxes: np.ndarray, vpm: np.ndarray):
         v, a, b = project_bounds(corners, vpm)
         vis, lo, hi = vis & v, np.maximum(lo, a), np.minimum(hi, b)
     return vis & (lo <= hi).all(axis=1), lo, hi
-
-
-def _clipped_bounds(clip: np.ndarray, d: np.ndarray):
-    """NDC bounds of boxes cut by the near plane: corners in front plus edge/plane intersections."""
-    a, b = clip[:, BOX_EDGES[:, 0]], clip[:, BOX_EDGES[:, 1]]
-    da, db = d[:, BOX_EDGES[:, 0]], d[:, BOX_EDGES[:, 1]]
-    crossing = (da * db) < 0
-    t = np.where(crossing, da / np.where(crossing, da - db, 1.0), 0.0)
-    hits = a + t[..., None] * (b - a)  # [m, 12, 4], on the plane: w = near > 0
-    pts = np.concatenate([clip, hits], axis=1)  # [m, 20, 4]
-    valid = np.concatenate([d >= 0, crossing], axis=1)
-    w = np.maximum(np.where(valid, pts[..., 3], 1.0), np.finfo(np.float64).tiny)
-    xyz = pts[..., :3] / w[..., None]
-    lo = np.where(valid[..., None], xyz, np.inf).min(axis=1)
-    hi = np.where(valid[..., None], xyz, -np.inf).max(axis=1)
-    return lo, hi
 
 
 def viewport_rects(

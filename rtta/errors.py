@@ -9,7 +9,24 @@ _ESCAPED = {"\n": "\\n", "\r": "\\r", "\t": "\\t"}
 
 
 class RttaError(Exception):
-    """An expected failure (bad input, unsupported context); the CLI prints it and exits 2."""
+    """An expected failure: bad input, an unwritable output, an unsupported context.
+
+    The CLI prints it as one line, ``rtta: error: <file>: <reason>``, and exits with code 2;
+    the library raises it with the same message.
+
+    Parameters
+    ----------
+    message : str
+        What is wrong, as one line.
+    path : str or Path, optional
+        The file it is about; it leads the message.
+
+    Examples
+    --------
+    >>> import rtta
+    >>> str(rtta.RttaError("truncated", "part.glb"))
+    'part.glb: truncated'
+    """
 
     def __init__(self, message: str, path: str | Path | None = None) -> None:
         self.path = None if path is None else str(path)

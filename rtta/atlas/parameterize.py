@@ -124,16 +124,55 @@ def parameterize(
     hidden: np.ndarray | None = None,
     thin: Thinning | None = None,
 ) -> Records:
-    """Algorithm 1: records for all objects, given B_world corners [n, 8, 3] (or several
-    enclosing boxes per object [k, n, 8, 3], whose projections are intersected) and VPM.
+    """Algorithm 1: every object's atlas region for one view, vectorised over objects.
 
-    region_scale: atlas texels per viewport pixel wanted for every region (below 1 saves
-    atlas memory and fill, above 1 supersamples); lowered per object only where it must be.
-    A float, or one per object [n] (importance: focus objects at 1, context ones lower).
-    hidden: bool [n], objects the user hid: culled like those outside the view (no region).
-    thin: chooses more objects to leave out from this frame's projection (fast navigation):
-    called with (visible [n] bool, inner B_viewport [n, 4] pixels) after culling, it returns
-    bool [n] or None; those are culled too."""
+    Culls against the view frustum, projects B_world (clipped against the near plane in clip
+    space), clips to the viewport, adds the border, packs the regions into layers (shelf
+    packing) and computes each object's transform T. Regions are scaled down, the scale
+    recorded, where the atlas would need more layers than allowed.
+
+    Parameters
+    ----------
+    corners : numpy.ndarray
+        B_world corners [n, 8, 3], or several enclosing boxes per object [k, n, 8, 3], whose
+        projections are intersected.
+    vpm : numpy.ndarray
+        The 4x4 view-projection matrix (world to clip).
+    viewport : tuple of int
+        (W, H) in pixels.
+    border : int, default 1
+        Empty texels around each region.
+    atlas_max : tuple of int, optional
+        The largest layer (W, H); default `default_atlas_max`.
+    max_layers : int, default 2048
+        The most layers.
+    region_scale : float or numpy.ndarray, default 1
+        Atlas texels per viewport pixel wanted for every region (below 1 saves atlas memory
+        and fill, above 1 supersamples), or one per object [n] (focus objects at 1, context
+        ones lower); lowered per object only where it must be.
+    hidden : numpy.ndarray, optional
+        bool [n]: objects the user hid, culled like those outside the view (no region).
+    thin : callable, optional
+        Chooses more objects to leave out from this frame's projection (fast navigation):
+        called with (visible [n] bool, inner B_viewport [n, 4] pixels) after culling, it
+        returns bool [n] or None; those are culled too.
+
+    Returns
+    -------
+    Records
+        The record set R, arrays indexed by object id.
+
+    Examples
+    --------
+    >>> import rtta
+    >>> from rtta.scene.generators.demo import demo_path
+    >>> scene = rtta.load_scene(str(demo_path()))
+    >>> camera = rtta.Camera.orbit(scene.center, scene.radius, 35, 25, 2.2)
+    >>> vpm = camera.projection(640 / 480) @ camera.view(scene.origin)
+    >>> records = rtta.parameterize(scene.box_corners(), vpm, (640, 480))
+    >>> int(records.visible.sum()) <= scene.count
+    True
+    """
     n = corners.shape[-3]
     W, H = int(viewport[0]), int(viewport[1])
     if W < 1 or H < 1:

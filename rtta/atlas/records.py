@@ -17,7 +17,35 @@ RECORD_DTYPE = np.dtype(
 
 @dataclass
 class Records:
-    """The record set R for one frame (arrays indexed by object id)."""
+    """The record set R of one frame, Algorithm 1's output: planar arrays indexed by object id.
+
+    A viewport pixel (px, py) of object i lies at atlas texel
+    (x + border + scale * (px - x0), y + border + scale * (py - y0)) in its layer, where
+    (x, y) = atlas_rect[i, :2] and (x0, y0) = viewport_rect[i, :2].
+
+    Attributes
+    ----------
+    visible : numpy.ndarray
+        bool [n]: packed this frame (not culled, hidden or left out).
+    viewport_rect : numpy.ndarray
+        int64 [n, 4]: the inner B_viewport x0, y0, x1, y1 in pixels, clipped to the viewport.
+    atlas_rect : numpy.ndarray
+        int64 [n, 4]: B_atlas x, y, w, h in texels, border included.
+    layer : numpy.ndarray
+        int64 [n]: the atlas layer of each region.
+    scale : numpy.ndarray
+        float64 [n]: atlas texels per viewport pixel.
+    transform : numpy.ndarray
+        float64 [n, 4]: T as (sx, sy, tx, ty) in NDC, viewport to atlas.
+    clip_ndc : numpy.ndarray
+        float64 [n, 4]: the inner B_viewport in the viewport's NDC.
+    viewport : tuple of int
+        (W, H) in pixels.
+    atlas_size : tuple of int
+        (T_w, T_h, T_d): the atlas's used width, height and layers.
+    border : int
+        Empty texels around each region.
+    """
 
     visible: np.ndarray  # bool [n]
     viewport_rect: np.ndarray  # int64 [n,4] inner B_viewport x0,y0,x1,y1 (pixels, clipped)

@@ -12,7 +12,28 @@ LAYER_EXTENSION = "GL_ARB_shader_viewport_layer_array"
 
 
 def create_headless_context() -> moderngl.Context:
-    """A standalone OpenGL 4.3+ core context through EGL (works without a display)."""
+    """Make a standalone OpenGL 4.3+ core context through EGL; no display is needed.
+
+    Mesa's llvmpipe gives one on any machine; a GPU driver's EGL is used where there is one.
+
+    Returns
+    -------
+    moderngl.Context
+        A new context; `Renderer` takes it.
+
+    Raises
+    ------
+    RttaError
+        The driver offers no OpenGL 4.3 (the message names the version it offers), or EGL is
+        missing.
+
+    Examples
+    --------
+    >>> import rtta
+    >>> ctx = rtta.create_headless_context()
+    >>> ctx.version_code >= 430
+    True
+    """
     try:
         ctx = moderngl.create_standalone_context(backend="egl", require=430)
     except Exception as exc:
@@ -55,6 +76,24 @@ def shared_context() -> moderngl.Context:
 
 @dataclass(frozen=True)
 class Capabilities:
+    """What a context's driver offers that rtta needs; `Capabilities.of(ctx)` checks it.
+
+    Attributes
+    ----------
+    version : int
+        The GL version code (430 for 4.3).
+    renderer : str
+        GL_RENDERER, e.g. "llvmpipe (LLVM 15.0.6, 256 bits)".
+    geometry_shader : bool
+        Whether the geometry-shader capture path (the paper's) is available.
+    vertex_layer : bool
+        Whether GL_ARB_shader_viewport_layer_array allows the vertex-shader capture path.
+    max_layers : int
+        GL_MAX_ARRAY_TEXTURE_LAYERS: the most atlas layers.
+    max_texture : int
+        GL_MAX_TEXTURE_SIZE: the largest atlas layer side.
+    """
+
     version: int
     renderer: str
     geometry_shader: bool

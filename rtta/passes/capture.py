@@ -134,7 +134,20 @@ class ScenePass:
 
 
 class CapturePass(ScenePass):
-    """RTTA capture. path: 'vs' (GL_ARB_shader_viewport_layer_array) or 'gs' (the paper's)."""
+    """The RTTA capture: every visible object drawn once into its own atlas region.
+
+    One draw call over the batched scene, each vertex displaced by its object's transform T
+    into its region and layer (a second call for the regions on the viewport's edge, the only
+    ones clipped). `Renderer.capture` runs it.
+
+    Parameters
+    ----------
+    ctx : moderngl.Context
+        An OpenGL 4.3 core context.
+    path : str
+        "vs": the layer chosen in the vertex shader (GL_ARB_shader_viewport_layer_array);
+        "gs": the paper's geometry shader.
+    """
 
     def __init__(self, ctx: moderngl.Context, path: str) -> None:
         if path not in ("vs", "gs"):
@@ -205,8 +218,16 @@ class CapturePass(ScenePass):
 
 
 class StdPass(ScenePass):
-    """STD: the scene drawn normally into a one-layer target of the viewport's size;
-    with `projection` (ProjectorPass, Projector) painted by the projector per fragment."""
+    """STD, the direct render: the scene drawn normally into a one-layer target of the viewport.
+
+    The reference every "x STD" figure is held against. With `projection` (ProjectorPass,
+    Projector), painted by the projector per fragment. `Renderer.std` runs it.
+
+    Parameters
+    ----------
+    ctx : moderngl.Context
+        An OpenGL 4.3 core context.
+    """
 
     def __init__(self, ctx: moderngl.Context) -> None:
         super().__init__(ctx)
@@ -245,10 +266,16 @@ class StdPass(ScenePass):
 
 
 class RttPass(ScenePass):
-    """RTT: every listed object drawn alone into its own full-viewport target.
+    """RTT, the per-object baseline: every listed object drawn alone into a full-viewport target.
 
-    One target is reused: after each object is drawn, `consume(object_id, target)` is
-    called (read it back, composite it...), as an application of plain RTT would.
+    One target is reused: after each object is drawn, `consume(object_id, target)` is called
+    (read it back, composite it...), as an application of plain RTT would. `Renderer.rtt` runs
+    it; the tests hold every atlas region against it.
+
+    Parameters
+    ----------
+    ctx : moderngl.Context
+        An OpenGL 4.3 core context.
     """
 
     def __init__(self, ctx: moderngl.Context) -> None:

@@ -30,7 +30,24 @@ TINY_SCENE = 1e-15
 
 @dataclass
 class Scene:
-    """A batched scene. Per object: name, colour, index range, vertex range, world AABB."""
+    """A batched scene: ONE vertex and index buffer with an object id per vertex.
+
+    Attributes
+    ----------
+    names : list of str
+        Object names, indexed by object id (unique, numbered in file order).
+    positions, normals : numpy.ndarray
+        float32 [V, 3]; positions relative to `origin` (float32 precision far from the origin).
+    object_ids, indices, index_ranges : numpy.ndarray
+        uint32 [V] per vertex; uint32 [3F] triangles; int64 [N, 2] (first, count) per object.
+    colors, aabb_min, aabb_max : numpy.ndarray
+        float32 [N, 4] base colours; float64 [N, 3] world bounds (B_world).
+    paths, unit, up_axis
+        Each object's groups in the file's tree (root first, or None); the length unit ('' =
+        unstated); the file's up axis, 'y' or 'z'.
+    warnings, inputs : list of str
+        Problems worked around while loading; the files read (outputs never replace them).
+    """
 
     names: list[str]
     positions: np.ndarray  # float32 [V, 3], relative to origin
@@ -189,8 +206,23 @@ def from_meshes(
     texture_ids: list[int] | None = None,
     textures: list[np.ndarray] | None = None,
 ) -> Scene:
-    """Batch (name, vertices float64 [V,3] world, faces int [F,3], normals or None) parts;
-    optionally with texture coordinates per part and an index into `textures` per part."""
+    """Batch meshes of your own into a `Scene`, one object per part.
+
+    Parameters
+    ----------
+    parts : list of tuple
+        (name, vertices float64 [V, 3] in world units, faces int [F, 3], normals [V, 3] or None).
+    colors : list, optional
+        An RGBA colour per part (default: a palette).
+    source : str, default "<memory>"
+        The name errors and warnings give.
+    uvs, texture_ids, textures : list, optional
+        Texture coordinates per part, an index into `textures` per part (-1: none), RGBA images.
+
+    Returns
+    -------
+    Scene
+    """
     if not parts:
         raise RttaError("scene has no objects with geometry", source)
     textured = bool(textures) and uvs is not None and texture_ids is not None

@@ -8,9 +8,10 @@ Each shader file declares the defines it understands on a line `// defines: A B 
 from __future__ import annotations
 
 import re
+from collections.abc import Mapping
 from functools import cache
 from importlib import resources
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 from ..outputs import signals_held
 from . import bindings
@@ -57,7 +58,7 @@ def load(name: str, **defines: object) -> str:
     return _load(name, items)
 
 
-def stage_sources(stages: dict[str, str | None], **defines: object) -> dict[str, str | None]:
+def stage_sources(stages: Mapping[str, str | None], **defines: object) -> dict[str, str | None]:
     """Sources for `ctx.program(**...)`: each stage (keyword -> file, or None) gets the defines
     its own file declares; a define that no stage declares is rejected."""
     known = set().union(*(declared_defines(name) for name in stages.values() if name))
@@ -70,10 +71,23 @@ def stage_sources(stages: dict[str, str | None], **defines: object) -> dict[str,
     }
 
 
-def program(ctx: moderngl.Context, **sources: str | None) -> moderngl.Program:
-    """`ctx.program(**sources)` with signals held (rtta.outputs.signals_held), raised once the
+def program(
+    ctx: moderngl.Context,
+    vertex_shader: str | None = None,
+    fragment_shader: str | None = None,
+    geometry_shader: str | None = None,
+) -> moderngl.Program:
+    """`ctx.program(...)` with signals held (rtta.outputs.signals_held), raised once the
     program is made: moderngl builds a program's members through Python calls, and an
     interrupt raised among them crashed the process (SIGSEGV inside Context.program; 3 of 3
     runs of 200 interrupted frames on llvmpipe, none in 800 with the hold)."""
     with signals_held():
-        return ctx.program(**sources)
+        return ctx.program(
+            vertex_shader=vertex_shader, fragment_shader=fragment_shader, geometry_shader=geometry_shader
+        )
+
+
+def uniform(prog: moderngl.Program | moderngl.ComputeShader, name: str) -> moderngl.Uniform:
+    """`prog[name]` as the uniform it is, for `.value` and `.write`: moderngl types a program's
+    members as any kind (uniform, uniform block, attribute, varying), which have neither."""
+    return cast("moderngl.Uniform", prog[name])

@@ -53,21 +53,21 @@ class LdiTextures:
         for t in (self.layers, self.ranges):
             t.filter = moderngl.NEAREST, moderngl.NEAREST
 
-    def bind(self, prog: moderngl.Program, to_world: np.ndarray, *, packed_unit: int, prefix: str = "u_") -> None:
+    def bind(self, prog: moderngl.Program | moderngl.ComputeShader, to_world: np.ndarray, *, packed_unit: int, prefix: str = "u_") -> None:
         """Bind the layers (Image.LDI_LAYERS, ldi.glsl) and the ranges (texture unit `packed_unit`),
         and set <prefix>to_crop (point space -> crop space, for `to_world`: point -> world),
         crop_size, depth and per_row, where the program uses them."""
         self.layers.bind_to_image(Image.LDI_LAYERS, read=True, write=False)
         self.ranges.use(packed_unit)
         if f"{prefix}to_crop" in prog:
-            prog[f"{prefix}to_crop"].write(mat_bytes(self.ldi.crop_matrix @ to_world))
+            glsl.uniform(prog, f"{prefix}to_crop").write(mat_bytes(self.ldi.crop_matrix @ to_world))
         for name, value in (
             ("crop_size", tuple(self.ldi.crop[2:])),
             ("depth", self.ldi.depth),
             ("per_row", self.per_row),
         ):
             if prefix + name in prog:
-                prog[prefix + name].value = value
+                glsl.uniform(prog, prefix + name).value = value
 
     def release(self) -> None:
         self.layers.release()

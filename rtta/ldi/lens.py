@@ -12,6 +12,7 @@ import moderngl
 import numpy as np
 
 from ..errors import RttaError
+from ..gl import glsl
 from ..gl.bindings import Texture
 from ..scene.model import Scene
 from .gpu import LdiTextures
@@ -98,7 +99,7 @@ class LensPass:
         # not on PROJECTOR_DEPTH: a projector and a lens are bound for the same draws
         tex.bind(prog, lens.to_local(origin), packed_unit=Texture.LDI_RANGES, prefix="u_lens_")
         if "u_lens_object" in prog:
-            prog["u_lens_object"].value = lens.object_id
+            glsl.uniform(prog, "u_lens_object").value = lens.object_id
 
     def release(self) -> None:
         for t in self._ldis.values():

@@ -161,13 +161,13 @@ class Peeler:
             raise RuntimeError("Peeler: load() a mesh first")
         self.ctx.enable_only(moderngl.BLEND)
         self.ctx.blend_func = moderngl.ONE, moderngl.ONE
-        self.ctx.blend_equation = equation
+        self.ctx.blend_equation = equation, equation  # colour and alpha
         for prog in (self.peel_prog, self.count_prog):
-            prog["u_matrix"].write(mat_bytes(_NDC @ matrix))
+            glsl.uniform(prog, "u_matrix").write(mat_bytes(_NDC @ matrix))
         self._targets(n)
 
     def _done(self) -> None:
-        self.ctx.blend_equation = moderngl.FUNC_ADD
+        self.ctx.blend_equation = moderngl.FUNC_ADD, moderngl.FUNC_ADD
         self.ctx.enable_only(moderngl.NOTHING)
 
     def count(self, matrix: np.ndarray, n: int) -> np.ndarray:
@@ -194,7 +194,7 @@ class Peeler:
                 out.use()
                 out.clear(NIL)
                 prev.use(Texture.PEEL_PREVIOUS)
-                self.peel_prog["u_pass"].value = k
+                glsl.uniform(self.peel_prog, "u_pass").value = k
                 with self.query:
                     vao.render(moderngl.TRIANGLES)
                 if not self.query.any_samples:

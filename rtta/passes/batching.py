@@ -13,6 +13,7 @@ from __future__ import annotations
 import moderngl
 import numpy as np
 
+from ..gl import glsl
 from ..gl.bindings import Texture
 from ..gl.gpu import GpuScene
 from ..gl.targets import LayeredTarget
@@ -55,7 +56,7 @@ class SeparatePass(ScenePass):
             for oid, (first, count) in enumerate(gpu.scene.index_ranges):
                 if ids is not None:
                     has = ids[oid] >= 0
-                    self.program["u_textured"].value = bool(has)
+                    glsl.uniform(self.program, "u_textured").value = bool(has)
                     if has:
                         textures[ids[oid]].use(Texture.SCENE_TEXTURE)
                 self.cull(bool(self._cullable[oid]))  # as STD culls (ScenePass.draw_objects)

@@ -16,6 +16,7 @@ from pathlib import Path
 import moderngl
 import numpy as np
 
+from ..gl import glsl
 from ..gl.bindings import Texture
 from ..gl.gpu import GpuScene
 from ..scene.camera import Camera
@@ -157,7 +158,7 @@ class ProjectorPass:
         self.image.repeat_x = self.image.repeat_y = False
 
     def bind(self, program: moderngl.Program, projector: Projector, origin) -> None:
-        program["u_projector"].write(mat_bytes(projector.matrix(origin)))
+        glsl.uniform(program, "u_projector").write(mat_bytes(projector.matrix(origin)))
         for name, value in (
             ("u_projector_strength", float(projector.strength)),
             ("u_projector_shadows", int(projector.shadows)),
@@ -165,7 +166,9 @@ class ProjectorPass:
             ("u_projector_range", (projector.near, projector.far)),
         ):
             if name in program:
-                program[name].value = value
+                glsl.uniform(program, name).value = value
+        if self.image is None:
+            raise RuntimeError("ProjectorPass: render() a projector before binding it")
         self.image.use(Texture.PROJECTOR_IMAGE)
         self.depth.use(Texture.PROJECTOR_DEPTH)
 

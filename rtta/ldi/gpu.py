@@ -53,7 +53,14 @@ class LdiTextures:
         for t in (self.layers, self.ranges):
             t.filter = moderngl.NEAREST, moderngl.NEAREST
 
-    def bind(self, prog: moderngl.Program | moderngl.ComputeShader, to_world: np.ndarray, *, packed_unit: int, prefix: str = "u_") -> None:
+    def bind(
+        self,
+        prog: moderngl.Program | moderngl.ComputeShader,
+        to_world: np.ndarray,
+        *,
+        packed_unit: int,
+        prefix: str = "u_",
+    ) -> None:
         """Bind the layers (Image.LDI_LAYERS, ldi.glsl) and the ranges (texture unit `packed_unit`),
         and set <prefix>to_crop (point space -> crop space, for `to_world`: point -> world),
         crop_size, depth and per_row, where the program uses them."""

@@ -3,9 +3,34 @@
 # when missing, a virtual environment in .venv, and rtta installed into it (not editable,
 # so the tests exercise the wheel with its shaders and demo scene).
 # Usage: scripts/setup.sh [EXTRAS]   (pip extras, comma-separated, e.g. "test,viewer")
+# A run on a checkout that has not changed since the last one does nothing: .venv/.setup-stamp
+# holds a hash of what was installed (this script, pyproject.toml, the extras, the Python,
+# the source files rtta/ viewer/ shaders/ assets/), and apt and pip are skipped when it matches.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 extras="${1:-}"
+STAMP=.venv/.setup-stamp
+SOURCES=(rtta viewer shaders assets)
+
+stamp() {  # the hash of everything the install depends on
+  {
+    echo "extras=$extras"
+    .venv/bin/python --version 2>&1 || true
+    cat scripts/setup.sh pyproject.toml
+    if git rev-parse --is-inside-work-tree >/dev/null 2>&1; then
+      git ls-files -s -- "${SOURCES[@]}"  # the tracked files' blob hashes: no file is read
+      git ls-files -z -m -o --exclude-standard -- "${SOURCES[@]}" | xargs -0 -r sha256sum 2>/dev/null || true
+    else
+      find "${SOURCES[@]}" -type f ! -name '*.pyc' -print0 | sort -z | xargs -0 -r sha256sum
+    fi
+  } | sha256sum | cut -d' ' -f1
+}
+
+if [ -f "$STAMP" ] && [ -x .venv/bin/python ] && [ "$(cat "$STAMP")" = "$(stamp)" ]; then
+  echo "setup: .venv is up to date (nothing changed since the last setup)"
+  exit 0
+fi
+rm -f "$STAMP"
 
 need_apt=()
 ldconfig -p 2>/dev/null | grep -q 'libEGL.so.1 ' || need_apt+=(libegl1)
@@ -38,3 +63,4 @@ spec="."
 [ -n "$extras" ] && spec=".[$extras]"
 .venv/bin/python -m pip install -q --disable-pip-version-check --force-reinstall --no-deps "$spec"
 .venv/bin/python -m pip install -q --disable-pip-version-check "$spec"
+stamp >"$STAMP"

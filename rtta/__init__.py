@@ -13,6 +13,7 @@ from .atlas.parameterize import Records, parameterize
 from .errors import RttaError
 from .gl.context import Capabilities, create_headless_context
 from .passes.capture import CapturePass, RttPass, StdPass
+from .passes.composite import Style
 from .renderer.api import Capture, capture, snapshot
 from .renderer.renderer import Renderer, Settings
 from .scene.camera import Camera
@@ -35,6 +36,7 @@ __all__ = [
     "Scene",
     "Settings",
     "StdPass",
+    "Style",
     "create_headless_context",
     "from_meshes",
     "load_scene",

@@ -11,7 +11,7 @@ import time
 import numpy as np
 
 from rtta.gl.context import shared_context
-from rtta.passes import composite, oit
+from rtta.passes import composite, oit, sprites
 from rtta.renderer.renderer import Renderer
 from rtta.scene.camera import Camera
 from rtta.scene.loader import load_scene_or_demo
@@ -52,8 +52,8 @@ def main() -> None:
         ways = {"fetched": oit.PixelOrderPass(ctx, fetch=True), **ways}
     times: dict[tuple[str, str], list[float]] = {}
     way = [""]
-    draw_name = lambda args, kw: "+".join(k for k, v in kw.items() if v is True) or "draw"  # noqa: E731
-    composite.CompositePass._draw_run = timed(ctx, times, way, draw_name, composite.CompositePass._draw_run)
+    draw_name = lambda args, kw: args[2].kind.value  # noqa: E731  (the SpriteDraw of SpritePass._run)
+    sprites.SpritePass._run = timed(ctx, times, way, draw_name, sprites.SpritePass._run)
     for method in ("begin", "collect_into", "resolve"):
         setattr(oit.PixelOrderPass, method, timed(ctx, times, way, method, getattr(oit.PixelOrderPass, method)))
     for _ in range(a.frames):

@@ -13,7 +13,7 @@ import numpy as np
 
 from rtta.gl import glraw
 from rtta.gl.context import shared_context
-from rtta.passes import capture, composite
+from rtta.passes import capture, composite, sprites
 from rtta.renderer.renderer import Renderer
 from rtta.scene.camera import Camera
 from rtta.scene.loader import load_scene_or_demo
@@ -77,11 +77,11 @@ def main() -> None:
     style = composite.Style(focus={0, scene.count // 2})
     timers = Timers(ctx.finish if a.sync else None)
     if a.no_hull:
-        composite.worth_outlines = lambda records, ids: False
+        sprites.worth_outlines = lambda records, ids: False
     capture.CapturePass.render = timers.wrap("capture", capture.CapturePass.render)
     capture.StdPass.render = timers.wrap("std", capture.StdPass.render)
-    kind = lambda args, kw: "composite " + ("+".join(k for k, v in kw.items() if v is True) or "draw")  # noqa: E731
-    composite.CompositePass._draw_run = timers.wrap(kind, composite.CompositePass._draw_run)
+    kind = lambda args, kw: f"composite {args[2].kind.value}" + ("+upsample" if args[2].upsample else "")  # noqa: E731
+    sprites.SpritePass._run = timers.wrap(kind, sprites.SpritePass._run)
     for i in range(a.frames + 2):
         cam = Camera.orbit(scene.center, scene.radius, 30.0 + i * 0.5, 20.0, 2.2)
         t0 = time.perf_counter()

@@ -11,63 +11,28 @@ objects only, Style.ao_objects / edge_objects). Regions captured below one texel
 `transparent` blends per pixel in surface order (Style.order 'pixel', and 'auto', the default;
 oit.py), the ghosted context with 'pixel'; Style.halo draws halos around focus objects where
 context lies behind them.
+
+Here the order of a mode's draws (CompositePass); each draw is a SpriteDraw of sprites.py
+(SpritePass), the options are style.py's (Style, Mode, Order, Role).
 """
 
 from __future__ import annotations
-
-from dataclasses import dataclass, field
 
 import moderngl
 import numpy as np
 
 from ..atlas.parameterize import Records
-from ..gl import glraw, glsl
+from ..gl import glraw
 from ..gl.bindings import Storage, Texture
 from ..gl.gpu import GpuScene
 from ..gl.targets import CompositeTarget, LayeredTarget, release_framebuffer
 from .capture import mat_bytes
 from .oit import PixelOrderPass, blended_in_place, resolved_order
-from .outlines import hull_margin, worth_outlines
+from .sprites import UPSAMPLE_BELOW, Depth, SpriteDraw, SpritePass, upload
+from .style import BACKGROUND, LENS_MODES, MODES, ROLES, Mode, ModeName, Order, Style
 
-MODES = ("sprites", "transparent", "ghosted", "ghosted-ao")
-LENS_MODES = ("ghosted", "ghosted-ao")  # where a lens cuts the context away
-BACKGROUND = (0.93, 0.93, 0.95, 1.0)
-UPSAMPLE_BELOW = 0.999  # regions with fewer texels per pixel are upsampled
-ROLES = ("focus", "all")  # which objects get AO / edges in ghosted-ao
-
-
-@dataclass
-class Style:
-    """What compositing needs besides the atlas; changing it never re-runs the capture."""
-
-    opacity: dict[int, float] = field(default_factory=dict)  # per object id
-    default_opacity: float = 0.5  # `transparent`: objects not in `opacity`
-    focus: set[int] = field(default_factory=set)
-    context_opacity: float = 0.3
-    desaturate: float = 0.8
-    edge_color: tuple[float, float, float, float] = (0.05, 0.05, 0.08, 1.0)
-    outline_color: tuple[float, float, float, float] = (1.0, 0.75, 0.1, 1.0)
-    outline_width: int = 1
-    edge_width: int = 1
-    ao_radius: float = 6.0
-    ao_strength: float = 1.0
-    # defaults from `rtta bench composite` on the demo at 1024² (README, BENCHMARKS.md)
-    ao_objects: str = "focus"  # ghosted-ao: AO on 'focus' objects only (the paper) or on 'all'
-    edge_objects: str = "all"  # ghosted-ao: edges on 'focus' objects only or on 'all'
-    order: str = "auto"  # transparent and ghosted context: 'object' (bounds centres), 'pixel'
-    # (surface depths), or 'auto' (oit.resolved_order: pixel in transparent)
-    halo: int = 0  # ghosted modes: halo width (pixels) around focus objects, 0: none
-    halo_color: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.6)  # (rgb, strength)
-
-    def shaded(self, n: int) -> tuple[np.ndarray, np.ndarray]:
-        """(uses AO, uses edges) per object [n] bool, in ghosted-ao."""
-        focus = np.zeros(n, bool)
-        focus[[o for o in self.focus if 0 <= o < n]] = True
-        for name, value in (("ao_objects", self.ao_objects), ("edge_objects", self.edge_objects)):
-            if value not in ROLES:
-                raise ValueError(f"{name} must be one of {', '.join(ROLES)}, got {value!r}")
-        every = np.ones(n, bool)
-        return (every if self.ao_objects == "all" else focus), (every if self.edge_objects == "all" else focus)
+# re-exported: what the renderer, the viewer, the benchmarks and the tests import from here
+__all__ = ["BACKGROUND", "LENS_MODES", "MODES", "ROLES", "CompositePass", "CompositeTarget", "Style", "back_to_front"]
 
 
 def back_to_front(records: Records, view_depth: np.ndarray, ids: np.ndarray) -> np.ndarray:
@@ -84,45 +49,28 @@ def back_to_front(records: Records, view_depth: np.ndarray, ids: np.ndarray) -> 
 
 
 class CompositePass:
-    """`render(*, atlas, records, gpu, style, mode, target)`; needs `post` for ghosted-ao."""
+    """The atlas composited into a target: `render(*, atlas, records, gpu, style, mode, view_depth,
+    target)` draws every sprite draw of the mode (SpritePass), blending in object or pixel order
+    (oit.PixelOrderPass); needs `post` (AtlasPostPass) for ghosted-ao."""
 
     def __init__(self, ctx: moderngl.Context) -> None:
         self.ctx = ctx
-        self._programs: dict[tuple, moderngl.Program] = {}
-        self._vaos: dict[tuple, moderngl.VertexArray] = {}
+        self.sprites = SpritePass(ctx)
         self.styles = ctx.buffer(reserve=16)
-        self.order = ctx.buffer(reserve=16)
-        self.passes: list[str] = []  # the draws of the last render, for inspection
         self._pixel_order = None  # PixelOrderPass, made on first use
         self._context_depth = self._context_fbo = None  # front-most context depth, for halos
         self.fallbacks = 0  # frames that asked for pixel order and got object order
-        self._projection = self._lens = self._inv_view_proj = None
-        self._hull = None  # (P V bytes, eye): sprites over the projected outlines of B_world
         self._opacity = np.zeros(0, np.float32)  # per object, as the last render draws them
-        self.hull_draws = 0  # draws of the last render whose sprites covered projected outlines
 
-    def _program(self, **defines) -> tuple[moderngl.Program, moderngl.VertexArray]:
-        key = tuple(sorted(defines.items()))
-        if key not in self._programs:
-            sources = glsl.stage_sources(
-                {
-                    "vertex_shader": "composite.vert",
-                    "geometry_shader": "composite.geom",
-                    "fragment_shader": "composite.frag",
-                },
-                **defines,
-            )
-            prog = glsl.program(self.ctx, **sources)
-            self._programs[key] = prog
-            self._vaos[key] = self.ctx.vertex_array(prog, [])
-        return self._programs[key], self._vaos[key]
+    @property
+    def passes(self) -> list[str]:
+        """The draws of the last render, for inspection (SpritePass.passes, and 'resolve')."""
+        return self.sprites.passes
 
-    def _upload(self, buf: moderngl.Buffer, data) -> None:
-        """`data`: bytes or a contiguous array (written as it is: no copy to bytes)."""
-        size = memoryview(data).nbytes
-        if buf.size < size:
-            buf.orphan(max(size, 2 * buf.size))
-        buf.write(data)
+    @property
+    def hull_draws(self) -> int:
+        """Draws of the last render whose sprites covered projected outlines."""
+        return self.sprites.hull_draws
 
     def render(
         self,
@@ -131,7 +79,7 @@ class CompositePass:
         records: Records,
         gpu: GpuScene,
         style: Style,
-        mode: str,
+        mode: ModeName | Mode,
         view_depth: np.ndarray,
         target: CompositeTarget,
         post=None,
@@ -147,26 +95,29 @@ class CompositePass:
         projected outline of each object's B_world instead of all of B_viewport."""
         if lens is not None and mode not in LENS_MODES:
             lens = None
-        self._projection, self._lens = projection, lens
-        # (P V)^-1 once per render, for every draw that rebuilds world positions
-        self._inv_view_proj = None if projection is None and lens is None else mat_bytes(np.linalg.inv(view_proj))
-        self._hull = None if eye is None or view_proj is None else (mat_bytes(view_proj), tuple(float(v) for v in eye))
-        if mode not in MODES:
-            raise ValueError(f"unknown mode {mode!r}; modes: {', '.join(MODES)}")
+        self.sprites.frame(
+            projection=projection,
+            lens=lens,
+            # (P V)^-1 once per render, for every draw that rebuilds world positions
+            inv_view_proj=None if projection is None and lens is None else mat_bytes(np.linalg.inv(view_proj)),
+            hull=None if eye is None or view_proj is None else (mat_bytes(view_proj), tuple(float(v) for v in eye)),
+        )
+        try:
+            mode = Mode(mode)
+        except ValueError:
+            raise ValueError(f"unknown mode {mode!r}; modes: {', '.join(MODES)}") from None
         n = len(records.visible)
         params = np.zeros((max(n, 1), 4), np.float32)
-        params[:n, 0] = style.default_opacity if mode == "transparent" else 1.0
+        params[:n, 0] = style.default_opacity if mode is Mode.TRANSPARENT else 1.0
         for oid, a in style.opacity.items():
             params[oid, 0] = float(np.clip(a, 0.0, 1.0))
         focus = np.array(sorted(o for o in style.focus if 0 <= o < n), np.int64)
         params[focus, 1] = 1.0
-        if mode == "ghosted-ao":
+        if mode is Mode.GHOSTED_AO:
             ao, edges = style.shaded(n)
             params[:n, 2], params[:n, 3] = ao, edges
-        self._upload(self.styles, params)
+        upload(self.styles, params)
         self._opacity = params[:n, 0]  # a view: as drawn (the ghosted context's too), for OrderMarks
-        self.passes = []
-        self.hull_draws = 0
         target.ensure(records.viewport)
         target.fbo.use()
         target.fbo.clear(*BACKGROUND, depth=1.0)
@@ -179,16 +130,18 @@ class CompositePass:
             atlas.normal.use(Texture.ATLAS_NORMAL)
         everyone = np.arange(n)
         outlined = style.outline_width >= 1
-        if mode == "sprites":
-            self._draw(everyone, style, records, sprite=True)
+        draw = self.sprites.draw
+        if mode is Mode.SPRITES:
+            draw(everyone, SpriteDraw.opaque(), style, records)
             if outlined:
-                self._draw(focus, style, records, outline=True)  # highlights, seen through
-        elif mode == "transparent":
-            self._blend(back_to_front(records, view_depth, everyone), style, records, target, mode, desaturate=0.0)
+                draw(focus, SpriteDraw.outlines(), style, records)  # highlights, seen through
+        elif mode is Mode.TRANSPARENT:
+            ordered = back_to_front(records, view_depth, everyone)
+            self._blend(ordered, SpriteDraw.transparent(), style, records, target, mode)
             if outlined:
-                self._draw(focus, style, records, outline=True)
+                draw(focus, SpriteDraw.outlines(), style, records)
         else:
-            with_ao = mode == "ghosted-ao"
+            with_ao = mode is Mode.GHOSTED_AO
             if with_ao:
                 post.texture.use(Texture.ATLAS_POST)
             in_context = np.ones(n, bool)
@@ -197,26 +150,15 @@ class CompositePass:
             # the focus outlines in the focus sprites' pass (at depth 0, so that nothing drawn
             # after covers them), unless a focus region is upsampled (outlines read texels)
             fused = outlined and not (records.scale[focus[records.visible[focus]]] < UPSAMPLE_BELOW).any()
-            self._draw(focus, style, records, sprite=True, ao=with_ao, outlined=fused)
+            draw(focus, SpriteDraw.opaque(shaded=with_ao, outlined=fused), style, records)
             params[context, 0] = style.context_opacity * params[context, 0]
-            self._upload(self.styles, params)
-            self._blend(
-                back_to_front(records, view_depth, context),
-                style,
-                records,
-                target,
-                mode,
-                behind=focus,
-                behind_outlined=fused,
-                desaturate=style.desaturate,
-                depth_test=True,
-                ao=with_ao,
-                cut=True,
-            )
+            upload(self.styles, params)
+            faded = SpriteDraw.context(desaturate=style.desaturate, shaded=with_ao)
+            self._blend(back_to_front(records, view_depth, context), faded, style, records, target, mode, focus, fused)
             if style.halo > 0 and len(focus):
                 self._halo(focus, context, style, records, target)
             if outlined and not fused:
-                self._draw(focus, style, records, outline=True)
+                draw(focus, SpriteDraw.outlines(), style, records)
 
     def _halo(self, focus, context, style: Style, records: Records, target: CompositeTarget) -> None:
         """Halos around the focus objects where context lies behind them: the farthest
@@ -225,23 +167,16 @@ class CompositePass:
         quad per focus object reaching `style.halo` pixels beyond its B_viewport."""
         if not 1 <= int(style.halo) <= 32:
             raise ValueError(f"halo width must be 0..32 pixels, got {style.halo}")
-        self._sprite_depth(context, style, records, target, farthest=True, cut=True).use(Texture.CONTEXT_DEPTH)
-        self._draw(focus, style, records, halo=True, depth_test=True)
+        depths = SpriteDraw.depths(farthest=True, cut=True)
+        self._sprite_depth(context, depths, style, records, target).use(Texture.CONTEXT_DEPTH)
+        self.sprites.draw(focus, SpriteDraw.halos(), style, records)
 
     def _sprite_depth(
-        self,
-        ids,
-        style: Style,
-        records: Records,
-        target: CompositeTarget,
-        *,
-        farthest: bool,
-        cut: bool,
-        outlined: bool = False,
+        self, ids, draw: SpriteDraw, style: Style, records: Records, target: CompositeTarget
     ) -> moderngl.Texture:
-        """The nearest (or farthest) sprite depth of `ids` per pixel, in a depth texture of
-        the target's size (1, or 0 for farthest, where none); the target is bound again after.
-        `outlined`: their outlines at depth 0 (as the fused focus pass draws them)."""
+        """The nearest (or farthest) sprite depth of `ids` per pixel (`draw`: SpriteDraw.depths),
+        in a depth texture of the target's size (1, or 0 for farthest, where none); the target
+        is bound again after."""
         if self._context_depth is None or self._context_depth.size != target.size:
             self._release_context_depth()
             self._context_depth = self.ctx.depth_texture(target.size)
@@ -249,8 +184,8 @@ class CompositePass:
             self._context_fbo = self.ctx.framebuffer(depth_attachment=self._context_depth)
         self._context_fbo.viewport = (0, 0, *target.viewport)
         self._context_fbo.use()
-        self._context_fbo.clear(depth=0.0 if farthest else 1.0)
-        self._draw(ids, style, records, sprite=True, cut=cut, farthest=farthest, outlined=outlined)
+        self._context_fbo.clear(depth=0.0 if draw.depth is Depth.FARTHEST else 1.0)
+        self.sprites.draw(ids, draw, style, records)
         target.fbo.use()
         return self._context_depth
 
@@ -263,23 +198,24 @@ class CompositePass:
     def _blend(
         self,
         ids,
+        draw: SpriteDraw,
         style: Style,
         records: Records,
         target: CompositeTarget,
-        mode: str,
+        mode: Mode,
         behind=None,
         behind_outlined: bool = False,
-        **how,
     ) -> None:
-        """Blend `ids` (back to front) over the target: object by object, or per pixel in the
-        order of their surfaces (style.order 'pixel', or 'auto' in `transparent`; object order
-        where PixelOrderPass.begin refuses: over MAX_NODES, or a view too large for its targets).
-        `behind`: opaque objects already drawn (the ghosted focus); surfaces behind them are
-        hidden, by the depth test in object order and by their depth per pixel in pixel order;
-        `behind_outlined`: their outlines were drawn with them (at depth 0: nothing covers them).
-        With nothing behind, pixel order blends in object order as it collects, marking the
-        pixels that order gets wrong (oit.OrderMarks), and resolves only those."""
-        if resolved_order(style.order, mode) == "pixel" and len(ids):
+        """Blend `ids` (back to front) over the target with `draw` (a blended SpriteDraw): object
+        by object, or per pixel in the order of their surfaces (style.order 'pixel', or 'auto' in
+        `transparent`; object order where PixelOrderPass.begin refuses: over MAX_NODES, or a view
+        too large for its targets). `behind`: opaque objects already drawn (the ghosted focus);
+        surfaces behind them are hidden, by the depth test in object order and by their depth
+        per pixel in pixel order; `behind_outlined`: their outlines were drawn with them (at
+        depth 0: nothing covers them). With nothing behind, pixel order blends in object order
+        as it collects, marking the pixels that order gets wrong (oit.OrderMarks), and resolves
+        only those."""
+        if resolved_order(style.order, mode) is Order.PIXEL and len(ids):
             if self._pixel_order is None:
                 self._pixel_order = PixelOrderPass(self.ctx)
             ids = np.asarray(ids, np.int64)
@@ -288,23 +224,12 @@ class CompositePass:
                 clip = behind is not None and len(behind) > 0
                 fetch = self._pixel_order.fetch
                 if clip:
-                    self._sprite_depth(
-                        behind, style, records, target, farthest=False, cut=False, outlined=behind_outlined
-                    ).use(Texture.FOCUS_DEPTH)
+                    depths = SpriteDraw.depths(farthest=False, cut=False, outlined=behind_outlined)
+                    self._sprite_depth(behind, depths, style, records, target).use(Texture.FOCUS_DEPTH)
                 self._pixel_order.collect_into(target, mark=not clip)
                 try:  # clip: collected only, writing no depth (clipped by the focus depth instead);
                     # else blended in object order and sorted where that is wrong (oit.OrderMarks)
-                    tested = not clip and not fetch
-                    self._draw(
-                        ids,
-                        style,
-                        records,
-                        collect=True,
-                        blend=not clip,
-                        focus_clip=clip,
-                        first_fetched=fetch,
-                        **{**how, "depth_test": tested, "depth_write": tested},
-                    )
+                    self.sprites.draw(ids, draw.collected(clip=clip, fetched=fetch), style, records)
                 finally:
                     self._pixel_order.end_collect()
                 if clip:
@@ -315,7 +240,7 @@ class CompositePass:
                 self.passes.append("resolve")
                 return
             self.fallbacks += 1
-        self._draw(ids, style, records, blend=True, **how)
+        self.sprites.draw(ids, draw, style, records)
 
     @property
     def pixel_order_refusal(self) -> str | None:
@@ -328,128 +253,9 @@ class CompositePass:
         a = a[a > 0]
         return blended_in_place(a.min() if len(a) else 1.0)
 
-    def _draw(self, ids, style: Style, records: Records, **how) -> None:
-        """Draw `ids` in order: one draw per run of objects captured at one texel per pixel
-        or more, and per run below it (those are upsampled); outlines read texels as they are."""
-        ids = np.asarray(ids, np.int32)
-        ids = ids[records.visible[ids]] if len(ids) else ids
-        if len(ids) == 0:
-            return
-        low = records.scale[ids] < UPSAMPLE_BELOW
-        if how.get("outline") or how.get("halo") or not low.any():
-            return self._draw_run(ids, style, records, **how)
-        cuts = np.flatnonzero(np.diff(low.astype(np.int8))) + 1
-        for run in np.split(ids, cuts):
-            self._draw_run(run, style, records, upsample=bool(records.scale[run[0]] < UPSAMPLE_BELOW), **how)
-
-    def _draw_run(
-        self,
-        ids,
-        style: Style,
-        records: Records,
-        *,
-        sprite=False,
-        blend=False,
-        outline=False,
-        desaturate=0.0,
-        depth_test=False,
-        ao=False,
-        cut=False,
-        upsample=False,
-        collect=False,
-        halo=False,
-        farthest=False,
-        focus_clip=False,
-        outlined=False,
-        depth_write=False,
-        first_fetched=False,
-    ) -> None:
-        self._upload(self.order, np.ascontiguousarray(ids, np.int32))
-        self.order.bind_to_storage_buffer(Storage.DRAW_LIST)
-        projection = None if outline or halo else self._projection
-        lens = self._lens if cut else None
-        # upsampled pixels reach past the outline; small sprites do not repay the outline's cost
-        hull = None if halo or upsample or self._hull is None or not worth_outlines(records, ids) else self._hull
-        mode = {
-            "MODE_SPRITE": sprite,
-            "MODE_BLEND": blend,
-            "MODE_OUTLINE": outline,
-            "MODE_COLLECT": collect,
-            "FIRST_FETCHED": collect and first_fetched,
-            "MODE_HALO": halo,
-            "FOCUS_CLIP": focus_clip,
-            "SPRITE_OUTLINE": outlined and sprite,
-            "OUTLINE_QUAD": (
-                (outline or outlined)
-                and int(style.outline_width) == 1
-                and records.border >= 1
-                and bool((records.scale[ids] == 1.0).all())
-            ),
-            "WITH_AO": ao and not outline,
-            "PROJECTOR": projection is not None,
-            "LENS": lens is not None,
-            "UPSAMPLE": upsample,
-        }
-        on = [k for k, v in mode.items() if v]
-        self.passes.append(
-            "+".join(
-                k.removeprefix("MODE_").removeprefix("SPRITE_").lower()
-                for k in on
-                if k not in ("OUTLINE_QUAD", "FIRST_FETCHED")
-            )
-        )
-        prog, vao = self._program(**{k: True for k in on})
-        prog["u_viewport"].value = tuple(float(v) for v in records.viewport)
-        if projection is not None or lens is not None:
-            prog["u_inv_view_proj"].write(self._inv_view_proj)
-        prog["u_hull"].value = hull is not None
-        if hull is not None:
-            self.hull_draws += 1
-            view_proj, eye = hull
-            prog["u_view_proj"].write(view_proj)
-            prog["u_eye"].value = eye
-            prog["u_hull_margin"].value = hull_margin(records.scale[ids])
-        if projection is not None:
-            pass_, projector, origin = projection
-            pass_.bind(prog, projector, origin)
-        if lens is not None:
-            lens_pass, lens_, origin = lens
-            lens_pass.bind(prog, lens_, origin)
-        for name, value in (
-            ("u_desaturate", desaturate),
-            ("u_edge_color", style.edge_color),
-            ("u_outline_color", style.outline_color),
-            ("u_outline_width", style.outline_width),
-            ("u_halo_width", int(style.halo)),
-            ("u_halo_color", tuple(style.halo_color)),
-        ):
-            if name in prog:  # the compiler drops what a variant does not use
-                prog[name].value = value
-        flags = moderngl.NOTHING
-        if sprite or depth_test:
-            flags |= moderngl.DEPTH_TEST
-        if blend or halo:
-            flags |= moderngl.BLEND
-        self.ctx.enable_only(flags)
-        self.ctx.depth_func = ">" if farthest else "<"
-        self.ctx.blend_func = moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA
-        fbo = self.ctx.fbo
-        fbo.depth_mask = bool(sprite or depth_write)
-        masked = collect and not blend and not first_fetched  # else the collect framebuffer masks it
-        if masked:
-            fbo.color_mask = (False,) * 4
-        fbo.use()
-        vao.render(moderngl.POINTS, vertices=len(ids))
-        fbo.depth_mask = True
-        self.ctx.depth_func = "<"
-        if masked:
-            fbo.color_mask = (True,) * 4
-
     def release(self) -> None:
         self._release_context_depth()
         if self._pixel_order is not None:
             self._pixel_order.release()
-        for obj in [*self._vaos.values(), *self._programs.values(), self.styles, self.order]:
-            obj.release()
-        self._vaos.clear()
-        self._programs.clear()
+        self.sprites.release()
+        self.styles.release()

@@ -38,6 +38,8 @@ from ..atlas.parameterize import Records
 from ..gl import glraw, glsl
 from ..gl.bindings import Storage, Texture
 from ..gl.targets import release_all
+from .style import ORDERS as ORDERS  # re-exported: the choices of --order
+from .style import Mode, ModeName, Order, OrderName, choice
 
 # each pixel's first surfaces in colour attachments and its count and order mark in the stencil,
 # read and written in draw order by the shader (no atomics): where the driver has these (Mesa's
@@ -65,16 +67,16 @@ ROUNDING_BUDGET = 2.5
 STENCIL_OUT_OF_ORDER = 255
 STENCIL_COUNT = 127  # with `fetched` marks: the count's bits (oit.glsl), the flag 128 above them
 NODE_BYTES = 16
-ORDERS = ("auto", "object", "pixel")  # auto: pixel in `transparent`, object for the ghosted context
 
 
-def resolved_order(order: str, mode: str) -> str:
-    """'object' or 'pixel': what `order` means in `mode` (auto: pixel in transparent, where
+def resolved_order(order: OrderName | Order, mode: ModeName | Mode) -> Order:
+    """Order.OBJECT or Order.PIXEL: what `order` means in `mode` (auto: pixel in transparent, where
     object order leaves 3.5-6.3% of pixels over 8/255 at 1.2-1.4x the frame; object for the
     ghosted context, faded and desaturated, whose frame budget is set against STD)."""
-    if order not in ORDERS:
-        raise ValueError(f"order must be one of {', '.join(ORDERS)}, got {order!r}")
-    return order if order != "auto" else ("pixel" if mode == "transparent" else "object")
+    chosen = choice(Order, order, "order")
+    if chosen is not Order.AUTO:
+        return chosen
+    return Order.PIXEL if mode == Mode.TRANSPARENT else Order.OBJECT
 
 
 def blended_in_place(min_opacity: float) -> int:

@@ -1,0 +1,274 @@
+"""Sprite draws (RTTA paper, section 3.2, Figure 3): one point per object, expanded into a quad
+over its B_viewport (or the projected outline of its B_world), reading its own unoccluded
+atlas images. Every draw of compositing is one of these; `SpriteDraw` says which kind.
+
+`SpritePass.draw(ids, draw, style, records)` draws `ids` in order into the bound framebuffer,
+from the atlas, records and style buffers CompositePass bound (rtta.gl.bindings), with the
+frame's projector, lens and outline hull (`SpritePass.frame`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from enum import Enum
+
+import moderngl
+import numpy as np
+
+from ..atlas.parameterize import Records
+from ..gl import glsl
+from ..gl.bindings import Storage
+from .outlines import hull_margin, worth_outlines
+from .style import Style
+
+UPSAMPLE_BELOW = 0.999  # regions with fewer texels per pixel are upsampled
+STAGES = {"vertex_shader": "composite.vert", "geometry_shader": "composite.geom", "fragment_shader": "composite.frag"}
+
+
+class Kind(Enum):
+    """What a draw does with its sprites (composite.frag's MODE_* defines)."""
+
+    OPAQUE = "opaque"  # depth sprites: the STD picture reconstructed, depth written (MODE_SPRITE)
+    BLENDED = "blended"  # blended over the target, in the order given (MODE_BLEND)
+    COLLECTED = "collected"  # into per-pixel lists only, behind the focus depth dropped (FOCUS_CLIP)
+    COLLECTED_BLENDED = "collected+blended"  # listed while blended in object order, order errors marked
+    OUTLINES = "outlines"  # the silhouettes of highlighted objects, over everything (MODE_OUTLINE)
+    HALOS = "halos"  # a halo around each object where the context lies behind it (MODE_HALO)
+
+
+class Depth(Enum):
+    """How a draw uses the depth buffer."""
+
+    OFF = "off"  # neither tested nor written
+    TESTED = "tested"  # tested against what is drawn, not written
+    NEAREST = "nearest"  # tested and written, the nearest kept
+    FARTHEST = "farthest"  # tested and written, the farthest kept
+
+
+@dataclass(frozen=True)
+class SpriteDraw:
+    """One kind of sprite draw; the named constructors give the combinations compositing uses.
+
+    Attributes
+    ----------
+    kind : Kind
+        What the draw does with its sprites.
+    depth : Depth
+        How it uses the depth buffer.
+    shaded : bool
+        With the atlas post-processing's AO and edges (ghosted-ao).
+    cut : bool
+        The lens cuts these objects away where it holds them (the context).
+    outlined : bool
+        Opaque sprites that draw their own outlines, at depth 0 (the fused focus pass).
+    fetched : bool
+        Collected with each pixel's first surfaces in colour attachments (oit.OrderMarks).
+    desaturate : float
+        Desaturation of the blended colour, in [0, 1] (the ghosted context).
+    upsample : bool
+        The objects' regions are captured below one texel per pixel (UPSAMPLE_BELOW).
+    """
+
+    kind: Kind
+    depth: Depth = Depth.OFF
+    shaded: bool = False
+    cut: bool = False
+    outlined: bool = False
+    fetched: bool = False
+    desaturate: float = 0.0
+    upsample: bool = False
+
+    def __post_init__(self) -> None:
+        collects = self.kind in (Kind.COLLECTED, Kind.COLLECTED_BLENDED)
+        if self.outlined and self.kind is not Kind.OPAQUE:
+            raise ValueError(f"only opaque sprites draw their own outlines, not {self.kind.value}")
+        if self.fetched and not collects:
+            raise ValueError(f"only collected sprites fetch their first surfaces, not {self.kind.value}")
+
+    @classmethod
+    def opaque(cls, *, shaded: bool = False, outlined: bool = False) -> SpriteDraw:
+        """Depth sprites over the target (`sprites`; the ghosted focus)."""
+        return cls(Kind.OPAQUE, Depth.NEAREST, shaded=shaded, outlined=outlined)
+
+    @classmethod
+    def depths(cls, *, farthest: bool, cut: bool, outlined: bool = False) -> SpriteDraw:
+        """The nearest (or farthest) sprite depth per pixel, into a depth-only target."""
+        return cls(Kind.OPAQUE, Depth.FARTHEST if farthest else Depth.NEAREST, cut=cut, outlined=outlined)
+
+    @classmethod
+    def transparent(cls) -> SpriteDraw:
+        """Every object blended with its opacity, over nothing opaque (`transparent`)."""
+        return cls(Kind.BLENDED)
+
+    @classmethod
+    def context(cls, *, desaturate: float, shaded: bool) -> SpriteDraw:
+        """The ghosted context: faded, desaturated, blended behind-tested against the focus, cut by a lens."""
+        return cls(Kind.BLENDED, Depth.TESTED, shaded=shaded, cut=True, desaturate=desaturate)
+
+    @classmethod
+    def outlines(cls) -> SpriteDraw:
+        """The highlighted objects' silhouettes, seen through everything."""
+        return cls(Kind.OUTLINES)
+
+    @classmethod
+    def halos(cls) -> SpriteDraw:
+        """Halos around the focus objects, where the context lies behind them."""
+        return cls(Kind.HALOS, Depth.TESTED)
+
+    def collected(self, *, clip: bool, fetched: bool) -> SpriteDraw:
+        """This blend collected per pixel (oit.PixelOrderPass): with `clip`, listed only and
+        clipped by the focus depth; else blended in object order as it lists, depth tested and
+        written (where not `fetched`) to mark the pixels that order gets wrong."""
+        tested = not clip and not fetched
+        kind = Kind.COLLECTED if clip else Kind.COLLECTED_BLENDED
+        return dataclasses.replace(self, kind=kind, depth=Depth.NEAREST if tested else Depth.OFF, fetched=fetched)
+
+
+def upload(buf: moderngl.Buffer, data) -> None:
+    """`data`: bytes or a contiguous array (written as it is: no copy to bytes)."""
+    size = memoryview(data).nbytes
+    if buf.size < size:
+        buf.orphan(max(size, 2 * buf.size))
+    buf.write(data)
+
+
+class SpritePass:
+    """Draws sprites of one SpriteDraw kind; `passes` and `hull_draws` describe the frame's draws."""
+
+    def __init__(self, ctx: moderngl.Context) -> None:
+        self.ctx = ctx
+        self._programs: dict[tuple, moderngl.Program] = {}
+        self._vaos: dict[tuple, moderngl.VertexArray] = {}
+        self.order = ctx.buffer(reserve=16)
+        self.passes: list[str] = []  # the draws of the last frame, for inspection
+        self.hull_draws = 0  # draws of the last frame whose sprites covered projected outlines
+        self._projection = self._lens = self._inv_view_proj = self._hull = None
+
+    def frame(self, *, projection=None, lens=None, inv_view_proj: bytes | None = None, hull=None) -> None:
+        """Start a frame: `projection` (ProjectorPass, Projector, origin) and `lens` (LensPass,
+        Lens, origin) with `inv_view_proj` ((P V)^-1 bytes) to rebuild world positions; `hull`
+        (P V bytes, eye): sprites over the projected outlines of B_world, else B_viewport."""
+        self._projection, self._lens, self._inv_view_proj, self._hull = projection, lens, inv_view_proj, hull
+        self.passes = []
+        self.hull_draws = 0
+
+    def _program(self, **defines) -> tuple[moderngl.Program, moderngl.VertexArray]:
+        key = tuple(sorted(defines.items()))
+        if key not in self._programs:
+            prog = glsl.program(self.ctx, **glsl.stage_sources(STAGES, **defines))
+            self._programs[key] = prog
+            self._vaos[key] = self.ctx.vertex_array(prog, [])
+        return self._programs[key], self._vaos[key]
+
+    def draw(self, ids, draw: SpriteDraw, style: Style, records: Records) -> None:
+        """Draw `ids` in order: one draw per run of objects captured at one texel per pixel
+        or more, and per run below it (those are upsampled); outlines read texels as they are."""
+        ids = np.asarray(ids, np.int32)
+        ids = ids[records.visible[ids]] if len(ids) else ids
+        if len(ids) == 0:
+            return
+        low = records.scale[ids] < UPSAMPLE_BELOW
+        if draw.kind in (Kind.OUTLINES, Kind.HALOS) or not low.any():
+            return self._run(ids, draw, style, records)
+        cuts = np.flatnonzero(np.diff(low.astype(np.int8))) + 1
+        for run in np.split(ids, cuts):
+            upsample = bool(records.scale[run[0]] < UPSAMPLE_BELOW)
+            self._run(run, dataclasses.replace(draw, upsample=upsample), style, records)
+
+    def _defines(self, ids, draw: SpriteDraw, style: Style, records: Records) -> dict[str, bool]:
+        kind, outline = draw.kind, draw.kind is Kind.OUTLINES
+        return {
+            "MODE_SPRITE": kind is Kind.OPAQUE,
+            "MODE_BLEND": kind in (Kind.BLENDED, Kind.COLLECTED_BLENDED),
+            "MODE_OUTLINE": outline,
+            "MODE_COLLECT": kind in (Kind.COLLECTED, Kind.COLLECTED_BLENDED),
+            "FIRST_FETCHED": draw.fetched,
+            "MODE_HALO": kind is Kind.HALOS,
+            "FOCUS_CLIP": kind is Kind.COLLECTED,
+            "SPRITE_OUTLINE": draw.outlined,
+            "OUTLINE_QUAD": (
+                (outline or draw.outlined)
+                and int(style.outline_width) == 1
+                and records.border >= 1
+                and bool((records.scale[ids] == 1.0).all())
+            ),
+            "WITH_AO": draw.shaded and not outline,
+            "PROJECTOR": self._projection is not None and kind not in (Kind.OUTLINES, Kind.HALOS),
+            "LENS": self._lens is not None and draw.cut,
+            "UPSAMPLE": draw.upsample,
+        }
+
+    def _run(self, ids, draw: SpriteDraw, style: Style, records: Records) -> None:
+        upload(self.order, np.ascontiguousarray(ids, np.int32))
+        self.order.bind_to_storage_buffer(Storage.DRAW_LIST)
+        defines = self._defines(ids, draw, style, records)
+        projection = self._projection if defines["PROJECTOR"] else None
+        lens = self._lens if defines["LENS"] else None
+        # upsampled pixels reach past the outline; small sprites do not repay the outline's cost
+        halo = draw.kind is Kind.HALOS
+        hull = None if halo or draw.upsample or self._hull is None or not worth_outlines(records, ids) else self._hull
+        on = [k for k, v in defines.items() if v]
+        self.passes.append(
+            "+".join(
+                k.removeprefix("MODE_").removeprefix("SPRITE_").lower()
+                for k in on
+                if k not in ("OUTLINE_QUAD", "FIRST_FETCHED")
+            )
+        )
+        prog, vao = self._program(**{k: True for k in on})
+        prog["u_viewport"].value = tuple(float(v) for v in records.viewport)
+        if projection is not None or lens is not None:
+            prog["u_inv_view_proj"].write(self._inv_view_proj)
+        prog["u_hull"].value = hull is not None
+        if hull is not None:
+            self.hull_draws += 1
+            view_proj, eye = hull
+            prog["u_view_proj"].write(view_proj)
+            prog["u_eye"].value = eye
+            prog["u_hull_margin"].value = hull_margin(records.scale[ids])
+        if projection is not None:
+            pass_, projector, origin = projection
+            pass_.bind(prog, projector, origin)
+        if lens is not None:
+            lens_pass, lens_, origin = lens
+            lens_pass.bind(prog, lens_, origin)
+        for name, value in (
+            ("u_desaturate", draw.desaturate),
+            ("u_edge_color", style.edge_color),
+            ("u_outline_color", style.outline_color),
+            ("u_outline_width", style.outline_width),
+            ("u_halo_width", int(style.halo)),
+            ("u_halo_color", tuple(style.halo_color)),
+        ):
+            if name in prog:  # the compiler drops what a variant does not use
+                prog[name].value = value
+        self._render(vao, len(ids), draw)
+
+    def _render(self, vao: moderngl.VertexArray, count: int, draw: SpriteDraw) -> None:
+        """The draw's GL state around one draw call, then the defaults back."""
+        flags = moderngl.NOTHING
+        if draw.depth is not Depth.OFF:
+            flags |= moderngl.DEPTH_TEST
+        if draw.kind in (Kind.BLENDED, Kind.COLLECTED_BLENDED, Kind.HALOS):
+            flags |= moderngl.BLEND
+        self.ctx.enable_only(flags)
+        self.ctx.depth_func = ">" if draw.depth is Depth.FARTHEST else "<"
+        self.ctx.blend_func = moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA
+        fbo = self.ctx.fbo
+        fbo.depth_mask = draw.depth in (Depth.NEAREST, Depth.FARTHEST)
+        masked = draw.kind is Kind.COLLECTED and not draw.fetched  # else the collect framebuffer masks it
+        if masked:
+            fbo.color_mask = (False,) * 4
+        fbo.use()
+        vao.render(moderngl.POINTS, vertices=count)
+        fbo.depth_mask = True
+        self.ctx.depth_func = "<"
+        if masked:
+            fbo.color_mask = (True,) * 4
+
+    def release(self) -> None:
+        for obj in [*self._vaos.values(), *self._programs.values(), self.order]:
+            obj.release()
+        self._vaos.clear()
+        self._programs.clear()

@@ -1,0 +1,89 @@
+"""What compositing is asked for besides the atlas: the mode, and the Style (opacities, the
+focus set, colours, widths, which objects get AO and edges, the blending order, halos).
+
+Options are `StrEnum`s where the code compares them (`Mode`, `Role`, `Order`) and `Literal`
+aliases in the type hints of the public API (`ModeName`, `RoleName`, `OrderName`): the CLI's
+and the API's strings stay what they were, and a str equal to a value works as the member.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import StrEnum
+from typing import Literal
+
+import numpy as np
+
+
+class Mode(StrEnum):
+    """Compositing modes (RTTA paper, section 3.2; README)."""
+
+    SPRITES = "sprites"  # depth sprites: STD reconstructed
+    TRANSPARENT = "transparent"  # every object blended with its opacity, back to front
+    GHOSTED = "ghosted"  # focus opaque, visible through the faded, desaturated context
+    GHOSTED_AO = "ghosted-ao"  # ghosted, shaded with AO and edges from each object's own atlas images
+
+
+class Role(StrEnum):
+    """Which objects get AO / edges in ghosted-ao (Style.ao_objects, Style.edge_objects)."""
+
+    FOCUS = "focus"  # the focus objects only (the paper's AO)
+    ALL = "all"
+
+
+class Order(StrEnum):
+    """The blending order of `transparent` and the ghosted context (oit.resolved_order)."""
+
+    AUTO = "auto"  # pixel in `transparent`, object for the ghosted context
+    OBJECT = "object"  # back to front by bounds centre
+    PIXEL = "pixel"  # per pixel, by surface depth (oit.PixelOrderPass)
+
+
+ModeName = Literal["sprites", "transparent", "ghosted", "ghosted-ao"]
+RoleName = Literal["focus", "all"]
+OrderName = Literal["auto", "object", "pixel"]
+MODES: tuple[str, ...] = tuple(m.value for m in Mode)
+ROLES: tuple[str, ...] = tuple(r.value for r in Role)
+ORDERS: tuple[str, ...] = tuple(o.value for o in Order)
+LENS_MODES: tuple[str, ...] = (Mode.GHOSTED.value, Mode.GHOSTED_AO.value)  # where a lens cuts the context away
+BACKGROUND = (0.93, 0.93, 0.95, 1.0)
+
+
+def choice(kind: type[StrEnum], value: str, what: str) -> StrEnum:
+    """`value` as a member of `kind`; ValueError naming `what` and the choices otherwise."""
+    try:
+        return kind(value)
+    except ValueError:
+        raise ValueError(f"{what} must be one of {', '.join(kind)}, got {value!r}") from None
+
+
+@dataclass
+class Style:
+    """What compositing needs besides the atlas; changing it never re-runs the capture."""
+
+    opacity: dict[int, float] = field(default_factory=dict)  # per object id
+    default_opacity: float = 0.5  # `transparent`: objects not in `opacity`
+    focus: set[int] = field(default_factory=set)
+    context_opacity: float = 0.3
+    desaturate: float = 0.8
+    edge_color: tuple[float, float, float, float] = (0.05, 0.05, 0.08, 1.0)
+    outline_color: tuple[float, float, float, float] = (1.0, 0.75, 0.1, 1.0)
+    outline_width: int = 1
+    edge_width: int = 1
+    ao_radius: float = 6.0
+    ao_strength: float = 1.0
+    # defaults from `rtta bench composite` on the demo at 1024² (README, BENCHMARKS.md)
+    ao_objects: RoleName = "focus"  # ghosted-ao: AO on 'focus' objects only (the paper) or on 'all'
+    edge_objects: RoleName = "all"  # ghosted-ao: edges on 'focus' objects only or on 'all'
+    order: OrderName = "auto"  # transparent and ghosted context: 'object' (bounds centres), 'pixel'
+    # (surface depths), or 'auto' (oit.resolved_order: pixel in transparent)
+    halo: int = 0  # ghosted modes: halo width (pixels) around focus objects, 0: none
+    halo_color: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.6)  # (rgb, strength)
+
+    def shaded(self, n: int) -> tuple[np.ndarray, np.ndarray]:
+        """(uses AO, uses edges) per object [n] bool, in ghosted-ao."""
+        focus = np.zeros(n, bool)
+        focus[[o for o in self.focus if 0 <= o < n]] = True
+        every = np.ones(n, bool)
+        ao, edges = (choice(Role, getattr(self, name), name) for name in ("ao_objects", "edge_objects"))
+        return (every if ao is Role.ALL else focus), (every if edges is Role.ALL else focus)

@@ -59,7 +59,50 @@ def choice(kind: type[StrEnum], value: str, what: str) -> StrEnum:
 
 @dataclass
 class Style:
-    """What compositing needs besides the atlas; changing it never re-runs the capture."""
+    """How a capture is composited: focus, opacities, colours, widths, AO, order, halos.
+
+    Changing it never re-runs the capture, and only the objects whose role changed are shaded
+    again. `rtta.snapshot` takes these fields as keywords; the CLI as options of the same names
+    (`--context-opacity`, `--ao-objects` ...). The defaults come from `rtta bench composite` on
+    the demo at 1024² (docs: Performance, Compositing modes).
+
+    Parameters
+    ----------
+    opacity : dict of int to float
+        Opacity per object id, in `transparent`.
+    default_opacity : float, default 0.5
+        Opacity of the objects not in `opacity`, in `transparent`.
+    focus : set of int
+        The focus set: highlighted objects, opaque in the ghosted modes, outlined in all.
+    context_opacity : float, default 0.3
+        Opacity of everything else in the ghosted modes.
+    desaturate : float, default 0.8
+        How far the context's colours are desaturated (0: not at all, 1: grey).
+    edge_color, outline_color : tuple of float
+        RGBA of the `ghosted-ao` edges and of the focus objects' silhouettes.
+    outline_width, edge_width : int, default 1
+        Widths in pixels.
+    ao_radius : float, default 6
+        Ambient occlusion radius in pixels (`ghosted-ao`).
+    ao_strength : float, default 1
+        Ambient occlusion strength.
+    ao_objects : {"focus", "all"}, default "focus"
+        Which objects get AO in `ghosted-ao` (the paper's: the focus).
+    edge_objects : {"focus", "all"}, default "all"
+        Which objects get edges in `ghosted-ao`.
+    order : {"auto", "object", "pixel"}, default "auto"
+        Blending order of `transparent` and of the ghosted context: by bounds centre, per pixel
+        by surface depth, or auto (per pixel in `transparent`, by object in the context).
+    halo : int, default 0
+        Width in pixels of a halo around the focus objects where context lies behind (0: none).
+    halo_color : tuple of float
+        The halo's RGB and strength.
+
+    Examples
+    --------
+    >>> import rtta
+    >>> style = rtta.Style(focus={17, 18}, context_opacity=0.2, ao_objects="all", halo=4)
+    """
 
     opacity: dict[int, float] = field(default_factory=dict)  # per object id
     default_opacity: float = 0.5  # `transparent`: objects not in `opacity`
@@ -72,7 +115,7 @@ class Style:
     edge_width: int = 1
     ao_radius: float = 6.0
     ao_strength: float = 1.0
-    # defaults from `rtta bench composite` on the demo at 1024² (README, BENCHMARKS.md)
+    # defaults from `rtta bench composite` on the demo at 1024² (docs/performance/modes.md)
     ao_objects: RoleName = "focus"  # ghosted-ao: AO on 'focus' objects only (the paper) or on 'all'
     edge_objects: RoleName = "all"  # ghosted-ao: edges on 'focus' objects only or on 'all'
     order: OrderName = "auto"  # transparent and ghosted context: 'object' (bounds centres), 'pixel'

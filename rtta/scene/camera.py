@@ -67,7 +67,28 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 @dataclass
 class Camera:
-    """eye/target are world-space float64; fov_y in degrees; near/far in world units."""
+    """A camera: where it stands, what it looks at, its field of view and depth range.
+
+    `Camera.orbit` places one on an orbit around the scene (azimuth, elevation, distance in
+    bounding radii) with near and far fitted to the bounding sphere; `view` and `projection`
+    give the float64 matrices, relative to the scene origin.
+
+    Parameters
+    ----------
+    eye, target, up : numpy.ndarray
+        World-space float64 [3]: the eye, the point looked at, the up direction.
+    fov_y : float, default 45
+        Vertical field of view in degrees.
+    near, far : float
+        The depth range in world units.
+
+    Examples
+    --------
+    >>> import rtta
+    >>> camera = rtta.Camera.orbit([0.0, 0.0, 0.0], 1.0, 35, 25, 2.2)
+    >>> camera.projection(4 / 3).shape
+    (4, 4)
+    """
 
     eye: np.ndarray
     target: np.ndarray

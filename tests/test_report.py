@@ -4,12 +4,13 @@ name renderer, CPU, date and command, draws the plots, and keeps the rest of the
 from __future__ import annotations
 
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
 from PIL import Image
 
-from rtta.bench.report import BEGIN, END, SECTIONS
+from rtta.bench.report import BEGIN, DEFAULT_MARKDOWN, END, NEW_PAGE, SECTIONS, write_block
 from rtta.cli.main import main
 
 
@@ -89,8 +90,6 @@ def test_plots_are_drawn(quick_report):
 
 
 def test_a_second_run_replaces_the_block(tmp_path, quick_report):
-    from rtta.bench.report import write_block
-
     md = tmp_path / "B.md"
     md.write_text(quick_report[0].read_text() + "\ntail text\n")
     write_block(md, "new block")
@@ -125,3 +124,15 @@ def test_importance_section(quick_report):
     assert sum(r[9] == "**yes**" for r in rows) == 2 * 3  # ghosted, ghosted-ao, transparent
     half = [r for r in rows if r[1] == "ghosted-ao" and r[2] == "0.5"]
     assert half and all(float(r[8]) > 0 for r in half)
+
+
+def test_the_default_target_is_the_docs_report_page(tmp_path):
+    """`rtta bench report` writes into the docs site's page, which holds one block; a page that
+    does not exist yet is started with a title of its own."""
+    page = Path(__file__).resolve().parents[1] / DEFAULT_MARKDOWN
+    assert DEFAULT_MARKDOWN.as_posix() == "docs/performance/report.md"
+    text = page.read_text()
+    assert text.count(BEGIN) == 1 and text.count(END) == 1 and text.index(BEGIN) < text.index(END)
+    fresh = tmp_path / "report.md"
+    write_block(fresh, "### 1. x")
+    assert fresh.read_text() == f"{NEW_PAGE}{BEGIN}\n### 1. x\n{END}\n"

@@ -1,8 +1,8 @@
 """`rtta bench report [--quick]`: error against run time, regenerated from measurements.
 
 Runs the sections of report_runs.py, writes them as markdown tables between two markers in
-BENCHMARKS.md (the rest of the file is kept) and draws the plots of report_plots.py into
-docs/bench/. Every table states the renderer, the CPU, the date and the command; every
+docs/performance/report.md, a page of the docs site (the rest of the page is kept), and draws
+the plots of report_plots.py into docs/bench/. Every table states the renderer, the CPU, the date and the command; every
 number comes from the run.
 """
 
@@ -23,6 +23,8 @@ from .reliability_table import _progress
 
 BEGIN = "<!-- rtta bench report: begin (generated; edit report.py, not this block) -->"
 END = "<!-- rtta bench report: end -->"
+DEFAULT_MARKDOWN = Path("docs/performance/report.md")  # the docs site's report page
+NEW_PAGE = "# `rtta bench report`: choosing settings\n\n"  # a page that does not exist yet starts so
 SECTIONS = (
     "1. Reconstruction error against frame time",
     "2. Packing",
@@ -88,7 +90,7 @@ def run_report(quick: bool = False, markdown: str | None = None, plots: str | No
     from .report_plots import draw_all
 
     base = Path("out/report-quick") if quick else Path(".")
-    md_path = Path(markdown) if markdown else base / "BENCHMARKS.md"
+    md_path = Path(markdown) if markdown else (base / "report.md" if quick else DEFAULT_MARKDOWN)
     plot_dir = Path(plots) if plots else (base if quick else Path("docs/bench"))
     _check_markdown(md_path)
     try:
@@ -135,7 +137,7 @@ def _check_markdown(path: Path) -> None:
 def write_block(path: Path, text: str) -> None:
     """Replace the generated block of `path` (or append one); the rest stays as it is."""
     block = f"{BEGIN}\n{text.rstrip()}\n{END}\n"
-    old = path.read_text() if path.is_file() else "# Benchmarks\n\n"
+    old = path.read_text() if path.is_file() else NEW_PAGE
     if BEGIN in old:
         new = re.sub(re.escape(BEGIN) + ".*?" + re.escape(END) + "\n?", lambda _: block, old, flags=re.S)
     else:
@@ -166,7 +168,7 @@ def render_markdown(res: dict, h: dict, images: dict, md_dir: Path) -> str:
     parts += [
         f"### {SECTIONS[5]}",
         "",
-        'Measured by `rtta bench material`, not by this report: see "Material atlas and batching (issue 6)" above.',
+        "Measured by `rtta bench material`, not by this report: see [Material atlas](material.md).",
         "",
     ]
     parts += [f"### {SECTIONS[6]}", "", _stamp(h), "", _importance_md(res["importance"]), ""]

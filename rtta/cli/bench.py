@@ -25,7 +25,7 @@ def add_parsers(sub):
         help="demo, table1-N, random-N or a file (default: the demo and the Table 1 rows)",
     )
     b.add_argument("--json", default=None)
-    b = bsub.add_parser("reliability", help="random extreme cameras against STD, and a soak (RELIABILITY.md)")
+    b = bsub.add_parser("reliability", help="random extreme cameras against STD, and a soak (docs/reliability.md)")
     b.add_argument("--sweep", type=int, default=10000, help="random cameras per scene")
     b.add_argument("--soak", type=int, default=20000, help="soak frames per scene")
     b.add_argument("--quick", action="store_true", help="200 cameras, 500 soak frames, a 200-object scene")
@@ -67,7 +67,7 @@ def add_parsers(sub):
     b.add_argument("--json", default=None)
     b = bsub.add_parser(
         "report",
-        help="error against run time: regenerate the report block of BENCHMARKS.md and the plots in docs/bench/",
+        help="error against run time: regenerate docs/performance/report.md's report block and docs/bench/'s plots",
     )
     b.add_argument(
         "--quick",
@@ -75,7 +75,9 @@ def add_parsers(sub):
         help="small scenes and grids, under two minutes (default output: out/report-quick/)",
     )
     b.add_argument(
-        "--markdown", default=None, help="markdown file whose report block is replaced (default: BENCHMARKS.md)"
+        "--markdown",
+        default=None,
+        help="markdown file whose report block is replaced (default: docs/performance/report.md)",
     )
     b.add_argument("--plots", default=None, help="folder for the PNG plots (default: docs/bench)")
     b = bsub.add_parser("formats", help="load time of every scene file: the format's library against rtta")

@@ -19,7 +19,8 @@
 layout(binding = BINDING_ATLAS_DEPTH) uniform sampler2DArray u_depth;    // window depth, 1 where empty
 layout(binding = BINDING_ATLAS_NORMAL) uniform sampler2DArray u_normal;   // view normal * 0.5 + 0.5 (RGBA8); stale where empty
 
-uniform vec4 u_proj;           // (P00, P11, P22, P23) of the perspective projection
+uniform vec4 u_proj;           // (P00, P11, P22, P23) of the perspective or orthographic projection
+uniform vec2 u_proj_w;         // (P32, P33): (-1, 0) perspective, (0, 1) orthographic
 uniform float u_ao_radius;     // pixels
 uniform float u_ao_strength;
 uniform int u_edge_width;      // pixels
@@ -35,8 +36,11 @@ ivec3 g_t;
 vec3 g_p, g_n;
 float g_dist;
 
-// view distance (along -z) of window depth `d`
-float view_distance(float d) { return u_proj.w / (d * 2.0 - 1.0 + u_proj.z); }
+// view distance (along -z) of window depth `d`: ndc z = (P22 z + P23) / (P32 z + P33)
+float view_distance(float d) {
+    float ndc = d * 2.0 - 1.0;
+    return (u_proj.w - ndc * u_proj_w.y) / (u_proj.z - ndc * u_proj_w.x);
+}
 
 vec3 normal_at(ivec3 t) { return texelFetch(u_normal, t, 0).xyz * 2.0 - 1.0; }
 
@@ -46,7 +50,8 @@ bool outside(ivec2 t) { return any(lessThan(t, g_rect.xy)) || any(greaterThan(t,
 vec3 view_position(ivec2 t, float d) {
     vec2 ndc = g_map.xy + (vec2(t) + 0.5) * g_map.zw;
     float z = -view_distance(d);
-    return vec3(-z * ndc.x / u_proj.x, -z * ndc.y / u_proj.y, z);
+    float w = u_proj_w.x * z + u_proj_w.y;     // clip w: the distance, or 1 in an orthographic view
+    return vec3(w * ndc.x / u_proj.x, w * ndc.y / u_proj.y, z);
 }
 
 // one AO sample at offset `o` (texels); returns (occlusion, used)

@@ -226,7 +226,7 @@ def test_unknown_names_and_bad_options_say_what_is_wrong(gl):
     with pytest.raises(rtta.RttaError, match="size 0x10"):
         rtta.snapshot(size=(0, 10))
     with pytest.raises(rtta.RttaError, match="--camera expects AZ,EL,DIST"):
-        rtta.capture(camera=(1, 2), size=(32, 32))
+        rtta.capture(camera=(1, 2, 3, 4), size=(32, 32))
     with pytest.raises(rtta.RttaError, match="no object named 'nope'"):
         rtta.capture(size=(32, 32)).index("nope")
     with pytest.raises(rtta.RttaError):

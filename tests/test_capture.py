@@ -14,28 +14,34 @@ from rtta.scene.generators.generate import random_scene
 PATHS = ("vs", "gs")
 
 
+PROJECTIONS = ("perspective", "ortho")
+
+
+@pytest.mark.parametrize("projection", PROJECTIONS)
 @pytest.mark.parametrize("path", PATHS)
-def test_demo_default_view(make_renderer, demo_scene, path):
+def test_demo_default_view(make_renderer, demo_scene, path, projection):
     r = make_renderer(demo_scene)
-    cam = Camera.orbit(demo_scene.center, demo_scene.radius, *DEFAULT_ORBIT)
+    cam = Camera.orbit(demo_scene.center, demo_scene.radius, *DEFAULT_ORBIT, projection=projection)
     out = check_frame(r, cam, (320, 240), path)
     assert out["visible"] == demo_scene.count
 
 
+@pytest.mark.parametrize("projection", PROJECTIONS)
 @pytest.mark.parametrize("path", PATHS)
 @pytest.mark.parametrize("orbit", [(0, 0, 2.0), (120, -40, 1.6), (250, 80, 3.0), (300, 10, 0.9)])
-def test_demo_orbits(make_renderer, demo_scene, path, orbit):
+def test_demo_orbits(make_renderer, demo_scene, path, orbit, projection):
     r = make_renderer(demo_scene)
-    cam = Camera.orbit(demo_scene.center, demo_scene.radius, *orbit)
+    cam = Camera.orbit(demo_scene.center, demo_scene.radius, *orbit, projection=projection)
     check_frame(r, cam, (256, 200), path)
 
 
+@pytest.mark.parametrize("projection", PROJECTIONS)
 @pytest.mark.parametrize("n", [1, 7, 60])
 @pytest.mark.parametrize("path", PATHS)
-def test_generated_scenes(make_renderer, n, path):
+def test_generated_scenes(make_renderer, n, path, projection):
     scene = random_scene(n, seed=n)
     r = make_renderer(scene)
-    cam = Camera.orbit(scene.center, scene.radius, 40, 25, 1.8)
+    cam = Camera.orbit(scene.center, scene.radius, 40, 25, 1.8, projection=projection)
     out = check_frame(r, cam, (240, 180), path)
     assert out["visible"] >= 1
 

@@ -30,20 +30,22 @@ def _assert_matches_std(rgba, depth, std_rgba, std_depth, std_id):
         assert (depth[~cov] == 1.0).all()
 
 
+@pytest.mark.parametrize("projection", ["perspective", "ortho"])
 @pytest.mark.parametrize("orbit", [DEFAULT_ORBIT, (200, -30, 1.5), (80, 60, 3.0)])
-def test_sprites_reconstruct_std_demo(make_renderer, demo_scene, orbit):
+def test_sprites_reconstruct_std_demo(make_renderer, demo_scene, orbit, projection):
     r = make_renderer(demo_scene)
-    cam = Camera.orbit(demo_scene.center, demo_scene.radius, *orbit)
+    cam = Camera.orbit(demo_scene.center, demo_scene.radius, *orbit, projection=projection)
     r.capture(cam, VP)
     rgba, depth = r.composite("sprites").read()
     _assert_matches_std(rgba, depth, *_std(r, cam))
 
 
+@pytest.mark.parametrize("projection", ["perspective", "ortho"])
 @pytest.mark.parametrize("n", [1, 40, 500])
-def test_sprites_reconstruct_std_generated(make_renderer, n):
+def test_sprites_reconstruct_std_generated(make_renderer, n, projection):
     scene = random_scene(n, seed=n, spread=3.0 * np.cbrt(n) + 2)
     r = make_renderer(scene)
-    cam = Camera.orbit(scene.center, scene.radius, 30, 20, 1.7)
+    cam = Camera.orbit(scene.center, scene.radius, 30, 20, 1.7, projection=projection)
     r.capture(cam, VP)
     rgba, depth = r.composite("sprites").read()
     _assert_matches_std(rgba, depth, *_std(r, cam))

@@ -18,11 +18,13 @@ from rtta.scene.loader import load_scene
 RTTA = str(Path(sys.executable).with_name("rtta"))
 
 
-@pytest.fixture(scope="module")
-def exported(tmp_path_factory, ctx):
+@pytest.fixture(scope="module", params=["perspective", "ortho"])
+def exported(tmp_path_factory, ctx, request):
     out = tmp_path_factory.mktemp("exp") / "demo"
-    assert main(["export", "--out", str(out), "--size", "320x240", "--camera", "35,25,2.2", "--border", "2"]) == 0
+    args = ["export", "--out", str(out), "--size", "320x240", "--camera", "35,25,2.2", "--border", "2"]
+    assert main([*args, "--projection", request.param]) == 0
     assert ctx.error == "GL_NO_ERROR"
+    assert json.loads((out / "records.json").read_text())["camera"]["projection"] == request.param
     return out
 
 
@@ -68,7 +70,7 @@ def test_view_and_proj_place_objects_in_their_viewport_rects(exported):
 
 
 def test_std_is_the_front_most_of_the_exported_atlas(exported):
-    """Re-implements the mapping from the README: atlas = atlas_rect.xy + border + scale*(px - rect.xy)."""
+    """Re-implements the mapping from docs/library.md: atlas = atlas_rect.xy + border + scale*(px - rect.xy)."""
     rec = json.loads((exported / "records.json").read_text())
     depth, ids = np.load(exported / "atlas_depth.npy"), np.load(exported / "atlas_id.npy")
     std_id, std_depth = np.load(exported / "std_id.npy"), np.load(exported / "std_depth.npy")
@@ -124,7 +126,10 @@ def _run(args, cwd):
         (["export", "missing.glb", "--out", "o"], "missing.glb: no such file"),
         (["export", "bad.glb", "--out", "o"], "bad.glb: GLB file is truncated"),
         (["export", "--out", "o", "--size", "12by4"], "--size expects WxH"),
-        (["export", "--out", "o", "--camera", "1,2"], "--camera expects AZ,EL,DIST"),
+        (["export", "--out", "o", "--camera", "1,2,3,4"], "--camera expects AZ,EL,DIST"),
+        (["export", "--out", "o", "--camera", "1,x"], "--camera '1,x': AZ and EL must be finite"),
+        (["export", "--out", "o", "--view", "top", "--camera", "1,2"], "--view top and --camera both"),
+        (["export", "--out", "o", "--projection", "fisheye"], "--projection"),
         (["export", "--out", "o", "--border", "-1"], "--border must be"),
         (["export", "--out", "o", "--atlas-max", "0x0"], "--atlas-max"),
     ],

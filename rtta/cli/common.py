@@ -6,6 +6,8 @@ from __future__ import annotations
 import argparse
 
 from ..errors import RttaError
+from ..scene.camera import PROJECTIONS
+from ..scene.framing import STANDARD_VIEWS
 from ..scene.preprocess import DEFAULT_SMOOTH_ANGLE
 from .guard import say
 
@@ -50,7 +52,26 @@ def add_load_options(p: argparse.ArgumentParser) -> None:
 
 def view_args(p: argparse.ArgumentParser) -> None:
     """The camera, viewport and atlas flags of export and snapshot."""
-    p.add_argument("--camera", default=None, help="AZ,EL,DIST orbit (degrees, degrees, scene radii)")
+    p.add_argument(
+        "--camera",
+        default=None,
+        help="AZ,EL,DIST orbit (degrees, degrees, scene radii), or AZ,EL: the distance that frames "
+        "the visible parts (default: 35,25)",
+    )
+    p.add_argument(
+        "--view",
+        choices=tuple(STANDARD_VIEWS),
+        default=None,
+        help="a standard view relative to the file's up axis (Z in CAD/BIM files, Y in glTF), framed",
+    )
+    p.add_argument(
+        "--projection",
+        choices=PROJECTIONS,
+        default=None,
+        help="perspective (default) or ortho: an orthographic view keeps the scale the perspective "
+        "one shows at the target",
+    )
+    p.add_argument("--hide", nargs="+", default=[], metavar="NAME", help="objects left out (names, groups, globs)")
     p.add_argument("--size", default="1024x768", help="viewport WxH")
     p.add_argument("--fov", type=float, default=45.0, help="vertical field of view in degrees")
     p.add_argument("--border", type=int, default=1, help="border around each atlas region in pixels")
@@ -71,7 +92,7 @@ def view_args(p: argparse.ArgumentParser) -> None:
         type=float,
         default=None,
         help="region scale of objects outside the focus, as a fraction of --region-scale "
-        "(0.25 to 1; default: the library's, see README); upsampled depth-aware when composited",
+        "(0.25 to 1; default: the library's, see docs/modes.md); upsampled depth-aware when composited",
     )
 
 
@@ -117,3 +138,21 @@ def make_renderer(ctx, scene, settings):
     for note in caps.notes if settings.capture_path == "auto" else []:
         say("note", note)
     return Renderer(ctx, scene, settings)
+
+
+def camera_of(args, scene, viewport: tuple[int, int]):
+    """(Camera, hidden object ids) of view_args' flags: --camera or --view, --projection, --fov, --hide."""
+    from ..renderer.options import orbit_camera
+    from ..renderer.snapshot import resolve_names
+
+    hidden = resolve_names(scene, args.hide, "--hide")
+    camera = orbit_camera(
+        scene,
+        args.camera,
+        args.fov,
+        projection=args.projection or "perspective",
+        view=args.view,
+        aspect=viewport[0] / viewport[1],
+        hidden=hidden,
+    )
+    return camera, hidden

@@ -6,7 +6,7 @@ from pathlib import Path
 
 from ..errors import RttaError, printable
 from ..outputs import check_file, check_folder, check_into_folder, os_error
-from .common import load, make_renderer, parse_size, scene_arg, settings_of, view_args
+from .common import camera_of, load, make_renderer, parse_size, scene_arg, settings_of, view_args
 
 
 def add_parsers(sub) -> None:
@@ -83,15 +83,15 @@ def add_parsers(sub) -> None:
 def cmd_export(args) -> int:
     from ..gl.context import shared_context
     from ..renderer.export import export
-    from ..renderer.options import orbit_camera
 
     viewport = parse_size(args.size)
     settings = settings_of(args)
     check_folder(args.out, [args.scene])  # before the work: a refused --out fails fast
     scene = load(args)
-    camera = orbit_camera(scene, args.camera, args.fov)
+    camera, hidden = camera_of(args, scene, viewport)
     ctx = shared_context()
     renderer = make_renderer(ctx, scene, settings)
+    renderer.hidden = set(hidden)
     try:
         out = export(renderer, camera, viewport, args.out)
     except ValueError as exc:
@@ -104,7 +104,7 @@ def cmd_export(args) -> int:
 
 def cmd_snapshot(args) -> int:
     from ..gl.context import shared_context
-    from ..renderer.options import make_style, orbit_camera
+    from ..renderer.options import make_style
     from ..renderer.snapshot import SNAPSHOT_MODES, parse_opacities, render_modes, resolve_names, write_pngs
 
     if args.mode not in SNAPSHOT_MODES:
@@ -112,7 +112,7 @@ def cmd_snapshot(args) -> int:
     viewport = parse_size(args.size)
     _snapshot_targets(args, [args.scene, *_projector_files(args)])  # refused outputs fail before the work
     scene = load(args)
-    camera = orbit_camera(scene, args.camera, args.fov)
+    camera, hidden = camera_of(args, scene, viewport)
     style = make_style(
         resolve_names(scene, args.focus, "--focus"),
         parse_opacities(scene, args.opacity),
@@ -127,6 +127,7 @@ def cmd_snapshot(args) -> int:
     )
     targets = _snapshot_targets(args, [*scene.inputs, *_projector_files(args)])
     renderer = make_renderer(shared_context(), scene, settings_of(args))
+    renderer.hidden = set(hidden)
     if args.projector is not None:
         renderer.projector = _projector(args, scene, camera)
     if args.lens is not None:

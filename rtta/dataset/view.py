@@ -19,7 +19,7 @@ from PIL import Image
 
 from ..renderer.export import replace_dir, world_matrices
 from ..renderer.renderer import Renderer
-from ..scene.camera import Camera
+from ..scene.camera import Camera, view_depth
 from .alone import Alone, alone_rtt, alone_rtta
 from .coco import encode_flat
 
@@ -51,9 +51,7 @@ def _std(renderer: Renderer, viewport) -> dict[str, np.ndarray]:
 
 def linear_depth(window: np.ndarray, proj: np.ndarray) -> np.ndarray:
     """Window depth [0, 1] -> distance along the view axis (world units); 1 (empty) -> 0."""
-    ndc = window.astype(np.float64) * 2.0 - 1.0
-    with np.errstate(divide="ignore", invalid="ignore"):
-        z = proj[2, 3] / (ndc + proj[2, 2])
+    z = view_depth(window, proj)  # perspective or orthographic
     return np.where(window < 1.0, z, 0.0).astype(np.float32)
 
 

@@ -114,6 +114,7 @@ class AtlasPostPass:
         prog, vao = self._variant(*defines)
         uniforms = {
             "u_proj": (float(proj[0, 0]), float(proj[1, 1]), float(proj[2, 2]), float(proj[2, 3])),
+            "u_proj_w": (float(proj[3, 2]), float(proj[3, 3])),
             "u_viewport": tuple(float(v) for v in records.viewport),
             "u_target": (float(tw), float(th)),
             "u_ao_radius": float(style.ao_radius),

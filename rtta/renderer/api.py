@@ -28,7 +28,8 @@ from ..errors import RttaError
 from ..gl.context import Capabilities, shared_context
 from ..ldi.lens import Lens
 from ..passes.projector import Projector
-from ..scene.camera import Camera
+from ..scene.camera import Camera, Projection
+from ..scene.framing import StandardView
 from ..scene.loader import load_scene
 from ..scene.model import Scene
 from ..scene.preprocess import DEFAULT_SMOOTH_ANGLE
@@ -157,6 +158,9 @@ def snapshot(
     lens_at: str | Sequence[float] | None = None,
     smooth_angle: float = DEFAULT_SMOOTH_ANGLE,
     smooth: bool = False,
+    projection: Projection = "perspective",
+    view: StandardView | None = None,
+    hidden: str | Iterable[str] = (),
     **style,
 ) -> np.ndarray:
     """Render one picture of a scene in a compositing mode, headless.
@@ -177,7 +181,8 @@ def snapshot(
         Opacity per object or group name, in `transparent`.
     camera : Camera, str or sequence of float, optional
         An orbit (azimuth, elevation, distance in bounding radii), "AZ,EL,DIST", or a `Camera`;
-        default (35, 25, 2.2).
+        without a distance ("AZ,EL", or None: azimuth 35, elevation 25) the view frames the
+        parts not hidden.
     size : sequence of int, default (1024, 768)
         Width and height in pixels.
     fov : float, default 45
@@ -210,6 +215,12 @@ def snapshot(
         Normals made at load are smoothed across faces within this angle (degrees).
     smooth : bool, default False
         Smooth the file's own normals too.
+    projection : {"perspective", "ortho"}, default "perspective"
+        An orthographic view shows at every depth the scale a perspective one shows at the target.
+    view : {"front", "back", "left", "right", "top", "bottom", "iso"}, optional
+        A standard view relative to the file's up axis (instead of the camera's direction).
+    hidden : str or iterable of str
+        Objects left out (names, group names or globs): not drawn, captured nor framed.
     **style
         Style keywords (see `Style`): context_opacity, desaturate, edge_width, edge_color,
         outline_width, outline_color, ao_radius, ao_strength, ao_objects, edge_objects, order,
@@ -236,7 +247,10 @@ def snapshot(
     extra = style_keywords(style)
     scene = _session.scene(scene, smooth_angle, smooth)
     viewport = check_size(size)
-    cam = orbit_camera(scene, camera, fov)
+    hidden_ids = resolve_names(scene, [hidden] if isinstance(hidden, str) else list(hidden), "hidden")
+    cam = orbit_camera(
+        scene, camera, fov, projection=projection, view=view, aspect=viewport[0] / viewport[1], hidden=hidden_ids
+    )
     focus_ids = resolve_names(scene, [focus] if isinstance(focus, str) else list(focus), "focus")
     st = make_style(focus_ids, opacities(scene, opacity or {}), **{k: style[k] for k in CORE_STYLE if k in style})
     for key, value in extra.items():
@@ -246,7 +260,7 @@ def snapshot(
         projector = make_projector(scene, cam, projector, projector_fov, projector_shadows)
     if isinstance(lens, str):
         lens = make_lens(scene, lens, lens_at, st.focus)
-    renderer = _prepare(scene, settings, projector, lens)
+    renderer = _prepare(scene, settings, projector, lens, hidden_ids)
     try:
         rgba = render_modes(renderer, cam, viewport, [mode], st)[mode]
     except ValueError as exc:
@@ -268,6 +282,8 @@ def capture(
     bounds: str = "aabb",
     smooth_angle: float = DEFAULT_SMOOTH_ANGLE,
     smooth: bool = False,
+    projection: Projection = "perspective",
+    view: StandardView | None = None,
 ) -> Capture:
     """Capture one frame: every object's unoccluded images, as arrays.
 
@@ -301,6 +317,10 @@ def capture(
         Normals made at load are smoothed across faces within this angle (degrees).
     smooth : bool, default False
         Smooth the file's own normals too.
+    projection : {"perspective", "ortho"}, default "perspective"
+        The projection, as in `snapshot`.
+    view : {"front", "back", "left", "right", "top", "bottom", "iso"}, optional
+        A standard view relative to the file's up axis, as in `snapshot`.
 
     Returns
     -------
@@ -317,7 +337,7 @@ def capture(
     """
     scene = _session.scene(scene, smooth_angle, smooth)
     viewport = check_size(size)
-    cam = orbit_camera(scene, camera, fov)
+    cam = orbit_camera(scene, camera, fov, projection=projection, view=view, aspect=viewport[0] / viewport[1])
     renderer = _prepare(
         scene, make_settings(border, atlas_max, max_layers, capture_path, region_scale, bounds), None, None
     )
@@ -349,9 +369,12 @@ def capture(
     )
 
 
-def _prepare(scene: Scene, settings: Settings, projector: Projector | None, lens: Lens | None) -> Renderer:
+def _prepare(
+    scene: Scene, settings: Settings, projector: Projector | None, lens: Lens | None, hidden: Iterable[int] = ()
+) -> Renderer:
     renderer = _session.renderer_for(scene, settings)
     renderer.projector, renderer.lens = projector, lens
+    renderer.hidden = set(hidden)
     if projector is not None:
         # the projector pass re-uploads when id(image) changes; keeping the last image alive
         # means no later image can reuse its id while the pass still holds its texture

@@ -55,6 +55,8 @@ def records_json(renderer: Renderer, camera: Camera, records, viewport) -> dict:
             "fov_y": camera.fov_y,
             "near": camera.near,
             "far": camera.far,
+            "projection": camera.kind,
+            "height": camera.half_height() if camera.kind == "ortho" else None,
         },
         "objects": objects,
     }

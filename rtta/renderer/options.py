@@ -14,7 +14,8 @@ import numpy as np
 from ..errors import RttaError
 from ..passes.composite import Style
 from ..passes.oit import ORDERS
-from ..scene.camera import DEFAULT_ORBIT, Camera, parse_orbit
+from ..scene.camera import Camera, Projection
+from ..scene.framing import StandardView, scene_orbit
 from ..scene.model import Scene
 from .renderer import Settings
 from .snapshot import resolve_names
@@ -102,17 +103,27 @@ def make_style(
     return style
 
 
-def orbit_camera(scene: Scene, camera: Camera | str | Sequence[float] | None, fov: float = 45.0) -> Camera:
-    """A Camera as given, or the orbit AZ,EL,DIST (degrees, degrees, scene radii) about the scene."""
+def orbit_camera(
+    scene: Scene,
+    camera: Camera | str | Sequence[float] | None,
+    fov: float = 45.0,
+    *,
+    projection: Projection = "perspective",
+    view: StandardView | None = None,
+    aspect: float = 4 / 3,
+    hidden: Iterable[int] = (),
+) -> Camera:
+    """A Camera as given, or the orbit AZ,EL,DIST (degrees, degrees, scene radii) about the
+    scene; AZ,EL or a standard `view` (front, back, left, right, top, bottom, iso: relative to
+    the file's up axis) and no distance frame the parts not `hidden` in a view of `aspect`
+    (rtta.scene.framing). `projection`: 'perspective' or 'ortho'."""
     if isinstance(camera, Camera):
         return camera
     if not 1.0 <= fov <= 170.0:  # NaN fails too
         raise RttaError(f"--fov must be between 1 and 170 degrees, got {fov}")
-    if camera is None:
-        orbit = DEFAULT_ORBIT
-    else:
-        orbit = parse_orbit(camera if isinstance(camera, str) else ",".join(str(v) for v in camera))
-    return Camera.orbit(scene.center, scene.radius, *orbit, fov_y=fov, up_axis=scene.up_axis)
+    hidden = tuple(hidden)
+    orbit = scene_orbit(scene, camera, fov, projection=projection, view=view, aspect=aspect, hidden=hidden)
+    return orbit.camera(scene, hidden)
 
 
 def check_size(size: str | Sequence[int], what: str = "size") -> tuple[int, int]:
@@ -145,17 +156,30 @@ def style_keywords(style: dict) -> dict:
             raise TypeError(f"snapshot() got an unexpected keyword argument '{key}'{hint}")
     extra = {k: v for k, v in style.items() if k not in CORE_STYLE}
     for key in ("desaturate", "default_opacity"):
-        if key in extra and not 0.0 <= extra[key] <= 1.0:
-            raise RttaError(f"{key} must be in [0, 1], got {extra[key]}")
-    if "outline_width" in extra and not 1 <= extra["outline_width"] <= 8:
-        raise RttaError(f"outline_width must be 1..8, got {extra['outline_width']}")
+        if key in extra and not 0.0 <= _real(extra[key], text=False) <= 1.0:  # NaN and what is no number fail too
+            raise RttaError(f"{key} must be in [0, 1], got {extra[key]!r}")
+    if "outline_width" in extra and not 1 <= _real(extra["outline_width"], text=False) <= 8:
+        raise RttaError(f"outline_width must be 1..8, got {extra['outline_width']!r}")
     for key in ("outline_color", "edge_color"):
         if key in extra:
-            c = tuple(float(v) for v in extra[key])
+            value = extra[key]
+            c = tuple(_real(v) for v in value) if isinstance(value, (list, tuple, np.ndarray)) else ()
             if len(c) != 4 or not all(0.0 <= v <= 1.0 for v in c):
-                raise RttaError(f"{key} must be RGBA, four numbers in [0, 1], got {extra[key]!r}")
+                raise RttaError(f"{key} must be RGBA, four numbers in [0, 1], got {value!r}")
             extra[key] = c
     return extra
+
+
+def _real(value, text: bool = True) -> float:
+    """`value` as a float; NaN for what is not a number ('red', True, None, 10**400; with
+    `text` False, any string), so the range checks refuse it with their own message (a colour
+    of strings raised ValueError: found by fuzzing, issue 42)."""
+    if isinstance(value, (bool, np.bool_, bytes)) or (not text and isinstance(value, str)):
+        return float("nan")
+    try:
+        return float(value)
+    except (TypeError, ValueError, OverflowError):
+        return float("nan")
 
 
 def opacities(scene: Scene, opacity: Mapping[str, float]) -> dict[int, float]:

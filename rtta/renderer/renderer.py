@@ -23,7 +23,7 @@ from ..passes import oit
 from ..passes.capture import CapturePass, RttPass, StdPass
 from ..passes.composite import LENS_MODES, CompositePass, CompositeTarget, Style
 from ..passes.post import AtlasPostPass
-from ..scene.camera import Camera
+from ..scene.camera import Camera, is_ortho
 from ..scene.model import Scene
 from .settings import Settings
 
@@ -242,7 +242,7 @@ class Renderer:
                 view_proj=proj @ view,
                 projection=projection,
                 lens=lens,
-                eye=np.linalg.inv(view)[:3, 3],
+                eye=_outline_eye(view, proj, self.scene.radius),
             )
             self._throttle.flush()
         if self._composite.fallbacks > fallbacks:
@@ -378,3 +378,11 @@ class Renderer:
                 t.release()
         self.gpu.release()
         scratch.release()  # Algorithm 1's temporaries, sized for this scene (27 MB at 10^5 objects)
+
+
+def _outline_eye(view: np.ndarray, proj: np.ndarray, radius: float) -> np.ndarray:
+    """Where the sprites' outlines are seen from (scene origin at 0): the eye, or in an
+    orthographic view a point far back along the view axis (the outline of a box seen along
+    parallel rays is its outline from infinitely far)."""
+    inv = np.linalg.inv(view)
+    return inv[:3, 3] + inv[:3, 2] * (1e4 * max(radius, 1e-9) if is_ortho(proj) else 0.0)

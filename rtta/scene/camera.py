@@ -1,8 +1,16 @@
-"""Perspective camera with orbit parameters; matrices in float64, relative to the scene origin."""
+"""Perspective or orthographic camera with orbit parameters; matrices in float64, relative to
+the scene origin.
+
+An orthographic view's half height is `Camera.height`; an orbit sets it to the orbit distance
+times tan(fov / 2), the half height a perspective view of that orbit shows at its target, so
+switching the projection keeps the scale there. Its eye only bounds the depth range: fitting
+the depth places it a little outside the scene's bounding sphere, whatever the orbit distance.
+"""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import Literal, get_args
 
 import numpy as np
 
@@ -30,6 +38,9 @@ def parse_orbit(text: str, option: str = "--camera", given: str | None = None) -
 
 
 UP_AXES = ("y", "z")
+Projection = Literal["perspective", "ortho"]
+PROJECTIONS: tuple[str, ...] = get_args(Projection)
+ORTHO_EYE = 2.0  # an orthographic eye stands this many radii before the bounding sphere's centre
 
 
 def up_basis(up: str = "y") -> np.ndarray:
@@ -41,10 +52,20 @@ def up_basis(up: str = "y") -> np.ndarray:
     return np.identity(3) if up == "y" else np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
 
 
-def fit_distance(corners, target, direction, up, fov_y: float, aspect: float, margin: float = 0.05) -> float:
+def fit_distance(
+    corners,
+    target,
+    direction,
+    up,
+    fov_y: float,
+    aspect: float,
+    margin: float = 0.05,
+    projection: Projection = "perspective",
+) -> float:
     """Distance from `target` along `direction` (unit, towards the eye) at which every corner
     (world points [k, 3]) projects inside the view with `margin` (a fraction of the width and
-    of the height) left free on each side, in BOTH the vertical and the horizontal field of view."""
+    of the height) left free on each side, in BOTH the vertical and the horizontal field of view.
+    For 'ortho' the distance whose half height (distance * tan(fov / 2), Camera.orbit) frames them."""
     d = np.asarray(direction, np.float64)
     u = np.asarray(up, np.float64)
     r = np.cross(u, d)
@@ -55,8 +76,11 @@ def fit_distance(corners, target, direction, up, fov_y: float, aspect: float, ma
     keep = 1.0 - 2.0 * margin
     tan_y = np.tan(np.radians(fov_y) / 2.0) * keep
     tan_x = tan_y * aspect
-    need = z + np.maximum(np.abs(x) / tan_x, np.abs(y) / tan_y)
     extent = float(np.abs(p).max()) if p.size else 0.0
+    if projection == "ortho":
+        half = max(float(np.abs(x).max(initial=0.0)) / aspect, float(np.abs(y).max(initial=0.0))) / keep
+        return float(max(half / np.tan(np.radians(fov_y) / 2.0), extent * 1e-3, 1e-9))
+    need = z + np.maximum(np.abs(x) / tan_x, np.abs(y) / tan_y)
     return float(max(need.max() if p.size else 0.0, (z.max() if p.size else 0.0) + extent * 1e-3, 1e-9))
 
 
@@ -81,6 +105,11 @@ class Camera:
         Vertical field of view in degrees.
     near, far : float
         The depth range in world units.
+    kind : {"perspective", "ortho"}, default "perspective"
+        The projection.
+    height : float, optional
+        An orthographic view's half height in world units (None: |eye - target| *
+        tan(fov_y / 2), what a perspective view shows at the target).
 
     Examples
     --------
@@ -96,25 +125,56 @@ class Camera:
     fov_y: float = 45.0
     near: float = 0.1
     far: float = 100.0
+    kind: Projection = "perspective"
+    height: float | None = None
 
     @classmethod
     def orbit(
-        cls, center, radius: float, az: float, el: float, dist: float, fov_y: float = 45.0, up_axis: str = "y"
+        cls,
+        center,
+        radius: float,
+        az: float,
+        el: float,
+        dist: float,
+        fov_y: float = 45.0,
+        up_axis: str = "y",
+        projection: Projection = "perspective",
     ) -> Camera:
         """Azimuth about the up axis (+Y, or +Z for up_axis 'z') starting at +Z (-Y),
-        elevation up from the ground plane; dist in radii."""
+        elevation up from the ground plane; dist in radii. 'ortho': the half height that a
+        perspective view at dist shows at the centre (module docstring)."""
+        if projection not in PROJECTIONS:
+            raise RttaError(f"projection must be one of {', '.join(PROJECTIONS)}, got {projection!r}")
         a, e = np.radians(az), np.radians(el)
         basis = up_basis(up_axis)
         direction = basis @ np.array([np.sin(a) * np.cos(e), np.sin(e), np.cos(a) * np.cos(e)])
         up = basis @ np.array([-np.sin(a) * np.sin(e), np.cos(e), -np.cos(a) * np.sin(e)])  # never degenerate
         center = np.asarray(center, np.float64)
-        cam = cls(eye=center + direction * dist * radius, target=center, up=up, fov_y=fov_y)
+        cam = cls(eye=center + direction * (dist * radius), target=center, up=up, fov_y=fov_y, kind=projection)
         return cam.fit_depth(center, radius)
+
+    def half_height(self) -> float:
+        """An orthographic view's half height in world units (`height`, or as a perspective
+        view shows it at the target)."""
+        if self.height is not None:
+            return float(self.height)
+        return float(np.linalg.norm(self.target - self.eye) * np.tan(np.radians(self.fov_y) / 2.0))
 
     def fit_depth(self, center, radius: float) -> Camera:
         """Near/far tight around the bounding sphere so depth keeps its precision. Inside the
         sphere the near plane stays at far * NEAR_RATIO: closer geometry is clipped rather
-        than letting distant surfaces z-fight."""
+        than letting distant surfaces z-fight. An orthographic camera keeps its half height
+        and moves its eye along the view axis to ORTHO_EYE radii before the centre: nothing
+        is clipped however close the orbit, and float32 view depths stay precise however far."""
+        if self.kind == "ortho":
+            self.height = self.half_height()
+            forward = self.target - self.eye
+            forward = forward / np.linalg.norm(forward)
+            ahead = float((np.asarray(center, np.float64) - self.eye) @ forward)
+            shift = forward * (ahead - ORTHO_EYE * radius)
+            self.eye = self.eye + shift
+            self.near, self.far = (ORTHO_EYE - 1.01) * radius, (ORTHO_EYE + 1.01) * radius
+            return self
         d = float(np.linalg.norm(np.asarray(center, np.float64) - self.eye))
         far = (d + radius) * 1.01
         near = max(d - radius * 1.01, far * NEAR_RATIO)
@@ -124,6 +184,8 @@ class Camera:
     def depth_limited(self) -> tuple[Camera, str | None]:
         """This camera, or a copy whose near plane is raised to far / MAX_FAR_NEAR, with a
         message saying so: a wider depth range would draw z-fighting garbage."""
+        if self.kind == "ortho" and self.far > self.near:
+            return self, None  # window depth is linear in view depth: no range loses the order
         if self.near > 0 and self.far > self.near and self.far / self.near <= MAX_FAR_NEAR:
             return self, None
         far = self.far if self.far > 0 else 1.0
@@ -153,11 +215,19 @@ class Camera:
         return m
 
     def projection(self, aspect: float) -> np.ndarray:
-        """OpenGL perspective matrix (clip z in [-w, w])."""
+        """OpenGL perspective or orthographic matrix (clip z in [-w, w])."""
         if not (0.0 < self.fov_y < 180.0):
             raise RttaError(f"field of view must be in (0, 180) degrees, got {self.fov_y}")
-        t = 1.0 / np.tan(np.radians(self.fov_y) / 2.0)
         n, f = self.near, self.far
+        if self.kind == "ortho":
+            h = self.half_height()
+            if not (np.isfinite(h) and h > 0):
+                raise RttaError(f"an orthographic view needs a positive half height, got {h:g}")
+            p = np.identity(4)
+            p[0, 0], p[1, 1] = 1.0 / (h * aspect), 1.0 / h
+            p[2, 2], p[2, 3] = -2.0 / (f - n), -(f + n) / (f - n)
+            return p
+        t = 1.0 / np.tan(np.radians(self.fov_y) / 2.0)
         p = np.zeros((4, 4))
         p[0, 0] = t / aspect
         p[1, 1] = t
@@ -165,3 +235,17 @@ class Camera:
         p[2, 3] = -2.0 * f * n / (f - n)
         p[3, 2] = -1.0
         return p
+
+
+def view_depth(window, proj: np.ndarray):
+    """Window depth [0, 1] -> distance before the eye along the view axis, for a GL
+    perspective or orthographic `proj` (ndc z = (P22 z + P23) / (P32 z + P33) at view z)."""
+    ndc = np.asarray(window, np.float64) * 2.0 - 1.0
+    p = np.asarray(proj, np.float64)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return -(p[2, 3] - ndc * p[3, 3]) / (ndc * p[3, 2] - p[2, 2])
+
+
+def is_ortho(proj: np.ndarray) -> bool:
+    """Whether a GL projection matrix is orthographic (its w row is (0, 0, 0, 1))."""
+    return bool(proj[3, 2] == 0.0 and proj[3, 3] == 1.0)

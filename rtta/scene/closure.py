@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .camera import view_depth
+
 CHUNK_TRIANGLES = 1 << 18
 _M1, _M2 = np.uint64(0xBF58476D1CE4E5B9), np.uint64(0x94D049BB133111EB)
 _K = np.uint64(0x9E3779B97F4A7C15)
@@ -73,10 +75,10 @@ def closed_objects(
 
 def beyond_near(aabb_min: np.ndarray, aabb_max: np.ndarray, view: np.ndarray, proj: np.ndarray) -> np.ndarray:
     """bool [N]: whether each box (relative to the scene origin, as `view` expects) lies
-    wholly beyond the near plane of the perspective `proj`. Culling back faces is exact only
-    there: where the near plane cuts an object (or the camera is inside it), its back faces
-    show through the cut, as the file's surface does without culling."""
-    near = proj[2, 3] / (proj[2, 2] - 1.0)  # GL perspective: P22 = -(f+n)/(f-n), P23 = -2fn/(f-n)
+    wholly beyond the near plane of the perspective or orthographic `proj`. Culling back faces
+    is exact only there: where the near plane cuts an object (or the camera is inside it), its
+    back faces show through the cut, as the file's surface does without culling."""
+    near = float(view_depth(0.0, proj))  # window depth 0 lies on the near plane
     row = np.asarray(view, np.float64)[2]
     center, half = (aabb_max + aabb_min) / 2.0, (aabb_max - aabb_min) / 2.0
     nearest = center @ row[:3] + row[3] + half @ np.abs(row[:3])  # the box's largest view z (forward is -z)

@@ -5,7 +5,7 @@ the two renderers in turns within each round, one process.
     python scripts/bench_culling.py [SCENE [WxH [ROUNDS]]]     (default: demo 1024x1024 9)
 
 Prints the medians, culled over double-sided (paired per round), and each kind's frames as
-multiples of its own STD. BENCHMARKS.md, "Back faces of closed parts culled".
+multiples of its own STD. docs/performance/capture.md, "Back faces of closed parts culled".
 """
 
 from __future__ import annotations

@@ -4,7 +4,7 @@ clip every region, in turns over one orbit, in one process.
     python scripts/bench_edge_clip.py [SCENE [WxH [ROUNDS]]]     (default: demo 1024x1024 20)
 
 Prints the medians of both, their ratio to STD (drawn in the same round) and to each other.
-BENCHMARKS.md, "Capture: only regions on the viewport's edge are clipped".
+docs/performance/capture.md, "Only regions on the viewport's edge are clipped".
 """
 
 from __future__ import annotations

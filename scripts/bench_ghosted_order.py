@@ -2,8 +2,8 @@
 
     python scripts/bench_ghosted_order.py [SCENE]     (default: the demo; 1024x1024)
 
-Prints the medians of 9 composites each and the median of their ratios (BENCHMARKS.md,
-"The ghosted context in per-pixel order").
+Prints the medians of 9 composites each and the median of their ratios (docs/performance/order.md,
+"Whole frames").
 """
 
 from __future__ import annotations

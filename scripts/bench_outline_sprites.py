@@ -4,7 +4,7 @@ whole B_viewport rectangles, in turns on one capture, in one process.
     python scripts/bench_outline_sprites.py [SCENE [WxH [ROUNDS [MODES]]]]   (default: demo 1024x1024 11)
 
 Prints per mode the medians of both, the median of their ratios, and how many pixels of the
-two images differ (none should). BENCHMARKS.md, "Sprites over the projected outline of B_world".
+two images differ (none should). docs/performance/modes.md, "Sprites over the projected outline of B_world".
 """
 
 from __future__ import annotations

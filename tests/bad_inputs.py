@@ -4,7 +4,7 @@
 
 A case expects either an error (exit 2, one line naming the file and containing `says`)
 or a load that works (exit 0), possibly with a warning line containing `says`. Categories
-(RELIABILITY.md counts them): `format` (broken or mislabelled files), `gltf` (glTF JSON of
+(docs/reliability.md counts them): `format` (broken or mislabelled files), `gltf` (glTF JSON of
 the wrong types and ranges, broken node graphs), `limits` (what would hang or exhaust
 memory: FIFOs, devices, declared sizes, zip bombs, deep or exploding graphs), `references`
 (files a scene points to), `names` (repeated, missing and hostile object names), `pictures`

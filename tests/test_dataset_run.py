@@ -168,7 +168,7 @@ def test_workers_give_the_same_bytes(scenes, reference, tmp_path):
 
 
 def test_dask_cluster_runs_the_shards(scenes, reference, tmp_path):
-    """The recipe of the README: shards as tasks of a dask.distributed cluster (a LocalCluster of
+    """The recipe of docs/datasets.md: shards as tasks of a dask.distributed cluster (a LocalCluster of
     two worker processes here; a scheduler address on a real one), then merge."""
     distributed = pytest.importorskip("distributed")
     from rtta.dataset.cluster import run_shards

@@ -1,6 +1,6 @@
 """Small CI versions of `rtta bench reliability`: random extreme cameras checked against
 STD, and a soak whose GL object census and memory stay flat. The full runs are in
-RELIABILITY.md."""
+docs/reliability.md."""
 
 from __future__ import annotations
 
@@ -58,7 +58,7 @@ def test_sweep_and_soak_textured(make_renderer):
 
 def test_soak_is_flat(make_renderer, demo_scene):
     """GL objects exactly flat from the first sample on; memory (without the render targets)
-    within the full soak's 5% (`rtta bench reliability`, RELIABILITY.md), with a new random
+    within the full soak's 5% (`rtta bench reliability`, docs/reliability.md), with a new random
     viewport size nearly every frame. Before the driver's scenes were kept to one batch in
     flight, single readings here swung by ±6% and the bound had to be 15%; now they stay
     within about 1%."""

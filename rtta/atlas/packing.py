@@ -3,7 +3,7 @@
 `pack_shelves` is next-fit-decreasing-height shelf packing, vectorised with numpy:
 one sort (O(n log n)) plus one binary search per shelf and per layer, so it runs every
 frame for thousands of objects. `rtta bench packing` compares it with rectpack
-(MaxRects) and rectangle-packer; BENCHMARKS.md has the evidence for choosing it.
+(MaxRects) and rectangle-packer; docs/performance/capture.md has the evidence for choosing it.
 """
 
 from __future__ import annotations

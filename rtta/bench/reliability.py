@@ -254,7 +254,7 @@ def soak(
 # The reference frame is drawn this many times before a sample, so that the frames just before
 # every reading are the same, and so that each of llvmpipe's few scenes (one flushed batch in
 # flight: glraw.Throttle) draws it once and lets go of the framebuffer it held, the atlas
-# that trim() just replaced among them (RELIABILITY.md, Soak).
+# that trim() just replaced among them (docs/reliability.md, Soak).
 REFERENCE_REPEATS = 6
 
 

@@ -1,6 +1,6 @@
 """`rtta bench reliability`: the extreme-camera sweep and the soak, as tables.
 
-Figures come from the run; RELIABILITY.md records them with the command and renderer.
+Figures come from the run; docs/reliability.md records them with the command and renderer.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """`rtta bench capture|packing`: measured tables (median of frames, wall clock after glFinish).
 
-Only figures from the run are printed; BENCHMARKS.md records them with the command.
+Only figures from the run are printed; docs/performance/ records them with the command.
 """
 
 from __future__ import annotations

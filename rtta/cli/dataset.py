@@ -1,5 +1,5 @@
 """`rtta dataset SCENE... --out DIR`, `rtta dataset merge INPUT... --out FILE` and
-`rtta bench dataset`: amodal segmentation datasets (README, "rtta dataset")."""
+`rtta bench dataset`: amodal segmentation datasets (docs/datasets.md)."""
 
 from __future__ import annotations
 

@@ -3,7 +3,7 @@ parts assembled into one `annotations.json`, and shard files merged with unique 
 
 Masks arrive as crops (each object's viewport rectangle), not as full images: scanning a
 full-image mask per object costs more than rendering it here (0.16 ms per 640x480 mask in
-`pycocotools.mask.encode`, against 1-2 ms per object for the whole RTT baseline, BENCHMARKS.md),
+`pycocotools.mask.encode`, against 1-2 ms per object for the whole RTT baseline, docs/performance/dataset.md),
 so the column-major run boundaries of every crop of a view are found in one numpy pass and
 pycocotools turns those counts into its compressed RLE strings (`frPyObjects`), area and
 boxes. The tests check that every string equals `pycocotools.mask.encode` of the full mask.

@@ -5,7 +5,7 @@ contiguous slices of it, so any scheduler can run the shards anywhere. Each view
 into a temporary folder renamed into place, then its annotation part (`parts/<scene>/<view>.json`)
 is written atomically: a view is complete exactly when its part exists, so a killed run
 restarts where it stopped. annotations.json is assembled from the parts at the end, so shards,
-workers and restarts give the same bytes. Layout and fields: README, "rtta dataset".
+workers and restarts give the same bytes. Layout and fields: docs/datasets.md.
 """
 
 from __future__ import annotations

@@ -146,7 +146,7 @@ class Throttle:
     "scene" of its own, allocates scenes on demand and keeps them; a scene keeps the
     framebuffer it drew last (and so its textures, after they were deleted) until it is
     used again. A loop that never waits (headless, no swap) piled up many scenes, and the
-    memory of as many old atlases (RELIABILITY.md, Soak). Waiting for the batch before
+    memory of as many old atlases (docs/reliability.md, Soak). Waiting for the batch before
     costs nothing on a GPU that keeps up, and on llvmpipe keeps Python one batch ahead."""
 
     def __init__(self) -> None:

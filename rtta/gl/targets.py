@@ -48,14 +48,14 @@ class LayeredTarget:
     depth 32F, `layers` deep. Post-processing takes a texel's view distance from its depth.
 
     `normals=False` (STD and RTT targets): no normal image; nothing reads one there, and on
-    llvmpipe writing it costs about 15% of an STD frame (BENCHMARKS.md).
+    llvmpipe writing it costs about 15% of an STD frame (BENCHMARKS.md in git history).
 
     `depth_keyed` (the atlas): a texel is empty exactly where its depth is 1 (the far plane,
     which no drawn fragment passes), so `clear()` clears the depth alone and the other
     attachments of empty texels keep whatever an earlier frame left there; every reader
     tests the depth (the shaders) or gets masked arrays (`read`). On llvmpipe a standalone
     clear of a 3-layer 1024² atlas took 14.8 ms with colour, normal and id, 3.3 ms of the
-    depth alone (inside a frame the difference is smaller: BENCHMARKS.md).
+    depth alone (inside a frame the difference is smaller: BENCHMARKS.md in git history).
     """
 
     def __init__(
@@ -159,7 +159,7 @@ class LayeredTarget:
     def clear(self) -> None:
         """Clear every layer whole: depth 1 (far), and unless depth-keyed colour/normal 0,
         id -1. Unscissored on purpose: on llvmpipe any scissor makes layered clears ~2x
-        slower (BENCHMARKS.md)."""
+        slower (BENCHMARKS.md in git history)."""
         self._fbo.viewport = (0, 0, *self.size)
         self._fbo.scissor = None
         self._fbo.use()

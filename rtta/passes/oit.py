@@ -8,7 +8,7 @@ pixel's place in the object's B_viewport, so no counter is shared), then one pas
 union of the drawn objects' B_viewport walks each list front to back
 (shaders/oit_resolve.frag: the K = 8 nearest in exact order, the rest merged behind them,
 weighted blended). Chosen over depth peeling, which draws every sprite quad once per layer
-(BENCHMARKS.md). The nodes need 16 bytes per pixel of the drawn objects' viewport
+(BENCHMARKS.md in git history). The nodes need 16 bytes per pixel of the drawn objects' viewport
 rectangles; a frame needing more than MAX_NODES blends in object order instead (the caller
 counts it).
 
@@ -25,7 +25,7 @@ in two colour attachments and its count and mark in the stencil, all read and wr
 shader itself: no atomics, no depth test, and nodes only for a pixel's fourth surface on
 (OrderMarks with `fetched`). On llvmpipe the atomic exchange and the node stores were 40% of
 the `transparent` composite: with the first surfaces fetched, the demo's list pass takes 23.5 ms
-against 29.1 at 1024², the resolve 4.7 against 8.5 (BENCHMARKS.md). Both ways give the same
+against 29.1 at 1024², the resolve 4.7 against 8.5 (docs/performance/order.md). Both ways give the same
 picture; the tests run both.
 """
 

@@ -16,7 +16,7 @@ import numpy as np
 
 
 class Mode(StrEnum):
-    """Compositing modes (RTTA paper, section 3.2; README)."""
+    """Compositing modes (RTTA paper, section 3.2; docs/modes.md)."""
 
     SPRITES = "sprites"  # depth sprites: STD reconstructed
     TRANSPARENT = "transparent"  # every object blended with its opacity, back to front

@@ -4,7 +4,7 @@ captures every part again, so a view at rest is always exact.
 
 This is the "guaranteed frame rate" of large-model viewers (Navisworks drops the smallest
 objects while navigating and fills them in when the view rests). On a CPU renderer the
-capture of a large assembly is bound by its triangles (BENCHMARKS.md, issue 22), and a frame
+capture of a large assembly is bound by its triangles (docs/performance/scale.md), and a frame
 costs about what it draws: leaving out the smallest 20% of a 10,000-part assembly's parts
 made a viewer frame 18% faster. Parts are ranked by the area of their B_viewport in the
 frame's own projection (atlas.parameterize's `thin`, before packing); the focus is never left out.

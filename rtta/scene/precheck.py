@@ -31,7 +31,7 @@ ZIP_ERRORS = (
     lzma.LZMAError,
 )
 
-# Peak memory of loading, measured (RELIABILITY.md): with normals smoothed at load (a file
+# Peak memory of loading, measured (docs/reliability.md): with normals smoothed at load (a file
 # without normals) about 170 bytes per vertex and 1,300 per triangle (163,842 vertices and
 # 327,680 triangles: 435 MiB); a file with normals needs about a tenth of that. Half the
 # worst case is charged, so a scene the limit admits peaks below twice the limit.

@@ -80,3 +80,18 @@ def test_options_are_str_enums_that_take_the_old_strings():
     assert ao.tolist() == [True, True, True] and edges.tolist() == [False, True, False]
     with pytest.raises(ValueError, match="ao_objects must be one of focus, all, got 'some'"):
         Style(ao_objects="some").shaded(2)  # type: ignore[arg-type]
+
+
+def test_capture_path_and_lens_shape_take_their_strings(gl):
+    from rtta.errors import RttaError
+    from rtta.gl.context import Capabilities, CapturePath
+    from rtta.ldi.lens import Lens, LensShape
+
+    caps = Capabilities.of(gl)
+    assert caps.capture_path("gs") is CapturePath.GS and caps.capture_path(CapturePath.AUTO) in set(CapturePath)
+    with pytest.raises(RttaError, match="capture path must be one of auto, vs, gs, got 'xx'"):
+        caps.capture_path("xx")  # type: ignore[arg-type]
+    assert Lens.shape("box", (0, 0, 0), 1.0).key == "box"
+    assert Lens.shape(LensShape.SPHERE, (0, 0, 0), 1.0).key == "sphere"
+    with pytest.raises(RttaError, match="unknown lens shape 'cone'"):
+        Lens.shape("cone", (0, 0, 0), 1.0)  # type: ignore[arg-type]

@@ -3,12 +3,26 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from enum import StrEnum
+from typing import Literal
 
 import moderngl
 
 from ..errors import RttaError
 
 LAYER_EXTENSION = "GL_ARB_shader_viewport_layer_array"
+
+
+class CapturePath(StrEnum):
+    """How the capture routes each object to its atlas layer (Settings.capture_path)."""
+
+    AUTO = "auto"  # VS where the driver has LAYER_EXTENSION, else GS
+    VS = "vs"  # gl_Layer from the vertex shader (LAYER_EXTENSION)
+    GS = "gs"  # the paper's geometry shader
+
+
+CapturePathName = Literal["auto", "vs", "gs"]
+CAPTURE_PATHS: tuple[str, ...] = tuple(p.value for p in CapturePath)
 
 
 def create_headless_context() -> moderngl.Context:
@@ -127,10 +141,14 @@ class Capabilities:
             "geometry-shader path (the paper's) instead"
         ]
 
-    def capture_path(self, requested: str = "auto") -> str:
-        """'vs' where the layer extension exists, else the paper's 'gs' path."""
-        if requested == "vs" and not self.vertex_layer:
+    def capture_path(self, requested: CapturePathName | CapturePath = "auto") -> CapturePath:
+        """The path `requested`, or for 'auto' 'vs' where the layer extension exists, else the paper's 'gs'."""
+        try:
+            path = CapturePath(requested)
+        except ValueError:
+            raise RttaError(f"capture path must be one of {', '.join(CAPTURE_PATHS)}, got {requested!r}") from None
+        if path is CapturePath.VS and not self.vertex_layer:
             raise RttaError(f"capture path 'vs' needs {LAYER_EXTENSION}, which {self.renderer} lacks")
-        if requested in ("vs", "gs"):
-            return requested
-        return "vs" if self.vertex_layer else "gs"
+        if path is not CapturePath.AUTO:
+            return path
+        return CapturePath.VS if self.vertex_layer else CapturePath.GS

@@ -7,6 +7,8 @@ LDI; compositing tests each context texel's world position (from its atlas depth
 from __future__ import annotations
 
 from dataclasses import dataclass
+from enum import StrEnum
+from typing import Literal
 
 import moderngl
 import numpy as np
@@ -18,7 +20,16 @@ from ..scene.model import Scene
 from .gpu import LdiTextures
 from .peel import Peeler, build, closed_mesh
 
-SHAPES = ("sphere", "box")
+
+class LensShape(StrEnum):
+    """The shape lenses (besides an object of the scene)."""
+
+    SPHERE = "sphere"  # radius 1 in its frame
+    BOX = "box"  # half-size 1 in its frame
+
+
+LensShapeName = Literal["sphere", "box"]
+SHAPES: tuple[str, ...] = tuple(s.value for s in LensShape)
 RESOLUTION = 256
 
 
@@ -36,15 +47,18 @@ class Lens:
     object_id: int = -1  # the scene object used as the lens: never cut itself
 
     @classmethod
-    def shape(cls, kind: str, center, radius: float) -> Lens:
+    def shape(cls, kind: LensShapeName | LensShape, center, radius: float) -> Lens:
         from ..scene.generators import shapes
 
-        if kind not in SHAPES:
-            raise RttaError(f"unknown lens shape {kind!r}; shapes: {', '.join(SHAPES)}, or an object name")
+        try:
+            shape = LensShape(kind)
+        except ValueError:
+            raise RttaError(f"unknown lens shape {kind!r}; shapes: {', '.join(SHAPES)}, or an object name") from None
         if not (np.isfinite(radius) and radius > 0):
             raise RttaError(f"lens radius must be positive, got {radius}")
-        mesh = shapes.sphere(1.0, 3) if kind == "sphere" else shapes.box(2.0)
-        return cls(kind, np.asarray(mesh.vertices), np.asarray(mesh.faces), np.asarray(center, float), float(radius))
+        mesh = shapes.sphere(1.0, 3) if shape is LensShape.SPHERE else shapes.box(2.0)
+        vertices, faces = np.asarray(mesh.vertices), np.asarray(mesh.faces)
+        return cls(shape.value, vertices, faces, np.asarray(center, float), float(radius))
 
     @classmethod
     def of_object(cls, scene: Scene, oid: int) -> Lens:

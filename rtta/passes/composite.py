@@ -27,7 +27,7 @@ from ..gl.bindings import Storage, Texture
 from ..gl.gpu import GpuScene
 from ..gl.targets import CompositeTarget, LayeredTarget, release_framebuffer
 from .capture import mat_bytes
-from .oit import PixelOrderPass, blended_in_place, resolved_order
+from .oit import PixelOrderPass, Refusal, blended_in_place, resolved_order
 from .sprites import UPSAMPLE_BELOW, Depth, SpriteDraw, SpritePass, upload
 from .style import BACKGROUND, LENS_MODES, MODES, ROLES, Mode, ModeName, Order, Style
 
@@ -243,7 +243,7 @@ class CompositePass:
         self.sprites.draw(ids, draw, style, records)
 
     @property
-    def pixel_order_refusal(self) -> str | None:
+    def pixel_order_refusal(self) -> Refusal | None:
         """Why the last fallback to object order happened (oit.PixelOrderPass.refusal)."""
         return self._pixel_order.refusal if self._pixel_order is not None else None
 

@@ -31,6 +31,8 @@ picture; the tests run both.
 
 from __future__ import annotations
 
+from typing import Literal
+
 import moderngl
 import numpy as np
 
@@ -41,6 +43,7 @@ from ..gl.targets import release_all
 from .style import ORDERS as ORDERS  # re-exported: the choices of --order
 from .style import Mode, ModeName, Order, OrderName, choice
 
+Refusal = Literal["surfaces", "target"]  # why PixelOrderPass.begin refused: over MAX_NODES, or LISTS/FETCH bytes
 # each pixel's first surfaces in colour attachments and its count and order mark in the stencil,
 # read and written in draw order by the shader (no atomics): where the driver has these (Mesa's
 # llvmpipe does; NVIDIA's driver not)
@@ -125,7 +128,7 @@ class PixelOrderPass:
         self.programs: dict[tuple[bool, bool], moderngl.Program] = {}  # (over, fetch), made on first use
         self.vaos: dict[tuple[bool, bool], moderngl.VertexArray] = {}
         self._marks: dict[bool, OrderMarks] = {}  # by fetch; one kept at a time
-        self.refusal: str | None = None  # why begin() last returned False
+        self.refusal: Refusal | None = None  # why begin() last returned False
         self._width = 1
         self._rect = (-1.0, -1.0, 1.0, 1.0)
 

@@ -116,9 +116,9 @@ class Style:
     ao_radius: float = 6.0
     ao_strength: float = 1.0
     # defaults from `rtta bench composite` on the demo at 1024² (docs/performance/modes.md)
-    ao_objects: RoleName = "focus"  # ghosted-ao: AO on 'focus' objects only (the paper) or on 'all'
-    edge_objects: RoleName = "all"  # ghosted-ao: edges on 'focus' objects only or on 'all'
-    order: OrderName = "auto"  # transparent and ghosted context: 'object' (bounds centres), 'pixel'
+    ao_objects: RoleName | Role = "focus"  # ghosted-ao: AO on 'focus' objects only (the paper) or on 'all'
+    edge_objects: RoleName | Role = "all"  # ghosted-ao: edges on 'focus' objects only or on 'all'
+    order: OrderName | Order = "auto"  # transparent and ghosted context: 'object' (bounds centres), 'pixel'
     # (surface depths), or 'auto' (oit.resolved_order: pixel in transparent)
     halo: int = 0  # ghosted modes: halo width (pixels) around focus objects, 0: none
     halo_color: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.6)  # (rgb, strength)

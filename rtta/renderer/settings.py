@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from ..gl.context import CapturePath, CapturePathName
+
 
 @dataclass
 class Settings:
@@ -18,7 +20,7 @@ class Settings:
     max_layers : int, optional
         The most atlas layers; None: the driver's GL_MAX_ARRAY_TEXTURE_LAYERS. Regions are
         scaled down (the scale recorded) rather than dropped when they do not fit.
-    capture_path : str, default "auto"
+    capture_path : {"auto", "vs", "gs"}, default "auto"
         "vs" (vertex shader with GL_ARB_shader_viewport_layer_array), "gs" (the paper's
         geometry shader) or "auto" (vs where the driver has it).
     region_scale : float, default 1
@@ -41,7 +43,7 @@ class Settings:
     border: int = 1
     atlas_max: tuple[int, int] | None = None
     max_layers: int | None = None
-    capture_path: str = "auto"
+    capture_path: CapturePathName | CapturePath = "auto"
     region_scale: float = 1.0
     context_scale: float = 1.0
     bounds: str = "aabb"

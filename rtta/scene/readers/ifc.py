@@ -104,7 +104,7 @@ def tree_path(element, memo: dict | None = None) -> tuple[str, ...]:
     memo = {} if memo is None else memo
     chain, node, seen, above = [], element, {element.id()}, None
     while True:
-        parent = util.get_aggregate(node) or util.get_container(node) or _nest(node)
+        parent = util.get_aggregate(node) or _container(node) or _nest(node)
         if parent is None:
             above = ()
             break
@@ -122,6 +122,22 @@ def tree_path(element, memo: dict | None = None) -> tuple[str, ...]:
         if above is not None:
             memo[parent.id()] = path
     return path
+
+
+def _container(element):
+    """ifcopenshell's get_container (the direct spatial container, else that of the nearest
+    element above through aggregation, nesting, filling or voiding), walked iteratively: its
+    own recursion never ends on a cycle of a damaged file (found by fuzzing, issue 42)."""
+    import ifcopenshell.util.element as util
+
+    node, seen = element, set()
+    while node is not None and node.id() not in seen:
+        seen.add(node.id())
+        direct = util.get_container(node, should_get_direct=True)
+        if direct is not None:
+            return direct
+        node = util.get_parent(node)
+    return None
 
 
 def _nest(element):

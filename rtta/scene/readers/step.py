@@ -109,7 +109,7 @@ def _product_names(text: str) -> dict[tuple, str]:
     """Sub-assembly names by the sorted names of the parts below them (with repeats)."""
 
     def ref(a: str) -> int:
-        return int(a.lstrip("#")) if a.startswith("#") else -1
+        return int(a[1:]) if re.fullmatch(r"#\d{1,18}", a) else -1  # '#', '#x': no reference (fuzzing, issue 42)
 
     def unquote(a: str) -> str:
         return a[1:-1].replace("''", "'") if len(a) >= 2 and a[0] == "'" else ""
@@ -127,19 +127,28 @@ def _product_names(text: str) -> dict[tuple, str]:
     for a in _entities(text, "NEXT_ASSEMBLY_USAGE_OCCURRENCE").values():
         if len(a) > 4:
             children.setdefault(ref(a[3]), []).append(ref(a[4]))
-    memo: dict[int, tuple] = {}
+    memo: dict[int, Counter] = {}
 
-    def leaves(pd: int, depth: int = 0) -> tuple:
+    def leaves(pd: int, depth: int = 0) -> Counter:
         if pd not in memo:
             kids = children.get(pd, [])
-            memo[pd] = (
-                (name_of.get(pd, ""),)
-                if not kids or depth > 64
-                else tuple(sorted(x for k in kids for x in leaves(k, depth + 1)))
-            )
+            found: Counter = Counter()
+            if not kids or depth > 64:
+                found[name_of.get(pd, "")] = 1
+            else:
+                for k in kids:
+                    found.update(leaves(k, depth + 1))
+            memo[pd] = found
         return memo[pd]
 
-    return {leaves(pd): name_of[pd] for pd in children if name_of.get(pd)}
+    return {_bag(leaves(pd)): name_of[pd] for pd in children if name_of.get(pd)}
+
+
+def _bag(names: Counter) -> tuple:
+    """A multiset of part names as a key: (name, count) pairs, sorted. Counted, not listed:
+    a product structure shared level after level names 2^levels parts (a 4 kB file of 24
+    levels took 5 s and gigabytes as a sorted list; found while fuzzing, issue 42)."""
+    return tuple(sorted(names.items()))
 
 
 def _walk(glb: bytes, out: Assembly, scale: float, assemblies: dict, path: Path) -> None:
@@ -151,8 +160,10 @@ def _walk(glb: bytes, out: Assembly, scale: float, assemblies: dict, path: Path)
     def leaves(i: int) -> tuple:
         if i not in memo:
             n = nodes[i]
-            own = (meshes[n["mesh"]].get("name") or n.get("name", ""),) if "mesh" in n else ()
-            memo[i] = tuple(sorted(own + tuple(x for c in n.get("children", []) for x in leaves(c))))
+            found = Counter([meshes[n["mesh"]].get("name") or n.get("name", "")] if "mesh" in n else [])
+            for c in n.get("children", []):
+                found.update(dict(leaves(c)))
+            memo[i] = _bag(found)
         return memo[i]
 
     def visit(i: int, parent: np.ndarray, groups: tuple[str, ...]) -> None:

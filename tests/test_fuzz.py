@@ -1,0 +1,121 @@
+"""The fuzz targets of rtta's own parsers (tests/fuzz_targets.py), each run briefly and
+deterministically: every seed of tests/fuzz_corpus/<target>/, then mutants of a fixed seed.
+Each input gives a result or an RttaError, within LIMIT_S seconds and INPUT_MB of traced
+memory. `python scripts/fuzz.py TARGET --seconds N` runs one coverage-guided (atheris); what
+the fuzzing found is below, each as a regression test (docs/reliability.md)."""
+
+from __future__ import annotations
+
+import time
+import tracemalloc
+
+import pytest
+from fuzz_corpus_make import STEP_HEAD, STEP_TAIL
+from fuzz_targets import INPUT_MB, LIMIT_S, TARGETS, mutants, run_one, seeds, warm
+
+MUTANTS = {"obj": 60, "gltf": 60, "step": 200, "ifc": 60, "specs": 150}  # a few seconds each
+
+
+@pytest.mark.parametrize("target", list(TARGETS))
+def test_target_keeps_its_contract(target):
+    corpus = seeds(target)
+    assert len(corpus) >= 4, "tests/fuzz_corpus is missing: python scripts/fuzz.py --corpus"
+    warm(target)  # imports and first-use caches: not an input's time
+    for k, data in enumerate([*corpus, *mutants(corpus, MUTANTS[target], seed=42)]):
+        tracemalloc.start()
+        start = time.perf_counter()
+        try:
+            run_one(target, data)
+        except Exception as exc:  # the contract: a result or an RttaError
+            pytest.fail(f"{target} input {k} ({data[:160]!r}): {type(exc).__name__}: {exc}")
+        finally:
+            seconds = time.perf_counter() - start
+            peak = tracemalloc.get_traced_memory()[1]
+            tracemalloc.stop()
+        assert seconds < LIMIT_S, f"{target} input {k} ({data[:160]!r}) took {seconds:.2f} s"
+        assert peak < INPUT_MB * 2**20, f"{target} input {k} ({data[:160]!r}) allocated {peak / 2**20:.0f} MiB"
+
+
+def test_mutants_are_deterministic_and_differ():
+    corpus = seeds("specs")
+    first, again = list(mutants(corpus, 20, seed=7)), list(mutants(corpus, 20, seed=7))
+    assert first == again and len(set(first)) > 10 and not set(first) <= set(corpus)
+
+
+# ---- findings, kept ---------------------------------------------------------------------
+def _shared_levels(levels: int) -> str:
+    """A product structure of `levels` assemblies, each using the next twice: 2^levels parts."""
+    lines = ["#1=PRODUCT('leaf','leaf','',(#9));", "#2=PRODUCT_DEFINITION_FORMATION('','',#1);"]
+    lines += [f"#{100 + i}=PRODUCT_DEFINITION('design','',#2,#8);" for i in range(levels + 1)]
+    lines += [
+        f"#{1000 + 2 * i + j}=NEXT_ASSEMBLY_USAGE_OCCURRENCE('u','','',#{100 + i},#{101 + i},$);"
+        for i in range(levels)
+        for j in range(2)
+    ]
+    return STEP_HEAD + "\n".join(lines) + "\n" + STEP_TAIL
+
+
+def test_step_shared_product_structure_is_counted_not_unfolded():
+    """Found while writing the step target: 24 levels took 5 s (2^24 names listed)."""
+    from rtta.scene.readers import step
+
+    start = time.perf_counter()
+    names = step._product_names(_shared_levels(64))
+    assert time.perf_counter() - start < 0.5
+    assert names[(("leaf", 2**64),)] == "leaf" and names[(("leaf", 2),)] == "leaf"
+
+
+def test_step_reference_that_is_not_a_number():
+    """Found by the step target: '#' or '#x' where an entity reference stands raised ValueError."""
+    from rtta.scene.readers import step
+
+    text = _shared_levels(1).replace("#101,$);", "#,$);").replace("#100,", "#x1,", 1)
+    assert step._product_names(text) == {(("", 1),): "leaf"}  # one usage left, of no product
+    assert step._product_names(_shared_levels(1)) == {(("leaf", 2),): "leaf"}
+
+
+def test_ifc_aggregation_cycle_without_a_container():
+    """Found by the ifc target: ifcopenshell's get_container recursed forever (RecursionError)
+    up a cycle of aggregates none of which is in a spatial structure."""
+    import ifcopenshell
+
+    from rtta.scene.readers.ifc import tree_path
+
+    model = ifcopenshell.file(schema="IFC4")
+    a, b, c = (model.create_entity("IfcElementAssembly", Name=n) for n in "abc")
+    model.create_entity("IfcRelAggregates", RelatingObject=a, RelatedObjects=[b])
+    model.create_entity("IfcRelAggregates", RelatingObject=b, RelatedObjects=[a])
+    model.create_entity("IfcRelNests", RelatingObject=a, RelatedObjects=[c])
+    assert tree_path(c) == () and tree_path(a, {}) == ("b",) and tree_path(b, {}) == ("a",)
+    storey = model.create_entity("IfcBuildingStorey", Name="1st")
+    model.create_entity("IfcRelContainedInSpatialStructure", RelatingStructure=storey, RelatedElements=[b])
+    assert tree_path(c) == ("1st",)  # the container of the nearest element above that has one
+
+
+@pytest.mark.parametrize(
+    "style",
+    [
+        {"outline_color": "1,0,0,1"},  # a string: its characters were floated (ValueError on ',')
+        {"edge_color": ["red", 0, 0, 1]},
+        {"edge_color": [1, 0, 0, 10**400]},  # OverflowError
+        {"outline_color": 5},  # TypeError: not iterable
+        {"desaturate": "0.5"},  # TypeError: str against float
+        {"default_opacity": None},
+        {"outline_width": [2]},
+    ],
+)
+def test_style_values_that_are_no_numbers_are_one_error(style):
+    """Found by the specs target: a colour or a style number of the wrong type raised
+    ValueError, TypeError or OverflowError instead of naming the keyword."""
+    from rtta.errors import RttaError
+    from rtta.renderer.options import style_keywords
+
+    with pytest.raises(RttaError, match=next(iter(style))):
+        style_keywords(style)
+
+
+def test_style_colours_as_before():
+    from rtta.renderer.options import style_keywords
+
+    assert style_keywords({"outline_color": ["1", 0.5, 0, 1]}) == {"outline_color": (1.0, 0.5, 0.0, 1.0)}
+    assert style_keywords({"desaturate": 0.25, "outline_width": 3}) == {"desaturate": 0.25, "outline_width": 3}

@@ -7,7 +7,6 @@ the composite and the atlas layer side by side with the panel on the left.
 
 from __future__ import annotations
 
-import itertools
 import re
 import threading
 import time
@@ -66,7 +65,7 @@ class Viewer:
         self._projector_image = None
         self._lens_cache = None
         self.item_rects: dict[int, tuple] = {}  # object list checkboxes on screen (tests click them)
-        self.renderer: Renderer | None = None
+        self.renderer: Renderer  # set_scene makes it (and the state), and makes it again per scene
         self.layout = Layout.of(wnd.buffer_size, True)
         self.set_scene(scene, mode=mode)
         notes = [*self.renderer.caps.notes, *scene.warnings]
@@ -76,8 +75,8 @@ class Viewer:
 
     # ---- scene -------------------------------------------------------------------------
     def set_scene(self, scene: Scene, mode: str | None = None) -> None:
-        old = self.state if self.renderer is not None else None
-        state = ViewerState(scene.names, mode=mode or old.mode, paths=scene.paths)
+        old: ViewerState | None = getattr(self, "state", None)  # none before the first scene
+        state = ViewerState(scene.names, mode=mode or (old.mode if old else "ghosted-ao"), paths=scene.paths)
         if old is not None:
             state.settings, state.atlas_max, state.show_atlas = old.settings, old.atlas_max, old.show_atlas
             state.measure, state.navigation_fps = old.measure, old.navigation_fps
@@ -349,6 +348,8 @@ class Viewer:
 
     def _draw_atlas(self) -> None:
         atlas, rec = self.renderer.atlas, self.records
+        if rec is None or atlas is None:
+            return  # nothing captured yet
         for layer, rect in self.atlas_tiles():
             self.view_pass.render(
                 texture=atlas.color,
@@ -367,7 +368,9 @@ class Viewer:
         images = {"composite": self.composite_image(), "atlas": self.atlas_image()}
         images = {k: v for k, v in images.items() if v is not None}
         stem = re.sub(r"[^\w.-]", "_", Path(self.scene_label).stem)[:80] or "scene"
-        for n in itertools.count(1):
+        n = 0
+        while True:
+            n += 1
             paths = {k: self.screenshot_dir / f"rtta-{stem}-{n:03d}-{k}.png" for k in images}
             if any(p.exists() or p.is_symlink() for p in paths.values()):
                 continue

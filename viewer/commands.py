@@ -48,10 +48,12 @@ class ControlsHost(Host, Protocol):
     the file browser, and the app's actions."""
 
     wnd: BaseWindow
-    imgui: ModernglWindowRenderer
     orbit: Orbit
     files: FileBrowser
     scene_dir: Path
+
+    @property
+    def imgui(self) -> ModernglWindowRenderer: ...  # read only here: the app's is a subclass
 
     def move_lens(self, x: float, y: float) -> None: ...
 

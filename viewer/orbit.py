@@ -51,7 +51,7 @@ class Orbit:
         d, up = _direction(self.az, self.el, self.up_axis)
         cam = Camera(eye=self.target + d * self.dist, target=self.target.copy(), up=up, fov_y=self.fov_y)
         # near/far must hold the scene and the target, wherever the user wandered
-        far_point = np.linalg.norm(self.target - self.scene_center) + self.scene_radius
+        far_point = float(np.linalg.norm(self.target - self.scene_center)) + self.scene_radius
         return cam.fit_depth(self.target, max(far_point, self.dist * 1e-3))
 
     def _axes(self) -> tuple[np.ndarray, np.ndarray]:

@@ -29,6 +29,8 @@ def _col(rgba) -> int:
 def regions(app: OverlayHost):
     """(object ids, screen boxes x0, y0, x1, y1) of every atlas region shown, per tile."""
     rec = app.records
+    if rec is None:
+        return
     for layer, rect in app.atlas_tiles():
         ids = np.flatnonzero(rec.visible & (rec.layer == layer))
         yield layer, ids, atlas_rects_on_screen(rec.atlas_rect[ids], rec.atlas_size[:2], rect)
@@ -56,11 +58,11 @@ def hovered(app: OverlayHost) -> np.ndarray:
 
 def _hover(app: OverlayHost, dl) -> None:
     """Outline the hovered row's objects: their projected bounds in the composite."""
-    ids = hovered(app)
-    if not ids.size:
+    ids, rec = hovered(app), app.records
+    if not ids.size or rec is None:
         return
     cx, cy, _, ch = app.layout.composite
-    for x0, y0, x1, y1 in app.records.viewport_rect[ids]:
+    for x0, y0, x1, y1 in rec.viewport_rect[ids]:
         dl.add_rect(imgui.ImVec2(cx + x0, cy + ch - y1), imgui.ImVec2(cx + x1, cy + ch - y0), HOVER, 0.0, 0, 2.0)
 
 

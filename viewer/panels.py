@@ -32,7 +32,7 @@ def draw(app: PanelsHost) -> None:
         return
     imgui.set_next_window_pos(imgui.ImVec2(x, y))
     imgui.set_next_window_size(imgui.ImVec2(w, h))
-    flags = imgui.WindowFlags_.no_move | imgui.WindowFlags_.no_resize | imgui.WindowFlags_.no_collapse
+    flags = imgui.WindowFlags_.no_move.value | imgui.WindowFlags_.no_resize.value | imgui.WindowFlags_.no_collapse.value
     imgui.begin("rtta", None, flags)
     _scene(app)
     _mode(app)
@@ -63,7 +63,7 @@ def _scene(app: PanelsHost) -> None:
 
 def _mode(app: PanelsHost) -> None:
     s = app.state
-    changed, i = imgui.combo("mode (M)", VIEW_MODES.index(s.mode), VIEW_MODES)
+    changed, i = imgui.combo("mode (M)", VIEW_MODES.index(s.mode), list(VIEW_MODES))
     if changed:
         s.mode = VIEW_MODES[i]
     _, s.show_atlas = imgui.checkbox("atlas view (A)", s.show_atlas)
@@ -80,7 +80,7 @@ def _objects(app: PanelsHost) -> None:
 
 def _style(app: PanelsHost) -> None:
     st = app.state.style
-    if not imgui.collapsing_header("Style", imgui.TreeNodeFlags_.default_open):
+    if not imgui.collapsing_header("Style", imgui.TreeNodeFlags_.default_open.value):
         return
     _, st.context_opacity = imgui.slider_float("context opacity", st.context_opacity, 0.0, 1.0)
     _, st.desaturate = imgui.slider_float("desaturate", st.desaturate, 0.0, 1.0)
@@ -122,7 +122,7 @@ def _lens(app: PanelsHost) -> None:
     if not imgui.collapsing_header("lens (C)"):
         return
     _, p.on = imgui.checkbox("cut the context away (ghosted modes)", p.on)
-    changed, i = imgui.combo("shape", LENS_SHAPES.index(p.shape), LENS_SHAPES)
+    changed, i = imgui.combo("shape", LENS_SHAPES.index(p.shape), list(LENS_SHAPES))
     if changed:
         p.shape = LENS_SHAPES[i]
     _, p.radius = imgui.slider_float("radius (scene radii)", p.radius, 0.02, 1.5)
@@ -134,16 +134,16 @@ def _lens(app: PanelsHost) -> None:
 
 
 def _color(label: str, rgba) -> tuple[bool, tuple]:
-    changed, col = imgui.color_edit4(label, list(rgba), imgui.ColorEditFlags_.no_inputs)
+    changed, col = imgui.color_edit4(label, list(rgba), imgui.ColorEditFlags_.no_inputs.value)
     return changed, tuple(col)
 
 
 def _atlas(app: PanelsHost) -> None:
     s = app.state
-    if not imgui.collapsing_header("Atlas", imgui.TreeNodeFlags_.default_open):
+    if not imgui.collapsing_header("Atlas", imgui.TreeNodeFlags_.default_open.value):
         return
     _, s.settings.border = imgui.slider_int("border (px)", s.settings.border, 0, 4)
-    changed, i = imgui.combo("max size", ATLAS_MAX_CHOICES.index(s.atlas_max), ATLAS_MAX_CHOICES)
+    changed, i = imgui.combo("max size", ATLAS_MAX_CHOICES.index(s.atlas_max), list(ATLAS_MAX_CHOICES))
     if changed:
         s.set_atlas_max(ATLAS_MAX_CHOICES[i])
     _, s.settings.region_scale = imgui.slider_float("region scale", s.settings.region_scale, 0.25, 2.0, "%.2f")
@@ -180,7 +180,7 @@ def _navigation(app: PanelsHost) -> None:
 
 
 def _stats(app: PanelsHost) -> None:
-    if not imgui.collapsing_header("Stats", imgui.TreeNodeFlags_.default_open):
+    if not imgui.collapsing_header("Stats", imgui.TreeNodeFlags_.default_open.value):
         return
     st = app.stats
     imgui.text(f"frame {st.mean_ms():6.1f} ms  ({st.fps():5.1f} fps)")
@@ -200,7 +200,11 @@ def _stats(app: PanelsHost) -> None:
     history = np.asarray(st.history, np.float32)
     if len(history) and implot.begin_plot("##frametime", imgui.ImVec2(-1, 110)):
         implot.setup_axes("frame", "ms")
-        implot.setup_axis_limits(implot.ImAxis_.y1, 0, max(50.0, float(history.max()) * 1.1), implot.Cond_.always)
-        implot.setup_axis_limits(implot.ImAxis_.x1, 0, st.history.maxlen, implot.Cond_.always)
+        implot.setup_axis_limits(
+            implot.ImAxis_.y1.value, 0, max(50.0, float(history.max()) * 1.1), imgui.Cond_.always.value
+        )
+        implot.setup_axis_limits(
+            implot.ImAxis_.x1.value, 0, float(st.history.maxlen or len(history)), imgui.Cond_.always.value
+        )
         implot.plot_line("frame ms", history)
         implot.end_plot()

@@ -34,9 +34,15 @@ class PartTree:
         def visit(path: tuple[str, ...]) -> None:
             if path:
                 stack.append((path, len(labels)))
-                labels.append(path[-1]), depth.append(len(path) - 1), obj.append(-1), end.append(0)
+                labels.append(path[-1])
+                depth.append(len(path) - 1)
+                obj.append(-1)
+                end.append(0)
             for oid in by_path.get(path, []):
-                labels.append(names[oid]), depth.append(len(path)), obj.append(oid), end.append(len(labels))
+                labels.append(names[oid])
+                depth.append(len(path))
+                obj.append(oid)
+                end.append(len(labels))
                 order.append(oid)
             for kid in children.get(path, []):
                 visit(kid)
@@ -57,11 +63,16 @@ class PartTree:
         self.row_of[self.obj[is_obj]] = np.flatnonzero(is_obj)
         self.parent = np.full(len(labels), -1, np.int64)
         for node in np.flatnonzero(~is_obj)[::-1]:  # innermost groups first
-            kids = np.arange(node + 1, self.end[node])
+            kids = np.arange(node + 1, int(self.end[node]))
             self.parent[kids[self.parent[kids] < 0]] = node
         self._rows_key: tuple | None = None
         self._rows = np.zeros(0, np.int64)
         self.open: set[int] = set()
+        # where the panel drew the rows on screen, its toolbar's buttons and the opacity sliders
+        # (x0, y0, x1, y1) by node or label, for the tests to click (viewer/tree.py fills them)
+        self.rects: dict[int, tuple[float, ...]] = {}
+        self.sliders: dict[int, tuple[float, ...]] = {}
+        self.buttons: dict[str, tuple[float, ...]] = {}
         self.open_levels()
 
     def open_levels(self, rows: int = OPEN_ROWS) -> None:

@@ -20,7 +20,7 @@ STAGE_COLUMNS = ("parameterize", "capture", "post", "composite", "std", "ui")
 def create_window(size: tuple[int, int], visible: bool = True):
     """A pyglet window with an OpenGL 4.3 core context, made current for moderngl."""
     import moderngl_window as mglw
-    from moderngl_window.context.pyglet import Window
+    from moderngl_window.context.pyglet.window import Window
 
     try:
         wnd = Window(title="rtta", gl_version=(4, 3), size=size, vsync=False, resizable=True, visible=visible)

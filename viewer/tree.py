@@ -20,14 +20,14 @@ if TYPE_CHECKING:
 LIST_HEIGHT = 220
 SLIDER_W = 64
 INDENT = 12.0
-MIXED = int(imgui.internal.ItemFlagsPrivate_.mixed_value)
+MIXED = imgui.internal.ItemFlagsPrivate_.mixed_value.value
 SELECTED = imgui.IM_COL32(255, 200, 80, 255)
 HIDDEN_TEXT = imgui.ImVec4(0.55, 0.55, 0.58, 1.0)
 
 
 def draw(app: PanelsHost) -> None:
     s = app.state
-    if not imgui.collapsing_header("Objects", imgui.TreeNodeFlags_.default_open):
+    if not imgui.collapsing_header("Objects", imgui.TreeNodeFlags_.default_open.value):
         return
     _, s.filter = imgui.input_text_with_hint("##filter", "filter by name", s.filter)
     controls = {-1: (*imgui.get_item_rect_min(), *imgui.get_item_rect_max())}
@@ -39,7 +39,7 @@ def draw(app: PanelsHost) -> None:
     _toolbar(app)
     tree = s.tree
     rows = tree.rows(s.filter)
-    imgui.begin_child("objects", imgui.ImVec2(0, LIST_HEIGHT), imgui.ChildFlags_.borders)
+    imgui.begin_child("objects", imgui.ImVec2(0, LIST_HEIGHT), imgui.ChildFlags_.borders.value)
     app.item_rects.clear()
     app.item_rects.update(controls)  # -1: filter box, -2..-4: all/none/invert (tests click them)
     tree.rects = {}  # rows on screen: node -> checkbox rect (tests click them)
@@ -100,7 +100,7 @@ def _row(app: PanelsHost, node: int, focus: np.ndarray, hidden: np.ndarray, size
     if s.mode == "transparent":  # room for the opacity slider on the right
         label = _fit(label, imgui.get_window_width() - SLIDER_W - 40 - imgui.get_cursor_pos_x())
     if off == n:
-        imgui.push_style_color(imgui.Col_.text, HIDDEN_TEXT)
+        imgui.push_style_color(imgui.Col_.text.value, HIDDEN_TEXT)
     changed, _ = imgui.checkbox(label, n > 0 and on == n)
     if off == n:
         imgui.pop_style_color()

@@ -109,7 +109,7 @@ class ViewPass:
         rect: Rect,
         window_height: int,
         layer: int | None = None,
-        depth=None,
+        depth: glraw.DepthArray | None = None,
         extent: tuple[float, float] = (1.0, 1.0),
         background=BACKGROUND[:3],
         target: moderngl.Framebuffer,
@@ -122,11 +122,13 @@ class ViewPass:
             return
         prog, vao = self._program(layer is not None)
         if layer is not None:
-            prog["u_layer"].value = int(layer)
-        prog["u_extent"].value = tuple(float(v) for v in extent)
-        prog["u_background"].value = tuple(float(v) for v in background)
+            glsl.uniform(prog, "u_layer").value = int(layer)
+        glsl.uniform(prog, "u_extent").value = tuple(float(v) for v in extent)
+        glsl.uniform(prog, "u_background").value = tuple(float(v) for v in background)
         texture.use(Texture.VIEW_TEXTURE)
         if layer is not None:
+            if depth is None:
+                raise ValueError("ViewPass.render: an array layer needs the atlas depth")
             glraw.bind_texture_array(Texture.ATLAS_DEPTH, depth.glo)
         self.ctx.enable_only(moderngl.NOTHING)
         target.viewport = (int(rx), int(window_height - ry - rh), int(rw), int(rh))

@@ -26,6 +26,25 @@ def pytest_addoption(parser):
     )
 
 
+GL_FIXTURES = {"ctx", "gl", "make_renderer"}
+VIEWER_FILES = {"test_viewer.py", "test_tree_viewer.py"}  # the real window under Xvfb (tests/viewer_*driver.py)
+SLOW_FIXTURES = {"driven", "driven_large", "tree_driven"}  # one driven viewer session each: 30-75 s
+
+
+def pytest_collection_modifyitems(items):
+    """Markers by what a test uses (registered in pyproject.toml, `--strict-markers`): `gl` for
+    a GL context, `viewer` for the viewer's window tests, `slow` for the driven viewer sessions;
+    other tests over ~10 s carry `@pytest.mark.slow` by hand."""
+    for item in items:
+        uses = set(getattr(item, "fixturenames", ()))
+        if uses & GL_FIXTURES:
+            item.add_marker(pytest.mark.gl)
+        if item.path.name in VIEWER_FILES or "display" in uses:
+            item.add_marker(pytest.mark.viewer)
+        if uses & SLOW_FIXTURES:
+            item.add_marker(pytest.mark.slow)
+
+
 @pytest.fixture(scope="session")
 def ctx():
     """The process's one headless context (the CLI called in-process uses it too)."""

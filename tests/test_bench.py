@@ -4,6 +4,8 @@ import json
 import math
 import os
 
+import pytest
+
 import rtta
 from rtta.bench import render as bench
 
@@ -122,6 +124,7 @@ def test_dataset_bench_quick(gl, tmp_path, capsys):
     assert "RTTA v/s" in capsys.readouterr().out
 
 
+@pytest.mark.slow  # measured: 11.1 s
 def test_scale_bench_quick(gl, tmp_path, capsys):
     from rtta.bench.scale import run_scale
 

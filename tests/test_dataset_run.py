@@ -113,6 +113,7 @@ def _views_written(out: Path) -> list[Path]:
     return sorted(p for p in (out / "parts").glob("*/*.json") if not p.name.startswith("."))
 
 
+@pytest.mark.slow  # measured: 10.8 s
 def test_killed_run_restarts_to_the_same_dataset(scenes, tmp_path, ctx):
     argv = [str(scenes / "brake.glb"), "--views", "40", "--seed", "3", "--out", "k", *SMALL]
     proc = subprocess.Popen([RTTA, "dataset", *argv], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
@@ -155,6 +156,7 @@ def test_sigterm_leaves_no_temporaries(scenes, tmp_path):
     assert not leftovers and _views_written(tmp_path / "t")
 
 
+@pytest.mark.slow  # measured: 13.7 s
 def test_workers_give_the_same_bytes(scenes, reference, tmp_path):
     res = subprocess.run(
         [RTTA, "dataset", str(scenes), "--views", "3", "--seed", "7", "--out", "w", "--workers", "2", *SMALL],
@@ -167,6 +169,7 @@ def test_workers_give_the_same_bytes(scenes, reference, tmp_path):
     assert _bytes(tmp_path / "w/annotations.json") == _bytes(reference / "annotations.json")
 
 
+@pytest.mark.slow  # measured: 18.0 s
 def test_dask_cluster_runs_the_shards(scenes, reference, tmp_path):
     """The recipe of docs/datasets.md: shards as tasks of a dask.distributed cluster (a LocalCluster of
     two worker processes here; a scheduler address on a real one), then merge."""

@@ -28,6 +28,7 @@ def _snapshot(tree: Path) -> dict[str, bytes]:
 
 
 # ---- interruptions ----------------------------------------------------------------------
+@pytest.mark.slow  # measured: 20.3 s
 def test_an_interrupted_export_leaves_the_old_or_the_new_whole(tmp_path):
     """SIGINT or SIGTERM at random moments: exit 0 with the new export in place and no word of
     an interruption, or exit 130 saying so with the old export intact; never a temporary."""

@@ -5,6 +5,7 @@ docs/reliability.md."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from rtta.bench.reliability import drift, gl_census, random_camera, random_viewport, soak, sweep
 from rtta.memory import mapped_block_bytes, steady_heap
@@ -56,6 +57,7 @@ def test_sweep_and_soak_textured(make_renderer):
     assert errors == [] and all(s.objects == samples[0].objects for s in samples)
 
 
+@pytest.mark.slow  # measured: 22.2 s
 def test_soak_is_flat(make_renderer, demo_scene):
     """GL objects exactly flat from the first sample on; memory (without the render targets)
     within the full soak's 5% (`rtta bench reliability`, docs/reliability.md), with a new random

@@ -323,6 +323,7 @@ def test_bench_without_a_display_runs_headless():
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "--bench" in bad.stderr, bad.stderr  # no NaN table
 
 
+@pytest.mark.slow  # measured: 23-28 s for the five
 @pytest.mark.parametrize("after", [0.8, 1.2, 1.6, 2.5, 8.0])
 def test_ctrl_c_closes_the_viewer_quietly(after):
     """SIGINT from the terminal at any moment, from the imports through the scene's load to

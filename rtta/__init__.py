@@ -15,6 +15,7 @@ from .gl.context import Capabilities, create_headless_context
 from .passes.capture import CapturePass, RttPass, StdPass
 from .passes.composite import Style
 from .renderer.api import Capture, capture, snapshot
+from .renderer.pick import Pick, pick
 from .renderer.renderer import Renderer, Settings
 from .scene.camera import Camera
 from .scene.loader import load_scene
@@ -25,6 +26,8 @@ __all__ = [
     "snapshot",
     "capture",
     "Capture",
+    "pick",
+    "Pick",
     # the renderer and what it takes and gives
     "Camera",
     "Capabilities",

@@ -43,21 +43,31 @@ def run(scene: Scene, tree: bool) -> int:
 
 def tree_lines(scene: Scene) -> list[str]:
     """The tree, indented two spaces a level: groups as 'name/  (objects, triangles)',
-    objects as 'id  name  (triangles)', in the file's order."""
+    objects as 'id  name  (triangles)'. Each group is printed once with everything below it,
+    however its parts interleave with others' in the file; siblings keep the order in which
+    the file first names them."""
     triangles = scene.index_ranges[:, 1] // 3
     groups = scene.groups
+    root: dict = {"groups": {}, "entries": []}  # entries: group names and object ids, in order
+    for oid in range(scene.count):
+        node = root
+        for part in scene.path_of(oid):
+            if part not in node["groups"]:
+                node["groups"][part] = {"groups": {}, "entries": []}
+                node["entries"].append(part)
+            node = node["groups"][part]
+        node["entries"].append(oid)
     out: list[str] = []
-    shown: tuple[str, ...] = ()
-    for oid, name in enumerate(scene.names):
-        path = scene.path_of(oid)
-        common = 0
-        while common < min(len(path), len(shown)) and path[common] == shown[common]:
-            common += 1
-        for depth in range(common, len(path)):
-            ids = groups["/".join(path[: depth + 1])]
-            out.append(
-                f"{'  ' * depth}{printable(path[depth])}/  ({len(ids)} objects, {int(triangles[ids].sum())} triangles)"
-            )
-        shown = path
-        out.append(f"{'  ' * len(path)}{oid:d}  {printable(name)}  ({triangles[oid]} triangles)")
+
+    def emit(node: dict, path: tuple[str, ...]) -> None:
+        pad = "  " * len(path)
+        for entry in node["entries"]:
+            if isinstance(entry, int):
+                out.append(f"{pad}{entry:d}  {printable(scene.names[entry])}  ({triangles[entry]} triangles)")
+                continue
+            ids = groups["/".join((*path, entry))]
+            out.append(f"{pad}{printable(entry)}/  ({len(ids)} objects, {int(triangles[ids].sum())} triangles)")
+            emit(node["groups"][entry], (*path, entry))
+
+    emit(root, ())
     return out

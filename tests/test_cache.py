@@ -4,12 +4,12 @@ processes loading at once leave one valid entry, and eviction keeps the folder b
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 import subprocess
 import sys
 import time
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -172,10 +172,13 @@ def _rewritten(entry: Path, change) -> None:
         + bytes(-len(text) % cache.ALIGN)
         + bytes(data[body + head["meta"] + (-head["meta"] % cache.ALIGN) :])
     )
-    head.update(meta=len(text), checksum=hashlib.blake2b(rest, digest_size=32).hexdigest())
+    head.update(meta=len(text), checksum=zlib.crc32(rest))
     top = json.dumps(head).encode()
     top = cache.MAGIC + len(top).to_bytes(8, "little") + top
     entry.write_bytes(top + bytes(-len(top) % cache.ALIGN) + rest)
+
+
+FORMAT = b'"format": %d' % cache.FORMAT
 
 
 def _shape(meta, name, shape):
@@ -191,7 +194,7 @@ DAMAGE = {
     "empty": lambda e: e.write_bytes(b""),
     "flipped byte": lambda e: e.write_bytes((lambda b: b[:-100] + bytes([b[-100] ^ 1]) + b[-99:])(e.read_bytes())),
     "flipped meta byte": lambda e: e.write_bytes((lambda b: b[:300] + bytes([b[300] ^ 4]) + b[301:])(e.read_bytes())),
-    "foreign format": lambda e: e.write_bytes(e.read_bytes().replace(b'"format": 1', b'"format": 7', 1)),
+    "foreign format": lambda e: e.write_bytes(e.read_bytes().replace(FORMAT, b'"format": 9', 1)),
     "not json": lambda e: e.write_bytes(cache.MAGIC + (40).to_bytes(8, "little") + b"{" * 40 + e.read_bytes()[64:]),
     "wrong shape": lambda e: _rewritten(e, lambda m: _shape(m, "positions", [3, 3])),
     "wrong dtype": lambda e: _rewritten(e, lambda m: _dtype(m, "indices", "float64")),

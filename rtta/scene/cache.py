@@ -9,8 +9,10 @@ edited in a checkout never hands back its old scenes) and the load options; it i
 only when every file the scene was read from (a glTF's buffers and textures, an OBJ's
 materials) still has its size and mtime.
 
-An entry is one file: a magic line, a JSON head (format version, blake2b checksum of what
-follows), the scene's JSON metadata (names, tree paths, warnings, inputs, unit, up axis,
+An entry is one file: a magic line, a JSON head (format version, CRC-32 of what follows:
+it finds damage, and at 1.3 GB/s here against blake2b's 0.3-0.8 it is not what a second
+open waits for; an entry written on purpose to deceive is still held to the checks below),
+the scene's JSON metadata (names, tree paths, warnings, inputs, unit, up axis,
 the arrays' dtypes, shapes and offsets) and the arrays' raw bytes. Nothing in it is
 unpickled; an entry that is damaged, truncated, of another format or version, or whose
 arrays do not fit together is ignored (and replaced by the next load), never trusted.
@@ -32,13 +34,14 @@ import stat
 import sys
 import tempfile
 import time
+import zlib
 from pathlib import Path
 
 import numpy as np
 
 from .model import Scene
 
-FORMAT = 1
+FORMAT = 2  # 2: CRC-32 (1 had blake2b)
 MAGIC = b"rtta-scene-cache"
 SUFFIX = ".scene"
 DEFAULT_MAX_BYTES = 2 << 30
@@ -257,10 +260,10 @@ def _encode(scene: Scene, key: dict, stats: dict) -> tuple[bytes, list, int]:
     chunks: list = [body, bytes(-len(body) % ALIGN)]
     for a in arrays.values():
         chunks += [memoryview(np.ascontiguousarray(a)).cast("B"), bytes(-a.nbytes % ALIGN)]
-    checksum = hashlib.blake2b(digest_size=32)
+    checksum = 0
     for chunk in chunks:
-        checksum.update(chunk)
-    head = json.dumps({"format": FORMAT, "checksum": checksum.hexdigest(), "meta": len(body)}).encode()
+        checksum = zlib.crc32(chunk, checksum)
+    head = json.dumps({"format": FORMAT, "checksum": checksum, "meta": len(body)}).encode()
     head = MAGIC + len(head).to_bytes(8, "little") + head
     head += bytes(-len(head) % ALIGN)
     return head, chunks, len(head) + sum(len(c) for c in chunks)
@@ -277,7 +280,7 @@ def _decode(data: bytearray, key: dict, source: str) -> Scene | None:
     if not isinstance(head, dict) or head.get("format") != FORMAT:
         return None
     view = memoryview(data)[start:]
-    if hashlib.blake2b(view, digest_size=32).hexdigest() != head.get("checksum"):
+    if zlib.crc32(view) != head.get("checksum"):
         return None
     length = int(head["meta"])
     meta = json.loads(bytes(view[:length]))

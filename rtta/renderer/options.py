@@ -12,11 +12,11 @@ from collections.abc import Iterable, Mapping, Sequence
 import numpy as np
 
 from ..errors import RttaError
-from ..passes.composite import Style
-from ..passes.oit import ORDERS
+from ..gl.context import CAPTURE_PATHS, CapturePath, CapturePathName
+from ..passes.style import ORDERS, ROLES, Order, OrderName, Role, RoleName, Style
 from ..scene.camera import Camera, Projection
 from ..scene.framing import StandardView, scene_orbit
-from ..scene.model import Scene
+from ..scene.model import BOUNDS, Bounds, BoundsName, Scene
 from .renderer import Settings
 from .snapshot import resolve_names
 
@@ -37,9 +37,9 @@ def make_settings(
     border: int = 1,
     atlas_max: str | tuple[int, int] | None = None,
     max_layers: int | None = None,
-    capture_path: str = "auto",
+    capture_path: CapturePathName | CapturePath = "auto",
     region_scale: float = 1.0,
-    bounds: str = "aabb",
+    bounds: BoundsName | Bounds = "aabb",
     context_scale: float | None = None,
 ) -> Settings:
     """Checked Settings (the messages name the CLI flags, as `rtta snapshot` says them)."""
@@ -53,8 +53,8 @@ def make_settings(
     if not (0.25 <= context_scale <= 1):
         raise RttaError(f"--context-scale must be between 0.25 and 1, got {context_scale}")
     atlas_max = check_size(atlas_max, "--atlas-max") if atlas_max else None
-    check_choice("--capture-path", capture_path, ("auto", "vs", "gs"))
-    check_choice("--bounds", bounds, ("aabb", "obb"))
+    check_choice("--capture-path", capture_path, CAPTURE_PATHS)
+    check_choice("--bounds", bounds, BOUNDS)
     return Settings(
         border=border,
         atlas_max=atlas_max,
@@ -74,9 +74,9 @@ def make_style(
     edge_width: int = 1,
     ao_radius: float = 6.0,
     ao_strength: float = 1.0,
-    ao_objects: str | None = None,
-    edge_objects: str | None = None,
-    order: str | None = None,
+    ao_objects: RoleName | Role | None = None,
+    edge_objects: RoleName | Role | None = None,
+    order: OrderName | Order | None = None,
     halo: int = 0,
 ) -> Style:
     """A checked Style from object ids (resolved by the caller) and the compositing flags."""
@@ -84,11 +84,7 @@ def make_style(
     if not (1 <= edge_width <= 8 and 0 < ao_radius <= 64 and 0 <= ao_strength <= 4):
         raise RttaError("--edge-width must be 1..8, --ao-radius in (0, 64], --ao-strength in [0, 4]")
     style.edge_width, style.ao_radius, style.ao_strength = edge_width, ao_radius, ao_strength
-    roles = (
-        ("--ao-objects", ao_objects, ("focus", "all")),
-        ("--edge-objects", edge_objects, ("focus", "all")),
-        ("--order", order, ORDERS),
-    )
+    roles = (("--ao-objects", ao_objects, ROLES), ("--edge-objects", edge_objects, ROLES), ("--order", order, ORDERS))
     for what, value, choices in roles:
         if value is not None:
             check_choice(what, value, choices)

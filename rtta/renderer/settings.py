@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..gl.context import CapturePath, CapturePathName
+from ..scene.model import Bounds, BoundsName
 
 
 @dataclass
@@ -27,7 +28,7 @@ class Settings:
         Atlas texels per viewport pixel (below 1 saves fill, above 1 supersamples).
     context_scale : float, default 1
         Of `region_scale`, for objects outside the focus (0.25-1); the focus stays exact.
-    bounds : str, default "aabb"
+    bounds : {"aabb", "obb"}, default "aabb"
         B_world: "aabb" (the paper's) or "obb" (the projections of the AABB and of the
         principal-axes box intersected: tighter for long, rotated parts).
     cull_closed : bool, default True
@@ -46,5 +47,5 @@ class Settings:
     capture_path: CapturePathName | CapturePath = "auto"
     region_scale: float = 1.0
     context_scale: float = 1.0
-    bounds: str = "aabb"
+    bounds: BoundsName | Bounds = "aabb"
     cull_closed: bool = True

@@ -8,6 +8,8 @@ scene far from the world origin keeps full precision on the GPU.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from enum import StrEnum
+from typing import Literal
 
 import numpy as np
 
@@ -21,7 +23,17 @@ BOX_EDGES = np.array(
     [(0, 1), (2, 3), (4, 5), (6, 7), (0, 2), (1, 3), (4, 6), (5, 7), (0, 4), (1, 5), (2, 6), (3, 7)], dtype=np.intp
 )
 _BITS = np.array([[(i >> k) & 1 for k in range(3)] for i in range(8)], dtype=bool)
-BOUNDS = ("aabb", "obb")
+
+
+class Bounds(StrEnum):
+    """B_world, the per-object bounds parameterization projects (Settings.bounds)."""
+
+    AABB = "aabb"  # axis-aligned boxes (the paper's)
+    OBB = "obb"  # the AABBs and the principal-axes boxes, their projections intersected
+
+
+BoundsName = Literal["aabb", "obb"]
+BOUNDS: tuple[str, ...] = tuple(b.value for b in Bounds)
 # scene extent below which a GPU may draw nothing (scripts/probe_tiny.py: llvmpipe draws a box
 # down to 1e-36 units and nothing at 1e-38, where float32 underflows; an NVIDIA H200 draws it
 # whole at 1e-15, 4% of it at 1e-20 and nothing at 1e-25, its clipping losing w that small)
@@ -99,24 +111,26 @@ class Scene:
         r = float(np.linalg.norm(hi - lo) / 2.0)
         return r if r > 0 else max(1e-6, float(np.abs(lo).max()) * 1e-7)
 
-    def box_corners(self, kind: str = "aabb") -> np.ndarray:
+    def box_corners(self, kind: BoundsName | Bounds = "aabb") -> np.ndarray:
         """B_world as 8 corners per object, relative to origin: float64 [N, 8, 3] for 'aabb'
         (the paper's axis-aligned boxes); [2, N, 8, 3] for 'obb': the AABBs and the
         principal-axes boxes, whose projections parameterization intersects (both enclose
         the object, so the intersection does too, and it is never larger than the AABB's)."""
-        if kind not in BOUNDS:
-            raise ValueError(f"unknown bounds '{kind}' (choose from {', '.join(BOUNDS)})")
-        if "aabb" not in self._corners:  # stored planar [3, 8, N]: parameterize projects rows
+        try:
+            bounds = Bounds(kind)
+        except ValueError:
+            raise ValueError(f"unknown bounds '{kind}' (choose from {', '.join(BOUNDS)})") from None
+        if Bounds.AABB not in self._corners:  # stored planar [3, 8, N]: parameterize projects rows
             lo = (self.aabb_min - self.origin).T[:, None, :]
             hi = (self.aabb_max - self.origin).T[:, None, :]
             planar = np.where(_BITS.T[:, :, None], hi, lo)
             planar.flags.writeable = False  # fixed, so parameterize checks their alignment once
-            self._corners["aabb"] = planar.transpose(2, 1, 0)
-        if kind == "obb" and "obb" not in self._corners:
+            self._corners[Bounds.AABB] = planar.transpose(2, 1, 0)
+        if bounds is Bounds.OBB and Bounds.OBB not in self._corners:
             obb = oriented_corners(self.positions, self.object_ids, self.count)
-            planar = np.stack([self._corners["aabb"].transpose(2, 1, 0), obb.transpose(2, 1, 0)])
-            self._corners["obb"] = planar.transpose(0, 3, 2, 1)
-        return self._corners[kind]
+            planar = np.stack([self._corners[Bounds.AABB].transpose(2, 1, 0), obb.transpose(2, 1, 0)])
+            self._corners[Bounds.OBB] = planar.transpose(0, 3, 2, 1)
+        return self._corners[bounds]
 
     @property
     def closed(self) -> np.ndarray:

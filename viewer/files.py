@@ -52,12 +52,12 @@ class FileBrowser:
         if self._want_open:
             imgui.open_popup(POPUP)
             self._want_open = False
-        imgui.set_next_window_size(imgui.ImVec2(520, 420), imgui.Cond_.appearing)
+        imgui.set_next_window_size(imgui.ImVec2(520, 420), imgui.Cond_.appearing.value)
         self.visible, _ = imgui.begin_popup_modal(POPUP, None)
         if not self.visible:
             return
         imgui.text_wrapped(str(self.folder))
-        imgui.begin_child("entries", imgui.ImVec2(0, -30), imgui.ChildFlags_.borders)
+        imgui.begin_child("entries", imgui.ImVec2(0, -30), imgui.ChildFlags_.borders.value)
         dirs, files = listing(self.folder)
         if self.folder.parent != self.folder and imgui.selectable("../", False)[0]:
             self.folder = self.folder.parent

@@ -11,7 +11,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 from imgui_bundle import imgui, implot
 
+from rtta.gl.context import CapturePath
 from rtta.ldi.lens import SHAPES as LENS_SHAPES
+from rtta.ldi.lens import LensShape
 from rtta.passes.composite import LENS_MODES, ROLES
 from rtta.passes.oit import ORDERS
 from rtta.scene.model import BOUNDS
@@ -124,7 +126,7 @@ def _lens(app: PanelsHost) -> None:
     _, p.on = imgui.checkbox("cut the context away (ghosted modes)", p.on)
     changed, i = imgui.combo("shape", LENS_SHAPES.index(p.shape), list(LENS_SHAPES))
     if changed:
-        p.shape = LENS_SHAPES[i]
+        p.shape = LensShape(LENS_SHAPES[i])
     _, p.radius = imgui.slider_float("radius (scene radii)", p.radius, 0.02, 1.5)
     _, p.follow = imgui.checkbox("follows the mouse (Space)", p.follow)
     if imgui.button("on the focus"):
@@ -155,7 +157,7 @@ def _atlas(app: PanelsHost) -> None:
     current = app.renderer.caps.capture_path(s.settings.capture_path)
     changed, i = imgui.combo("capture path", paths.index(current), paths)
     if changed:
-        s.settings.capture_path = paths[i]
+        s.settings.capture_path = CapturePath(paths[i])
     layers = app.records.atlas_size[2] if app.records is not None else 0
     if layers > 0:
         _, s.atlas_layer = imgui.slider_int(

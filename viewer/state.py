@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from rtta.ldi.lens import LensShape, LensShapeName
 from rtta.passes.composite import MODES, Style
 from rtta.renderer.renderer import Settings
 
@@ -48,7 +49,7 @@ class LensState:
     (world; None: on the focus). It follows the mouse over the composite unless pinned."""
 
     on: bool = False
-    shape: str = "sphere"
+    shape: LensShapeName | LensShape = "sphere"
     radius: float = 0.35
     follow: bool = True
     center: tuple | None = None

@@ -47,7 +47,7 @@ from .options import (
     style_keywords,
 )
 from .renderer import Renderer, Settings
-from .snapshot import SNAPSHOT_MODES, make_lens, make_projector, render_modes, resolve_names
+from .snapshot import SNAPSHOT_MODES, SnapshotModeName, make_lens, make_projector, render_modes, resolve_names
 
 __all__ = [
     "CORE_STYLE",
@@ -137,7 +137,7 @@ def context() -> moderngl.Context:
 
 def snapshot(
     scene: SceneLike = None,
-    mode: str = "ghosted-ao",
+    mode: SnapshotModeName = "ghosted-ao",
     *,
     focus: str | Iterable[str] = (),
     opacity: Mapping[str, float] | None = None,

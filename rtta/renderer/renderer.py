@@ -23,6 +23,7 @@ from ..passes import oit
 from ..passes.capture import CapturePass, RttPass, StdPass
 from ..passes.composite import LENS_MODES, CompositePass, CompositeTarget, Style
 from ..passes.post import AtlasPostPass
+from ..passes.style import Mode, ModeName
 from ..scene.camera import Camera, is_ortho
 from ..scene.model import Scene
 from .settings import Settings
@@ -198,7 +199,7 @@ class Renderer:
         self._captures += 1
         return records
 
-    def composite(self, mode: str, style: Style | None = None) -> CompositeTarget:
+    def composite(self, mode: ModeName | Mode, style: Style | None = None) -> CompositeTarget:
         """Composite the last capture; re-run it alone when only the style or mode changes."""
         if self.last is None:
             raise RuntimeError("composite() needs a capture() first")
@@ -214,7 +215,7 @@ class Renderer:
             self._composite = CompositePass(self.ctx)
         centers = (self.scene.aabb_min + self.scene.aabb_max) / 2 - self.scene.origin
         view_depth = -(centers @ view[2, :3] + view[2, 3])
-        post = self.post_process(style) if mode == "ghosted-ao" else None
+        post = self.post_process(style) if mode == Mode.GHOSTED_AO else None
         origin = self.scene.origin
         projection = self._projection()
         if projection is not None:
@@ -260,10 +261,10 @@ class Renderer:
                 )
         return self.target
 
-    def needs_normals(self, mode: str) -> bool:
+    def needs_normals(self, mode: str) -> bool:  # also "std"
         """Whether compositing `mode` reads the atlas's normal image: AO and edges
         (ghosted-ao) and the projector's lighting do; the other modes read colour and depth."""
-        return mode == "ghosted-ao" or self.projector is not None
+        return mode == Mode.GHOSTED_AO or self.projector is not None
 
     def _projection(self):
         """(ProjectorPass, Projector) with the shadow map up to date, or None without a projector."""

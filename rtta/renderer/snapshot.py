@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Sequence
 from functools import lru_cache
 from pathlib import Path
+from typing import Literal
 
 import numpy as np
 
@@ -19,6 +20,7 @@ from ..scene.select import resolve_names
 from .renderer import Renderer
 
 SNAPSHOT_MODES = ("std", *MODES)
+SnapshotModeName = Literal["std", "sprites", "transparent", "ghosted", "ghosted-ao"]  # STD or a Mode
 __all__ = ["SNAPSHOT_MODES", "over_background", "parse_opacities", "render_modes", "resolve_names", "write_pngs"]
 
 

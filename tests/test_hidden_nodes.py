@@ -148,3 +148,19 @@ def test_assembly_formats_leave_a_hidden_subtree_out(tmp_path, suffix, hide, nam
     assert sorted(scene.names) == ["base", "link"]
     note = _hidden_warning(scene)
     assert note.startswith("1 node(s)") and note.endswith(f": {named}"), note
+
+
+def test_3mf_through_trimesh_leaves_a_hidden_item_out(tmp_path):
+    """3MF's build items and components carry transforms (read by trimesh, placed by rtta)."""
+    import trimesh
+
+    s = trimesh.Scene()
+    box = trimesh.creation.box()
+    s.add_geometry(box, node_name="shown", transform=trimesh.transformations.translation_matrix([3, 0, 0]))
+    flat = np.eye(4)
+    flat[1, 1] = 0.0
+    s.add_geometry(box, node_name="gone", geom_name="second", transform=flat)
+    path = tmp_path / "hidden.3mf"
+    path.write_bytes(s.export(file_type="3mf"))
+    scene = load_scene(path)
+    assert scene.names == ["shown"] and _hidden_warning(scene).endswith(": gone")

@@ -19,7 +19,7 @@ from ..files import SafeResolver, max_objects
 from ..model import Scene, from_batch
 from ..precheck import BYTES_PER_TRIANGLE, BYTES_PER_VERTEX, check_size, memory_limit, precheck
 from ..textures import TextureTable
-from . import graph_paths, obj_read
+from . import graph_paths, hidden, obj_read
 from .gltf import prepare
 from .gltf_read import Decoded
 from .obj import material_colors, obj_objects, object_number
@@ -189,7 +189,10 @@ def _items(path: Path, suffix: str) -> tuple[list[str], list[Path], list[tuple]]
             name, key = names[k], k
         items.append((key, name, loaded.geometry.get(geom_name), np.asarray(transform, np.float64), tree))
     items.sort(key=lambda item: item[0])  # file order
-    return notes + resolver.warnings, resolver.inputs, [item[1:] for item in items]
+    flat = hidden.singular(np.array([item[3] for item in items]).reshape(-1, 4, 4))  # a zero scale hides (3MF)
+    gone = list(dict.fromkeys(item[1] for item, f in zip(items, flat, strict=True) if f))
+    hidden.note_hidden(gone, int((~flat).sum()), path, resolver.warnings)
+    return notes + resolver.warnings, resolver.inputs, [item[1:] for item, f in zip(items, flat, strict=True) if not f]
 
 
 def _texture_notes(scene: Scene) -> list[str]:

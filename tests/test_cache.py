@@ -283,3 +283,24 @@ def test_eviction_keeps_the_folder_under_the_bound(folder, tmp_path, monkeypatch
     monkeypatch.setenv("RTTA_CACHE_MAX_BYTES", str(size // 2))  # an entry over the bound is not kept
     load_scene(paths[1])
     assert not _entries(folder)
+
+
+COMMANDS = [["info"], ["snapshot", "--out", "o"], ["export", "--out", "o"], ["dataset", "x.glb", "--out", "o"]]
+
+
+@pytest.mark.parametrize("command", [*COMMANDS, ["ldi", "x.glb"], None])
+def test_every_command_that_loads_a_scene_has_no_cache(command):
+    """rtta's commands and rtta-view (command None) take --no-cache; the loader gets cache=False."""
+    from rtta.cli.common import load_options
+    from rtta.cli.main import build_parser
+
+    if command is None:
+        import viewer
+
+        args = viewer.build_parser().parse_args(["--no-cache"])
+    else:
+        args = build_parser().parse_args([*command, "--no-cache"])
+    assert args.no_cache
+    if command is None or command[0] != "ldi":
+        assert load_options(args)["cache"] is False
+        assert load_options(type(args)(**{**vars(args), "no_cache": False}))["cache"] is True

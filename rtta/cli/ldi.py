@@ -24,9 +24,10 @@ def add_parser(sub) -> None:
     p.add_argument("--resolution", type=int, default=512, help="LDI resolution N (N x N texels)")
     p.add_argument("--compressed", action="store_true", help="test against the compressed depth ranges")
     p.add_argument("--stats", action="store_true", help="print the seed's table row for this mesh")
+    p.add_argument("--no-cache", action="store_true", help="read the scene file itself, not the scene cache")
 
 
-def load_mesh(spec: str) -> tuple[str, np.ndarray, np.ndarray, list[str]]:
+def load_mesh(spec: str, cache: bool = True) -> tuple[str, np.ndarray, np.ndarray, list[str]]:
     """(name, vertices, faces, files read) of a closed mesh; RttaError naming the file otherwise."""
     from ..ldi.peel import closed_mesh
 
@@ -40,7 +41,7 @@ def load_mesh(spec: str) -> tuple[str, np.ndarray, np.ndarray, list[str]]:
         return spec, *closed_mesh(mesh.vertices, mesh.faces, spec), []
     from ..scene.loader import load_scene
 
-    scene = load_scene(spec)
+    scene = load_scene(spec, cache=cache)
     for note in scene.warnings:
         say("warning", note, scene.source)
     vertices = scene.positions.astype(np.float64) + scene.origin
@@ -111,7 +112,7 @@ def cmd_ldi(args: argparse.Namespace) -> int:
     if args.out:
         check_file(args.out, inputs, suffix=".npy")
     points = read_points(args.points) if args.points else None
-    name, vertices, faces, files = load_mesh(args.mesh)
+    name, vertices, faces, files = load_mesh(args.mesh, cache=not args.no_cache)
     if args.out:
         check_file(args.out, [*inputs, *files], suffix=".npy")
     center, extent = (vertices.min(axis=0) + vertices.max(axis=0)) / 2, float(np.ptp(vertices, axis=0).max())

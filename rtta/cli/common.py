@@ -141,18 +141,12 @@ def make_renderer(ctx, scene, settings):
 
 
 def camera_of(args, scene, viewport: tuple[int, int]):
-    """(Camera, hidden object ids) of view_args' flags: --camera or --view, --projection, --fov, --hide."""
-    from ..renderer.options import orbit_camera
+    """(Camera, hidden object ids) of view_args' flags (--camera or --view, --projection, --fov,
+    --hide), or of the view --view-file read (args.saved_view, set by views.saved_view_of)."""
     from ..renderer.snapshot import resolve_names
+    from .views import camera_of_view, saved_view_of
 
+    if getattr(args, "saved_view", None) is None:
+        args.saved_view = saved_view_of(args)
     hidden = resolve_names(scene, args.hide, "--hide")
-    camera = orbit_camera(
-        scene,
-        args.camera,
-        args.fov,
-        projection=args.projection or "perspective",
-        view=args.view,
-        aspect=viewport[0] / viewport[1],
-        hidden=hidden,
-    )
-    return camera, hidden
+    return camera_of_view(args, args.saved_view, scene, viewport, hidden), hidden

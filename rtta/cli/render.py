@@ -7,6 +7,7 @@ from pathlib import Path
 from ..errors import RttaError, printable
 from ..outputs import check_file, check_folder, check_into_folder, os_error
 from .common import camera_of, load, make_renderer, parse_size, scene_arg, settings_of, view_args
+from .views import saved_view_of, view_file_args
 
 
 def add_parsers(sub) -> None:
@@ -14,10 +15,12 @@ def add_parsers(sub) -> None:
     p = sub.add_parser("export", help="write per-object amodal images (atlas) and the direct render")
     scene_arg(p)
     view_args(p)
+    view_file_args(p)
     p.add_argument("--out", required=True, help="output folder (replaced atomically)")
     p = sub.add_parser("snapshot", help="render STD or a composite mode to PNG, headless")
     scene_arg(p)
     view_args(p)
+    view_file_args(p, save=True)
     p.add_argument("--mode", default="ghosted-ao", help="std, sprites, transparent, ghosted or ghosted-ao")
     p.add_argument(
         "--focus",
@@ -86,6 +89,7 @@ def cmd_export(args) -> int:
 
     viewport = parse_size(args.size)
     settings = settings_of(args)
+    args.saved_view = saved_view_of(args)  # --view-file's, or the flags'
     check_folder(args.out, [args.scene])  # before the work: a refused --out fails fast
     scene = load(args)
     camera, hidden = camera_of(args, scene, viewport)
@@ -107,9 +111,12 @@ def cmd_snapshot(args) -> int:
     from ..renderer.options import make_style
     from ..renderer.snapshot import SNAPSHOT_MODES, parse_opacities, render_modes, resolve_names, write_pngs
 
+    args.saved_view = saved_view_of(args)  # --view-file's (its mode, focus... replace the flags), or the flags'
     if args.mode not in SNAPSHOT_MODES:
         raise RttaError(f"--mode must be one of {', '.join(SNAPSHOT_MODES)}, got '{args.mode}'")
     viewport = parse_size(args.size)
+    if args.save_view:
+        check_file(args.save_view, [args.scene, args.view_file], suffix=".json", what="--save-view")
     _snapshot_targets(args, [args.scene, *_projector_files(args)])  # refused outputs fail before the work
     scene = load(args)
     camera, hidden = camera_of(args, scene, viewport)
@@ -145,6 +152,11 @@ def cmd_snapshot(args) -> int:
             raise os_error(exc, args.all_modes) from None
     for path in write_pngs(images, targets):
         print(f"wrote {printable(path)}")
+    if args.save_view:
+        from ..renderer.view_file import write_view
+
+        saved = write_view(args.saved_view, args.save_view, [*scene.inputs, *_projector_files(args)])
+        print(f"wrote {printable(saved)}")
     return 0
 
 

@@ -178,11 +178,13 @@ class PixelOrderPass:
         if not mark and not self.fetch:
             target.fbo.use()
             return
-        if self.marks is None:
+        marks = self.marks
+        if marks is None:
             for other in self._marks.values():  # the other way's targets: released
                 other.release()
-            self._marks = {self.fetch: OrderMarks(self.ctx, fetched=self.fetch)}
-        self.marks.begin(target, mark)
+            marks = OrderMarks(self.ctx, fetched=self.fetch)
+            self._marks = {self.fetch: marks}
+        marks.begin(target, mark)
 
     def end_collect(self) -> None:
         glraw.stencil_off()
@@ -192,8 +194,11 @@ class PixelOrderPass:
         `over`, over that colour, written as it is, on the pixels OrderMarks left to it only:
         out of order, or with more than `in_place` surfaces (blended_in_place)."""
         self.ctx.memory_barrier(moderngl.SHADER_STORAGE_BARRIER_BIT)
-        if self.fetch:
-            for unit, texture in zip((Texture.OIT_FIRST, Texture.OIT_MORE), self.marks.first, strict=True):
+        marks = self.marks
+        if marks is None and (self.fetch or over is not None):
+            raise RuntimeError("PixelOrderPass.resolve: collect_into() first (the marks hold this way's surfaces)")
+        if self.fetch and marks is not None:
+            for unit, texture in zip((Texture.OIT_FIRST, Texture.OIT_MORE), marks.first, strict=True):
                 texture.use(unit)
         else:
             self.heads.bind_to_storage_buffer(Storage.OIT_HEADS)
@@ -208,19 +213,20 @@ class PixelOrderPass:
             self.vaos[key] = self.ctx.vertex_array(self.programs[key], [])
         program = self.programs[key]
         if "u_width" in program:  # the heads as a texture need no width
-            program["u_width"].value = self._width
-        program["u_rect"].value = tuple(float(v) for v in self._rect)
-        if over is not None:  # the stencil test, before the shader (it has no side effects)
-            program["u_background"].value = tuple(float(v) for v in over[:3])
+            glsl.uniform(program, "u_width").value = self._width
+        glsl.uniform(program, "u_rect").value = tuple(float(v) for v in self._rect)
+        if over is not None and marks is not None:  # the stencil test, before the shader (it has no side effects)
+            glsl.uniform(program, "u_background").value = tuple(float(v) for v in over[:3])
             self.ctx.enable_only(moderngl.NOTHING)
-            fbo = self.marks.fbo
-            glraw.stencil_above(min(int(in_place), self.marks.in_place_limit))
+            fbo = marks.fbo
+            glraw.stencil_above(min(int(in_place), marks.in_place_limit))
         else:
             self.ctx.enable_only(moderngl.BLEND)
             self.ctx.blend_func = moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA
-            if self.fetch:  # the counts are in OrderMarks' stencil: the covered pixels only
-                fbo = self.marks.fbo
+            if self.fetch and marks is not None:  # the counts are in OrderMarks' stencil: the covered pixels only
+                fbo = marks.fbo
                 glraw.stencil_above(0)
+        assert fbo is not None, "the marks' framebuffer, made by collect_into"
         fbo.depth_mask = False
         fbo.use()
         try:
@@ -263,7 +269,9 @@ class OrderMarks:
         # stencil_above's bound: with the count in 7 bits, a bound of 127 or more hides the flag
         self.in_place_limit = STENCIL_COUNT - 1 if fetched else STENCIL_OUT_OF_ORDER - 1
         self._key = None
-        self.stencil = self.fbo = self.collect_fbo = None
+        self.stencil: glraw.DepthStencil | None = None
+        self.fbo: moderngl.Framebuffer | None = None  # over the target's colour (begin)
+        self.collect_fbo: moderngl.Framebuffer | None = None  # with `first` too (fetched)
         self.first: list[moderngl.Texture] = []
 
     def begin(self, target, mark: bool = True) -> moderngl.Framebuffer:
@@ -273,35 +281,38 @@ class OrderMarks:
         if self._key is None or key[0] is not self._key[0] or key[1] != self._key[1]:
             self._allocate(target)
             self._key = key
-        self.fbo.viewport = (0, 0, *target.viewport)
-        if self.fetched:
-            self.collect_fbo.viewport = self.fbo.viewport
+        fbo, collect = self.fbo, self.collect_fbo
+        assert fbo is not None and (collect is not None or not self.fetched), "made by _allocate"
+        fbo.viewport = (0, 0, *target.viewport)
+        if collect is not None:
+            collect.viewport = fbo.viewport
             on = (True,) * 4
-            self.collect_fbo.color_mask = (on if mark else (False,) * 4, on, on)
-            self.collect_fbo.depth_mask = False
-            self.collect_fbo.use()
+            # one mask per colour attachment, which moderngl takes (its stubs say one mask in all)
+            collect.color_mask = (on if mark else (False,) * 4, on, on)  # pyright: ignore[reportAttributeAccessIssue]
+            collect.depth_mask = False
+            collect.use()
             glraw.clear_stencil(0)  # no surface yet: `first` holds last frame's
             glraw.stencil_from_shader()
-            return self.collect_fbo
-        self.fbo.depth_mask = True
-        self.fbo.use()
+            return collect
+        fbo.depth_mask = True
+        fbo.use()
         glraw.clear_depth_stencil(1.0, 0)
         glraw.stencil_count_surfaces()
-        return self.fbo
+        return fbo
 
     def _allocate(self, target) -> None:
         self.release()
-        self.stencil = glraw.DepthStencil(*target.size, stencil_only=self.fetched)
-        self.fbo = self.ctx.framebuffer(color_attachments=[target.color])
-        self.fbo.use()
-        self.stencil.attach_to_bound_framebuffer()
+        self.stencil = stencil = glraw.DepthStencil(*target.size, stencil_only=self.fetched)
+        self.fbo = fbo = self.ctx.framebuffer(color_attachments=[target.color])
+        fbo.use()
+        stencil.attach_to_bound_framebuffer()
         if self.fetched:
             self.first = [self.ctx.texture(target.size, 4, dtype="u4") for _ in range(2)]
             for t in self.first:
                 t.filter = moderngl.NEAREST, moderngl.NEAREST
-            self.collect_fbo = self.ctx.framebuffer(color_attachments=[target.color, *self.first])
-            self.collect_fbo.use()
-            self.stencil.attach_to_bound_framebuffer()
+            self.collect_fbo = collect = self.ctx.framebuffer(color_attachments=[target.color, *self.first])
+            collect.use()
+            stencil.attach_to_bound_framebuffer()
 
     @property
     def nbytes(self) -> int:

@@ -33,16 +33,19 @@ class _LayerTarget:
     def __init__(self, ctx: moderngl.Context, components: int, dtype: str) -> None:
         self.ctx = ctx
         self.components, self.dtype = components, dtype
-        self.texture = self.fbo = self.shape = self._key = None
+        self.texture: moderngl.TextureArray | None = None
+        self.fbo: moderngl.Framebuffer | None = None
+        self.shape: tuple[int, int, int] | None = None
+        self._key: tuple | None = None
 
     def ensure(self, shape: tuple[int, int, int], depth_of: LayeredTarget) -> None:
         key = (shape, id(depth_of), depth_of.allocations)
         if key != self._key:
             self.release()
-            self.texture = self.ctx.texture_array(shape, self.components, dtype=self.dtype)
-            self.texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
-            self.fbo = self.ctx.framebuffer([self.texture])
-            self.fbo.use()
+            self.texture = texture = self.ctx.texture_array(shape, self.components, dtype=self.dtype)
+            texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
+            self.fbo = fbo = self.ctx.framebuffer([texture])
+            fbo.use()
             depth_of.depth.attach_to_bound_framebuffer()
             self.shape, self._key = shape, key
 
@@ -54,6 +57,7 @@ class _LayerTarget:
     def release(self) -> None:
         if self.fbo is not None:
             release_framebuffer(self.ctx, self.fbo)
+        if self.texture is not None:
             self.texture.release()
         self.texture = self.fbo = self.shape = self._key = None
 
@@ -128,9 +132,11 @@ class AtlasPostPass:
         # empty texels of the rectangles are never shaded nor written
         self.ctx.enable_only(moderngl.DEPTH_TEST)
         self.ctx.depth_func = ">"
-        self._out.fbo.depth_mask = False
-        self._out.fbo.viewport = (0, 0, tw, th)
-        self._out.fbo.use()
+        fbo = self._out.fbo
+        assert fbo is not None, "made by render's ensure()"
+        fbo.depth_mask = False
+        fbo.viewport = (0, 0, tw, th)
+        fbo.use()
         vao.render(moderngl.POINTS, vertices=len(ids))
         self.ctx.depth_func = "<"
         self.ctx.enable_only(moderngl.NOTHING)

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from enum import StrEnum
-from typing import Literal
+from typing import Literal, TypeVar
 
 import numpy as np
 
@@ -49,7 +49,10 @@ LENS_MODES: tuple[str, ...] = (Mode.GHOSTED.value, Mode.GHOSTED_AO.value)  # whe
 BACKGROUND = (0.93, 0.93, 0.95, 1.0)
 
 
-def choice(kind: type[StrEnum], value: str, what: str) -> StrEnum:
+E = TypeVar("E", bound=StrEnum)
+
+
+def choice(kind: type[E], value: str, what: str) -> E:
     """`value` as a member of `kind`; ValueError naming `what` and the choices otherwise."""
     try:
         return kind(value)

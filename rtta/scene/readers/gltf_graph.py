@@ -65,12 +65,12 @@ def _rotations(q: np.ndarray) -> np.ndarray:
 
 def walk(doc: dict, path: Path, warnings: list[str], limit: int) -> list[tuple[str, int, np.ndarray, tuple]]:
     """(name, mesh, world matrix, ancestors' names) of every node with a mesh, in depth-first
-    file order, each
-    path through the graph once. Cycles, graphs deeper than MAX_DEPTH and graphs whose paths
-    make more objects than files.max_objects allows are errors (found in one pass over the nodes, before
-    any path is followed); a node with several parents is drawn under each, with a warning.
-    A node whose transform is singular (a zero scale: glTF's way to hide a node) draws nothing,
-    nor does anything below it: one warning names those nodes."""
+    file order, each path through the graph once. Cycles, graphs deeper than MAX_DEPTH and
+    graphs whose paths make more objects than files.max_objects allows are errors (found in
+    one pass over the nodes, before any path is followed); a node with several parents is
+    drawn under each, with a warning. A node whose transform is singular (a zero scale:
+    glTF's way to hide a node) draws nothing, nor does anything below it: one warning names
+    those nodes (rtta.scene.readers.hidden)."""
     nodes, scenes = doc.get("nodes", []), doc.get("scenes", [])
     parents = [0] * len(nodes)
     for node in nodes:

@@ -132,3 +132,25 @@ def test_read_view_refuses_a_huge_file(tmp_path):
     big.write_text('{"rtta_view": 1, "focus": [' + ",".join(['"a"'] * 300_000) + "]}")
     with pytest.raises(Exception, match="not a view file"):
         read_view(big)
+
+
+def test_dataset_takes_the_projection_and_a_view_file(tmp_path, gl):
+    """`rtta dataset --view-file`: one view per scene with the saved camera (the view matrix
+    export gives for the same file), projection and hidden parts (not annotated)."""
+    view = tmp_path / "view.json"
+    saved = ["--camera", "30,20", "--hide", "caliper", "--projection", "ortho", "--save-view", str(view)]
+    _snap(tmp_path, "a.png", *saved)
+    out = tmp_path / "ds"
+    assert main(["dataset", "--out", str(out), "--size", "96x72", "--view-file", str(view), "--no-progress"]) == 0
+    doc = json.loads((out / "annotations.json").read_text())
+    (image,) = doc["images"]
+    assert image["camera"]["projection"] == "ortho"
+    names = {c["id"]: c["name"] for c in doc["categories"]}
+    assert "caliper" not in {names[a["category_id"]] for a in doc["annotations"]}
+    assert main(["export", "--size", "96x72", "--out", str(tmp_path / "exp"), "--view-file", str(view)]) == 0
+    rec = json.loads((tmp_path / "exp" / "records.json").read_text())
+    assert rec["view"] == image["camera"]["view"] and rec["proj"] == image["camera"]["proj"]
+    sampled = tmp_path / "ds2"
+    assert main(["dataset", "--out", str(sampled), "--size", "96x72", "--views", "2", "--projection", "ortho"]) == 0
+    cams = [i["camera"] for i in json.loads((sampled / "annotations.json").read_text())["images"]]
+    assert [c["projection"] for c in cams] == ["ortho", "ortho"] and all(c["proj"][3][3] == 1.0 for c in cams)

@@ -56,6 +56,18 @@ def add_parsers(sub, bench_sub, common: tuple) -> None:
         '{"eye": [..], "target": [..], "up": [..], "fov": F}, ...]',
     )
     p.add_argument(
+        "--projection",
+        choices=("perspective", "ortho"),
+        default="perspective",
+        help="perspective (default) or ortho: an orthographic view keeps the scale perspective shows at the target",
+    )
+    p.add_argument(
+        "--view-file",
+        default=None,
+        metavar="FILE.json",
+        help="one view per scene: the camera, projection and hidden parts saved by `rtta snapshot --save-view`",
+    )
+    p.add_argument(
         "--depth",
         choices=("png", "npy"),
         default="png",
@@ -148,6 +160,8 @@ def cmd_dataset(args: argparse.Namespace) -> int:
         min_visible=args.min_visible,
         smooth_angle=load["smooth_angle"],
         smooth=load["smooth"],
+        projection=args.projection,
+        view_file=_view_file(args),
     )
     how = Run(
         out=Path(args.out).absolute(),
@@ -164,6 +178,20 @@ def cmd_dataset(args: argparse.Namespace) -> int:
     finally:
         if main_thread:
             signal.signal(signal.SIGTERM, previous)
+
+
+def _view_file(args: argparse.Namespace) -> dict | None:
+    """--view-file's document, checked (its camera and projection replace the sampled ones)."""
+    if args.view_file is None:
+        return None
+    from ..renderer.view_file import read_view
+
+    view = read_view(args.view_file)
+    if view.orbit is None:
+        raise RttaError("a dataset's view file needs a camera", args.view_file)
+    if args.cameras:
+        raise RttaError("--view-file and --cameras both give the cameras: use one of them")
+    return view.to_json()
 
 
 def _interrupted(*_) -> None:

@@ -47,6 +47,8 @@ class Options:
     min_visible: int = 0
     smooth_angle: float = 30.0
     smooth: bool = False
+    projection: str = "perspective"  # or 'ortho' (--projection)
+    view_file: dict | None = None  # a saved view (rtta.renderer.view_file), one view per scene (--view-file)
 
 
 @dataclass
@@ -106,21 +108,46 @@ def settings(opts: Options, paths: list[str]) -> dict:
     s["size"] = list(opts.size)
     for k in ("azimuth", "elevation", "distance", "fov"):
         s[k] = list(s[k])
+    if opts.view_file is not None:
+        s["views"] = 1
+    for k, default in (("projection", "perspective"), ("view_file", None)):
+        if s[k] == default:
+            del s[k]  # the settings of datasets made before these options stay the same
     return s
 
 
-def camera_for(s: dict, key: str, view: int, center, radius: float) -> tuple[Camera, dict]:
-    """The view's camera: explicit (settings' cameras) or drawn from the seed, the scene key and
-    the view index alone (so any shard or restart draws the same one); also how it was made."""
+def camera_for(s: dict, key: str, view: int, center, radius: float, scene=None) -> tuple[Camera, dict]:
+    """The view's camera: a saved view's (needs `scene`), explicit (settings' cameras) or drawn
+    from the seed, the scene key and the view index alone (so any shard or restart draws the
+    same one); also how it was made. Perspective, or orthographic with settings' projection."""
+    kind = s.get("projection", "perspective")
+    if s.get("view_file") is not None:
+        from ..renderer.view_file import parse_view
+
+        orbit = parse_view(s["view_file"]).orbit
+        if orbit is None or scene is None:
+            raise RttaError("a dataset's saved view needs a camera and the scene")
+        return orbit.camera(scene, hidden_ids(s, scene)), {"orbit": [orbit.az, orbit.el], "target": list(orbit.target)}
     if s["cameras"] is not None:
         c = s["cameras"][view]
         if "orbit" in c:
-            return Camera.orbit(center, radius, *c["orbit"], fov_y=c["fov"]), {"orbit": list(c["orbit"])}
+            cam = Camera.orbit(center, radius, *c["orbit"], fov_y=c["fov"], projection=kind)
+            return cam, {"orbit": list(c["orbit"])}
         cam = Camera(np.array(c["eye"], float), np.array(c["target"], float), np.array(c["up"], float), c["fov"])
+        cam.kind = kind
         return cam.fit_depth(center, radius), {}
     rng = np.random.default_rng([s["seed"], zlib.crc32(key.encode()), view])
     az, el, dist, fov = (float(rng.uniform(*s[k])) for k in ("azimuth", "elevation", "distance", "fov"))
-    return Camera.orbit(center, radius, az, el, dist, fov_y=fov), {"orbit": [az, el, dist]}
+    return Camera.orbit(center, radius, az, el, dist, fov_y=fov, projection=kind), {"orbit": [az, el, dist]}
+
+
+def hidden_ids(s: dict, scene) -> list[int]:
+    """The objects a dataset's saved view hides (none without one)."""
+    if s.get("view_file") is None:
+        return []
+    from ..scene.select import resolve_names
+
+    return resolve_names(scene, s["view_file"].get("hidden", []), "hidden")
 
 
 def parse_cameras(path: str) -> list[dict]:

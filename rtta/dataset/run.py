@@ -131,7 +131,8 @@ def produce_view(
     key = s["scenes"][index]["key"]
     scene = renderer.scene
     size = tuple(s["size"])
-    camera, how = ds.camera_for(s, key, view, scene.center, scene.radius)
+    camera, how = ds.camera_for(s, key, view, scene.center, scene.radius, scene)
+    renderer.hidden = set(ds.hidden_ids(s, scene))  # a saved view's hidden parts: not drawn nor annotated
     t0 = time.perf_counter()
     result = render(renderer, camera, size, appearance=s["appearance"])
     t1 = time.perf_counter()

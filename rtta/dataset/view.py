@@ -133,6 +133,7 @@ def camera_entry(renderer: Renderer, camera: Camera, viewport: tuple[int, int]) 
         "fov_y": float(camera.fov_y),
         "near": float(used.near),
         "far": float(used.far),
+        "projection": camera.kind,
     }
 
 

@@ -176,3 +176,17 @@ def test_demo_tree_names_every_group_once(capsys):
     lines = tree_lines(load_scene(demo_path()))
     groups = [line.strip() for line in lines if "/  (" in line]
     assert len(groups) == len(set(groups))
+
+
+def test_ambient_occlusion_and_edges_shade_alike_in_both_projections(gl):
+    """AO and edges reconstruct view positions from the atlas depth (post.frag): in ortho they
+    darken the focus about as much as in perspective (a perspective-only reconstruction gives
+    an orthographic view garbage positions)."""
+    shade = {}
+    for projection in ("perspective", "ortho"):
+        kw = {"focus": "hub", "size": (240, 180), "projection": projection, "camera": "35,25"}
+        ao = rtta.snapshot(None, "ghosted-ao", ao_objects="focus", **kw).astype(float)
+        flat = rtta.snapshot(None, "ghosted", **kw).astype(float)
+        shade[projection] = float(np.abs(ao[..., :3] - flat[..., :3]).mean())
+    assert shade["perspective"] > 0.2 and shade["ortho"] > 0.2, shade
+    assert 0.5 < shade["ortho"] / shade["perspective"] < 2.0, shade

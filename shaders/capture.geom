@@ -1,13 +1,18 @@
 #version 430
-// defines: TEXTURED
+// defines: TEXTURED SECTIONS
 // The paper's path (Figure 4): displace each triangle into its atlas region and route it to its layer.
 #include "records.glsl"
 
 layout(triangles) in;
 layout(triangle_strip, max_vertices = 3) out;
 
+#ifdef SECTIONS
+in VertexData { vec3 normal; flat int object; flat vec3 color; vec3 world; } gs_in[];
+out VertexData { vec3 normal; flat int object; flat vec3 color; vec3 world; } gs_out;
+#else
 in VertexData { vec3 normal; flat int object; flat vec3 color; } gs_in[];
 out VertexData { vec3 normal; flat int object; flat vec3 color; } gs_out;
+#endif
 out float gl_ClipDistance[4];
 #ifdef TEXTURED
 layout(location = 5) in vec2 v_uv[];
@@ -31,6 +36,9 @@ void main() {
         gs_out.normal = gs_in[i].normal;
         gs_out.object = gs_in[i].object;
         gs_out.color = gs_in[i].color;
+#ifdef SECTIONS
+        gs_out.world = gs_in[i].world;
+#endif
 #ifdef TEXTURED
         g_uv = v_uv[i];
         g_material_rect = v_material_rect[i];

@@ -1,10 +1,13 @@
 #version 430
-// defines: PROJECTOR TEXTURED SEPARATE NO_NORMAL
+// defines: PROJECTOR TEXTURED SEPARATE NO_NORMAL SECTIONS CAP_DEPTH
+// SECTIONS, CAP_DEPTH: cut, capped (section.glsl)
 // Multiple render targets: shaded colour, view-space normal (RGBA8: n * 0.5 + 0.5; the view
 // distance post-processing needs comes from the depth), object id (depth is the depth
 // attachment). NO_NORMAL: colour and id only (STD, RTT: nothing reads their normals).
 #include "records.glsl"
 #include "projector.glsl"
+#define SECTION_FRAGMENT
+#include "section.glsl"
 #ifdef TEXTURED
 layout(location = 5) in vec2 f_uv;
 #ifdef SEPARATE
@@ -22,7 +25,7 @@ in VertexData {
     vec3 normal;
     flat int object;
     flat vec3 color;
-#ifdef PROJECTOR
+#if defined(PROJECTOR) || defined(SECTIONS)
     vec3 world;
 #endif
 } fs_in;
@@ -40,6 +43,18 @@ void main() {
     float len_n = length(fs_in.normal);
     vec3 n = len_n > 1e-20 ? fs_in.normal / len_n : vec3(0.0, 0.0, 1.0);
     if (!gl_FrontFacing) n = -n;
+#ifdef SECTIONS
+    int flags = int(placement[fs_in.object].w);
+    if ((flags & 1) != 0 && section_removed(fs_in.world)) discard;
+    vec3 hit;
+    int plane;
+    bool cap = (flags & 2) != 0 && !gl_FrontFacing && section_entry(fs_in.world, hit, plane);
+#ifdef CAP_DEPTH
+    if (!cap) discard;
+    gl_FragDepth = section_depth(hit);
+#endif
+    if (cap) n = normalize(mat3(u_view) * u_sections[plane].xyz);   // faces the eye: it came from that side
+#endif
     // headlight: light from the camera, two-sided
     float light = surface_light(n);
     vec3 base = fs_in.color;
@@ -49,6 +64,9 @@ void main() {
 #else
     base *= material_texel(f_material_rect, f_material_layer, f_uv, dFdx(f_uv), dFdy(f_uv));
 #endif
+#endif
+#ifdef SECTIONS
+    if (cap) base = cap_color(fs_in.color, hit, u_sections[plane].xyz);
 #endif
     vec3 rgb = base * light;
 #ifdef PROJECTOR

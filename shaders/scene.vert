@@ -1,5 +1,6 @@
 #version 430
-// defines: CAPTURE_VS CAPTURE_GS PROJECTOR TEXTURED REGION_CLIP
+// defines: CAPTURE_VS CAPTURE_GS PROJECTOR TEXTURED REGION_CLIP PLACED SECTIONS
+// PLACED, SECTIONS: exploded and cut (section.glsl)
 // One vertex shader for STD/RTT (no define), the RTTA vertex-shader path (CAPTURE_VS,
 // needs GL_ARB_shader_viewport_layer_array) and the RTTA geometry-shader path (CAPTURE_GS).
 // REGION_CLIP (with CAPTURE_VS): clip every vertex to its object's B_viewport. Only objects
@@ -9,6 +10,7 @@
 #extension GL_ARB_shader_viewport_layer_array : require
 #endif
 #include "records.glsl"
+#include "section.glsl"
 
 layout(location = 0) in vec3 in_position;
 layout(location = 1) in vec3 in_normal;
@@ -28,8 +30,8 @@ out VertexData {
     vec3 normal;
     flat int object;
     flat vec3 color;  // the object's colour, read here per vertex, not per fragment
-#ifdef PROJECTOR
-    vec3 world;       // relative to the scene origin, for projective texturing (STD only)
+#if defined(PROJECTOR) || defined(SECTIONS)
+    vec3 world;       // relative to the scene origin: projective texturing (STD only), sections
 #endif
 } vs_out;
 
@@ -38,7 +40,12 @@ out float gl_ClipDistance[4];
 #endif
 
 void main() {
-    vec4 clip_pos = u_proj * (u_view * vec4(in_position, 1.0));
+#ifdef PLACED
+    vec3 position = in_position + placement[in_object].xyz;
+#else
+    vec3 position = in_position;
+#endif
+    vec4 clip_pos = u_proj * (u_view * vec4(position, 1.0));
     vs_out.normal = mat3(u_view) * in_normal;
     vs_out.object = int(in_object);
     vs_out.color = object_colors[in_object].rgb;
@@ -48,8 +55,8 @@ void main() {
     v_material_rect = m.rect;
     v_material_layer = m.layer;
 #endif
-#ifdef PROJECTOR
-    vs_out.world = in_position;
+#if defined(PROJECTOR) || defined(SECTIONS)
+    vs_out.world = position;
 #endif
 #ifdef CAPTURE_VS
     Record r = records[in_object];

@@ -7,6 +7,7 @@ from pathlib import Path
 from ..errors import RttaError, printable
 from ..outputs import check_file, check_folder, check_into_folder, os_error
 from .common import camera_of, load, make_renderer, parse_size, scene_arg, settings_of, view_args
+from .cutaway import cutaway_args, staging_of
 from .views import saved_view_of, view_file_args
 
 
@@ -15,11 +16,13 @@ def add_parsers(sub) -> None:
     p = sub.add_parser("export", help="write per-object amodal images (atlas) and the direct render")
     scene_arg(p)
     view_args(p)
+    cutaway_args(p)
     view_file_args(p)
     p.add_argument("--out", required=True, help="output folder (replaced atomically)")
     p = sub.add_parser("snapshot", help="render STD or a composite mode to PNG, headless")
     scene_arg(p)
     view_args(p)
+    cutaway_args(p)
     view_file_args(p, save=True)
     p.add_argument("--mode", default="ghosted-ao", help="std, sprites, transparent, ghosted or ghosted-ao")
     p.add_argument(
@@ -86,15 +89,18 @@ def add_parsers(sub) -> None:
 def cmd_export(args) -> int:
     from ..gl.context import shared_context
     from ..renderer.export import export
+    from ..renderer.placing import check_staging
 
     viewport = parse_size(args.size)
     settings = settings_of(args)
     args.saved_view = saved_view_of(args)  # --view-file's, or the flags'
+    staging = staging_of(args)
     check_folder(args.out, [args.scene])  # before the work: a refused --out fails fast
     scene = load(args)
-    camera, hidden = camera_of(args, scene, viewport)
+    camera, hidden = camera_of(args, check_staging(staging, scene), viewport)
     ctx = shared_context()
     renderer = make_renderer(ctx, scene, settings)
+    renderer.staging = staging
     renderer.hidden = set(hidden)
     try:
         out = export(renderer, camera, viewport, args.out)
@@ -109,6 +115,7 @@ def cmd_export(args) -> int:
 def cmd_snapshot(args) -> int:
     from ..gl.context import shared_context
     from ..renderer.options import make_style
+    from ..renderer.placing import check_staging
     from ..renderer.snapshot import SNAPSHOT_MODES, parse_opacities, render_modes, resolve_names, write_pngs
 
     args.saved_view = saved_view_of(args)  # --view-file's (its mode, focus... replace the flags), or the flags'
@@ -117,9 +124,9 @@ def cmd_snapshot(args) -> int:
     viewport = parse_size(args.size)
     if args.save_view:
         check_file(args.save_view, [args.scene, args.view_file], suffix=".json", what="--save-view")
+    staging = staging_of(args)
     _snapshot_targets(args, [args.scene, *_projector_files(args)])  # refused outputs fail before the work
     scene = load(args)
-    camera, hidden = camera_of(args, scene, viewport)
     style = make_style(
         resolve_names(scene, args.focus, "--focus"),
         parse_opacities(scene, args.opacity),
@@ -132,8 +139,10 @@ def cmd_snapshot(args) -> int:
         order=args.order,
         halo=args.halo,
     )
+    camera, hidden = camera_of(args, check_staging(staging, scene, style.focus), viewport)
     targets = _snapshot_targets(args, [*scene.inputs, *_projector_files(args)])
     renderer = make_renderer(shared_context(), scene, settings_of(args))
+    renderer.staging = staging
     renderer.hidden = set(hidden)
     if args.projector is not None:
         renderer.projector = _projector(args, scene, camera)

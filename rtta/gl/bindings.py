@@ -56,6 +56,7 @@ class Storage:
     OIT_HEADS: Final = 5  # oit.glsl: per pixel, its list's first node
     OIT_NODES: Final = 6  # oit.glsl: the lists' nodes
     OIT_BASES: Final = 7  # composite.geom: per object, its first node (one per pixel of its sprite)
+    PLACEMENT: Final = 8  # section.glsl: per object, its explode offset and cut flags (cutaways)
 
 
 KINDS: Final = (Texture, Image, Storage)

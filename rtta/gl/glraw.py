@@ -44,23 +44,26 @@ def _lib() -> ctypes.CDLL:
 
 
 class DepthArray:
-    """A GL_DEPTH_COMPONENT32F 2D texture array (immutable storage)."""
+    """A GL_DEPTH_COMPONENT32F 2D texture array (immutable storage); with `stencil`
+    GL_DEPTH32F_STENCIL8 (section caps mark their texels in the stencil)."""
 
-    def __init__(self, width: int, height: int, layers: int) -> None:
+    def __init__(self, width: int, height: int, layers: int, stencil: bool = False) -> None:
+        self.stencil = stencil
         gl = _lib()
         tex = ctypes.c_uint(0)
         gl.glGenTextures(1, ctypes.byref(tex))
         self.glo = tex.value
         self.size = (width, height, layers)
         gl.glBindTexture(GL_TEXTURE_2D_ARRAY, self.glo)
-        gl.glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, GL_DEPTH_COMPONENT32F, width, height, layers)
+        gl.glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, 0x8CAD if stencil else GL_DEPTH_COMPONENT32F, width, height, layers)
         gl.glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST)
         gl.glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST)
         gl.glBindTexture(GL_TEXTURE_2D_ARRAY, 0)
 
     def attach_to_bound_framebuffer(self) -> None:
         """Attach as the layered depth attachment of the currently bound framebuffer."""
-        _lib().glFramebufferTexture(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, self.glo, 0)
+        point = 0x821A if self.stencil else GL_DEPTH_ATTACHMENT  # GL_DEPTH_STENCIL_ATTACHMENT
+        _lib().glFramebufferTexture(GL_FRAMEBUFFER, point, self.glo, 0)
 
     def read(self) -> np.ndarray:
         """All layers as float32 [layers, height, width]; row 0 is the bottom row."""

@@ -24,6 +24,7 @@ class GpuScene:
         self.scene = scene
         self.textured = scene.textured
         self.cull_closed = True  # the scene passes cull the back faces of closed objects (Scene.closed)
+        self.placement = None  # rtta.passes.sections.Placement: objects moved and cut, or None
         fields = [("p", "<f4", 3), ("n", "<f4", 3), ("id", "<u4")] + ([("uv", "<f4", 2)] if self.textured else [])
         interleaved = np.zeros(scene.vertex_count, dtype=fields)
         interleaved["p"] = scene.positions

@@ -65,10 +65,12 @@ class LayeredTarget:
         layers: int = 1,
         depth_keyed: bool = False,
         normals: bool = True,
+        stencil: bool = False,
     ) -> None:
         self.ctx = ctx
         self.depth_keyed = depth_keyed
         self.normals = normals
+        self.stencil = stencil  # depth 32F + stencil 8 (section caps: rtta.passes.sections)
         self.normals_written = normals  # False after a capture that left the normal image alone
         self.ids_written = True  # False after a capture that left the id image alone
         self.size = (0, 0)
@@ -83,7 +85,7 @@ class LayeredTarget:
         self._free()
         w, h = max(1, int(size[0])), max(1, int(size[1]))
         n = max(1, int(layers))
-        need = w * h * n * (4 + 4 * self.normals + 4 + 4)
+        need = w * h * n * (4 + 4 * self.normals + 4 + 4 + 4 * self.stencil)
         if need > max(memory_limit() // 2, MIN_TARGET_BYTES):
             raise RttaError(
                 f"the render targets would need {w}x{h}x{n} texels ({need / 2**20:,.0f} MiB), over half "
@@ -106,13 +108,19 @@ class LayeredTarget:
         self._textures = [t for t in (self.color, self.normal, self.ids) if t is not None]
         for tex in self._textures:
             tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
-        self.depth = glraw.DepthArray(w, h, n)
+        self.depth = glraw.DepthArray(w, h, n, self.stencil)
         self._fbo = ctx.framebuffer(color_attachments=self._textures)
         self._fbo.depth_mask = True
         self._fbo.use()
         self.depth.attach_to_bound_framebuffer()
         self.size, self.layers = (w, h), n
         self.allocations += 1
+
+    def want_stencil(self, on: bool) -> None:
+        """With a stencil (reallocated, contents lost, when that changes), or without."""
+        if bool(on) != self.stencil:
+            self.stencil = bool(on)
+            self._allocate(self.size, self.layers)
 
     def ensure(self, size: tuple[int, int], layers: int) -> bool:
         """Make room for `size` x `layers`; returns True when textures were reallocated."""
@@ -143,13 +151,22 @@ class LayeredTarget:
     @property
     def nbytes(self) -> int:
         """Texture memory: RGBA8 + RGBA8 (with normals) + R32I + D32F per texel."""
-        return self.size[0] * self.size[1] * self.layers * (4 + 4 * self.normals + 4 + 4)
+        return self.size[0] * self.size[1] * self.layers * (4 + 4 * self.normals + 4 + 4 + 4 * self.stencil)
 
     def write_mask(self, normals: bool = True, ids: bool = True) -> None:
         """Whether draws write the normal and id images (colour masks; colour and depth are
         always written)."""
         masks = [(True,) * 4] + [(bool(normals),) * 4] * self.normals + [(bool(ids),) * 4]
         self._fbo.color_mask = masks
+
+    def color_writes(self, masks: bool | list) -> list:
+        """Set the colour masks of every attachment (False: none written; or a list as this
+        returns) and return the ones before."""
+        before = list(self._fbo.color_mask)
+        if isinstance(masks, bool):
+            masks = [(masks,) * 4] * len(self._textures)
+        self._fbo.color_mask = masks
+        return before
 
     def bind(self, viewport: tuple[int, int, int, int] | None = None) -> None:
         """Bind for drawing, with the GL viewport set (default: the whole allocation)."""
@@ -168,7 +185,10 @@ class LayeredTarget:
             if self.normals:
                 glraw.clear_color_float(1, (0.0, 0.0, 0.0, 0.0))
             glraw.clear_color_int(len(self._textures) - 1, -1)
-        glraw.clear_depth(1.0)
+        if self.stencil:
+            glraw.clear_depth_stencil(1.0, 0)
+        else:
+            glraw.clear_depth(1.0)
 
     def read(
         self, size: tuple[int, int] | None = None, layers: int | None = None, parts: tuple[str, ...] | None = None

@@ -29,11 +29,13 @@ from ..gl.context import Capabilities, shared_context
 from ..ldi.lens import Lens
 from ..passes.projector import Projector
 from ..scene.camera import Camera, Projection
+from ..scene.cutaway import Caps, SectionPlane, SectionScope
+from ..scene.explode import ExplodeScope
 from ..scene.framing import StandardView
 from ..scene.loader import load_scene
 from ..scene.model import Scene
 from ..scene.preprocess import DEFAULT_SMOOTH_ANGLE
-from .captured import Capture
+from .captured import Capture, empty_atlas
 from .export import read_frame, records_json
 from .options import (
     CORE_STYLE,
@@ -46,6 +48,7 @@ from .options import (
     orbit_camera,
     style_keywords,
 )
+from .placing import check_staging, make_staging, restage
 from .renderer import Renderer, Settings
 from .snapshot import SNAPSHOT_MODES, SnapshotModeName, make_lens, make_projector, render_modes, resolve_names
 
@@ -161,6 +164,11 @@ def snapshot(
     projection: Projection = "perspective",
     view: StandardView | None = None,
     hidden: str | Iterable[str] = (),
+    sections: Iterable[str | SectionPlane] = (),
+    caps: Caps = "solid",
+    section_scope: SectionScope = "all",
+    explode: float = 0.0,
+    explode_scope: ExplodeScope = "all",
     **style,
 ) -> np.ndarray:
     """Render one picture of a scene in a compositing mode, headless.
@@ -221,6 +229,9 @@ def snapshot(
         A standard view relative to the file's up axis (instead of the camera's direction).
     hidden : str or iterable of str
         Objects left out (names, group names or globs): not drawn, captured nor framed.
+    sections, caps, section_scope, explode, explode_scope
+        Cutaway and exploded view as the flags `--section SPEC` (each "x=V", "-x=V", ... or
+        "nx,ny,nz,d", or a SectionPlane), `--caps`, `--section-scope`, `--explode F`, `--explode-scope`.
     **style
         Style keywords (see `Style`): context_opacity, desaturate, edge_width, edge_color,
         outline_width, outline_color, ao_radius, ao_strength, ao_objects, edge_objects, order,
@@ -248,10 +259,12 @@ def snapshot(
     scene = _session.scene(scene, smooth_angle, smooth)
     viewport = check_size(size)
     hidden_ids = resolve_names(scene, [hidden] if isinstance(hidden, str) else list(hidden), "hidden")
-    cam = orbit_camera(
-        scene, camera, fov, projection=projection, view=view, aspect=viewport[0] / viewport[1], hidden=hidden_ids
-    )
+    staging = make_staging(sections, caps, section_scope, explode, explode_scope)
     focus_ids = resolve_names(scene, [focus] if isinstance(focus, str) else list(focus), "focus")
+    framed = check_staging(staging, scene, focus_ids, hidden_ids)
+    cam = orbit_camera(
+        framed, camera, fov, projection=projection, view=view, aspect=viewport[0] / viewport[1], hidden=hidden_ids
+    )
     st = make_style(focus_ids, opacities(scene, opacity or {}), **{k: style[k] for k in CORE_STYLE if k in style})
     for key, value in extra.items():
         setattr(st, key, value)
@@ -260,7 +273,7 @@ def snapshot(
         projector = make_projector(scene, cam, projector, projector_fov, projector_shadows)
     if isinstance(lens, str):
         lens = make_lens(scene, lens, lens_at, st.focus)
-    renderer = _prepare(scene, settings, projector, lens, hidden_ids)
+    renderer = _prepare(scene, settings, projector, lens, hidden_ids, staging)
     try:
         rgba = render_modes(renderer, cam, viewport, [mode], st)[mode]
     except ValueError as exc:
@@ -284,6 +297,9 @@ def capture(
     smooth: bool = False,
     projection: Projection = "perspective",
     view: StandardView | None = None,
+    sections: Iterable[str | SectionPlane] = (),
+    caps: Caps = "solid",
+    explode: float = 0.0,
 ) -> Capture:
     """Capture one frame: every object's unoccluded images, as arrays.
 
@@ -321,6 +337,8 @@ def capture(
         The projection, as in `snapshot`.
     view : {"front", "back", "left", "right", "top", "bottom", "iso"}, optional
         A standard view relative to the file's up axis, as in `snapshot`.
+    sections, caps, explode
+        Cut and exploded, as in `snapshot` (no focus here: every part is cut and moved).
 
     Returns
     -------
@@ -337,22 +355,17 @@ def capture(
     """
     scene = _session.scene(scene, smooth_angle, smooth)
     viewport = check_size(size)
-    cam = orbit_camera(scene, camera, fov, projection=projection, view=view, aspect=viewport[0] / viewport[1])
-    renderer = _prepare(
-        scene, make_settings(border, atlas_max, max_layers, capture_path, region_scale, bounds), None, None
-    )
+    staging = make_staging(sections, caps, "all", explode)
+    framed = check_staging(staging, scene)
+    cam = orbit_camera(framed, camera, fov, projection=projection, view=view, aspect=viewport[0] / viewport[1])
+    settings = make_settings(border, atlas_max, max_layers, capture_path, region_scale, bounds)
+    renderer = _prepare(scene, settings, None, None, (), staging)
     try:
         records, atlas, std = read_frame(renderer, cam, viewport)
     except ValueError as exc:
         raise RttaError(str(exc)) from None
     meta = records_json(renderer, cam, records, viewport)
-    if atlas is None:
-        atlas = {
-            "color": np.zeros((0, 0, 0, 4), np.uint8),
-            "normal": np.zeros((0, 0, 0, 3), np.float32),
-            "depth": np.ones((0, 0, 0), np.float32),
-            "id": np.full((0, 0, 0), -1, np.int32),
-        }
+    atlas = atlas if atlas is not None else empty_atlas()
     return Capture(
         records=records,
         names=tuple(scene.names),
@@ -369,11 +382,10 @@ def capture(
     )
 
 
-def _prepare(
-    scene: Scene, settings: Settings, projector: Projector | None, lens: Lens | None, hidden: Iterable[int] = ()
-) -> Renderer:
+def _prepare(scene: Scene, settings: Settings, projector: Projector | None, lens: Lens | None, hidden=(), staging=None):
     renderer = _session.renderer_for(scene, settings)
     renderer.projector, renderer.lens = projector, lens
+    restage(renderer, staging)
     renderer.hidden = set(hidden)
     if projector is not None:
         # the projector pass re-uploads when id(image) changes; keeping the last image alive

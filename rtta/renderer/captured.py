@@ -123,3 +123,13 @@ class Capture:
         if self.normal is not None:
             parts["normal"] = self.normal
         return parts
+
+
+def empty_atlas() -> dict[str, np.ndarray]:
+    """The atlas arrays of a frame in which nothing is visible (no layer)."""
+    return {
+        "color": np.zeros((0, 0, 0, 4), np.uint8),
+        "normal": np.zeros((0, 0, 0, 3), np.float32),
+        "depth": np.ones((0, 0, 0), np.float32),
+        "id": np.full((0, 0, 0), -1, np.int32),
+    }

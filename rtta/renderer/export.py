@@ -29,6 +29,7 @@ def world_matrices(renderer: Renderer, camera: Camera, viewport) -> tuple[np.nda
 def records_json(renderer: Renderer, camera: Camera, records, viewport) -> dict:
     view, proj = world_matrices(renderer, camera, viewport)
     objects = []
+    offsets = np.zeros((renderer.scene.count, 3)) + renderer.staging.shift
     for oid, name in enumerate(renderer.scene.names):
         vis = bool(records.visible[oid])
         objects.append(
@@ -40,6 +41,7 @@ def records_json(renderer: Renderer, camera: Camera, records, viewport) -> dict:
                 "atlas_rect": [int(v) for v in records.atlas_rect[oid]],
                 "layer": int(records.layer[oid]),
                 "scale": float(records.scale[oid]),
+                "offset": [float(v) for v in offsets[oid]],  # world translation (explode), 0 assembled
             }
         )
     return {

@@ -115,7 +115,7 @@ def render_modes(renderer: Renderer, camera: Camera, viewport: tuple[int, int], 
         )  # no mode reads the id image
     for mode in modes:
         if mode == "std":
-            out[mode] = over_background(renderer.std(camera, viewport).read(viewport, 1)["color"][0])
+            out[mode] = over_background(renderer.std(camera, viewport, style.focus).read(viewport, 1)["color"][0])
         else:
             rgba, _ = renderer.composite(mode, style).read()
             out[mode] = rgba.copy()

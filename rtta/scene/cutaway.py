@@ -1,0 +1,139 @@
+"""Section planes and what they cut: the value types of cutaways, parsed in one place.
+
+A `SectionPlane(normal, d)` removes the points p with normal·p > d (world coordinates, the
+file's units as `rtta info` prints its bounds). `parse_section` reads the CLI's SPEC:
+`x=V`, `y=V`, `z=V` (remove what lies beyond V on that axis), `-x=V`, `-y=V`, `-z=V` (remove
+what lies below V) or `nx,ny,nz,d`. `Cutaway` holds up to MAX_SECTIONS planes, the cap style
+and the scope; `cut_flags` and `removed` give what each object gets from it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Literal, get_args
+
+import numpy as np
+
+from ..errors import RttaError
+
+Caps = Literal["solid", "hatch", "off"]
+SectionScope = Literal["all", "context"]
+CAPS: tuple[str, ...] = get_args(Caps)
+SECTION_SCOPES: tuple[str, ...] = get_args(SectionScope)
+MAX_SECTIONS = 6
+_AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
+LIMIT = 1e15  # |d| and |normal| components above this are refused (float32 and NaN safety)
+
+
+@dataclass(frozen=True)
+class SectionPlane:
+    """The half-space n·p > d removed (n normalized; world coordinates).
+
+    Parameters
+    ----------
+    normal : tuple of float
+        (nx, ny, nz), any non-zero length; stored unit length.
+    d : float
+        Offset in world units (scaled with the normal).
+    """
+
+    normal: tuple[float, float, float]
+    d: float
+
+    def __post_init__(self) -> None:
+        n = np.asarray(self.normal, np.float64)
+        length = float(np.linalg.norm(n)) if n.shape == (3,) else 0.0
+        if not (math.isfinite(length) and length > 0 and math.isfinite(self.d)):
+            raise RttaError(f"--section: a plane needs a non-zero finite normal and a finite offset, got {self}")
+        object.__setattr__(self, "normal", tuple(float(v) for v in n / length))
+        object.__setattr__(self, "d", float(self.d) / length)
+
+    def removes(self, points: np.ndarray) -> np.ndarray:
+        """bool [...]: which of the world points [..., 3] this plane removes."""
+        return np.asarray(points, np.float64) @ np.asarray(self.normal) > self.d
+
+    def relative(self, origin: np.ndarray) -> tuple[float, float, float, float]:
+        """(n, d') for coordinates relative to `origin`: n·(p + origin) > d ⇔ n·p > d - n·origin."""
+        return (*self.normal, self.d - float(np.dot(self.normal, origin)))
+
+
+def parse_section(spec: str) -> SectionPlane:
+    """A SectionPlane from `x=V`, `-x=V` (likewise y, z) or `nx,ny,nz,d`.
+
+    Raises
+    ------
+    RttaError
+        For anything else (the message quotes the SPEC and the accepted forms).
+    """
+    text = str(spec).strip().lower().replace(" ", "")
+    bad = RttaError(f"--section expects x=V, -x=V (y, z likewise) or nx,ny,nz,d, got '{spec}'")
+    axis, eq, value = text.partition("=")
+    try:
+        if eq:
+            sign = -1.0 if axis[:1] == "-" else 1.0
+            normal = _AXES.get(axis[1:] if axis[:1] in "-+" else axis)
+            v = float(value)
+            if normal is None or not math.isfinite(v) or abs(v) > LIMIT:
+                raise bad
+            return SectionPlane(tuple(sign * c for c in normal), sign * v)
+        parts = [float(p) for p in text.split(",")]
+    except ValueError:
+        raise bad from None
+    if len(parts) != 4 or not all(math.isfinite(p) and abs(p) <= LIMIT for p in parts) or not any(parts[:3]):
+        raise bad
+    return SectionPlane(tuple(parts[:3]), parts[3])
+
+
+@dataclass(frozen=True)
+class Cutaway:
+    """What is cut and how: the planes, the caps on closed parts, the scope.
+
+    Parameters
+    ----------
+    planes : tuple of SectionPlane
+        Up to MAX_SECTIONS; a point is removed when any plane removes it.
+    caps : {'solid', 'hatch', 'off'}
+        The cut faces of closed parts: filled in the part's darker colour, hatched, or open.
+    scope : {'all', 'context'}
+        'context': the focus parts stay whole, only the others are cut.
+    """
+
+    planes: tuple[SectionPlane, ...] = ()
+    caps: Caps = "solid"
+    scope: SectionScope = "all"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "planes", tuple(self.planes))
+        if len(self.planes) > MAX_SECTIONS:
+            raise RttaError(f"--section: at most {MAX_SECTIONS} planes, got {len(self.planes)}")
+        if self.caps not in CAPS:
+            raise RttaError(f"--caps must be one of {', '.join(CAPS)}, got '{self.caps}'")
+        if self.scope not in SECTION_SCOPES:
+            raise RttaError(f"--section-scope must be one of {', '.join(SECTION_SCOPES)}, got '{self.scope}'")
+
+    def __bool__(self) -> bool:
+        return bool(self.planes)
+
+    def cut(self, count: int, focus=()) -> np.ndarray:
+        """bool [count]: the objects the planes cut (all, or all but the focus with scope 'context')."""
+        out = np.full(count, bool(self.planes))
+        if self.scope == "context":
+            out[[o for o in focus if 0 <= o < count]] = False
+        return out
+
+    def removed(self, scene, offsets: np.ndarray | None, cut: np.ndarray) -> np.ndarray:
+        """bool [n]: cut objects of `scene` that one plane removes whole (every vertex beyond
+        it), moved by `offsets` (float [n, 3] world, or None): they are not packed or drawn."""
+        n = scene.count
+        out = np.zeros(n, bool)
+        if not self.planes or not cut.any() or not scene.vertex_count:
+            return out
+        counts = np.bincount(scene.object_ids, minlength=n)
+        starts = np.minimum(np.concatenate([[0], np.cumsum(counts)[:-1]]), scene.vertex_count - 1)
+        shift = np.asarray(scene.origin, np.float64) + (0.0 if offsets is None else np.asarray(offsets, np.float64))
+        for plane in self.planes:
+            normal = np.asarray(plane.normal)
+            least = np.minimum.reduceat(scene.positions @ normal.astype(np.float32), starts).astype(np.float64)
+            out |= (counts > 0) & (least + shift @ normal > plane.d)
+        return out & cut

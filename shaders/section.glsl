@@ -1,0 +1,64 @@
+// Cutaways and exploded views, for scene.vert / scene.frag (capture, STD, RTT).
+// PLACED: each vertex moved by its object's offset (explode). SECTIONS: fragments beyond a
+// section plane discarded on cut objects; on capped ones (closed parts, caps on) a back face
+// seen through the cut is drawn as the cap: the ray's entry into the kept region, on the
+// plane it crosses there, flat-lit with the plane's normal. CAP_DEPTH: the second draw of
+// the capped back faces, writing the cap's depth where the first made the back face the
+// nearest surface (stencil 1; rtta/passes/sections.py).
+#if defined(PLACED) || defined(SECTIONS)
+// xyz: the object's world offset (scene origin at 0); w: flags, 1 cut, 2 capped
+layout(std430, binding = BINDING_PLACEMENT) readonly buffer PlacementBuffer { vec4 placement[]; };
+#endif
+
+#if defined(SECTIONS) && defined(SECTION_FRAGMENT)
+uniform vec4 u_sections[6];     // (n, d), scene origin at 0: n.p > d is removed
+uniform int u_section_count;
+uniform int u_caps;             // 1 solid, 2 hatched
+uniform float u_hatch_spacing;  // world units between hatch lines
+uniform mat4 u_view;            // the pass's, as scene.vert's
+uniform mat4 u_proj;
+uniform mat4 u_section_inverse; // (P V)^-1: viewport NDC + depth -> world (origin at 0)
+
+bool section_removed(vec3 p) {
+    for (int i = 0; i < u_section_count; ++i)
+        if (dot(u_sections[i].xyz, p) > u_sections[i].w) return true;
+    return false;
+}
+
+// Where the view ray through p (from the near plane on: perspective or orthographic alike)
+// enters the kept region: false when it starts inside it (no plane crossed before p).
+bool section_entry(vec3 p, out vec3 hit, out int plane) {
+    vec4 c = u_proj * (u_view * vec4(p, 1.0));
+    vec4 q4 = u_section_inverse * vec4(c.xy / c.w, -1.0, 1.0);
+    vec3 q = q4.xyz / q4.w;
+    vec3 d = p - q;
+    float enter = 0.0;
+    plane = -1;
+    for (int i = 0; i < u_section_count; ++i) {
+        float above = dot(u_sections[i].xyz, q) - u_sections[i].w, along = dot(u_sections[i].xyz, d);
+        if (above > 0.0 && along < 0.0 && -above / along > enter) {
+            enter = -above / along;
+            plane = i;
+        }
+    }
+    hit = q + enter * d;
+    return plane >= 0;
+}
+
+float section_depth(vec3 hit) {
+    vec4 c = u_proj * (u_view * vec4(hit, 1.0));
+    return clamp(0.5 * c.z / c.w + 0.5, 0.0, 1.0);
+}
+
+// The cap's colour: the part's, darker; hatched across the plane with u_caps == 2.
+vec3 cap_color(vec3 base, vec3 hit, vec3 n) {
+    vec3 rgb = base * 0.6;
+    if (u_caps == 2) {
+        vec3 t = normalize(abs(n.x) < 0.9 ? cross(n, vec3(1.0, 0.0, 0.0)) : cross(n, vec3(0.0, 1.0, 0.0)));
+        vec3 b = cross(n, t);
+        float s = (dot(hit, t) + dot(hit, b)) / u_hatch_spacing;
+        if (fract(s) < 0.35) rgb = base * 0.25;
+    }
+    return rgb;
+}
+#endif

@@ -25,6 +25,7 @@ from ..gl.context import CapturePath
 from ..gl.gpu import GpuScene
 from ..gl.targets import LayeredTarget
 from ..scene.closure import beyond_near
+from . import sections
 
 DIRECT_RUNS = 1  # more runs of visible objects than this: one indirect multi-draw
 
@@ -46,6 +47,7 @@ class ScenePass:
         self._programs: dict[tuple, moderngl.Program] = {}
         self._indirect: moderngl.Buffer | None = None
         self._cullable = np.zeros(0, bool)  # per object, for the view of the last setup()
+        self._capped, self._drawn = None, None  # capped objects (sections) and the arguments of setup()
         self.program = self.program_for(False)
 
     def program_for(self, textured: bool, normals: bool = True, **variant: bool) -> moderngl.Program:
@@ -68,34 +70,92 @@ class ScenePass:
     ) -> moderngl.VertexArray:
         """Program, matrices, buffers and state for drawing the batch into `target` (its
         attachments pick the program's outputs; None: a target of its own, e.g. a shadow map)."""
-        self.program = self.program_for(gpu.textured, target is None or target.normals, **variant)
-        self.program["u_view"].write(mat_bytes(view))
-        self.program["u_proj"].write(mat_bytes(proj))
+        placement = gpu.placement
+        self.program = self._program(gpu, view, proj, target, variant)
         scene = gpu.scene
+        lo, hi = scene.aabb_min - scene.origin, scene.aabb_max - scene.origin
+        if placement is not None and placement.offsets is not None:
+            lo, hi = lo + placement.offsets, hi + placement.offsets
         self._cullable = (
-            scene.closed & beyond_near(scene.aabb_min - scene.origin, scene.aabb_max - scene.origin, view, proj)
-            if gpu.cull_closed
-            else np.zeros(scene.count, bool)
+            scene.closed & beyond_near(lo, hi, view, proj) if gpu.cull_closed else np.zeros(scene.count, bool)
         )
+        self._capped = None
+        if placement is not None and placement.sections:
+            self._cullable &= ~placement.cut  # their back faces show through the cut
+            if target is not None and target.stencil and placement.capped.any():
+                self._capped = placement.capped
+        self._drawn = (gpu, view, proj, target, variant)
         gpu.bind_storage()
         gpu.bind_material(self.program)
         self.ctx.enable_only(moderngl.DEPTH_TEST)
         self.ctx.depth_func = "<"
         return gpu.vao(self.program)
 
+    def _program(self, gpu: GpuScene, view, proj, target: LayeredTarget | None, variant: dict) -> moderngl.Program:
+        """The program for `variant` and the scene's placement (rtta.passes.sections), its
+        matrices and the placement's uniforms set."""
+        placement = gpu.placement
+        extra = placement.variant() if placement is not None else {}
+        program = self.program_for(gpu.textured, target is None or target.normals, **variant, **extra)
+        program["u_view"].write(mat_bytes(view))
+        program["u_proj"].write(mat_bytes(proj))
+        if placement is not None:
+            placement.apply(program, proj @ view)
+        return program
+
     def draw_objects(self, vao: moderngl.VertexArray, gpu: GpuScene, objects: np.ndarray | None) -> None:
         """Draw the objects in `objects` (bool [n]; None: all) as setup() prepared them: the
         closed ones (Scene.closed) wholly beyond the near plane with their back faces culled,
-        which are never seen then, the others double-sided; one call for each kind there is."""
+        which are never seen then, the others double-sided; one call for each kind there is.
+        Capped objects (sections) are drawn last, marking the stencil, then capped."""
         closed = self._cullable
+        capped = self._capped if self._capped is None or objects is None else self._capped & objects
+        if capped is not None and not capped.any():
+            capped = None
         try:
+            if capped is not None:
+                sections.stencil_mark(0)
             for cull, kind in ((True, closed), (False, ~closed)):
                 mask = kind if objects is None else kind & objects
+                if capped is not None:
+                    mask = mask & ~capped
                 if mask.any():
                     self.cull(cull)
                     self._draw_runs(vao, None if mask.all() else gpu.scene.index_runs(mask))
+            if capped is not None:  # front faces, then back faces pushed back a little: where
+                runs = gpu.scene.index_runs(capped)  # a mesh has a front and a back face in one
+                sections.stencil_mark(1)  # place (boxes concatenated into one part), the front wins
+                self.cull(True)
+                self._draw_runs(vao, runs)
+                self.ctx.cull_face = "front"
+                self.ctx.polygon_offset = sections.BACK_OFFSET
+                self._draw_runs(vao, runs)
+                self.ctx.polygon_offset = (0.0, 0.0)
+                self._cap_depth(capped)
         finally:
             self.cull(False)
+            if capped is not None:
+                self.ctx.polygon_offset = (0.0, 0.0)
+                glraw.stencil_off()
+
+    def _cap_depth(self, capped: np.ndarray) -> None:
+        """The caps' depth: the capped back faces again, where the stencil says a capped back
+        face is the texel's nearest surface, writing the depth of the ray's entry into the kept
+        region (no colour); restores the program's state after."""
+        gpu, view, proj, target, variant = self._drawn
+        program = self._program(gpu, view, proj, target, {**variant, "CAP_DEPTH": True})
+        gpu.bind_material(program)
+        masks = target.color_writes(False)
+        self.ctx.enable(moderngl.CULL_FACE)
+        self.ctx.cull_face, self.ctx.front_face = "front", "ccw"
+        self.ctx.depth_func = "1"
+        sections.stencil_equal(1)
+        try:
+            self._draw_runs(gpu.vao(program), gpu.scene.index_runs(capped))
+        finally:
+            self.ctx.depth_func = "<"
+            self.ctx.cull_face = "back"
+            target.color_writes(masks)
 
     def cull(self, on: bool) -> None:
         """Back-face culling on (counter-clockwise fronts) or off."""
@@ -297,10 +357,18 @@ class RttPass(ScenePass):
         target.ensure(viewport, 1)
         vao = self.setup(gpu, view, proj, target)
         ranges, closed = gpu.scene.index_ranges, self._cullable
+        one = np.zeros(gpu.scene.count, bool)
         try:
             for oid in objects:
                 target.clear()
                 target.bind((0, 0, *viewport))
+                if self._capped is not None:  # as STD caps them (draw_objects)
+                    one[oid] = True
+                    self.draw_objects(vao, gpu, one)
+                    one[oid] = False
+                    if consume is not None:
+                        consume(int(oid), target)
+                    continue
                 first, count = ranges[oid]
                 self.cull(bool(closed[oid]))  # as draw_objects does
                 vao.render(moderngl.TRIANGLES, vertices=int(count), first=int(first))

@@ -26,6 +26,7 @@ from ..passes.post import AtlasPostPass
 from ..passes.style import Mode, ModeName
 from ..scene.camera import Camera, is_ortho
 from ..scene.model import Scene
+from .placing import Staging
 from .settings import Settings
 
 
@@ -71,6 +72,7 @@ class Renderer:
         self.lens = None  # a Lens cutting the context away in the ghosted modes, or None
         self._lens_pass = None
         self.hidden: set[int] = set()  # objects the user hid: not packed, captured, composited or drawn
+        self.staging = Staging()  # sections and explode (rtta.renderer.placing)
         self.measure = False  # time each stage (waits for the GPU after each)
         self.timings: dict[str, float] = {}  # stage -> ms of its last run, when measuring
         self.warnings: list[str] = []  # what was degraded (each said once)
@@ -117,14 +119,14 @@ class Renderer:
         """`thin`: picks objects not packed this time besides the hidden ones, from this
         frame's projection (fast navigation, rtta.renderer.navigation; atlas.parameterize)."""
         view, proj = matrices or self.matrices(camera, viewport)
-        hidden = self.hidden_mask()
+        hidden, corners = self.staging.staged(self.hidden_mask(), self.scene.box_corners(self.settings.bounds))
         s = self.settings
         largest = max(s.region_scale, s.region_scale * s.context_scale)
         atlas_max = s.atlas_max or default_atlas_max(viewport, s.border, largest)
         atlas_max = (min(atlas_max[0], self.caps.max_texture), min(atlas_max[1], self.caps.max_texture))
         max_layers = min(s.max_layers or self.caps.max_layers, self.caps.max_layers)
         return parameterize(
-            self.scene.box_corners(s.bounds),
+            corners,
             proj @ view,
             viewport,
             border=s.border,
@@ -186,6 +188,7 @@ class Renderer:
         id image unwritten (compositing and picking never read it; the export does).
         `thin`: picks objects left out of this capture as if hidden (fast navigation)."""
         view, proj = self.matrices(camera, viewport)
+        self.place(focus)
         self.captured_focus = self.scaled_for(focus)
         self._view = (camera, viewport, path)
         with self._timed("parameterize"):
@@ -205,7 +208,8 @@ class Renderer:
             raise RuntimeError("composite() needs a capture() first")
         style = style or Style()
         missing = self.needs_normals(mode) and not self.captured_normals
-        if self.scaled_for(style.focus) != self.captured_focus or missing:
+        stale = self.staging.key(style.focus) != self.staging.key(self.staging.focus)  # sections/explode
+        if self.scaled_for(style.focus) != self.captured_focus or missing or stale:
             # the focus decides the region scales; AO, edges and the projector read normals
             self.capture(
                 *self._view, focus=style.focus, normals=self.captured_normals or missing, ids=self.atlas.ids_written
@@ -213,7 +217,7 @@ class Renderer:
         records, view, proj = self.last
         if self._composite is None:
             self._composite = CompositePass(self.ctx)
-        centers = (self.scene.aabb_min + self.scene.aabb_max) / 2 - self.scene.origin
+        centers = (self.scene.aabb_min + self.scene.aabb_max) / 2 - self.scene.origin + self.staging.shift
         view_depth = -(centers @ view[2, :3] + view[2, 3])
         post = self.post_process(style) if mode == Mode.GHOSTED_AO else None
         origin = self.scene.origin
@@ -304,12 +308,17 @@ class Renderer:
     @property
     def single_target(self) -> LayeredTarget:
         if self._single is None:
-            self._single = LayeredTarget(self.ctx, (64, 64), 1, normals=False)
+            self._single = LayeredTarget(self.ctx, (64, 64), 1, normals=False, stencil=self.atlas.stencil)
         return self._single
 
-    def std(self, camera: Camera, viewport: tuple[int, int]) -> LayeredTarget:
+    def place(self, focus=None) -> None:
+        """Make `staging`'s sections and explode current for `focus` (None: the last; std() takes one too)."""
+        self.staging.place(self.gpu, focus, [t for t in (self.atlas, self._single) if t is not None])
+
+    def std(self, camera: Camera, viewport: tuple[int, int], focus=None) -> LayeredTarget:
         if self._std is None:
             self._std = StdPass(self.ctx)
+        self.place(focus)
         view, proj = self.matrices(camera, viewport)
         projection = self._projection()
         with self._timed("std"):
@@ -328,6 +337,7 @@ class Renderer:
     def rtt(self, camera: Camera, viewport: tuple[int, int], objects, consume=None) -> None:
         if self._rtt is None:
             self._rtt = RttPass(self.ctx)
+        self.place()
         view, proj = self.matrices(camera, viewport)
         self._rtt.render(
             gpu=self.gpu,
@@ -368,6 +378,7 @@ class Renderer:
             self._post,
             self._projector_pass,
             self._lens_pass,
+            self.staging,
         ]:
             if p is not None:
                 p.release()

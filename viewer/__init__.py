@@ -17,6 +17,8 @@ def build_parser() -> argparse.ArgumentParser:
     from rtta.cli.guard import OneLineParser
     from rtta.cli.main import add_load_options
     from rtta.renderer.snapshot import SNAPSHOT_MODES
+    from rtta.scene.camera import PROJECTIONS
+    from rtta.scene.framing import STANDARD_VIEWS
 
     from .state import NAVIGATION_FPS
 
@@ -44,6 +46,16 @@ def build_parser() -> argparse.ArgumentParser:
         help="fast navigation: while the camera moves, leave out the parts smallest on screen to keep "
         f"this frame rate (default {NAVIGATION_FPS:g}; scenes of 500 parts or more; a view at rest "
         "shows every part); 0: off",
+    )
+    p.add_argument("--focus", nargs="+", default=[], metavar="NAME", help="objects highlighted (names, groups, globs)")
+    p.add_argument("--hide", nargs="+", default=[], metavar="NAME", help="objects hidden (names, groups, globs)")
+    p.add_argument(
+        "--camera", default=None, help="AZ,EL (framed) or AZ,EL,DIST (scene radii) orbit, as `rtta snapshot` takes it"
+    )
+    p.add_argument("--view", default=None, choices=tuple(STANDARD_VIEWS), help="a standard view, framed")
+    p.add_argument("--projection", default=None, choices=PROJECTIONS, help="perspective (default) or ortho (key 5)")
+    p.add_argument(
+        "--view-file", default=None, metavar="FILE.json", help="open on a view saved by `rtta snapshot --save-view`"
     )
     add_load_options(p)
     return p
@@ -78,7 +90,9 @@ def main(argv: list[str] | None = None) -> int:
         print(f"rtta-view: broken install ({exc}); reinstall rtta: pip install --force-reinstall rtta", file=sys.stderr)
         return 2
     from .run import run
+    from .start import Start
 
+    start = Start(args.focus, args.hide, args.camera, args.view, args.projection, args.view_file)
     try:
         size = parse_size(args.size)
         bench_modes = _modes(args.bench_modes)
@@ -91,6 +105,7 @@ def main(argv: list[str] | None = None) -> int:
             load=load_options(args),
             bench_modes=bench_modes,
             navigation_fps=_fps(args.navigation_fps),
+            start=start,
         )
     except RttaError as exc:
         print(f"rtta-view: error: {printable(exc)}", file=sys.stderr)

@@ -171,5 +171,7 @@ class Controls:
             app.screenshot()
         elif key == keys.O:
             app.files.open(app.scene_dir)
+        elif key in (keys.NUMBER_5, keys.NUMPAD_5):  # as in Blender: perspective <-> orthographic
+            orbit.projection = "ortho" if orbit.projection == "perspective" else "perspective"
         elif key == keys.Q and modifiers.ctrl:
             app.wnd.close()

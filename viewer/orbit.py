@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rtta.scene.camera import DEFAULT_ORBIT, Camera, fit_distance, up_basis
+from rtta.scene.camera import DEFAULT_ORBIT, Camera, Projection, fit_distance, up_basis
 
 DEGREES_PER_PIXEL = 0.3
 MAX_ELEVATION = 89.0
@@ -38,6 +38,7 @@ class Orbit:
     scene_radius: float
     fov_y: float = 45.0
     up_axis: str = "y"  # the scene's up: the orbit turns about it
+    projection: Projection = "perspective"  # or 'ortho': the half height a perspective view shows at the target
 
     @classmethod
     def default(cls, center, radius: float, up_axis: str = "y") -> Orbit:
@@ -49,7 +50,9 @@ class Orbit:
 
     def camera(self) -> Camera:
         d, up = _direction(self.az, self.el, self.up_axis)
-        cam = Camera(eye=self.target + d * self.dist, target=self.target.copy(), up=up, fov_y=self.fov_y)
+        cam = Camera(
+            eye=self.target + d * self.dist, target=self.target.copy(), up=up, fov_y=self.fov_y, kind=self.projection
+        )
         # near/far must hold the scene and the target, wherever the user wandered
         far_point = float(np.linalg.norm(self.target - self.scene_center)) + self.scene_radius
         return cam.fit_depth(self.target, max(far_point, self.dist * 1e-3))
@@ -99,7 +102,7 @@ class Orbit:
             corners = None
         d, up = _direction(self.az, self.el, self.up_axis)
         self.target = c.copy()
-        dist = fit_distance(pts, c, d, up, self.fov_y, max(float(aspect), 1e-3))
+        dist = fit_distance(pts, c, d, up, self.fov_y, max(float(aspect), 1e-3), projection=self.projection)
         if corners is None:  # a sphere: its silhouette, not only the six points, must fit
             half = np.arctan(np.tan(np.radians(self.fov_y) / 2.0) * min(1.0, max(float(aspect), 1e-3)) * 0.9)
             dist = max(dist, r / np.sin(half))

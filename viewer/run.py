@@ -40,10 +40,11 @@ def run(
     load: dict | None = None,
     bench_modes: tuple[str, ...] | None = None,
     navigation_fps: float | None = None,
+    start=None,
 ) -> int:
     """`load`: the loader's options (smoothing), for this scene and those opened later;
     `navigation_fps`: the frame rate fast navigation keeps while the camera moves (0: off;
-    None: the viewer's default)."""
+    None: the viewer's default); `start`: the first view asked on the command line (start.Start)."""
     from .app import Viewer
 
     scene = load_scene_or_demo(scene_path, **(load or {}))  # a bad file on the command line: one line, exit 2
@@ -52,6 +53,10 @@ def run(
     if navigation_fps is not None:
         app.state.navigation_fps = navigation_fps
     try:
+        if start is not None:
+            from .start import apply_start
+
+            apply_start(app, start)
         if bench:
             print_bench(app, bench, bench_modes)
             return 0

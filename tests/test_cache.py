@@ -18,6 +18,7 @@ from assemblies import write_ifc
 from bad_gltf import box_doc, png
 
 import rtta
+from rtta.errors import RttaError
 from rtta.scene import cache
 from rtta.scene.generators.assembly import write_assembly
 from rtta.scene.loader import load_scene
@@ -151,6 +152,14 @@ def test_a_changed_file_or_input_misses(folder, tmp_path, monkeypatch):
     assert reads.count == 4 and len(_entries(folder)) == 4
 
 
+def test_a_lower_memory_limit_is_not_bypassed(folder, tmp_path, monkeypatch):
+    path = _obj(tmp_path / "files")
+    load_scene(path)
+    monkeypatch.setenv("RTTA_MEMORY_LIMIT_MB", "0.0001")
+    with pytest.raises(RttaError, match="memory"):
+        load_scene(path)
+
+
 def test_a_file_just_written_is_not_cached(folder, tmp_path):
     path = write_assembly(tmp_path / "new.glb", 3)
     load_scene(path)
@@ -258,6 +267,7 @@ def test_processes_loading_at_once_leave_one_valid_entry(folder, tmp_path, monke
     outs = [run.communicate(timeout=300)[0] for run in runs]
     assert [run.returncode for run in runs] == [0] * 8 and outs == ["400\n"] * 8
     assert len(_entries(folder)) == 1 and os.listdir(folder) == [_entries(folder)[0].name]  # no temporaries
+    monkeypatch.setattr(cache, "_CODE", [])  # this process's code fingerprint made now, as the children's were
     reads = Reads(monkeypatch)
     assert_same(load_scene(path, cache=False), load_scene(path))
     assert reads.count == 1  # only the direct load: the entry was whole

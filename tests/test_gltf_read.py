@@ -32,7 +32,7 @@ def _load(path, direct: bool, monkeypatch, smooth: bool = False):
         if not direct:
             m.setattr(gltf.Prepared, "decoded", lambda self: None)
         try:
-            return load_scene(path, smooth=smooth)
+            return load_scene(path, smooth=smooth, cache=False)  # both readings, never the scene cache
         except RttaError as exc:
             return str(exc)
 

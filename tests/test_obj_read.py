@@ -63,10 +63,10 @@ def _triangles(scene, oid: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _both(path, monkeypatch, **options):
-    direct = load_scene(path, **options)
+    direct = load_scene(path, **options, cache=False)  # both readings, never the scene cache
     with monkeypatch.context() as m:
         m.setattr(obj_read, "decode", lambda data, names: None)
-        via_trimesh = load_scene(path, **options)
+        via_trimesh = load_scene(path, **options, cache=False)
     return direct, via_trimesh
 
 

@@ -4,10 +4,10 @@ a second time skips its reading, checks and batching.
 Where: `$RTTA_CACHE_DIR`, else `$XDG_CACHE_HOME/rtta`, else `~/.cache/rtta`; at most
 `$RTTA_CACHE_MAX_BYTES` (default 2 GiB), the least recently used entries evicted after a
 write. An entry is found by the file's resolved path, size and mtime, rtta's version, a
-fingerprint of the scene code (the size and mtime of every module of rtta.scene, so a reader
-edited in a checkout never hands back its old scenes) and the load options; it is used
-only when every file the scene was read from (a glTF's buffers and textures, an OBJ's
-materials) still has its size and mtime.
+fingerprint of the scene code (the size and mtime of every module of rtta.scene, so a
+reader edited in a checkout never hands back its old scenes), the load options and the
+memory limit; it is used only when every file the scene was read from (a glTF's buffers
+and textures, an OBJ's materials) still has its size and mtime.
 
 An entry is one file: a magic line, a JSON head (format version, CRC-32 of what follows:
 it finds damage, and at 1.3 GB/s here against blake2b's 0.3-0.8 it is not what a second
@@ -39,6 +39,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..errors import RttaError
+from .files import memory_limit
 from .model import Scene
 
 FORMAT = 2  # 2: CRC-32 (1 had blake2b)
@@ -180,7 +182,8 @@ def _key(path: Path, options: dict) -> dict | None:
     try:
         resolved = path.resolve()
         size, mtime_ns = _stat(resolved)
-    except (OSError, RuntimeError):
+        limit = memory_limit()
+    except (OSError, RuntimeError, RttaError):  # the load itself says what is wrong
         return None
     return {
         "path": str(resolved),
@@ -189,6 +192,7 @@ def _key(path: Path, options: dict) -> dict | None:
         "version": _version(),
         "code": _code(),
         "options": {k: options[k] for k in sorted(options)},
+        "memory_limit": limit,  # a scene refused under a lower limit is not handed back
     }
 
 

@@ -16,8 +16,6 @@ import numpy as np
 from ..errors import RttaError, printable
 from .closure import closed_objects
 
-SUPPORTED = (".glb", ".gltf", ".obj", ".stl", ".ply", ".3mf", ".off")
-
 # Corner i of a box has bit 0 -> x max, bit 1 -> y max, bit 2 -> z max.
 BOX_EDGES = np.array(
     [(0, 1), (2, 3), (4, 5), (6, 7), (0, 2), (1, 3), (4, 6), (5, 7), (0, 4), (1, 5), (2, 6), (3, 7)], dtype=np.intp

@@ -14,9 +14,10 @@ import numpy as np
 from ..errors import RttaError
 from ..gl.context import CAPTURE_PATHS, CapturePath, CapturePathName
 from ..passes.style import ORDERS, ROLES, Order, OrderName, Role, RoleName, Style
+from ..scene.bounds import BOUNDS, Bounds, BoundsName
 from ..scene.camera import Camera, Projection
 from ..scene.framing import StandardView, scene_orbit
-from ..scene.model import BOUNDS, Bounds, BoundsName, Scene
+from ..scene.model import Scene
 from .renderer import Settings
 from .snapshot import resolve_names
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..gl.context import CapturePath, CapturePathName
-from ..scene.model import Bounds, BoundsName
+from ..scene.bounds import Bounds, BoundsName
 
 
 @dataclass

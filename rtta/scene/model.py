@@ -8,12 +8,11 @@ scene far from the world origin keeps full precision on the GPU.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from enum import StrEnum
-from typing import Literal
 
 import numpy as np
 
 from ..errors import RttaError, printable
+from .bounds import BOUNDS, Bounds, BoundsName
 from .closure import closed_objects
 
 # Corner i of a box has bit 0 -> x max, bit 1 -> y max, bit 2 -> z max.
@@ -21,17 +20,6 @@ BOX_EDGES = np.array(
     [(0, 1), (2, 3), (4, 5), (6, 7), (0, 2), (1, 3), (4, 6), (5, 7), (0, 4), (1, 5), (2, 6), (3, 7)], dtype=np.intp
 )
 _BITS = np.array([[(i >> k) & 1 for k in range(3)] for i in range(8)], dtype=bool)
-
-
-class Bounds(StrEnum):
-    """B_world, the per-object bounds parameterization projects (Settings.bounds)."""
-
-    AABB = "aabb"  # axis-aligned boxes (the paper's)
-    OBB = "obb"  # the AABBs and the principal-axes boxes, their projections intersected
-
-
-BoundsName = Literal["aabb", "obb"]
-BOUNDS: tuple[str, ...] = tuple(b.value for b in Bounds)
 # scene extent below which a GPU may draw nothing (scripts/probe_tiny.py: llvmpipe draws a box
 # down to 1e-36 units and nothing at 1e-38, where float32 underflows; an NVIDIA H200 draws it
 # whole at 1e-15, 4% of it at 1e-20 and nothing at 1e-25, its clipping losing w that small)

@@ -63,7 +63,18 @@ KINDS: Final = (Texture, Image, Storage)
 
 
 def names() -> dict[str, tuple[type, int]]:
-    """Every binding: name -> (its class, its number)."""
+    """Every binding point.
+
+    Returns
+    -------
+    dict of str to (type, int)
+        Name -> (its class: Texture, Image or Storage; its number).
+
+    Raises
+    ------
+    ValueError
+        A name is given in two classes (the shader defines would clash).
+    """
     out: dict[str, tuple[type, int]] = {}
     for kind in KINDS:
         for name, value in vars(kind).items():
@@ -75,5 +86,11 @@ def names() -> dict[str, tuple[type, int]]:
 
 
 def defines() -> dict[str, int]:
-    """`BINDING_<NAME>` -> number, for every binding: what the shader loader defines."""
+    """What the shader loader defines in every shader.
+
+    Returns
+    -------
+    dict of str to int
+        `BINDING_<NAME>` -> number, for every binding of `names()`.
+    """
     return {f"BINDING_{name}": value for name, (_, value) in names().items()}

@@ -53,7 +53,27 @@ E = TypeVar("E", bound=StrEnum)
 
 
 def choice(kind: type[E], value: str, what: str) -> E:
-    """`value` as a member of `kind`; ValueError naming `what` and the choices otherwise."""
+    """`value` as a member of `kind`.
+
+    Parameters
+    ----------
+    kind : type of StrEnum
+        The option's enum (Mode, Role, Order).
+    value : str
+        A member or its string.
+    what : str
+        The option's name, for the message.
+
+    Returns
+    -------
+    StrEnum
+        The member of `kind` equal to `value`.
+
+    Raises
+    ------
+    ValueError
+        `value` is none of them: "<what> must be one of <choices>, got <value>".
+    """
     try:
         return kind(value)
     except ValueError:

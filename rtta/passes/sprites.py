@@ -217,16 +217,16 @@ class SpritePass:
             )
         )
         prog, vao = self._program(**{k: True for k in on})
-        prog["u_viewport"].value = tuple(float(v) for v in records.viewport)
+        glsl.uniform(prog, "u_viewport").value = tuple(float(v) for v in records.viewport)
         if projection is not None or lens is not None:
-            prog["u_inv_view_proj"].write(self._inv_view_proj)
-        prog["u_hull"].value = hull is not None
+            glsl.uniform(prog, "u_inv_view_proj").write(self._inv_view_proj)
+        glsl.uniform(prog, "u_hull").value = hull is not None
         if hull is not None:
             self.hull_draws += 1
             view_proj, eye = hull
-            prog["u_view_proj"].write(view_proj)
-            prog["u_eye"].value = eye
-            prog["u_hull_margin"].value = hull_margin(records.scale[ids])
+            glsl.uniform(prog, "u_view_proj").write(view_proj)
+            glsl.uniform(prog, "u_eye").value = eye
+            glsl.uniform(prog, "u_hull_margin").value = hull_margin(records.scale[ids])
         if projection is not None:
             pass_, projector, origin = projection
             pass_.bind(prog, projector, origin)
@@ -242,7 +242,7 @@ class SpritePass:
             ("u_halo_color", tuple(style.halo_color)),
         ):
             if name in prog:  # the compiler drops what a variant does not use
-                prog[name].value = value
+                glsl.uniform(prog, name).value = value
         self._render(vao, len(ids), draw)
 
     def _render(self, vao: moderngl.VertexArray, count: int, draw: SpriteDraw) -> None:
@@ -259,13 +259,13 @@ class SpritePass:
         fbo.depth_mask = draw.depth in (Depth.NEAREST, Depth.FARTHEST)
         masked = draw.kind is Kind.COLLECTED and not draw.fetched  # else the collect framebuffer masks it
         if masked:
-            fbo.color_mask = (False,) * 4
+            fbo.color_mask = (False, False, False, False)
         fbo.use()
         vao.render(moderngl.POINTS, vertices=count)
         fbo.depth_mask = True
         self.ctx.depth_func = "<"
         if masked:
-            fbo.color_mask = (True,) * 4
+            fbo.color_mask = (True, True, True, True)
 
     def release(self) -> None:
         for obj in [*self._vaos.values(), *self._programs.values(), self.order]:

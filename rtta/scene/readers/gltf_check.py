@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Literal, overload
 
 from ...errors import RttaError
 
@@ -45,17 +46,43 @@ class Checker:
                 self.fail(f"{key}[{i}]", f"must be an object, not {_kind(item)}")
         return value
 
+    @overload  # required, or with a default: an int
     def integer(
         self,
         obj: dict,
         key: str,
         where: str,
         *,
-        below: int | None = None,
-        least: int = 0,
-        required: bool = False,
-        default: int | None = None,
-    ) -> int | None:
+        below: int | None = ...,
+        least: int = ...,
+        required: Literal[True],
+        default: None = ...,
+    ) -> int: ...
+    @overload
+    def integer(
+        self,
+        obj: dict,
+        key: str,
+        where: str,
+        *,
+        below: int | None = ...,
+        least: int = ...,
+        required: bool = ...,
+        default: int,
+    ) -> int: ...
+    @overload
+    def integer(
+        self,
+        obj: dict,
+        key: str,
+        where: str,
+        *,
+        below: int | None = ...,
+        least: int = ...,
+        required: bool = ...,
+        default: None = ...,
+    ) -> int | None: ...
+    def integer(self, obj: dict, key: str, where: str, *, below=None, least=0, required=False, default=None):
         value = obj.get(key, _MISSING)
         if type(value) is int and least <= value <= MAX_COUNT and (below is None or value < below):
             return value  # the common case, first
@@ -73,6 +100,10 @@ class Checker:
             self.fail(f"{where}.{key}", f"is {value}, but there are only {below}")
         return value
 
+    @overload
+    def index(self, obj: dict, key: str, where: str, target: str, *, required: Literal[True]) -> int: ...
+    @overload
+    def index(self, obj: dict, key: str, where: str, target: str, *, required: bool = ...) -> int | None: ...
     def index(self, obj: dict, key: str, where: str, target: str, *, required: bool = False) -> int | None:
         """An index into top-level array `target`."""
         return self.integer(obj, key, where, below=len(self.doc.get(target, [])), required=required)

@@ -7,8 +7,6 @@ the composite and the atlas layer side by side with the panel on the left.
 
 from __future__ import annotations
 
-import re
-import threading
 import time
 from pathlib import Path
 
@@ -18,19 +16,18 @@ from imgui_bundle import imgui, implot
 
 from rtta.errors import RttaError, printable
 from rtta.ldi.lens import Lens, default_placement
-from rtta.outputs import check_file, save_png
 from rtta.passes.projector import Projector, default_image
 from rtta.renderer.navigation import FrameBudget, left_out
 from rtta.renderer.renderer import Renderer
-from rtta.renderer.snapshot import over_background
-from rtta.scene.loader import load_scene
 from rtta.scene.model import Scene
 
 from . import overlay, panels
 from .controls import Controls
 from .files import FileBrowser, Stats
 from .imgui_renderer import GrowingImguiRenderer
+from .loading import Loading
 from .orbit import Orbit
+from .pictures import Pictures
 from .state import ViewerState
 from .views import ATLAS_BACKGROUND, Layout, ViewPass, layer_tiles
 
@@ -38,7 +35,7 @@ WINDOW_CLEAR = (0.11, 0.11, 0.12)
 LABEL_HEIGHT = 22
 
 
-class Viewer:
+class Viewer(Pictures, Loading):
     def __init__(
         self,
         wnd,
@@ -106,38 +103,6 @@ class Viewer:
         corners = scene.box_corners("aabb")[ids].reshape(-1, 3) + scene.origin
         _, _, w, h = self.layout.composite
         self.orbit.frame(corners=corners, aspect=w / h if w > 0 and h > 0 else 1.0)
-
-    def open_scene(self, path) -> bool:
-        """Load `path` now; on failure show the error in the panel and keep the current scene."""
-        return self._opened(path, *_read_scene(path, self.load_options))
-
-    def open_scene_later(self, path) -> None:
-        """Load `path` on a worker thread, so the window keeps drawing while a large file
-        loads (seconds at 10^5 parts); `frame()` takes the scene, or the error, once it is
-        there. The file browser and drag-and-drop open files this way."""
-        if self.loading is not None:
-            self.say(f"still loading {Path(self.loading[0]).name}; open another file when it is done", error=True)
-            return
-        box: dict = {}
-        worker = threading.Thread(
-            target=lambda: box.update(result=_read_scene(path, self.load_options)), name="rtta-load", daemon=True
-        )
-        self.loading = (path, worker, box)
-        self.say(f"loading {Path(path).name} ...")
-        worker.start()
-
-    def _take_loaded(self) -> None:
-        if self.loading is not None and not self.loading[1].is_alive():
-            path, _, box = self.loading
-            self.loading = None
-            self._opened(path, *box.get("result", (None, f"{path}: cannot open (the load stopped)")))
-
-    def _opened(self, path, scene: Scene | None, error: str | None) -> bool:
-        if scene is None:
-            return self.say(error or f"{path}: cannot open", error=True)
-        self.set_scene(scene)
-        self.say("; ".join([f"opened {Path(path).name}", *(f"warning: {w}" for w in scene.warnings)]))
-        return True
 
     def say(self, text: str, error: bool = False) -> bool:
         self.message, self.message_is_error = printable(text), error
@@ -362,60 +327,7 @@ class Viewer:
                 target=self.wnd.fbo,
             )
 
-    # ---- screenshots -------------------------------------------------------------------
-    def screenshot(self) -> list[Path]:
-        """PNGs of the composite and the atlas (layers side by side); never overwrites."""
-        images = {"composite": self.composite_image(), "atlas": self.atlas_image()}
-        images = {k: v for k, v in images.items() if v is not None}
-        stem = re.sub(r"[^\w.-]", "_", Path(self.scene_label).stem)[:80] or "scene"
-        n = 0
-        while True:
-            n += 1
-            paths = {k: self.screenshot_dir / f"rtta-{stem}-{n:03d}-{k}.png" for k in images}
-            if any(p.exists() or p.is_symlink() for p in paths.values()):
-                continue
-            try:
-                for p in paths.values():
-                    check_file(p, self.renderer.scene.inputs, suffix=".png", what="screenshot")
-                written = [save_png(paths[k], img, overwrite=False) for k, img in images.items()]
-            except FileExistsError:
-                continue
-            except (RttaError, OSError) as exc:
-                self.say(f"screenshot not written: {exc}", error=True)
-                return []
-            self.say("saved " + ", ".join(p.name for p in written))
-            return written
-
-    def composite_image(self) -> np.ndarray | None:
-        vp = self.viewport
-        if vp[0] < 1 or vp[1] < 1:
-            return None
-        if self.state.mode == "std":
-            return over_background(self.renderer.std(self.orbit.camera(), vp).read(vp, 1)["color"][0])
-        return self.renderer.target.read()[0].copy()
-
-    def atlas_image(self) -> np.ndarray | None:
-        rec = self.records
-        if rec is None or rec.atlas_size[2] == 0:
-            return None
-        tw, th, td = rec.atlas_size
-        color = self.renderer.atlas.read((tw, th), td, parts=("color",))["color"]
-        return np.concatenate(list(over_background(color, ATLAS_BACKGROUND)), axis=1)  # layers left to right
-
     def release(self) -> None:
         self.renderer.release()
         self.view_pass.release()
         self.imgui.shutdown()
-
-
-def _read_scene(path, options: dict) -> tuple[Scene | None, str | None]:
-    """(scene, None) or (None, the one-line error): a broken file never takes the session down."""
-    try:
-        scene = load_scene(str(path), **options)
-        _ = scene.closed  # which parts cull back faces: worked out here, not in the drawing thread
-        return scene, None
-    except RttaError as exc:
-        return None, str(exc)
-    except Exception as exc:
-        reason = str(exc).strip().splitlines()[0][:200] if str(exc).strip() else ""
-        return None, f"{path}: cannot open ({type(exc).__name__}: {reason})"

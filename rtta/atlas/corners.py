@@ -34,7 +34,7 @@ class CornerClip:
         """The function k -> rows [4, c] for the chunk planar [3, 8, c] (overwritten per call)."""
         c, m = planar.shape[2], self.m
         out = self.out[:, :c]
-        if not self.aligned:
+        if self.prod is None:  # not axis-aligned
 
             def rows(k: int) -> np.ndarray:
                 p = planar[:, k]

@@ -11,6 +11,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
+import numpy.typing as npt
 
 from .corners import CornerClip, axis_aligned, clipped_bounds, points_clip
 from .packing import Packing, pack_shelves
@@ -33,7 +34,10 @@ def project_bounds(corners: np.ndarray, vpm: np.ndarray, reuse: bool = False):
     n = corners.shape[0]
     m = np.asarray(vpm, np.float64)
     planar = corners.transpose(2, 1, 0)
-    new = scratch if reuse else (lambda _, shape, dtype=np.float64: np.empty(shape, dtype))
+
+    def new(name: str, shape: tuple[int, ...] | int, dtype: npt.DTypeLike = np.float64) -> np.ndarray:
+        return scratch(name, shape, dtype) if reuse else np.empty(shape, dtype)
+
     lo = new("bounds.lo", (3, n))
     hi = new("bounds.hi", (3, n))
     all_front = new("bounds.all_front", n, bool)

@@ -15,6 +15,7 @@ import sys
 import threading
 
 import numpy as np
+import numpy.typing as npt
 
 _LOCAL = threading.local()  # one pool per thread: a call never shares its temporaries
 RESULT_BLOCKS = 3  # result blocks kept per name: a caller's last result, the new one, a spare
@@ -27,7 +28,7 @@ def _pool() -> dict:
     return pool
 
 
-def scratch(name: str, shape: tuple[int, ...] | int, dtype=np.float64) -> np.ndarray:
+def scratch(name: str, shape: tuple[int, ...] | int, dtype: npt.DTypeLike = np.float64) -> np.ndarray:
     """An uninitialised array of `shape` that is this thread's `name` until the next request
     for `name` (its contents are overwritten then: never return one from a public call).
     The pool keeps the largest size asked for per name."""

@@ -17,7 +17,9 @@ the arrays' dtypes, shapes and offsets) and the arrays' raw bytes. Nothing in it
 unpickled; an entry that is damaged, truncated, of another format or version, or whose
 arrays do not fit together is ignored (and replaced by the next load), never trusted.
 Entries are written to a temporary file in the folder and renamed into place, so
-processes loading the same file at once each write a whole entry and the last one stays.
+processes loading the same file at once each write a whole entry and the last one stays;
+an entry is never changed in place, so a scene's arrays can map it (copy-on-write: no
+copy of a 300 MB entry before its checksum, 1.7 s of a 2.4 s cached load here).
 A folder that cannot be written means no cache, never an error.
 
 A file modified less than RACY_NS before its load began is not cached: its next change
@@ -29,6 +31,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import mmap
 import os
 import stat
 import sys
@@ -91,13 +94,11 @@ def load(path: Path, options: dict) -> Scene | None:
     entry = folder() / f"{_digest(key)}{SUFFIX}"
     try:
         st = entry.stat()
-        if not stat.S_ISREG(st.st_mode) or st.st_size > max_bytes():
+        if not stat.S_ISREG(st.st_mode) or not len(MAGIC) + 8 < st.st_size <= max_bytes():
             return None
-        with open(entry, "rb") as f:
-            data = bytearray(st.st_size)
-            if f.readinto(data) != st.st_size:
-                raise ValueError("short read")
-    except OSError:
+        with open(entry, "rb") as f:  # mapped copy-on-write: the arrays are writable, read as used
+            data = mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_COPY)
+    except (OSError, ValueError):
         return None
     try:
         scene = _decode(data, key, str(path))
@@ -273,7 +274,7 @@ def _encode(scene: Scene, key: dict, stats: dict) -> tuple[bytes, list, int]:
     return head, chunks, len(head) + sum(len(c) for c in chunks)
 
 
-def _decode(data: bytearray, key: dict, source: str) -> Scene | None:
+def _decode(data: mmap.mmap, key: dict, source: str) -> Scene | None:
     """The Scene in an entry's bytes, or None where anything is amiss."""
     if data[: len(MAGIC)] != MAGIC:
         return None

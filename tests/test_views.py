@@ -190,3 +190,13 @@ def test_ambient_occlusion_and_edges_shade_alike_in_both_projections(gl):
         shade[projection] = float(np.abs(ao[..., :3] - flat[..., :3]).mean())
     assert shade["perspective"] > 0.2 and shade["ortho"] > 0.2, shade
     assert 0.5 < shade["ortho"] / shade["perspective"] < 2.0, shade
+
+
+def test_bench_composite_and_capture_take_the_projection(gl, capsys):
+    from rtta.bench import render as bench
+
+    args = ["--quick", "--size", "96x72", "--scene", "random-12", "--projection", "ortho"]
+    assert main(["bench", "composite", *args]) == 0
+    assert "; ortho; viewport 96x72" in capsys.readouterr().out
+    row = bench.capture_row(gl, _boxes(("a", (1, 1, 1), (0, 0, 0))), (64, 48), 1, rtt=False, projection="ortho")
+    assert row["atlas"][2] == 1 and row["std_ms"] > 0

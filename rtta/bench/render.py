@@ -17,7 +17,7 @@ from ..atlas.packing import pack_shelves
 from ..atlas.parameterize import parameterize
 from ..gl.context import create_headless_context
 from ..renderer.renderer import Renderer
-from ..scene.camera import Camera
+from ..scene.camera import Camera, Projection
 from ..scene.generators.generate import TABLE1, random_scene, table1_scene
 
 
@@ -61,9 +61,9 @@ def _gl_timed(ctx, fn):
     return run
 
 
-def capture_row(ctx, scene, viewport, frames: int, rtt: bool = True) -> dict:
+def capture_row(ctx, scene, viewport, frames: int, rtt: bool = True, projection: Projection = "perspective") -> dict:
     r = Renderer(ctx, scene)
-    cam = Camera.orbit(scene.center, scene.radius, 30.0, 20.0, 2.2)
+    cam = Camera.orbit(scene.center, scene.radius, 30.0, 20.0, 2.2, projection=projection)
     view, proj = r.matrices(cam, viewport)
     corners, vpm = scene.box_corners(), proj @ view
     row = {"objects": scene.count, "vertices": scene.vertex_count}
@@ -86,18 +86,26 @@ def capture_row(ctx, scene, viewport, frames: int, rtt: bool = True) -> dict:
     return row
 
 
-def param_scaling(counts, viewport, frames: int) -> list[dict]:
+def param_scaling(counts, viewport, frames: int, projection: Projection = "perspective") -> list[dict]:
     out = []
     for n in counts:
         scene = random_scene(n, seed=7, spread=4.0 * np.cbrt(n))
-        cam = Camera.orbit(scene.center, scene.radius, 30.0, 20.0, 2.2)
+        cam = Camera.orbit(scene.center, scene.radius, 30.0, 20.0, 2.2, projection=projection)
         vpm = cam.projection(viewport[0] / viewport[1]) @ cam.view(scene.origin)
         corners = scene.box_corners()
         out.append({"objects": n, "ms": _median_ms(lambda c=corners, m=vpm: parameterize(c, m, viewport), frames)})
     return out
 
 
-def run_capture(viewport: tuple[int, int], quick: bool = False, json_path: str | None = None, ctx=None) -> int:
+def run_capture(
+    viewport: tuple[int, int],
+    quick: bool = False,
+    json_path: str | None = None,
+    ctx=None,
+    projection: Projection = "perspective",
+) -> int:
+    """Table 1's frame times (STD, RTT, RTTA both paths) and Algorithm 1's scaling, with a
+    perspective (the paper's) or orthographic camera."""
     ctx = ctx or create_headless_context()
     renderer = str(ctx.info["GL_RENDERER"])
     frames = 3 if quick else 15
@@ -105,9 +113,10 @@ def run_capture(viewport: tuple[int, int], quick: bool = False, json_path: str |
     for objects, vertices in TABLE1:
         if quick:
             vertices = min(vertices, 60000)
-        rows.append(capture_row(ctx, table1_scene(objects, vertices), viewport, frames))
-    scaling = param_scaling([100, 1000] if quick else [100, 300, 1000, 3000, 10000], viewport, 5 if quick else 21)
-    _print_capture(rows, scaling, renderer, viewport)
+        rows.append(capture_row(ctx, table1_scene(objects, vertices), viewport, frames, projection=projection))
+    counts = [100, 1000] if quick else [100, 300, 1000, 3000, 10000]
+    scaling = param_scaling(counts, viewport, 5 if quick else 21, projection)
+    _print_capture(rows, scaling, f"{renderer}; {projection}", viewport)
     if json_path:
         Path(json_path).write_text(
             json.dumps(
@@ -140,7 +149,9 @@ def _print_capture(rows, scaling, renderer, viewport) -> None:
         print(f"{n:>8} {s['ms']:>8.3f} {s['ms'] / (n * np.log2(n)) * 1e3:>20.4f}")
 
 
-def composite_row(ctx, name, scene, viewport, frames: int, settings=None) -> dict:
+def composite_row(
+    ctx, name, scene, viewport, frames: int, settings=None, projection: Projection = "perspective"
+) -> dict:
     """Full frame per mode (capture + post + composite) against STD at the default settings,
     plus ghosted-ao at full quality (AO and edges on every object, every region at scale 1)
     and transparent in object order (the default is per pixel), all taking turns within each round; the error of the
@@ -151,7 +162,7 @@ def composite_row(ctx, name, scene, viewport, frames: int, settings=None) -> dic
 
     r = Renderer(ctx, scene, settings)
     full = Renderer(ctx, scene, Settings(border=r.settings.border))
-    cam = Camera.orbit(scene.center, scene.radius, 30.0, 20.0, 2.2)
+    cam = Camera.orbit(scene.center, scene.radius, 30.0, 20.0, 2.2, projection=projection)
     focus = {0, scene.count // 2}
     styles = {
         "full": Style(focus=focus, ao_objects="all", edge_objects="all"),
@@ -220,13 +231,15 @@ def run_composite(
     json_path: str | None = None,
     ctx=None,
     scenes: list[str] | None = None,
+    projection: Projection = "perspective",
 ) -> int:
+    """Every mode's frame time against STD, with a perspective or orthographic camera."""
     ctx = ctx or create_headless_context()
     renderer = str(ctx.info["GL_RENDERER"])
     frames = 3 if quick else 11
     scenes = composite_scenes(scenes, quick)
-    rows = [composite_row(ctx, name, scene, viewport, frames) for name, scene in scenes]
-    _print_composite(rows, renderer, viewport, frames)
+    rows = [composite_row(ctx, name, scene, viewport, frames, projection=projection) for name, scene in scenes]
+    _print_composite(rows, f"{renderer}; {projection}", viewport, frames)
     if json_path:
         Path(json_path).write_text(
             json.dumps({"renderer": renderer, "viewport": list(viewport), "scenes": rows}, indent=1)

@@ -14,9 +14,11 @@ def add_parsers(sub):
     b.add_argument("--size", default="1024x1024")
     b.add_argument("--quick", action="store_true", help="short run (fewer frames, smaller scenes)")
     b.add_argument("--json", default=None, help="also write the figures as JSON")
+    _projection(b)
     b = bsub.add_parser("composite", help="per-mode frame time against STD, and re-composite time")
     b.add_argument("--size", default="1024x1024")
     b.add_argument("--quick", action="store_true")
+    _projection(b)
     b.add_argument(
         "--scene",
         nargs="+",
@@ -90,9 +92,13 @@ def cmd_bench(args) -> int:
     from ..bench import render as bench
 
     if args.bench == "capture":
-        return bench.run_capture(parse_size(args.size), quick=args.quick, json_path=args.json)
+        return bench.run_capture(
+            parse_size(args.size), quick=args.quick, json_path=args.json, projection=args.projection
+        )
     if args.bench == "composite":
-        return bench.run_composite(parse_size(args.size), quick=args.quick, json_path=args.json, scenes=args.scene)
+        return bench.run_composite(
+            parse_size(args.size), quick=args.quick, json_path=args.json, scenes=args.scene, projection=args.projection
+        )
     if args.bench == "reliability":
         from ..bench.reliability_table import run_reliability
 
@@ -137,3 +143,12 @@ def cmd_bench(args) -> int:
 
         return run_report(quick=args.quick, markdown=args.markdown, plots=args.plots)
     return bench.run_packing(quick=args.quick, json_path=args.json)
+
+
+def _projection(b) -> None:
+    b.add_argument(
+        "--projection",
+        choices=("perspective", "ortho"),
+        default="perspective",
+        help="the benchmark camera's projection (default perspective, the paper's)",
+    )

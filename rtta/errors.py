@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import unicodedata
 from pathlib import Path
 
@@ -53,3 +54,52 @@ def printable(text: object) -> str:
         else:
             out.append(ch)
     return "".join(out)
+
+
+_PLAIN = (  # an exception's kind (or a base's) -> what happened, in the user's terms
+    ("MemoryError", "out of memory"),
+    ("RecursionError", "nested too deeply"),
+    ("UnicodeError", "text that is not valid in its encoding"),
+    ("EOFError", "it ends too early"),
+    ("ArithmeticError", "a number out of range"),
+    ("LinAlgError", "a transform that cannot be inverted"),
+)
+_INTERNAL = ("AttributeError", "TypeError", "NameError", "LookupError", "AssertionError", "StopIteration")
+
+
+def reason(exc: BaseException, limit: int = 160) -> str:
+    """Why a library failed, for a message in parentheses: the first line of its own text
+    where that speaks of the input, else what its kind of failure means in the user's terms;
+    never the exception's class, nor Python's own wording (`'NoneType' object has no attribute
+    'x'`, `list index out of range`) from a library's bug.
+
+    Parameters
+    ----------
+    exc : BaseException
+        What the library raised.
+    limit : int
+        Characters kept of its text.
+
+    Returns
+    -------
+    str
+        One line.
+    """
+    kinds = [kind.__name__ for kind in type(exc).__mro__]
+    if isinstance(exc, OSError) and exc.strerror:
+        return exc.strerror
+    if type(exc).__module__ == "zlib":  # zlib.error: 'Error -3 while decompressing data: ...'
+        return "compressed data that is damaged"
+    plain = next((text for name, text in _PLAIN if name in kinds), None)
+    if plain is not None:
+        return plain
+    if isinstance(exc, KeyError) and exc.args and isinstance(exc.args[0], str) and " " in exc.args[0].strip():
+        return exc.args[0].strip().splitlines()[0][:limit]  # KeyError('no such entity #42'): a message, not a key
+    if any(name in kinds for name in _INTERNAL):
+        return "data of a form the reader does not expect"
+    try:
+        lines = str(exc).strip().splitlines()
+    except Exception:  # a __str__ that fails (usd-core's, on bytes that are not UTF-8)
+        lines = []
+    line = re.sub(r"\s*<[^<>]* at 0x[0-9a-fA-F]+>", "", lines[0]).strip() if lines else ""  # an object's repr
+    return line[:limit] or ("a system error" if isinstance(exc, OSError) else "a failure the library does not describe")

@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
-from .errors import RttaError
+from .errors import RttaError, reason
 
 NAME_MAX = 255  # bytes in one path component (Linux, macOS)
 PATH_MAX = 4096
@@ -159,8 +159,7 @@ def signals_held() -> Iterator[None]:
 # ---- paths ----------------------------------------------------------------------------
 def os_error(exc: OSError, path: str | Path, doing: str = "cannot write") -> RttaError:
     """An OSError as one line naming the path (read-only or full file system, permissions ...)."""
-    reason = exc.strerror or type(exc).__name__
-    return RttaError(f"{doing} ({reason})", path)
+    return RttaError(f"{doing} ({reason(exc)})", path)
 
 
 def _check_name(path: Path, what: str) -> None:

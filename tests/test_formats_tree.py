@@ -133,4 +133,4 @@ def test_usd_errors_are_one_short_line():
         def __str__(self):
             raise UnicodeDecodeError("utf-8", b"\x8c", 0, 1, "invalid start byte")
 
-    assert usd._error_text(NotUtf8()) == "NotUtf8"
+    assert usd._error_text(NotUtf8()) == "a failure the library does not describe"  # no class name

@@ -15,7 +15,7 @@ import warnings
 from pathlib import Path
 from urllib.parse import unquote
 
-from ..errors import RttaError
+from ..errors import RttaError, reason
 
 DEFAULT_LIMIT_MB = 4096
 MAX_FILE_BYTES = 2 * 1024**3
@@ -61,7 +61,7 @@ def regular_file(path: Path, what: str = "file") -> int:
     except NotADirectoryError:
         raise RttaError("no such file (a part of the path is not a folder)", path) from None
     except OSError as exc:
-        raise RttaError(f"cannot read the {what} ({exc.strerror or type(exc).__name__})", path) from None
+        raise RttaError(f"cannot read the {what} ({reason(exc)})", path) from None
     except ValueError:  # NUL byte in the path
         raise RttaError("the path contains a NUL byte", str(path).replace("\0", "\\0")) from None
     if stat.S_ISDIR(st.st_mode):
@@ -104,7 +104,7 @@ def read_limited(target: Path, path: Path, what: str) -> bytes:
         with open(target, "rb") as f:
             return f.read(size + 1)[:size]
     except OSError as exc:
-        raise RttaError(f"{what} cannot be read ({exc.strerror or type(exc).__name__})", path) from None
+        raise RttaError(f"{what} cannot be read ({reason(exc)})", path) from None
 
 
 class TextureBudget:
@@ -165,7 +165,7 @@ def open_image(path: Path, what: str = "image"):
             im = Image.open(io.BytesIO(data))
             im.load()
         except Exception as exc:
-            raise RttaError(f"cannot read the {what} ({type(exc).__name__})", path) from None
+            raise RttaError(f"cannot read the {what} ({reason(exc)})", path) from None
     return im
 
 

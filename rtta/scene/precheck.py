@@ -15,7 +15,7 @@ import zipfile
 import zlib
 from pathlib import Path
 
-from ..errors import RttaError
+from ..errors import RttaError, reason
 from .files import MAX_OBJECTS_LARGE, max_objects, memory_limit
 
 # what reading a damaged zip archive raises (3MF, 3DXML, ZAE): the directory, or a member's
@@ -132,7 +132,7 @@ def _threemf(path: Path) -> None:
             with archive.open(model) as stream:
                 _threemf_graph(stream, head, path)
     except ZIP_ERRORS as exc:
-        raise RttaError(f"not a readable 3MF archive ({str(exc)[:100] or type(exc).__name__})", path) from None
+        raise RttaError(f"not a readable 3MF archive ({reason(exc, 100)})", path) from None
 
 
 def _threemf_graph(stream, head: bytes, path: Path) -> None:

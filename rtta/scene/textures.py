@@ -6,6 +6,8 @@ import hashlib
 
 import numpy as np
 
+from ..errors import reason
+
 
 class TextureTable:
     """Collects textures as uint8 RGBA arrays with row 0 at v = 0 (OpenGL's convention, which
@@ -43,8 +45,7 @@ class TextureTable:
             self._keep.append(image)
             name = image.info.get("file_path") or getattr(image, "filename", "") or "an embedded image"
             self.notes.append(
-                f"texture '{name}' cannot be decoded ({type(exc).__name__}); objects using it keep "
-                "their material colour"
+                f"texture '{name}' cannot be decoded ({reason(exc)}); objects using it keep their material colour"
             )
             return -1
         digest = hashlib.sha1(rgba.tobytes() + str(rgba.shape).encode()).digest()

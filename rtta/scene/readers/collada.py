@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...errors import RttaError
+from ...errors import RttaError, reason
 from . import Assembly, check_archive, hidden, unit_name
 
 MAX_DEPTH = 256
@@ -22,8 +22,7 @@ def read(path: Path) -> Assembly:
     try:
         dae = collada.Collada(str(path), ignore=[collada.common.DaeUnsupportedError, collada.common.DaeBrokenRefError])
     except Exception as exc:  # pycollada raises many types for bad files
-        reason = (str(exc).strip().splitlines() or [type(exc).__name__])[0][:160]
-        raise RttaError(f"cannot read COLLADA file ({reason})", path) from None
+        raise RttaError(f"cannot read COLLADA file ({reason(exc)})", path) from None
     info = dae.assetInfo
     meters = float(getattr(info, "unitmeter", None) or 1.0)
     axis = str(getattr(info, "upaxis", "Y_UP") or "Y_UP").upper()

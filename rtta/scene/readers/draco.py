@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...errors import RttaError
+from ...errors import RttaError, reason
 from ..files import memory_limit
 from .gltf_check import TYPE_WIDTH
 from .gltf_read import append_accessor, view_bytes
@@ -100,9 +100,7 @@ def read(path: Path) -> list[dict]:
         except MemoryError:
             raise
         except Exception as exc:
-            text = str(exc).strip().splitlines()
-            reason = text[0][:120] if text else type(exc).__name__
-            raise RttaError(f"its Draco-compressed geometry {i} cannot be decoded ({reason})", path) from None
+            raise RttaError(f"its Draco-compressed geometry {i} cannot be decoded ({reason(exc, 120)})", path) from None
         out.append({"faces": faces, "attributes": attributes})
     return out
 

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...errors import RttaError
+from ...errors import RttaError, reason
 from ...outputs import signals_held
 from . import Assembly, unit_name
 
@@ -65,8 +65,7 @@ def read(path: Path, left_out: tuple[str, ...] = LEFT_OUT) -> Assembly:
 
 
 def _reason(exc: Exception) -> str:
-    text = str(exc).strip().splitlines()
-    return (text[0] if text else type(exc).__name__)[:160]
+    return reason(exc)
 
 
 def _check_text(path: Path) -> None:

@@ -37,8 +37,8 @@ except RttaError as exc:
 except MemoryError:
     result = ("error", "out of memory while reading it")
 except Exception as exc:
-    text = str(exc).strip().splitlines()
-    result = ("failed", type(exc).__name__ + (": " + text[0][:160] if text else ""))
+    from rtta.errors import reason
+    result = ("failed", reason(exc))
 with open(out + ".part", "wb") as f:
     pickle.dump(result, f, protocol=5)
 os.replace(out + ".part", out)

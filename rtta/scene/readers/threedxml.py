@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 from lxml import etree
 
-from ...errors import RttaError
+from ...errors import RttaError, reason
 from ..precheck import ZIP_ERRORS
 from . import Assembly, check_archive, hidden
 
@@ -24,8 +24,7 @@ def read(path: Path) -> Assembly:
     try:
         loaded = trimesh.load(str(path), file_type="3dxml", force="scene", process=False)
     except Exception as exc:  # trimesh raises many types for corrupt files
-        reason = (str(exc).strip().splitlines() or [type(exc).__name__])[0][:160]
-        raise RttaError(f"cannot read 3DXML file ({reason})", path) from None
+        raise RttaError(f"cannot read 3DXML file ({reason(exc)})", path) from None
     out = Assembly(unit="mm", up_axis="z")
     graph = loaded.graph
     hiders: dict[str, None] = {}  # parts placed by a singular transform (trimesh keeps no other nodes)

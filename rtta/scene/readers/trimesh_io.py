@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...errors import RttaError
+from ...errors import RttaError, reason
 
 
 def trimesh_load(source, file_type: str, path: Path, resolver):
@@ -19,11 +19,8 @@ def trimesh_load(source, file_type: str, path: Path, resolver):
     try:
         options = {"split_objects": True, "group_material": False} if file_type == "obj" else {}
         return trimesh.load(source, file_type=file_type, force="scene", process=False, resolver=resolver, **options)
-    except (MemoryError, RecursionError) as exc:
-        raise RttaError(f"cannot read {path.suffix[1:].upper()} file ({type(exc).__name__})", path) from None
-    except Exception as exc:  # trimesh raises many types for corrupt files
-        reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        raise RttaError(f"cannot read {path.suffix[1:].upper()} file ({reason[:160]})", path) from None
+    except Exception as exc:  # trimesh raises many types for corrupt files (MemoryError, RecursionError too)
+        raise RttaError(f"cannot read {path.suffix[1:].upper()} file ({reason(exc)})", path) from None
 
 
 def base_color(mesh) -> list[float] | None:

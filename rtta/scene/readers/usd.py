@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...errors import RttaError
+from ...errors import RttaError, reason
 from ...outputs import signals_held
 from ..batch import fans
 from . import Assembly, check_archive, hidden, native_output, unit_name
@@ -85,7 +85,7 @@ def _error_text(exc: Exception) -> str:
     try:
         return str(exc)
     except Exception:
-        return type(exc).__name__
+        return reason(exc)
 
 
 def _short(text: str) -> str:

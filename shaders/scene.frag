@@ -1,6 +1,6 @@
 #version 430
-// defines: PROJECTOR TEXTURED SEPARATE NO_NORMAL SECTIONS CAP_DEPTH
-// SECTIONS, CAP_DEPTH: cut, capped (section.glsl)
+// defines: PROJECTOR TEXTURED SEPARATE NO_NORMAL SECTIONS CAP_COUNT CAP_DRAW
+// SECTIONS, CAP_COUNT, CAP_DRAW: cut, capped (section.glsl)
 // Multiple render targets: shaded colour, view-space normal (RGBA8: n * 0.5 + 0.5; the view
 // distance post-processing needs comes from the depth), object id (depth is the depth
 // attachment). NO_NORMAL: colour and id only (STD, RTT: nothing reads their normals).
@@ -43,17 +43,17 @@ void main() {
     float len_n = length(fs_in.normal);
     vec3 n = len_n > 1e-20 ? fs_in.normal / len_n : vec3(0.0, 0.0, 1.0);
     if (!gl_FrontFacing) n = -n;
-#ifdef SECTIONS
-    int flags = int(placement[fs_in.object].w);
-    if ((flags & 1) != 0 && section_removed(fs_in.world)) discard;
+#if defined(CAP_COUNT) || defined(CAP_DRAW)
     vec3 hit;
     int plane;
-    bool cap = (flags & 2) != 0 && !gl_FrontFacing && section_entry(fs_in.world, hit, plane);
-#ifdef CAP_DEPTH
-    if (!cap) discard;
+    float enter;   // every surface beyond the entry counts, removed ones too
+    if (!section_entry(fs_in.world, hit, plane, enter) || enter >= 1.0) discard;
+#ifdef CAP_DRAW
     gl_FragDepth = section_depth(hit);
+    n = normalize(mat3(u_view) * u_sections[plane].xyz);   // faces the eye: it came from that side
 #endif
-    if (cap) n = normalize(mat3(u_view) * u_sections[plane].xyz);   // faces the eye: it came from that side
+#elif defined(SECTIONS)
+    if (int(placement[fs_in.object].w) % 2 == 1 && section_removed(fs_in.world)) discard;
 #endif
     // headlight: light from the camera, two-sided
     float light = surface_light(n);
@@ -65,8 +65,8 @@ void main() {
     base *= material_texel(f_material_rect, f_material_layer, f_uv, dFdx(f_uv), dFdy(f_uv));
 #endif
 #endif
-#ifdef SECTIONS
-    if (cap) base = cap_color(fs_in.color, hit, u_sections[plane].xyz);
+#ifdef CAP_DRAW
+    base = cap_color(fs_in.color, hit, u_sections[plane].xyz);
 #endif
     vec3 rgb = base * light;
 #ifdef PROJECTOR

@@ -1,10 +1,10 @@
 // Cutaways and exploded views, for scene.vert / scene.frag (capture, STD, RTT).
 // PLACED: each vertex moved by its object's offset (explode). SECTIONS: fragments beyond a
-// section plane discarded on cut objects; on capped ones (closed parts, caps on) a back face
-// seen through the cut is drawn as the cap: the ray's entry into the kept region, on the
-// plane it crosses there, flat-lit with the plane's normal. CAP_DEPTH: the second draw of
-// the capped back faces, writing the cap's depth where the first made the back face the
-// nearest surface (stencil 1; rtta/passes/sections.py).
+// section plane discarded on cut objects. Caps (closed parts, caps on; rtta/passes/sections.py):
+// the cap lies where the view ray enters the kept region, on the plane it crosses there, when
+// that point is inside the part: CAP_COUNT counts the part's surfaces beyond it into the
+// stencil (back +1, front -1: its winding number), CAP_DRAW draws the cap, flat-lit with the
+// plane's normal, from the part's back faces where the count is not 0.
 #if defined(PLACED) || defined(SECTIONS)
 // xyz: the object's world offset (scene origin at 0); w: flags, 1 cut, 2 capped
 layout(std430, binding = BINDING_PLACEMENT) readonly buffer PlacementBuffer { vec4 placement[]; };
@@ -27,12 +27,13 @@ bool section_removed(vec3 p) {
 
 // Where the view ray through p (from the near plane on: perspective or orthographic alike)
 // enters the kept region: false when it starts inside it (no plane crossed before p).
-bool section_entry(vec3 p, out vec3 hit, out int plane) {
+// `enter`: where along q -> p (p at 1) that is; a fragment lies beyond the entry when enter < 1.
+bool section_entry(vec3 p, out vec3 hit, out int plane, out float enter) {
     vec4 c = u_proj * (u_view * vec4(p, 1.0));
     vec4 q4 = u_section_inverse * vec4(c.xy / c.w, -1.0, 1.0);
     vec3 q = q4.xyz / q4.w;
     vec3 d = p - q;
-    float enter = 0.0;
+    enter = 0.0;
     plane = -1;
     for (int i = 0; i < u_section_count; ++i) {
         float above = dot(u_sections[i].xyz, q) - u_sections[i].w, along = dot(u_sections[i].xyz, d);

@@ -9,8 +9,9 @@ from ..scene.cutaway import CAPS, MAX_SECTIONS, SECTION_SCOPES
 from ..scene.explode import EXPLODE_MAX, EXPLODE_SCOPES
 
 
-def cutaway_args(p: argparse.ArgumentParser) -> None:
-    """--section (repeatable), --caps, --section-scope, --explode, --explode-scope."""
+def cutaway_args(p: argparse.ArgumentParser, scopes: bool = True) -> None:
+    """--section (repeatable), --caps, --explode; with `scopes` (commands that take a focus)
+    --section-scope and --explode-scope too."""
     p.add_argument(
         "--section",
         action="append",
@@ -27,17 +28,19 @@ def cutaway_args(p: argparse.ArgumentParser) -> None:
         help="cut faces of closed parts: filled in the part's colour, darker (solid, default), hatched, or open",
     )
     p.add_argument(
-        "--section-scope",
-        default="all",
-        metavar="|".join(SECTION_SCOPES),
-        help="cut every part (all, default) or the context only, the focus parts staying whole",
-    )
-    p.add_argument(
         "--explode",
         default="0",
         metavar="F",
         help=f"pull the parts apart along the part tree: 0 assembled (default), 1 fully exploded, up to "
         f"{EXPLODE_MAX:g}; sub-assemblies separate first",
+    )
+    if not scopes:
+        return
+    p.add_argument(
+        "--section-scope",
+        default="all",
+        metavar="|".join(SECTION_SCOPES),
+        help="cut every part (all, default) or the context only, the focus parts staying whole",
     )
     p.add_argument(
         "--explode-scope",

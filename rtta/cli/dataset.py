@@ -9,6 +9,7 @@ import threading
 from pathlib import Path
 
 from ..errors import RttaError
+from .cutaway import cutaway_args, staging_of
 
 
 def add_parsers(sub, bench_sub, common: tuple) -> None:
@@ -67,6 +68,7 @@ def add_parsers(sub, bench_sub, common: tuple) -> None:
         metavar="FILE.json",
         help="one view per scene: the camera, projection and hidden parts saved by `rtta snapshot --save-view`",
     )
+    cutaway_args(p, scopes=False)
     p.add_argument(
         "--depth",
         choices=("png", "npy"),
@@ -144,6 +146,7 @@ def cmd_dataset(args: argparse.Namespace) -> int:
     load = load_options(args)
     if not 1 <= args.views <= 1_000_000 or args.workers < 1 or args.min_visible < 0:
         raise RttaError("--views must be 1..1000000, --workers at least 1, --min-visible at least 0")
+    staging = staging_of(args)  # checked before any scene is read
     opts = Options(
         scenes=args.scenes,
         views=args.views,
@@ -162,6 +165,9 @@ def cmd_dataset(args: argparse.Namespace) -> int:
         smooth=load["smooth"],
         projection=args.projection,
         view_file=_view_file(args),
+        sections=list(args.section),
+        caps=args.caps,
+        explode=staging.explode,
     )
     how = Run(
         out=Path(args.out).absolute(),

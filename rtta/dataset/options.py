@@ -49,6 +49,9 @@ class Options:
     smooth: bool = False
     projection: str = "perspective"  # or 'ortho' (--projection)
     view_file: dict | None = None  # a saved view (rtta.renderer.view_file), one view per scene (--view-file)
+    sections: list[str] = field(default_factory=list)  # section plane SPECs (--section; rtta.scene.cutaway)
+    caps: str = "solid"  # --caps
+    explode: float = 0.0  # --explode
 
 
 @dataclass
@@ -110,7 +113,13 @@ def settings(opts: Options, paths: list[str]) -> dict:
         s[k] = list(s[k])
     if opts.view_file is not None:
         s["views"] = 1
-    for k, default in (("projection", "perspective"), ("view_file", None)):
+    for k, default in (
+        ("projection", "perspective"),
+        ("view_file", None),
+        ("sections", []),
+        ("caps", "solid"),
+        ("explode", 0.0),
+    ):
         if s[k] == default:
             del s[k]  # the settings of datasets made before these options stay the same
     return s

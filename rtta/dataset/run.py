@@ -37,6 +37,7 @@ class Worker:
         if self.index == index:
             return
         from ..gl.context import shared_context
+        from ..renderer.placing import make_staging
         from ..renderer.renderer import Renderer
         from ..scene.loader import load_scene
 
@@ -53,6 +54,10 @@ class Worker:
         path.parent.mkdir(parents=True, exist_ok=True)
         atomic_write(path, lambda tmp: Path(tmp).write_text(coco.dumps(part), encoding="utf-8"))
         self.renderer = Renderer(shared_context(), scene)
+        self.renderer.staging = make_staging(
+            self.s.get("sections", []), self.s.get("caps", "solid"), "all", self.s.get("explode", 0.0)
+        )
+        self.renderer.staging.framed(scene)  # a plane removing every part: this scene fails here
         self.index = index
 
     def view(self, index: int, view: int) -> int:
@@ -131,7 +136,8 @@ def produce_view(
     key = s["scenes"][index]["key"]
     scene = renderer.scene
     size = tuple(s["size"])
-    camera, how = ds.camera_for(s, key, view, scene.center, scene.radius, scene)
+    framed = renderer.staging.framed(scene)  # exploded: the cameras frame the moved parts
+    camera, how = ds.camera_for(s, key, view, framed.center, framed.radius, scene)
     renderer.hidden = set(ds.hidden_ids(s, scene))  # a saved view's hidden parts: not drawn nor annotated
     t0 = time.perf_counter()
     result = render(renderer, camera, size, appearance=s["appearance"])

@@ -39,6 +39,8 @@ class ScenePass:
     """Shared setup: a program from scene.vert (+ optional geometry shader) and scene.frag
     (or another fragment shader, e.g. depth.frag for the projector's shadow map)."""
 
+    disjoint = False  # objects may share texels (STD): caps are made one object at a time
+
     def __init__(
         self, ctx: moderngl.Context, geometry: str | None = None, fragment: str = "scene.frag", **defines: object
     ) -> None:
@@ -107,54 +109,53 @@ class ScenePass:
         """Draw the objects in `objects` (bool [n]; None: all) as setup() prepared them: the
         closed ones (Scene.closed) wholly beyond the near plane with their back faces culled,
         which are never seen then, the others double-sided; one call for each kind there is.
-        Capped objects (sections) are drawn last, marking the stencil, then capped."""
+        Then the caps of the capped objects (sections): all at once where each texel belongs
+        to one object (the atlas, RTT), else one object after the other (STD)."""
         closed = self._cullable
-        capped = self._capped if self._capped is None or objects is None else self._capped & objects
-        if capped is not None and not capped.any():
-            capped = None
         try:
-            if capped is not None:
-                sections.stencil_mark(0)
             for cull, kind in ((True, closed), (False, ~closed)):
                 mask = kind if objects is None else kind & objects
-                if capped is not None:
-                    mask = mask & ~capped
                 if mask.any():
                     self.cull(cull)
                     self._draw_runs(vao, None if mask.all() else gpu.scene.index_runs(mask))
-            if capped is not None:  # front faces, then back faces pushed back a little: where
-                runs = gpu.scene.index_runs(capped)  # a mesh has a front and a back face in one
-                sections.stencil_mark(1)  # place (boxes concatenated into one part), the front wins
-                self.cull(True)
-                self._draw_runs(vao, runs)
-                self.ctx.cull_face = "front"
-                self.ctx.polygon_offset = sections.BACK_OFFSET
-                self._draw_runs(vao, runs)
-                self.ctx.polygon_offset = (0.0, 0.0)
-                self._cap_depth(capped)
         finally:
             self.cull(False)
-            if capped is not None:
-                self.ctx.polygon_offset = (0.0, 0.0)
-                glraw.stencil_off()
+        capped = self._capped if self._capped is None or objects is None else self._capped & objects
+        if capped is None or not capped.any():
+            return
+        if self.disjoint:
+            self._caps(capped)
+            return
+        one = np.zeros(len(capped), bool)
+        for oid in np.flatnonzero(capped):
+            one[oid] = True
+            self._caps(one)
+            one[oid] = False
 
-    def _cap_depth(self, capped: np.ndarray) -> None:
-        """The caps' depth: the capped back faces again, where the stencil says a capped back
-        face is the texel's nearest surface, writing the depth of the ray's entry into the kept
-        region (no colour); restores the program's state after."""
+    def _caps(self, capped: np.ndarray) -> None:
+        """Cap `capped` (bool [n]) where the view ray enters the kept region inside them: their
+        surfaces beyond that point counted into the stencil (its winding number), then their
+        back faces drawn as the cap where the count is not 0, resetting it (rtta.passes.sections)."""
         gpu, view, proj, target, variant = self._drawn
-        program = self._program(gpu, view, proj, target, {**variant, "CAP_DEPTH": True})
-        gpu.bind_material(program)
+        runs = gpu.scene.index_runs(capped)
         masks = target.color_writes(False)
-        self.ctx.enable(moderngl.CULL_FACE)
-        self.ctx.cull_face, self.ctx.front_face = "front", "ccw"
-        self.ctx.depth_func = "1"
-        sections.stencil_equal(1)
         try:
-            self._draw_runs(gpu.vao(program), gpu.scene.index_runs(capped))
+            sections.stencil_count()
+            self.ctx.depth_func = "1"
+            self._draw_runs(gpu.vao(self._program(gpu, view, proj, target, {**variant, "CAP_COUNT": True})), runs)
+            sections.stencil_cap()
+            self.ctx.depth_func = "<"
+            target.color_writes(masks)
+            self.ctx.enable(moderngl.CULL_FACE)
+            self.ctx.cull_face, self.ctx.front_face = "front", "ccw"
+            program = self._program(gpu, view, proj, target, {**variant, "CAP_DRAW": True})
+            gpu.bind_material(program)
+            self._draw_runs(gpu.vao(program), runs)
         finally:
+            sections.stencil_off()
             self.ctx.depth_func = "<"
             self.ctx.cull_face = "back"
+            self.cull(False)
             target.color_writes(masks)
 
     def cull(self, on: bool) -> None:

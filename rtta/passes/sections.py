@@ -4,20 +4,15 @@
 whether the section planes cut it and cap it. The scene passes (capture.ScenePass) take it
 from `GpuScene.placement`, so every pass and mode sees the same cut and the same offsets.
 
-Caps, per object and so per atlas region: a closed part's back face that is the nearest
-surface left after the cut means the view ray entered the solid through the cut, so the cap
-lies where the ray crosses into the kept region (exact for any closed part, convex or not). The
-first draw marks each texel's nearest surface in the stencil (1: a capped object's back face,
-0: anything else) and shades those back faces as the cap; a second draw of the capped back
-faces, where the stencil holds 1, writes the cap's depth (the plane's, not the back face's),
-the same for every fragment of the texel (the entry point depends on the ray alone). The
-back faces are drawn after the front faces, pushed back by BACK_OFFSET, so that where a
-mesh has a front and a back face in one place (boxes concatenated into one part) the front
-face is the nearest, in the atlas and in RTT alike.
-
-STD caps by the nearest surface of all parts: where a part lies inside another's solid
-(interpenetrating parts), STD shows it through the other's cut, where the atlas (each part
-alone) shows the other's cap in front of it.
+Caps: the cap of a closed part lies where the view ray enters the kept region (the point P on
+the plane it crosses last), when P is inside the part. Inside means a winding number not 0:
+the part's surfaces beyond P along the ray, counted into the stencil (a back face +1, a front
+face -1, removed ones too), add up to the number of times P is inside it (concatenated
+boxes overlapping, as the demo's caliper is, count alike). The part's back faces beyond P
+then draw the cap where the count is not 0 (each resets it), with P's depth, in the part's
+darker colour, lit as a face on the plane. In the atlas every texel belongs to one part, so
+all parts are capped at once; STD caps one part after the other, so a part's cap covers the
+parts inside its solid as each part's own image does.
 """
 
 from __future__ import annotations
@@ -32,10 +27,9 @@ from ..gl.bindings import Storage
 from ..scene.cutaway import Cutaway
 
 GL_FRONT, GL_BACK, GL_FRONT_AND_BACK = 0x0404, 0x0405, 0x0408
-GL_EQUAL = 0x0202
+GL_NOTEQUAL, GL_ZERO, GL_INCR_WRAP, GL_DECR_WRAP = 0x0205, 0, 0x8507, 0x8508
 CAP_STYLES = {"off": 0, "solid": 1, "hatch": 2}
 HATCH_LINES = 60  # hatch lines across the scene's diameter
-BACK_OFFSET = (1.0, 8.0)  # glPolygonOffset of capped back faces in the first draw (ties go to the front)
 
 
 @dataclass
@@ -93,20 +87,27 @@ class Placement:
         self.buffer.release()
 
 
-def stencil_mark(back: int) -> None:
-    """Stencil on: every fragment that passes the depth test writes 0 for a front face and
-    `back` for a back face (the nearest surface's kind stays in each texel)."""
+def stencil_count() -> None:
+    """Stencil on, depth writes off: every fragment adds 1 for a back face, takes 1 for a
+    front face (wrapping), whatever the depth: the winding number of the surfaces drawn."""
     gl = glraw._lib()
     gl.glEnable(glraw.GL_STENCIL_TEST)
+    gl.glDepthMask(0)
     gl.glStencilMask(0xFF)
-    gl.glStencilFuncSeparate(GL_FRONT, glraw.GL_ALWAYS, 0, 0xFF)
-    gl.glStencilFuncSeparate(GL_BACK, glraw.GL_ALWAYS, back, 0xFF)
-    gl.glStencilOp(glraw.GL_KEEP, glraw.GL_KEEP, glraw.GL_REPLACE)
+    gl.glStencilFuncSeparate(GL_FRONT_AND_BACK, glraw.GL_ALWAYS, 0, 0xFF)
+    gl.glStencilOpSeparate(GL_BACK, glraw.GL_KEEP, GL_INCR_WRAP, GL_INCR_WRAP)
+    gl.glStencilOpSeparate(GL_FRONT, glraw.GL_KEEP, GL_DECR_WRAP, GL_DECR_WRAP)
 
 
-def stencil_equal(value: int) -> None:
-    """Stencil on: only where the stencil holds `value`, which stays."""
+def stencil_cap() -> None:
+    """Depth writes on; only where the stencil is not 0, which every fragment resets to 0."""
     gl = glraw._lib()
-    gl.glEnable(glraw.GL_STENCIL_TEST)
-    gl.glStencilFuncSeparate(GL_FRONT_AND_BACK, GL_EQUAL, value, 0xFF)
-    gl.glStencilOp(glraw.GL_KEEP, glraw.GL_KEEP, glraw.GL_KEEP)
+    gl.glDepthMask(1)
+    gl.glStencilFuncSeparate(GL_FRONT_AND_BACK, GL_NOTEQUAL, 0, 0xFF)
+    gl.glStencilOpSeparate(GL_FRONT_AND_BACK, GL_ZERO, GL_ZERO, GL_ZERO)
+
+
+def stencil_off() -> None:
+    gl = glraw._lib()
+    gl.glDepthMask(1)
+    gl.glDisable(glraw.GL_STENCIL_TEST)

@@ -30,6 +30,7 @@ class Staging:
     focus: frozenset = frozenset()  # the focus the placement was made for
     _key: tuple | None = None
     _placement: Placement | None = None
+    _framed: tuple | None = None
 
     def __post_init__(self) -> None:
         self.explode = check_explode(self.explode, self.explode_scope)
@@ -79,6 +80,12 @@ class Staging:
         for t in targets:
             t.want_stencil(bool(self._placement.sections and self._placement.capped.any()))
         return True
+
+    def framed(self, scene):
+        """The scene the default camera frames (check_staging, made once per scene)."""
+        if self._framed is None or self._framed[0] is not scene:
+            self._framed = (scene, check_staging(self, scene, self.focus))
+        return self._framed[1]
 
     def staged(self, hidden: np.ndarray | None, corners: np.ndarray) -> tuple[np.ndarray | None, np.ndarray]:
         """The objects not packed (hidden, or cut away whole) and B_world's corners, moved."""

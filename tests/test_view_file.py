@@ -84,6 +84,9 @@ BAD = [
     ("explode", '{"rtta_view": 1, "explode": {"factor": "far"}}', "explode.factor has the wrong type"),
     ("unknown name", '{"rtta_view": 1, "focus": ["pad_iner"]}', "did you mean pad_inner"),
     ("style value", '{"rtta_view": 1, "style": {"edge_width": 99}}', "--edge-width must be 1..8"),
+    ("caps", '{"rtta_view": 1, "sections": {"planes": ["x=0"], "caps": "hatched"}}', "--caps must be one of"),
+    ("plane", '{"rtta_view": 1, "sections": {"planes": ["w=0"]}}', "w=0"),
+    ("explode factor", '{"rtta_view": 1, "explode": {"factor": 99}}', "explode"),
 ]
 
 
@@ -95,7 +98,7 @@ def test_malformed_view_files_are_one_error_line(tmp_path, capsys, gl, case, tex
     assert main(["snapshot", "--size", "64x48", "--out", str(out), "--view-file", str(path)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("rtta: error:") and says in err[0], err
-    if case not in ("unknown name", "style value"):  # those need the scene: the flags' names
+    if case != "unknown name":  # names need the scene: the error names the flag
         assert "bad.json: " in err[0]
     assert not out.exists()
 
@@ -117,7 +120,7 @@ def test_version_one_round_trips_and_fills_the_slots():
         "rtta_view": 1,
         "camera": {"az": 1.5, "el": -2.0, "distance": 3.25, "target": [0.1, 0.2, 0.3], "fov": 30.0},
         "projection": "ortho",
-        "sections": {"planes": ["x=0.5"], "caps": "hatched", "scope": "all"},
+        "sections": {"planes": ["x=0.5"], "caps": "hatch", "scope": "all"},
         "explode": {"factor": 0.5, "scope": "focus"},
     }
     view = parse_view(doc)
@@ -132,6 +135,17 @@ def test_read_view_refuses_a_huge_file(tmp_path):
     big.write_text('{"rtta_view": 1, "focus": [' + ",".join(['"a"'] * 300_000) + "]}")
     with pytest.raises(Exception, match="not a view file"):
         read_view(big)
+
+
+def test_sections_and_explode_are_saved_too(tmp_path, gl):
+    view = tmp_path / "view.json"
+    args = ["--section", "x=0.2", "--caps", "hatch", "--explode", "0.5", "--focus", "hub", "--mode", "ghosted"]
+    first = _snap(tmp_path, "a.png", *args, "--save-view", str(view))
+    saved = json.loads(view.read_text())
+    assert saved["sections"] == {"planes": ["x=0.2"], "caps": "hatch", "scope": "all"}
+    assert saved["explode"] == {"factor": 0.5, "scope": "all"}
+    assert _snap(tmp_path, "b.png", "--view-file", str(view)) == first
+    assert _snap(tmp_path, "c.png", "--focus", "hub", "--mode", "ghosted") != first
 
 
 def test_dataset_takes_the_projection_and_a_view_file(tmp_path, gl):

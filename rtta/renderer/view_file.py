@@ -37,7 +37,8 @@ from ..errors import RttaError
 from ..outputs import atomic_write, check_file
 from ..scene.camera import PROJECTIONS
 from ..scene.framing import Orbit
-from .options import CORE_STYLE
+from .options import CORE_STYLE, make_style
+from .placing import make_staging
 from .snapshot import SNAPSHOT_MODES
 
 VERSION = 1
@@ -134,6 +135,13 @@ def parse_view(doc: Any) -> SavedView:
     view.style = dict(style)
     view.sections = _slot(doc.get("sections"), "sections", {"planes": list, "caps": str, "scope": str})
     view.explode = _slot(doc.get("explode"), "explode", {"factor": (int, float), "scope": str})
+    try:  # the values as the flags check them (names need the scene: checked when rendering)
+        make_style((), None, **view.style)
+        s, e = view.sections or {}, view.explode or {}
+        planes, caps, cut_scope = s.get("planes", []), s.get("caps", "solid"), s.get("scope", "all")
+        make_staging(planes, caps, cut_scope, e.get("factor", 0.0), e.get("scope", "all"))
+    except RttaError as exc:
+        raise ValueError(str(exc)) from None
     return view
 
 

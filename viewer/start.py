@@ -8,6 +8,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rtta.errors import RttaError
+from rtta.scene.camera import Projection
+from rtta.scene.framing import StandardView
 
 
 @dataclass
@@ -17,8 +19,8 @@ class Start:
     focus: list[str] = field(default_factory=list)
     hidden: list[str] = field(default_factory=list)
     camera: str | None = None  # AZ,EL[,DIST] as `rtta snapshot --camera`
-    view: str | None = None  # a standard view
-    projection: str | None = None
+    view: StandardView | None = None
+    projection: Projection | None = None
     view_file: str | None = None
 
 

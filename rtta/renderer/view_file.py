@@ -155,7 +155,11 @@ def write_view(view: SavedView, path: str | Path, inputs=()) -> Path:
         except RttaError:
             raise RttaError("exists and is not an rtta view file; --save-view will not replace it", path) from None
     text = json.dumps(view.to_json(), indent=1) + "\n"
-    return atomic_write(path, lambda tmp: Path(tmp).write_text(text, encoding="utf-8"))
+
+    def write(tmp: str) -> None:
+        Path(tmp).write_text(text, encoding="utf-8")
+
+    return atomic_write(path, write)
 
 
 def _orbit(camera: Any, projection: Any) -> Orbit:

@@ -200,3 +200,20 @@ def test_bench_composite_and_capture_take_the_projection(gl, capsys):
     assert "; ortho; viewport 96x72" in capsys.readouterr().out
     row = bench.capture_row(gl, _boxes(("a", (1, 1, 1), (0, 0, 0))), (64, 48), 1, rtt=False, projection="ortho")
     assert row["atlas"][2] == 1 and row["std_ms"] > 0
+
+
+@pytest.mark.parametrize("path", ["vs", "gs"])
+def test_ortho_near_plane_through_the_parts(make_renderer, demo_scene, path):
+    """An orthographic camera whose near plane cuts through the demo (a Camera made by hand,
+    not fitted): Algorithm 1 clips the bounds crossing it, and the atlas still equals the
+    objects drawn alone and STD its front-most surfaces (tests/checks.py)."""
+    from checks import check_frame
+
+    c, r = demo_scene.center, demo_scene.radius
+    eye = c + np.array([0.3, 0.2, 1.0]) * r * 0.2
+    cam = rtta.Camera(eye=eye, target=c, up=np.array([0.0, 1.0, 0.0]), near=0.01 * r, far=3 * r, kind="ortho")
+    cam.height = 0.8 * r
+    records = make_renderer(demo_scene).parameterize(cam, (200, 150))
+    assert 0 < records.visible.sum() < demo_scene.count  # some parts lie wholly behind the near plane
+    out = check_frame(make_renderer(demo_scene), cam, (200, 150), path)
+    assert out["visible"] == records.visible.sum()

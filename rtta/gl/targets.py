@@ -58,6 +58,13 @@ class LayeredTarget:
     depth alone (inside a frame the difference is smaller: BENCHMARKS.md in git history).
     """
 
+    # made by _make (after release(), gone until the next allocation)
+    color: moderngl.TextureArray
+    normal: moderngl.TextureArray | None  # None without normals
+    ids: moderngl.TextureArray
+    depth: glraw.DepthArray
+    _fbo: moderngl.Framebuffer
+
     def __init__(
         self,
         ctx: moderngl.Context,
@@ -73,11 +80,10 @@ class LayeredTarget:
         self.stencil = stencil  # depth 32F + stencil 8 (section caps: rtta.passes.sections)
         self.normals_written = normals  # False after a capture that left the normal image alone
         self.ids_written = True  # False after a capture that left the id image alone
-        self.size = (0, 0)
+        self.size: tuple[int, int] = (0, 0)
         self.layers = 0
         self.allocations = 0
         self._small_frames = 0
-        self._fbo = None
         self._textures: list = []
         self._allocate(size, layers)
 
@@ -157,7 +163,7 @@ class LayeredTarget:
         """Whether draws write the normal and id images (colour masks; colour and depth are
         always written)."""
         masks = [(True,) * 4] + [(bool(normals),) * 4] * self.normals + [(bool(ids),) * 4]
-        self._fbo.color_mask = masks
+        self._fbo.color_mask = masks  # pyright: ignore[reportAttributeAccessIssue]  (one per attachment: moderngl takes it)
 
     def color_writes(self, masks: bool | list) -> list:
         """Set the colour masks of every attachment (False: none written; or a list as this
@@ -165,7 +171,7 @@ class LayeredTarget:
         before = list(self._fbo.color_mask)
         if isinstance(masks, bool):
             masks = [(masks,) * 4] * len(self._textures)
-        self._fbo.color_mask = masks
+        self._fbo.color_mask = masks  # pyright: ignore[reportAttributeAccessIssue]  (as above)
         return before
 
     def bind(self, viewport: tuple[int, int, int, int] | None = None) -> None:
@@ -178,7 +184,7 @@ class LayeredTarget:
         id -1. Unscissored on purpose: on llvmpipe any scissor makes layered clears ~2x
         slower (BENCHMARKS.md in git history)."""
         self._fbo.viewport = (0, 0, *self.size)
-        self._fbo.scissor = None
+        self._fbo.scissor = None  # pyright: ignore[reportAttributeAccessIssue]  (none: moderngl takes it)
         self._fbo.use()
         if not self.depth_keyed:
             glraw.clear_color_float(0, (0.0, 0.0, 0.0, 0.0))
@@ -208,12 +214,14 @@ class LayeredTarget:
             if on
         )
         self._check_readable(parts)
+        normal = self.normal
         readers = {
             "color": lambda: np.frombuffer(self.color.read(), np.uint8).reshape(n, h, w, 4),
-            "normal": lambda: decode_normals(np.frombuffer(self.normal.read(), np.uint8).reshape(n, h, w, 4)),
             "id": lambda: np.frombuffer(self.ids.read(), np.int32).reshape(n, h, w),
             "depth": self.depth.read,
         }
+        if normal is not None:  # (else _check_readable refused "normal")
+            readers["normal"] = lambda: decode_normals(np.frombuffer(normal.read(), np.uint8).reshape(n, h, w, 4))
         out = {k: np.array(readers[k]()[:cl, :ch, :cw]) for k in parts}
         if set(parts) - {"depth"}:
             empty = out["depth"] >= 1.0 if "depth" in out else readers["depth"]()[:cl, :ch, :cw] >= 1.0
@@ -244,15 +252,15 @@ class LayeredTarget:
             raise ValueError("the last capture wrote no id image (capture with ids=True)")
 
     def _free(self) -> None:
-        if self._fbo is not None:
+        if hasattr(self, "_fbo"):
             release_framebuffer(self.ctx, self._fbo)
-            self._fbo = None
+            del self._fbo
         for tex in self._textures:
             tex.release()
         self._textures = []
-        if getattr(self, "depth", None) is not None:
+        if hasattr(self, "depth"):
             self.depth.release()
-            self.depth = None
+            del self.depth
 
     def release(self) -> None:
         self._free()
@@ -263,11 +271,15 @@ class CompositeTarget:
     the allocation (`size`) grows in steps of 64 and shrinks only after SHRINK_AFTER_FRAMES
     frames of needing less than half, so resizing a window does not reallocate per frame."""
 
+    # made by ensure() (after release(), gone until the next)
+    color: moderngl.Texture
+    depth: moderngl.Texture
+    fbo: moderngl.Framebuffer
+
     def __init__(self, ctx: moderngl.Context) -> None:
         self.ctx = ctx
-        self.size = (0, 0)
-        self.viewport = (0, 0)
-        self.fbo = None
+        self.size: tuple[int, int] = (0, 0)
+        self.viewport: tuple[int, int] = (0, 0)
         self._parts: list = []
         self._small_frames = 0
 
@@ -288,7 +300,7 @@ class CompositeTarget:
     def trim(self) -> None:
         """Reallocate to just hold the current viewport (64-pixel steps) now (contents lost)."""
         fit = (round_up(self.viewport[0], 64), round_up(self.viewport[1], 64))
-        if self.fbo is not None and fit != self.size:
+        if self._parts and fit != self.size:
             self._allocate(fit)
 
     def _allocate(self, size: tuple[int, int]) -> None:
@@ -298,7 +310,7 @@ class CompositeTarget:
         self.depth = self.ctx.depth_texture(size)
         self.fbo = self.ctx.framebuffer([self.color], self.depth)
         self._parts = [self.color, self.depth]
-        self.size, self.viewport, self._small_frames = tuple(size), viewport, 0
+        self.size, self.viewport, self._small_frames = (int(size[0]), int(size[1])), viewport, 0
 
     @property
     def nbytes(self) -> int:
@@ -320,10 +332,10 @@ class CompositeTarget:
         return rgba, np.ascontiguousarray(depth)
 
     def release(self) -> None:
-        if self.fbo is not None:
+        if self._parts:
             release_framebuffer(self.ctx, self.fbo)
+            del self.fbo
         for obj in self._parts:
             obj.release()
         self._parts = []
-        self.fbo = None
         self.size = (0, 0)

@@ -58,7 +58,8 @@ class CompositePass:
         self.sprites = SpritePass(ctx)
         self.styles = ctx.buffer(reserve=16)
         self._pixel_order = None  # PixelOrderPass, made on first use
-        self._context_depth = self._context_fbo = None  # front-most context depth, for halos
+        self._context_depth: moderngl.Texture | None = None  # front-most context depth, for halos
+        self._context_fbo: moderngl.Framebuffer | None = None
         self.fallbacks = 0  # frames that asked for pixel order and got object order
         self._opacity = np.zeros(0, np.float32)  # per object, as the last render draws them
 
@@ -95,11 +96,15 @@ class CompositePass:
         projected outline of each object's B_world instead of all of B_viewport."""
         if lens is not None and mode not in LENS_MODES:
             lens = None
+        inv_view_proj = None  # (P V)^-1 once per render, for every draw that rebuilds world positions
+        if projection is not None or lens is not None:
+            if view_proj is None:
+                raise ValueError("a projection or a lens needs view_proj")
+            inv_view_proj = mat_bytes(np.linalg.inv(view_proj))
         self.sprites.frame(
             projection=projection,
             lens=lens,
-            # (P V)^-1 once per render, for every draw that rebuilds world positions
-            inv_view_proj=None if projection is None and lens is None else mat_bytes(np.linalg.inv(view_proj)),
+            inv_view_proj=inv_view_proj,
             hull=None if eye is None or view_proj is None else (mat_bytes(view_proj), tuple(float(v) for v in eye)),
         )
         try:
@@ -127,6 +132,8 @@ class CompositePass:
         atlas.color.use(Texture.ATLAS_COLOR)
         glraw.bind_texture_array(Texture.ATLAS_DEPTH, atlas.depth.glo)  # depth-keyed: no id image is read
         if projection is not None:
+            if atlas.normal is None:
+                raise ValueError("a projection reads the atlas normals: an atlas made with normals=False has none")
             atlas.normal.use(Texture.ATLAS_NORMAL)
         everyone = np.arange(n)
         outlined = style.outline_width >= 1
@@ -143,6 +150,8 @@ class CompositePass:
         else:
             with_ao = mode is Mode.GHOSTED_AO
             if with_ao:
+                if post is None or post.texture is None:
+                    raise ValueError("ghosted-ao needs the post-processed atlas (post, AtlasPostPass)")
                 post.texture.use(Texture.ATLAS_POST)
             in_context = np.ones(n, bool)
             in_context[focus] = False
@@ -177,17 +186,18 @@ class CompositePass:
         """The nearest (or farthest) sprite depth of `ids` per pixel (`draw`: SpriteDraw.depths),
         in a depth texture of the target's size (1, or 0 for farthest, where none); the target
         is bound again after."""
-        if self._context_depth is None or self._context_depth.size != target.size:
+        depth, fbo = self._context_depth, self._context_fbo
+        if depth is None or fbo is None or depth.size != target.size:
             self._release_context_depth()
-            self._context_depth = self.ctx.depth_texture(target.size)
-            self._context_depth.compare_func = ""
-            self._context_fbo = self.ctx.framebuffer(depth_attachment=self._context_depth)
-        self._context_fbo.viewport = (0, 0, *target.viewport)
-        self._context_fbo.use()
-        self._context_fbo.clear(depth=0.0 if draw.depth is Depth.FARTHEST else 1.0)
+            self._context_depth = depth = self.ctx.depth_texture(target.size)
+            depth.compare_func = ""
+            self._context_fbo = fbo = self.ctx.framebuffer(depth_attachment=depth)
+        fbo.viewport = (0, 0, *target.viewport)
+        fbo.use()
+        fbo.clear(depth=0.0 if draw.depth is Depth.FARTHEST else 1.0)
         self.sprites.draw(ids, draw, style, records)
         target.fbo.use()
-        return self._context_depth
+        return depth
 
     def _release_context_depth(self) -> None:
         if self._context_depth is not None:

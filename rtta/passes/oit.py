@@ -189,7 +189,7 @@ class PixelOrderPass:
     def end_collect(self) -> None:
         glraw.stencil_off()
 
-    def resolve(self, fbo, over: tuple[float, float, float] | None = None, in_place: int = 1) -> None:
+    def resolve(self, fbo, over: tuple[float, ...] | None = None, in_place: int = 1) -> None:
         """Sort and blend every pixel's list over what `fbo` holds (the background); with
         `over`, over that colour, written as it is, on the pixels OrderMarks left to it only:
         out of order, or with more than `in_place` surfaces (blended_in_place)."""

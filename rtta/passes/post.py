@@ -101,6 +101,8 @@ class AtlasPostPass:
             return
         gpu.bind_storage()
         glraw.bind_texture_array(Texture.ATLAS_DEPTH, atlas.depth.glo)
+        if atlas.normal is None:
+            raise ValueError("AO and edges read the atlas normals: an atlas made with normals=False has none")
         atlas.normal.use(Texture.ATLAS_NORMAL)
         quad = ("EDGE_QUAD",) if int(style.edge_width) == 1 else ()
         for ids, defines in ((full, quad), (np.asarray(edges, np.int64), (*quad, "EDGES_ONLY"))):

@@ -19,10 +19,12 @@ from ..gl import glraw
 from ..gl.context import Capabilities, CapturePath, CapturePathName
 from ..gl.gpu import GpuScene
 from ..gl.targets import LayeredTarget
+from ..ldi.lens import Lens, LensPass
 from ..passes import oit
 from ..passes.capture import CapturePass, RttPass, StdPass
 from ..passes.composite import LENS_MODES, CompositePass, CompositeTarget, Style
 from ..passes.post import AtlasPostPass
+from ..passes.projector import Projector, ProjectorPass
 from ..passes.style import Mode, ModeName
 from ..scene.camera import Camera, is_ortho
 from ..scene.model import Scene
@@ -67,10 +69,10 @@ class Renderer:
         self._captures = 0
         self.target = CompositeTarget(ctx)
         self.last: tuple | None = None  # (records, view, proj) of the last capture
-        self.projector = None  # a Projector painting the scene, or None
-        self._projector_pass = None
-        self.lens = None  # a Lens cutting the context away in the ghosted modes, or None
-        self._lens_pass = None
+        self.projector: Projector | None = None  # painting the scene
+        self._projector_pass: ProjectorPass | None = None
+        self.lens: Lens | None = None  # cutting the context away in the ghosted modes
+        self._lens_pass: LensPass | None = None
         self.hidden: set[int] = set()  # objects the user hid: not packed, captured, composited or drawn
         self.staging = Staging()  # sections and explode (rtta.renderer.placing)
         self.measure = False  # time each stage (waits for the GPU after each)
@@ -204,7 +206,7 @@ class Renderer:
 
     def composite(self, mode: ModeName | Mode, style: Style | None = None) -> CompositeTarget:
         """Composite the last capture; re-run it alone when only the style or mode changes."""
-        if self.last is None:
+        if self.last is None or self._view is None:
             raise RuntimeError("composite() needs a capture() first")
         style = style or Style()
         missing = self.needs_normals(mode) and not self.captured_normals
@@ -227,8 +229,6 @@ class Renderer:
         lens = None
         if self.lens is not None and mode in LENS_MODES:
             if self._lens_pass is None:
-                from ..ldi.lens import LensPass
-
                 self._lens_pass = LensPass(self.ctx)
             with self._timed("lens"):
                 self._lens_pass.textures(self.lens)  # built once per lens geometry, before compositing
@@ -275,8 +275,6 @@ class Renderer:
         if self.projector is None:
             return None
         if self._projector_pass is None:
-            from ..passes.projector import ProjectorPass
-
             self._projector_pass = ProjectorPass(self.ctx)
         with self._timed("projector"):
             self._projector_pass.render(gpu=self.gpu, projector=self.projector, ranges=self.shown_ranges())
@@ -286,6 +284,8 @@ class Renderer:
         """Ambient occlusion and edges on the atlas (ghosted-ao only), cached per object: they
         depend on the capture and the AO/edge parameters, not on focus or opacity, so a focus
         change shades only the objects whose role now asks for more (--ao-objects focus)."""
+        if self.last is None:
+            raise RuntimeError("post_process() needs a capture() first")
         records, _, proj = self.last
         if self._post is None:
             self._post = AtlasPostPass(self.ctx)

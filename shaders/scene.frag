@@ -44,11 +44,12 @@ void main() {
     vec3 n = len_n > 1e-20 ? fs_in.normal / len_n : vec3(0.0, 0.0, 1.0);
     if (!gl_FrontFacing) n = -n;
 #if defined(CAP_COUNT) || defined(CAP_DRAW)
+    if (!section_beyond(fs_in.world)) discard;   // every surface beyond the entry counts, removed ones too
+#ifdef CAP_DRAW
     vec3 hit;
     int plane;
-    float enter;   // every surface beyond the entry counts, removed ones too
-    if (!section_entry(fs_in.world, hit, plane, enter) || enter >= 1.0) discard;
-#ifdef CAP_DRAW
+    float enter;
+    section_entry(fs_in.world, hit, plane, enter);
     gl_FragDepth = section_depth(hit);
     n = normalize(mat3(u_view) * u_sections[plane].xyz);   // faces the eye: it came from that side
 #endif

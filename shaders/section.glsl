@@ -18,6 +18,23 @@ uniform float u_hatch_spacing;  // world units between hatch lines
 uniform mat4 u_view;            // the pass's, as scene.vert's
 uniform mat4 u_proj;
 uniform mat4 u_section_inverse; // (P V)^-1: viewport NDC + depth -> world (origin at 0)
+uniform vec3 u_section_near[6]; // n.q - d of the near-plane point q under viewport NDC (x, y): affine
+
+// Whether p lies beyond the view ray's entry into the kept region (false without an entry):
+// every plane the ray enters (its near-plane point q removed) keeps p. Cheaper than
+// section_entry: what the count pass asks of every surface.
+bool section_beyond(vec3 p) {
+    vec4 c = u_proj * (u_view * vec4(p, 1.0));
+    vec3 ndc = vec3(c.xy / c.w, 1.0);
+    bool entered = false;
+    for (int i = 0; i < u_section_count; ++i) {
+        if (dot(u_section_near[i], ndc) > 0.0) {
+            entered = true;
+            if (dot(u_sections[i].xyz, p) > u_sections[i].w) return false;
+        }
+    }
+    return entered;
+}
 
 bool section_removed(vec3 p) {
     for (int i = 0; i < u_section_count; ++i)

@@ -49,7 +49,7 @@ class ScenePass:
         self._programs: dict[tuple, moderngl.Program] = {}
         self._indirect: moderngl.Buffer | None = None
         self._cullable = np.zeros(0, bool)  # per object, for the view of the last setup()
-        self._capped, self._drawn = None, None  # capped objects (sections) and the arguments of setup()
+        self._capped = self._cut = self._whole = self._drawn = None  # sections (setup)
         self.program = self.program_for(False)
 
     def program_for(self, textured: bool, normals: bool = True, **variant: bool) -> moderngl.Program:
@@ -81,9 +81,13 @@ class ScenePass:
         self._cullable = (
             scene.closed & beyond_near(lo, hi, view, proj) if gpu.cull_closed else np.zeros(scene.count, bool)
         )
-        self._capped = None
+        self._capped = self._cut = self._whole = None
         if placement is not None and placement.sections:
             self._cullable &= ~placement.cut  # their back faces show through the cut
+            self._cut = placement.cut  # the others draw without the sections' discard (early depth test)
+            whole = self._program(gpu, view, proj, target, {**variant, "SECTIONS": False})
+            gpu.bind_material(whole)
+            self._whole = gpu.vao(whole)
             if target is not None and target.stencil and placement.capped.any():
                 self._capped = placement.capped
         self._drawn = (gpu, view, proj, target, variant)
@@ -97,8 +101,8 @@ class ScenePass:
         """The program for `variant` and the scene's placement (rtta.passes.sections), its
         matrices and the placement's uniforms set."""
         placement = gpu.placement
-        extra = placement.variant() if placement is not None else {}
-        program = self.program_for(gpu.textured, target is None or target.normals, **variant, **extra)
+        extra = {**(placement.variant() if placement is not None else {}), **variant}
+        program = self.program_for(gpu.textured, target is None or target.normals, **extra)
         program["u_view"].write(mat_bytes(view))
         program["u_proj"].write(mat_bytes(proj))
         if placement is not None:
@@ -112,12 +116,19 @@ class ScenePass:
         Then the caps of the capped objects (sections): all at once where each texel belongs
         to one object (the atlas, RTT), else one object after the other (STD)."""
         closed = self._cullable
+        placement = gpu.placement
+        if placement is not None and placement.removed.any():  # cut away whole
+            objects = ~placement.removed if objects is None else objects & ~placement.removed
         try:
             for cull, kind in ((True, closed), (False, ~closed)):
                 mask = kind if objects is None else kind & objects
-                if mask.any():
-                    self.cull(cull)
-                    self._draw_runs(vao, None if mask.all() else gpu.scene.index_runs(mask))
+                for program, part in (
+                    ((vao, None),) if self._cut is None else ((self._whole, ~self._cut), (vao, self._cut))
+                ):
+                    drawn = mask if part is None else mask & part
+                    if drawn.any():
+                        self.cull(cull)
+                        self._draw_runs(program, None if drawn.all() else gpu.scene.index_runs(drawn))
         finally:
             self.cull(False)
         capped = self._capped if self._capped is None or objects is None else self._capped & objects

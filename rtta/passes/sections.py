@@ -38,7 +38,8 @@ class Placement:
     to the scene origin. `buffer` holds (offset, flags) per object for the shaders."""
 
     offsets: np.ndarray | None  # float64 [n, 3], world units; None: nothing moves
-    cut: np.ndarray  # bool [n]
+    removed: np.ndarray  # bool [n]: cut away whole, not drawn
+    cut: np.ndarray  # bool [n]: crossed by a plane
     capped: np.ndarray  # bool [n]: cut, closed and caps on
     planes: np.ndarray  # float32 [k, 4]: (n, d) with the scene origin at 0
     caps: int  # CAP_STYLES
@@ -46,8 +47,10 @@ class Placement:
     buffer: moderngl.Buffer
 
     @classmethod
-    def make(cls, ctx: moderngl.Context, scene, cutaway: Cutaway, cut: np.ndarray, offsets: np.ndarray | None):
-        """The placement of `scene` cut by `cutaway` (`cut`: the objects it cuts) and moved by `offsets`."""
+    def make(cls, ctx: moderngl.Context, scene, cutaway: Cutaway, sides: tuple, offsets: np.ndarray | None):
+        """The placement of `scene` cut by `cutaway` and moved by `offsets`; `sides`: the
+        objects it removes whole and those it crosses (Cutaway.sides)."""
+        removed, cut = sides
         n = scene.count
         caps = CAP_STYLES[cutaway.caps] if cutaway else 0
         capped = cut & scene.closed if caps else np.zeros(n, bool)
@@ -57,7 +60,7 @@ class Placement:
         data[:n, 3] = cut.astype(np.float32) + 2.0 * capped
         planes = np.array([p.relative(scene.origin) for p in cutaway.planes], np.float32).reshape(-1, 4)
         hatch = 2.0 * scene.radius / HATCH_LINES
-        return cls(offsets, cut, capped, planes, caps, hatch, ctx.buffer(data.tobytes()))
+        return cls(offsets, removed, cut, capped, planes, caps, hatch, ctx.buffer(data.tobytes()))
 
     @property
     def sections(self) -> bool:
@@ -79,12 +82,26 @@ class Placement:
         for name, value in (("u_caps", self.caps), ("u_hatch_spacing", self.hatch)):
             if name in program:
                 program[name].value = value
+        inverse = np.linalg.inv(np.asarray(view_proj, np.float64))
         if "u_section_inverse" in program:
-            inverse = np.linalg.inv(np.asarray(view_proj, np.float64))
             program["u_section_inverse"].write(np.ascontiguousarray(inverse.T, np.float32).tobytes())
+        if "u_section_near" in program:
+            near = np.zeros((6, 3), np.float32)
+            near[: len(self.planes)] = near_coefficients(self.planes, inverse)
+            program["u_section_near"].write(near.tobytes())
 
     def release(self) -> None:
         self.buffer.release()
+
+
+def near_coefficients(planes: np.ndarray, inverse: np.ndarray) -> np.ndarray:
+    """Per plane (n, d), n.q - d as a x + b y + c of viewport NDC (x, y), q the near-plane point
+    there: q is affine in (x, y) for a perspective and an orthographic projection alike."""
+    ndc = np.array([[0.0, 0.0, -1.0, 1.0], [1.0, 0.0, -1.0, 1.0], [0.0, 1.0, -1.0, 1.0]])
+    h = ndc @ inverse.T
+    q = h[:, :3] / h[:, 3:]
+    f = q @ planes[:, :3].astype(np.float64).T - planes[:, 3].astype(np.float64)  # [3 points, planes]
+    return np.stack([f[1] - f[0], f[2] - f[0], f[0]], axis=1)
 
 
 def stencil_count() -> None:

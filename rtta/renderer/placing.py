@@ -71,9 +71,8 @@ class Staging:
             movable = np.zeros(scene.count, bool)
             movable[[o for o in focus if 0 <= o < scene.count]] = True
         offsets = explode_offsets(scene, self.explode, movable) if self.explode > 0 else None
-        cut = self.cutaway.cut(scene.count, focus)
-        removed = self.cutaway.removed(scene, offsets, cut)
-        self._placement = Placement.make(gpu.ctx, scene, self.cutaway, cut, offsets)
+        removed, crossed = self.cutaway.sides(scene, offsets, self.cutaway.cut(scene.count, focus))
+        self._placement = Placement.make(gpu.ctx, scene, self.cutaway, (removed, crossed), offsets)
         gpu.placement, self.offsets = self._placement, offsets
         self.removed = removed if removed.any() else None
         self._write_bounds(gpu, offsets)
@@ -149,7 +148,7 @@ def check_staging(staging: Staging, scene, focus=(), hidden=()):
     cut = staging.cutaway.cut(scene.count, focus)
     shown = np.ones(scene.count, bool)
     shown[[o for o in hidden if 0 <= o < scene.count]] = False
-    if staging.cutaway and not (shown & ~staging.cutaway.removed(scene, offsets, cut)).any():
+    if staging.cutaway and not (shown & ~staging.cutaway.sides(scene, offsets, cut)[0]).any():
         raise RttaError("--section: the section planes remove the whole scene (see `rtta info` for its bounds)")
     if offsets is None:
         return scene

@@ -122,18 +122,23 @@ class Cutaway:
             out[[o for o in focus if 0 <= o < count]] = False
         return out
 
-    def removed(self, scene, offsets: np.ndarray | None, cut: np.ndarray) -> np.ndarray:
-        """bool [n]: cut objects of `scene` that one plane removes whole (every vertex beyond
-        it), moved by `offsets` (float [n, 3] world, or None): they are not packed or drawn."""
+    def sides(self, scene, offsets: np.ndarray | None, cut: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(removed, crossed), bool [n] each, of the `cut` objects of `scene` moved by `offsets`
+        (float [n, 3] world, or None): removed, one plane removes it whole (every vertex beyond
+        it: not packed or drawn); crossed, not removed but some vertex lies beyond a plane (the
+        others lie wholly on the kept side: drawn as they are, without a cut or a cap)."""
         n = scene.count
-        out = np.zeros(n, bool)
+        out, crossed = np.zeros(n, bool), np.zeros(n, bool)
         if not self.planes or not cut.any() or not scene.vertex_count:
-            return out
+            return out, crossed
         counts = np.bincount(scene.object_ids, minlength=n)
         starts = np.minimum(np.concatenate([[0], np.cumsum(counts)[:-1]]), scene.vertex_count - 1)
         shift = np.asarray(scene.origin, np.float64) + (0.0 if offsets is None else np.asarray(offsets, np.float64))
         for plane in self.planes:
             normal = np.asarray(plane.normal)
-            least = np.minimum.reduceat(scene.positions @ normal.astype(np.float32), starts).astype(np.float64)
-            out |= (counts > 0) & (least + shift @ normal > plane.d)
-        return out & cut
+            dist = scene.positions @ normal.astype(np.float32)
+            least = np.minimum.reduceat(dist, starts).astype(np.float64) + shift @ normal
+            most = np.maximum.reduceat(dist, starts).astype(np.float64) + shift @ normal
+            out |= (counts > 0) & (least > plane.d)
+            crossed |= (counts > 0) & (most > plane.d - 1e-6 * scene.radius)  # float32 slack: cut when in doubt
+        return out & cut, crossed & cut & ~out

@@ -215,3 +215,27 @@ def test_dataset_takes_the_flags(gl, tmp_path, capsys):
     assert main([*common, "--section", "x", "--out", str(tmp_path / "bad")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "--section expects" in err and not (tmp_path / "bad").exists()
+
+
+def test_viewer_cutaway_state(make_renderer, demo_scene):
+    """The viewer's cutaway panel state: its plane as --section takes it, a new capture key on
+    every change, and the renderer it stages cut (viewer.cutaway; the window is not needed)."""
+    from rtta.renderer.placing import restage
+    from viewer.cutaway import CutawayState
+    from viewer.state import ViewerState
+
+    state = ViewerState(names=list(demo_scene.names))
+    before = state.capture_key()
+    state.cutaway = CutawayState(axis="-x", at=0.5, caps="hatch", explode=0.5)
+    assert state.capture_key() != before
+    lo, hi = demo_scene.bounds
+    assert state.cutaway.spec(demo_scene) == f"-x={(lo[0] + hi[0]) / 2:.9g}"
+    r = make_renderer(demo_scene)
+    cam = Camera.orbit(demo_scene.center, demo_scene.radius, 35, 25, 3.0)
+    whole = r.std(cam, VP).read(VP, 1)["id"][0].copy()
+    restage(r, state.cutaway.staging(demo_scene))
+    assert r.staging.cutaway.caps == "hatch" and r.staging.explode == 0.5
+    cut = r.std(cam, VP).read(VP, 1)["id"][0]
+    assert (cut != whole).mean() > 0.05
+    restage(r, CutawayState().staging(demo_scene))  # back to whole
+    assert np.array_equal(r.std(cam, VP).read(VP, 1)["id"][0], whole)

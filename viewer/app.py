@@ -18,6 +18,7 @@ from rtta.errors import RttaError, printable
 from rtta.ldi.lens import Lens, default_placement
 from rtta.passes.projector import Projector, default_image
 from rtta.renderer.navigation import FrameBudget, left_out
+from rtta.renderer.placing import restage
 from rtta.renderer.renderer import Renderer
 from rtta.scene.model import Scene
 
@@ -206,10 +207,12 @@ class Viewer(Pictures, Loading):
         camera = self.orbit.camera()
         r.projector = self._projector(camera)
         r.lens = self._lens()
+        restage(r, s.cutaway.staging(r.scene))  # sections and explode (viewer.cutaway)
         painted = (
             s.projector.key(),
             tuple(camera.eye) if s.projector.on and s.projector.attached else None,
             s.lens.key(),
+            s.cutaway.key(),
         )
         atlas_visible = s.show_atlas and self.layout.atlas[2] > 0
         if s.mode != "std" or atlas_visible:
@@ -218,7 +221,7 @@ class Viewer(Pictures, Loading):
             key = (tuple(camera.eye), tuple(camera.target), vp, painted, s.hidden_rev)
             if key != self._std_key:  # a static view is not drawn again
                 r.hidden = s.hidden
-                r.std(camera, vp)
+                r.std(camera, vp, s.style.focus)
                 self._std_key = key
             target = r.single_target
             extent = (vp[0] / target.size[0], vp[1] / target.size[1])

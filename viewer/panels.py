@@ -18,7 +18,7 @@ from rtta.passes.composite import LENS_MODES, ROLES
 from rtta.passes.oit import ORDERS
 from rtta.scene.model import BOUNDS
 
-from . import tree
+from . import cutaway, tree
 from .state import ATLAS_MAX_CHOICES, NAVIGATION_FPS, VIEW_MODES
 
 if TYPE_CHECKING:
@@ -44,6 +44,7 @@ def draw(app: PanelsHost) -> None:
     _style(app)
     _projector(app)
     _lens(app)
+    cutaway.panel(app)
     _atlas(app)
     imgui.pop_item_width()
     imgui.end()

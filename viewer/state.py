@@ -14,6 +14,7 @@ from rtta.ldi.lens import LensShape, LensShapeName
 from rtta.passes.composite import MODES, Style
 from rtta.renderer.renderer import Settings
 
+from .cutaway import CutawayState
 from .parts import PartTree
 
 VIEW_MODES = ("std", *MODES)
@@ -109,6 +110,7 @@ class ViewerState:
     # this frame rate (scenes of 500 parts or more); 0: off
     projector: ProjectorState = field(default_factory=lambda: ProjectorState())
     lens: LensState = field(default_factory=lambda: LensState())
+    cutaway: CutawayState = field(default_factory=lambda: CutawayState())  # sections and explode
     paths: list[tuple[str, ...]] | None = None  # the part tree (Scene.paths)
     hidden: set[int] = field(default_factory=set)  # not captured, drawn or packed
     hidden_rev: int = 0  # bumped on every change of `hidden` (a cheap capture key)
@@ -245,4 +247,5 @@ class ViewerState:
             s.context_scale,
             s.bounds,
             self.hidden_rev,
+            self.cutaway.key(),
         )

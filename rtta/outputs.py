@@ -338,7 +338,7 @@ def to_image(rgba_gl: np.ndarray) -> Image.Image:
 
 
 def atomic_write(
-    path: str | Path, write: Callable[[str], None], *, overwrite: bool = True, final: bool = False
+    path: str | Path, write: Callable[[str], object], *, overwrite: bool = True, final: bool = False
 ) -> Path:
     """Let `write(tmp)` fill a temporary file beside `path`, then move it into place: an old
     file stays whole until the new one is complete. With overwrite=False an existing file is

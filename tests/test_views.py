@@ -217,3 +217,10 @@ def test_ortho_near_plane_through_the_parts(make_renderer, demo_scene, path):
     assert 0 < records.visible.sum() < demo_scene.count  # some parts lie wholly behind the near plane
     out = check_frame(make_renderer(demo_scene), cam, (200, 150), path)
     assert out["visible"] == records.visible.sum()
+
+
+def test_capture_leaves_hidden_parts_out(gl, demo_scene):
+    cap = rtta.capture(None, size=(96, 72), hidden=["rotor", "caliper"])
+    gone = [cap.index("rotor"), cap.index("caliper")]
+    assert not cap.visible[gone].any() and cap.visible.sum() == demo_scene.count - 2
+    assert not np.isin(cap.std_id, gone).any()

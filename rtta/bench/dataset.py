@@ -10,7 +10,9 @@ import json
 import shutil
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -23,6 +25,7 @@ from ..dataset.view import render_rtt, render_rtta
 from ..gl.context import shared_context
 from ..renderer.renderer import Renderer
 from ..scene.generators.generate import random_scene, table1_scene
+from ..scene.model import Scene
 from .compare import near_edges
 from .render import shared_data
 
@@ -31,13 +34,13 @@ STAGES = {"rtta": alone_rtta, "rtt": alone_rtt}
 PER_ROUND = 2  # views a method renders in a row (so that writing overlaps the next view, as in a run)
 
 
-def bench_scenes(quick: bool) -> list[tuple[str, object]]:
+def bench_scenes(quick: bool) -> list[tuple[str, Callable[[], Scene]]]:
     """(name, loader): the demo, the engine (when ../shared/data has it), the paper's 580-object
     Table 1 scene and a 2,000-part scene; --quick: the demo and 200 parts."""
     from ..scene.generators.demo import demo_path
     from ..scene.loader import load_scene
 
-    out = [("demo", lambda: load_scene(demo_path()))]
+    out: list[tuple[str, Callable[[], Scene]]] = [("demo", lambda: load_scene(demo_path()))]
     if quick:
         return out + [("random-200", lambda: random_scene(200, seed=3, spread=18.0))]
     engine = shared_data() / "engine_2cyl.glb"
@@ -49,12 +52,12 @@ def bench_scenes(quick: bool) -> list[tuple[str, object]]:
     ]
 
 
-def _amodal(out: Path, key: str, view: int) -> dict[int, dict]:
+def _amodal(out: Path, key: str, view: int) -> dict[int, Any]:
     doc = json.loads(part_path(out, key, view).read_text())
     return {a["object_id"]: a["amodal_segmentation"] for a in doc["annotations"]}
 
 
-def disagreement(a: dict[int, dict], b: dict[int, dict]) -> tuple[int, int, int]:
+def disagreement(a: dict[int, Any], b: dict[int, Any]) -> tuple[int, int, int]:
     """(objects only one method annotated, amodal pixels that differ off the 1-pixel silhouette
     band of b's mask, all differing pixels) between two views' annotations."""
     from pycocotools import mask
@@ -128,7 +131,7 @@ def amodal_stage(ctx, renderer, s: dict, key: str, views: int) -> dict:
             _, areas, _ = encode_flat(objects.mask, objects.rects, h, w)
             wall[method].append(time.perf_counter() - t0)
             masks[method] += int((areas > 0).sum())
-    out = {
+    out: dict[str, Any] = {
         m: {"masks_per_s": masks[m] / float(np.sum(wall[m])), "ms_per_view": float(np.mean(wall[m])) * 1e3}
         for m in STAGES
     }

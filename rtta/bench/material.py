@@ -39,7 +39,7 @@ def _frame(r, pass_, cam, view, proj, target, viewport):
     return partial(pass_.render, gpu=r.gpu, view=view, proj=proj, target=target, viewport=viewport)
 
 
-def frame_rows(ctx, scene, viewport, frames: int, max_vertices: int) -> list[list]:
+def frame_rows(ctx, scene, viewport, frames: int, max_vertices: int) -> tuple[list[list], dict]:
     r = Renderer(ctx, scene)
     sep, chunked = SeparatePass(ctx), ChunkedStdPass(ctx, max_vertices)
     target = LayeredTarget(ctx, viewport, 1, normals=False)  # as the renderer's STD target
@@ -66,6 +66,8 @@ def frame_rows(ctx, scene, viewport, frames: int, max_vertices: int) -> list[lis
             plain.release()
         leaves = len(chunked.bvh(r.gpu).leaves)
         info = r.gpu.atlas_info
+        if info is None:
+            raise ValueError("the material bench needs a textured scene (it has no material atlas)")
         memory = {
             "textures": len(scene.textures),
             "original_bytes": original_nbytes(scene.textures),

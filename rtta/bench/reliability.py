@@ -18,6 +18,7 @@ from ..gl.glraw import _lib
 from ..gl.readback import to_atlas
 from ..memory import rss_bytes
 from ..passes.composite import MODES, Style
+from ..passes.style import Mode
 from ..renderer.renderer import Renderer
 from ..renderer.snapshot import over_background
 from ..scene.camera import Camera
@@ -240,7 +241,7 @@ def soak(
         if mode == "std":
             renderer.std(cam, viewport)
         else:
-            renderer.composite(mode, Style(focus=focus))
+            renderer.composite(Mode(mode), Style(focus=focus))
         if renderer.ctx.error != "GL_NO_ERROR":
             errors.append(f"frame {i}: GL error")
         if i % every == 0 or i == frames - 1:
@@ -267,7 +268,7 @@ def _reference_frame(renderer: Renderer) -> None:
     renderer.capture(camera, (320, 240))
     renderer.trim()
     for mode in MODES:  # every mode with a focus once: its shader variants exist from the first sample
-        renderer.composite(mode, Style(focus={0}))
+        renderer.composite(Mode(mode), Style(focus={0}))
     for _ in range(REFERENCE_REPEATS):
         renderer.capture(camera, (320, 240))
         renderer.composite("ghosted-ao")

@@ -9,7 +9,9 @@ import json
 import os
 import platform
 import time
+from collections.abc import Callable, Mapping
 from pathlib import Path
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -37,13 +39,16 @@ def _median_ms(fn, frames: int, warmup: int = 2) -> float:
     return float(np.median(times))
 
 
-def _interleaved_ms(fns: dict, rounds: int) -> dict[str, list[float]]:
+K = TypeVar("K")
+
+
+def _interleaved_ms(fns: Mapping[K, Callable[[], object]], rounds: int) -> dict[K, list[float]]:
     """ms of each function per round, the functions taking turns within a round: a slow
     phase of a shared machine (this VM swings by ±30% for seconds at a time) then hits every
     function of that round alike, and ratios taken within a round cancel it. Each turn is
     one untimed call, then one timed call, so that a function never pays for the caches
     the previous one left (steady frames of one mode, as in the viewer)."""
-    times: dict[str, list[float]] = {name: [] for name in fns}
+    times: dict[K, list[float]] = {name: [] for name in fns}
     for _ in range(rounds):
         for name, fn in fns.items():
             fn()
@@ -237,8 +242,8 @@ def run_composite(
     ctx = ctx or create_headless_context()
     renderer = str(ctx.info["GL_RENDERER"])
     frames = 3 if quick else 11
-    scenes = composite_scenes(scenes, quick)
-    rows = [composite_row(ctx, name, scene, viewport, frames, projection=projection) for name, scene in scenes]
+    named = composite_scenes(scenes, quick)
+    rows = [composite_row(ctx, name, scene, viewport, frames, projection=projection) for name, scene in named]
     _print_composite(rows, f"{renderer}; {projection}", viewport, frames)
     if json_path:
         Path(json_path).write_text(
@@ -281,7 +286,7 @@ def _print_composite(rows, renderer, viewport, frames) -> None:
 def _rectpack(w, h, W, H):
     import rectpack
 
-    packer = rectpack.newPacker(rotation=False, pack_algo=rectpack.MaxRectsBssf)
+    packer: Any = rectpack.newPacker(rotation=False, pack_algo=rectpack.MaxRectsBssf)  # (untyped: inferred wrong)
     for i, (a, b) in enumerate(zip(w, h, strict=True)):
         packer.add_rect(int(a), int(b), rid=i)
     packer.add_bin(int(W), int(H), count=float("inf"))

@@ -8,10 +8,13 @@ composite) after glFinish, STD and every setting taking turns within each round.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from ..passes.composite import Style
 from ..passes.oit import resolved_order
+from ..passes.style import Mode
 from ..renderer.renderer import Renderer, Settings
 from .render import _gl_timed, _interleaved_ms
 
@@ -53,7 +56,7 @@ def steps(scenes: int, quick: bool) -> int:
 def _frame(r: Renderer, cam, viewport, mode: str, style: Style):
     def frame():
         r.capture(cam, viewport, focus=style.focus, normals=r.needs_normals(mode), ids=False)
-        return r.composite(mode, style)
+        return r.composite(Mode(mode), style)
 
     return frame
 
@@ -79,7 +82,9 @@ def importance_rows(ctx, scenes, viewport, quick: bool, tick) -> list[dict]:
         for k, c in enumerate(configs):
             images[k] = frames_of[k]().read()[0][..., :3].astype(np.int64)
             refs.setdefault(c["mode"], images[k])  # the first setting of a mode is its reference
-        fns = {"std": _gl_timed(ctx, lambda r=renderers[0], cam=cam: r.std(cam, viewport))}
+        fns: dict[str | int, Callable[[], None]] = {
+            "std": _gl_timed(ctx, lambda r=renderers[0], cam=cam: r.std(cam, viewport))
+        }
         fns.update({k: _gl_timed(ctx, f) for k, f in frames_of.items()})
         times = _interleaved_ms(fns, frames)
         std = np.array(times["std"])

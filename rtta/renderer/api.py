@@ -297,6 +297,7 @@ def capture(
     smooth: bool = False,
     projection: Projection = "perspective",
     view: StandardView | None = None,
+    hidden: str | Iterable[str] = (),
     sections: Iterable[str | SectionPlane] = (),
     caps: Caps = "solid",
     explode: float = 0.0,
@@ -337,6 +338,8 @@ def capture(
         The projection, as in `snapshot`.
     view : {"front", "back", "left", "right", "top", "bottom", "iso"}, optional
         A standard view relative to the file's up axis, as in `snapshot`.
+    hidden : str or iterable of str
+        Objects left out (not drawn, captured nor framed), as in `snapshot`.
     sections, caps, explode
         Cut and exploded, as in `snapshot` (no focus here: every part is cut and moved).
 
@@ -355,11 +358,13 @@ def capture(
     """
     scene = _session.scene(scene, smooth_angle, smooth)
     viewport = check_size(size)
+    hidden_ids = resolve_names(scene, [hidden] if isinstance(hidden, str) else list(hidden), "hidden")
     staging = make_staging(sections, caps, "all", explode)
-    framed = check_staging(staging, scene)
-    cam = orbit_camera(framed, camera, fov, projection=projection, view=view, aspect=viewport[0] / viewport[1])
+    framed = check_staging(staging, scene, (), hidden_ids)
+    aspect = viewport[0] / viewport[1]
+    cam = orbit_camera(framed, camera, fov, projection=projection, view=view, aspect=aspect, hidden=hidden_ids)
     settings = make_settings(border, atlas_max, max_layers, capture_path, region_scale, bounds)
-    renderer = _prepare(scene, settings, None, None, (), staging)
+    renderer = _prepare(scene, settings, None, None, hidden_ids, staging)
     try:
         records, atlas, std = read_frame(renderer, cam, viewport)
     except ValueError as exc:

@@ -2,7 +2,7 @@
 time, in a subprocess (issue 42; the targets are in tests/fuzz_targets.py).
 
     python scripts/fuzz.py TARGET [--seconds N] [--work DIR]    run TARGET for N seconds (60)
-    python scripts/fuzz.py --corpus                             (re)write tests/fuzz_corpus/
+    python scripts/fuzz.py --corpus [TARGET]                    (re)write tests/fuzz_corpus/[TARGET]
     python scripts/fuzz.py --list                               the targets
 
 The contract: an input gives a result or an RttaError; any other exception, more than 2 s
@@ -34,7 +34,7 @@ def main() -> int:
     parser.add_argument("target", nargs="?")
     parser.add_argument("--seconds", type=int, default=60)
     parser.add_argument("--work", type=Path, default=None)
-    parser.add_argument("--corpus", action="store_true", help="(re)write the seed corpora")
+    parser.add_argument("--corpus", action="store_true", help="(re)write the seed corpora (of TARGET, or all)")
     parser.add_argument("--list", action="store_true")
     args = parser.parse_args()
     import fuzz_targets
@@ -45,7 +45,7 @@ def main() -> int:
     if args.corpus:
         from fuzz_corpus_make import write_corpus
 
-        for target, count in write_corpus(fuzz_targets.CORPUS).items():
+        for target, count in write_corpus(fuzz_targets.CORPUS, [args.target] if args.target else None).items():
             print(f"{target}: {count} seeds")
         return 0
     if args.target not in fuzz_targets.TARGETS:

@@ -134,15 +134,51 @@ def specs_seeds() -> dict[str, bytes]:
         "color.txt": "0.1,0.2,0.3,1\x000,0,0,1",
         "exotic.txt": "1e308,-0,nan\x00inf=0.5",
         "glob.txt": "[a-\x00**",
+        "section.txt": "-x=0.5",
+        "section_plane.txt": "0.6,0,0.8,-1e3",
     }
     return {name: text.encode() for name, text in texts.items()}
 
 
-def write_corpus(folder: Path) -> dict[str, int]:
-    """Every target's seeds into folder/<target>/ (replacing what was there); {target: count}."""
-    made = {"gltf": gltf_seeds(), "obj": obj_seeds(), "step": step_seeds(), "ifc": ifc_seeds(), "specs": specs_seeds()}
+def views_seeds() -> dict[str, bytes]:
+    """Saved view files (rtta.renderer.view_file, version 1) and dataset --cameras files."""
+    full = {
+        "rtta_view": 1,
+        "camera": {"az": 35.0, "el": 25.0, "distance": 4.1, "target": [0.0, 0.1, 0.0], "fov": 45.0},
+        "projection": "ortho",
+        "mode": "ghosted-ao",
+        "focus": ["bolt"],
+        "hidden": ["frame/*"],
+        "opacity": {"cover plate*": 0.3},
+        "style": {"edge_width": 1, "ao_radius": 6.0},
+        "sections": {"planes": ["x=0.5", "0,1,0,0"], "caps": "hatch", "scope": "context"},
+        "explode": {"factor": 0.5, "scope": "context"},
+    }
+    docs = {
+        "view_full.json": full,
+        "view_minimal.json": {"rtta_view": 1},
+        "view_newer.json": {"rtta_view": 2},
+        "view_camera_only.json": {"rtta_view": 1, "camera": full["camera"]},
+        "cameras_orbit.json": [{"orbit": [30, 20, 3], "fov": 40}, {"orbit": [-90, 80, 1.5]}],
+        "cameras_eye.json": [{"eye": [3, 2, 1], "target": [0, 0, 0], "up": [0, 0, 1], "fov": 60}],
+    }
+    return {name: json.dumps(doc, indent=1).encode() for name, doc in docs.items()}
+
+
+def write_corpus(folder: Path, targets: list[str] | None = None) -> dict[str, int]:
+    """The seeds of `targets` (default: all) into folder/<target>/, replacing what was there;
+    {target: count}."""
+    makers = {
+        "gltf": gltf_seeds,
+        "obj": obj_seeds,
+        "step": step_seeds,
+        "ifc": ifc_seeds,
+        "specs": specs_seeds,
+        "views": views_seeds,
+    }
     counts = {}
-    for target, seeds in made.items():
+    for target in targets or list(makers):
+        seeds = makers[target]()
         where = folder / target
         shutil.rmtree(where, ignore_errors=True)
         where.mkdir(parents=True)

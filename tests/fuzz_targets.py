@@ -9,7 +9,8 @@ skeleton), gltf (a .glb or .gltf through the loader: the container, the JSON che
 graph walk, the direct read and the rewrite for trimesh), step (the STEP text scans: header,
 external references, length unit, product names), ifc (the spatial tree walk and its memo,
 on element graphs built from the input), specs (the camera, size, colour, opacity, lens and
-name specs of rtta.renderer and the CLI).
+name specs of rtta.renderer and the CLI, section planes), views (a saved view file and a
+dataset's cameras file).
 """
 
 from __future__ import annotations
@@ -143,6 +144,7 @@ def fuzz_specs(data: bytes) -> None:
     from rtta.renderer.options import check_size, make_settings, orbit_camera, style_keywords
     from rtta.renderer.snapshot import make_lens, parse_opacities
     from rtta.scene.camera import parse_orbit
+    from rtta.scene.cutaway import parse_section
     from rtta.scene.framing import parse_camera
     from rtta.scene.select import resolve_names
 
@@ -159,10 +161,24 @@ def fuzz_specs(data: bytes) -> None:
         lambda: resolve_names(scene, [fields[0]], "--focus"),
         lambda: make_lens(scene, fields[0], fields[1] or None, []),
         lambda: style_keywords({"outline_color": fields[0].split(","), "edge_color": fields[1]}),
+        lambda: parse_section(fields[0]),
     ]
     for call in calls:
         try:
             call()
+        except RttaError:
+            pass
+
+
+def fuzz_views(data: bytes) -> None:
+    """The input as a saved view file (--view-file) and as a dataset's --cameras file."""
+    from rtta.dataset.options import parse_cameras
+    from rtta.renderer.view_file import read_view
+
+    path = _file(data, "input.json")
+    for read in (read_view, parse_cameras):
+        try:
+            read(path)
         except RttaError:
             pass
 
@@ -173,6 +189,7 @@ TARGETS: dict[str, Callable[[bytes], None]] = {
     "step": fuzz_step,
     "ifc": fuzz_ifc,
     "specs": fuzz_specs,
+    "views": fuzz_views,
 }
 
 
@@ -200,6 +217,7 @@ def seeds(target: str) -> list[bytes]:
 
 _TOKENS = [b"0", b"-1", b"1e308", b"-1e400", b"nan", b"inf", b"4294967295", b"2147483648", b"1e-320", b"3.0"]
 _TOKENS += [b"null", b"[]", b"{}", b'""', b"true", b",", b"\n", b"/", b"#1", b"*", b"'", b"\\", b"\x00", b"\xff"]
+_TOKENS += [b"9" * 400, b"[" * 3000, b"1e999", b"-0"]
 
 
 def mutants(corpus: list[bytes], n: int, seed: int = 42) -> Iterator[bytes]:
@@ -250,5 +268,7 @@ def _json_swap(data: bytes, rng: random.Random) -> bytes:
     if not holders:
         return data
     holder, key = rng.choice(holders)
-    holder[key] = rng.choice([-1, 0, 1, 3, 2**31, 2**32 + 5, 1e308, -0.0, None, "x", [], {}, [0] * 16, True, "data:,"])
+    holder[key] = rng.choice(
+        [-1, 0, 1, 3, 2**31, 2**32 + 5, 10**400, 1e308, -0.0, None, "x", [], {}, [0] * 16, True, "data:,"]
+    )
     return json.dumps(doc).encode()

@@ -13,7 +13,7 @@ import pytest
 from fuzz_corpus_make import STEP_HEAD, STEP_TAIL
 from fuzz_targets import INPUT_MB, LIMIT_S, TARGETS, mutants, run_one, seeds, warm
 
-MUTANTS = {"obj": 60, "gltf": 60, "step": 200, "ifc": 60, "specs": 150}  # a few seconds each
+MUTANTS = {"obj": 60, "gltf": 60, "step": 200, "ifc": 60, "specs": 150, "views": 200}  # a few seconds each
 
 
 @pytest.mark.parametrize("target", list(TARGETS))
@@ -119,3 +119,43 @@ def test_style_colours_as_before():
 
     assert style_keywords({"outline_color": ["1", 0.5, 0, 1]}) == {"outline_color": (1.0, 0.5, 0.0, 1.0)}
     assert style_keywords({"desaturate": 0.25, "outline_width": 3}) == {"desaturate": 0.25, "outline_width": 3}
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "[" * 100_000 + "]" * 100_000,
+        '{"rtta_view": 1, "opacity": {"a": 1' + "0" * 400 + "}}",
+        '[{"orbit": [1, 2, 1' + "0" * 400 + "]}]",
+    ],
+    ids=["nested", "400-digit opacity", "400-digit orbit"],
+)
+def test_view_and_cameras_files_of_deep_json_or_huge_integers(tmp_path, text):
+    """Found by the views target: RecursionError from json, OverflowError from math.isfinite
+    and float() of a 400-digit integer, in read_view and the dataset's parse_cameras."""
+    from rtta.dataset.options import parse_cameras
+    from rtta.errors import RttaError
+    from rtta.renderer.view_file import read_view
+
+    path = tmp_path / "view.json"
+    path.write_text(text)
+    for read in (read_view, parse_cameras):
+        with pytest.raises(RttaError, match="view.json: "):
+            read(path)
+
+
+def test_a_name_pattern_of_thousands_of_brackets_is_refused_quickly():
+    """Found by the specs target: fnmatch compiles a run of '[' in quadratic time (a 3,215
+    character --focus took 1.2 s, 14 s traced); longer patterns are not globbed, and the
+    message shows the first 200 characters."""
+    from fuzz_targets import _scene
+
+    from rtta.errors import RttaError
+    from rtta.scene.select import resolve_names
+
+    scene = _scene()
+    start = time.perf_counter()
+    with pytest.raises(RttaError, match=r"no object or group named '\[{200}\.\.\. \(65,536 characters\)'"):
+        resolve_names(scene, ["[" * 65536], "--focus")
+    assert time.perf_counter() - start < 0.5
+    assert len(resolve_names(scene, ["b*"], "--focus")) == 2  # globs as before

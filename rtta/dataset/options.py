@@ -166,6 +166,8 @@ def parse_cameras(path: str) -> list[dict]:
         data = json.loads(Path(path).read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise RttaError(f"cannot read cameras ({exc})", path) from None
+    except RecursionError:  # found by fuzzing (issue 42)
+        raise RttaError("cannot read cameras (JSON nested too deeply)", path) from None
     if not isinstance(data, list) or not data:
         raise RttaError("cameras must be a non-empty JSON list", path)
     out = []
@@ -180,7 +182,7 @@ def parse_cameras(path: str) -> list[dict]:
                 cam.update(up=[float(v) for v in c.get("up", [0, 1, 0])], fov=fov)
                 ok = all(len(cam[k]) == 3 for k in ("eye", "target", "up")) and cam["eye"] != cam["target"]
             ok = ok and 0 < fov < 180 and np.isfinite([v for x in cam.values() for v in np.ravel(x)]).all()
-        except (AttributeError, KeyError, TypeError, ValueError):
+        except (AttributeError, KeyError, TypeError, ValueError, OverflowError):  # 10**400: found by fuzzing
             ok = False
         if not ok:
             raise RttaError(

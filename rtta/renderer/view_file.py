@@ -94,6 +94,8 @@ def read_view(path: str | Path) -> SavedView:
         doc = json.loads(data.decode("utf-8"), parse_constant=_no_constant)
     except (UnicodeDecodeError, ValueError) as exc:
         raise RttaError(f"is not a JSON view file ({exc})", path) from None
+    except RecursionError:  # found by fuzzing (issue 42)
+        raise RttaError("is not a view file (JSON nested too deeply)", path) from None
     try:
         return parse_view(doc)
     except ValueError as exc:
@@ -208,7 +210,10 @@ def _choice(value: Any, choices, what: str) -> str:
 
 
 def _number(v: Any) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+    try:
+        return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+    except OverflowError:  # an integer of 400 digits (found by fuzzing, issue 42)
+        return False
 
 
 def _no_constant(name: str):

@@ -16,6 +16,7 @@ from ..errors import RttaError
 from .model import Scene
 
 GLOB = set("*?[")
+MAX_PATTERN = 1024  # characters of a glob: fnmatch compiles '[' runs in quadratic time (3,200 took 1.2 s)
 
 
 def full_names(scene: Scene) -> list[str]:
@@ -48,7 +49,7 @@ def _lookup(scene: Scene, name: str) -> list[int]:
     kind = [i for i, n in enumerate(scene.names) if n.startswith((f"{name} '", f"{name} #"))]
     if kind:  # a class of labelled objects: 'IfcWall' -> IfcWall 'a', ...
         return kind
-    if not GLOB & set(name):
+    if not GLOB & set(name) or len(name) > MAX_PATTERN:  # a longer one: found by fuzzing (issue 42)
         return []
     hits = [i for i in range(scene.count) if any(fnmatch.fnmatchcase(t, name) for t in _tails(scene, i))]
     return hits
@@ -64,6 +65,9 @@ def _tails(scene: Scene, oid: int) -> list[str]:
 def _unknown(scene: Scene, name: str, groups: bool) -> str:
     what = "object or group" if groups and scene.paths is not None else "object"
     pool = scene.names + ([g.rsplit("/", 1)[-1] for g in scene.groups] if groups else [])
-    close = difflib.get_close_matches(name, list(dict.fromkeys(pool)), n=4, cutoff=0.5)
+    close = (
+        difflib.get_close_matches(name, list(dict.fromkeys(pool)), n=4, cutoff=0.5) if len(name) <= MAX_PATTERN else []
+    )
     hint = f"; did you mean {', '.join(close)}?" if close else "; `rtta info --tree` lists the objects and groups"
-    return f"no {what} named '{name}' in {Path(scene.source).name}{hint}"
+    shown = name if len(name) <= 200 else f"{name[:200]}... ({len(name):,} characters)"
+    return f"no {what} named '{shown}' in {Path(scene.source).name}{hint}"

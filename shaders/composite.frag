@@ -63,6 +63,7 @@ uniform vec4 u_outline_color;  // MODE_OUTLINE, SPRITE_OUTLINE
 uniform int u_outline_width;    // pixels (MODE_OUTLINE)
 uniform int u_halo_width;       // pixels (MODE_HALO)
 uniform vec4 u_halo_color;      // (rgb, strength)
+uniform vec2 u_ortho_depth;     // an orthographic view: (1, near / (far - near)); perspective: (0, 0)
 layout(binding = BINDING_CONTEXT_DEPTH) uniform sampler2D u_context_depth;   // farthest context depth per pixel, 0: none (MODE_HALO)
 #ifdef FOCUS_CLIP
 layout(binding = BINDING_FOCUS_DEPTH) uniform sampler2D u_focus_depth;     // nearest focus depth per pixel, 1: none (MODE_COLLECT)
@@ -146,7 +147,8 @@ struct Sample { vec3 rgb; float depth; vec2 post; ivec3 t; };
 // at the context scale): the 2x2 texels around the pixel's atlas position, bilinear
 // weights over the texels that are the object's own (inside B_atlas, depth < 1) and lie on
 // the same surface as the nearest of them (view distance within 2%: 1 - window depth is
-// proportional to 1 / distance), renormalised. The pixel is covered where the own texels
+// about proportional to 1 / distance in perspective; in an orthographic view window depth is
+// linear in distance, which is (depth + near / (far - near)) (far - near)), renormalised. The pixel is covered where the own texels
 // hold at least half the weight, so the silhouette follows the bilinear coverage: no
 // background, no neighbouring region and no surface behind a depth edge ever blends in.
 bool upsampled(vec2 px, out Sample o) {
@@ -164,7 +166,8 @@ bool upsampled(vec2 px, out Sample o) {
     if (w.x + w.y + w.z + w.w < 0.5) return false;
     float m = max(max(w.x, w.y), max(w.z, w.w));
     float dref = w.x == m ? d.x : w.y == m ? d.y : w.z == m ? d.z : d.w;
-    w *= vec4(lessThanEqual(abs(d - dref), vec4(0.02 * (1.0 - dref))));
+    float reach = u_ortho_depth.x > 0.5 ? dref + u_ortho_depth.y : 1.0 - dref;
+    w *= vec4(lessThanEqual(abs(d - dref), vec4(0.02 * reach)));
     w /= w.x + w.y + w.z + w.w;       // the nearest texel is always in: the sum is > 0
     ivec3 t00 = ivec3(lo, g_layer);
     ivec3 tx = t00 + ivec3(0, 1, 0), ty = t00 + ivec3(1, 1, 0), tz = t00 + ivec3(1, 0, 0);

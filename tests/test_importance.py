@@ -42,8 +42,8 @@ def _grid_scene(rows=3, cols=4):
     return from_meshes(parts, colors)
 
 
-def _front(scene):
-    return Camera.orbit(scene.center, scene.radius, 0.0, 0.0, 2.0)
+def _front(scene, projection="perspective"):
+    return Camera.orbit(scene.center, scene.radius, 0.0, 0.0, 2.0, projection=projection)
 
 
 def test_per_object_scale_sizes_regions():
@@ -103,8 +103,11 @@ def _paint_empty(atlas, rgba) -> None:
     atlas.color.write(raw.tobytes())
 
 
-@pytest.mark.parametrize(("border", "scale"), [(0, 0.5), (1, 0.5), (0, 0.3)])
-def test_upsampling_never_bleeds(make_renderer, border, scale):
+@pytest.mark.parametrize(
+    ("border", "scale", "projection"), [(0, 0.5, "perspective"), (1, 0.5, "perspective"), (0, 0.3, "perspective"),
+                                        (1, 0.5, "ortho"), (0, 0.3, "ortho")]
+)  # fmt: skip
+def test_upsampling_never_bleeds(make_renderer, border, scale, projection):
     """At context scale 0.5 every pixel a context object covers lies within one pixel of its
     scale-1 silhouette and has a colour within the range of the scale-1 object pixels within
     one texel (2 pixels) of it (at 0.3, where pixels fall anywhere between texels and a
@@ -115,7 +118,7 @@ def test_upsampling_never_bleeds(make_renderer, border, scale):
     them) is painted the background colour before compositing: the atlas is depth-keyed,
     so no output may show them, and reading one greys a pixel."""
     scene = _grid_scene()
-    cam = _front(scene)
+    cam = _front(scene, projection)
     images = {}
     for cs in (1.0, scale):
         r = make_renderer(scene, Settings(context_scale=cs, border=border))

@@ -224,3 +224,31 @@ def test_capture_leaves_hidden_parts_out(gl, demo_scene):
     gone = [cap.index("rotor"), cap.index("caliper")]
     assert not cap.visible[gone].any() and cap.visible.sum() == demo_scene.count - 2
     assert not np.isin(cap.std_id, gone).any()
+
+
+def test_ortho_upsampling_keeps_the_surface_within_two_percent(make_renderer, monkeypatch):
+    """Context regions below one texel per pixel are upsampled over the texels within 2% of
+    the nearest one's view distance; in ortho window depth is linear in distance (not 1 - depth
+    ~ 1 / distance): a steep plate and a ball at the back come closer to the scale-1 picture
+    with the orthographic reach than with the perspective one."""
+    from rtta.passes import sprites
+    from rtta.scene.camera import Camera
+
+    plate = trimesh.creation.box(extents=(3, 3, 0.05))
+    plate.apply_transform(trimesh.transformations.rotation_matrix(np.radians(75), (1, 0, 0)))
+    ball = trimesh.creation.icosphere(3, radius=0.9)
+    parts = [("focus", trimesh.creation.box(extents=(0.2, 0.2, 0.2)), (0, 0, 1.5)), ("plate", plate, (-1, 0, -1))]
+    parts.append(("ball", ball, (1.2, 0, -1)))
+    scene = from_meshes([(n, np.asarray(m.vertices) + c, np.asarray(m.faces), None) for n, m, c in parts])
+    cam = Camera.orbit(scene.center, scene.radius, 0, 0, 2.0, projection="ortho")
+
+    def picture(scale):
+        r = make_renderer(scene, rtta.Settings(context_scale=scale))
+        r.capture(cam, (240, 180), focus={0})
+        return r.composite("sprites", rtta.Style(focus={0}, outline_width=0)).read()[0][..., :3].astype(float)
+
+    full, fixed = picture(1.0), picture(0.5)
+    frame = sprites.SpritePass.frame
+    monkeypatch.setattr(sprites.SpritePass, "frame", lambda self, **kw: frame(self, **{**kw, "ortho_near": None}))
+    perspective_reach = picture(0.5)
+    assert np.abs(fixed - full).mean() < np.abs(perspective_reach - full).mean()

@@ -88,6 +88,7 @@ class CompositePass:
         projection=None,
         lens=None,
         eye=None,
+        ortho_near: float | None = None,
     ) -> None:
         """Composite the captured atlas into `target` (sized to the records' viewport).
         `projection`: (ProjectorPass, Projector, scene origin) to paint with; `lens`: (LensPass,
@@ -106,6 +107,7 @@ class CompositePass:
             lens=lens,
             inv_view_proj=inv_view_proj,
             hull=None if eye is None or view_proj is None else (mat_bytes(view_proj), tuple(float(v) for v in eye)),
+            ortho_near=ortho_near,
         )
         try:
             mode = Mode(mode)

@@ -26,7 +26,7 @@ from ..passes.composite import LENS_MODES, CompositePass, CompositeTarget, Style
 from ..passes.post import AtlasPostPass
 from ..passes.projector import Projector, ProjectorPass
 from ..passes.style import Mode, ModeName
-from ..scene.camera import Camera, is_ortho
+from ..scene.camera import Camera, ortho_near, outline_eye
 from ..scene.model import Scene
 from .placing import Staging
 from .settings import Settings
@@ -247,7 +247,8 @@ class Renderer:
                 view_proj=proj @ view,
                 projection=projection,
                 lens=lens,
-                eye=_outline_eye(view, proj, self.scene.radius),
+                eye=outline_eye(view, proj, self.scene.radius),
+                ortho_near=ortho_near(proj),
             )
             self._throttle.flush()
         if self._composite.fallbacks > fallbacks:
@@ -390,11 +391,3 @@ class Renderer:
                 t.release()
         self.gpu.release()
         scratch.release()  # Algorithm 1's temporaries, sized for this scene (27 MB at 10^5 objects)
-
-
-def _outline_eye(view: np.ndarray, proj: np.ndarray, radius: float) -> np.ndarray:
-    """Where the sprites' outlines are seen from (scene origin at 0): the eye, or in an
-    orthographic view a point far back along the view axis (the outline of a box seen along
-    parallel rays is its outline from infinitely far)."""
-    inv = np.linalg.inv(view)
-    return inv[:3, 3] + inv[:3, 2] * (1e4 * max(radius, 1e-9) if is_ortho(proj) else 0.0)

@@ -249,3 +249,20 @@ def view_depth(window, proj: np.ndarray):
 def is_ortho(proj: np.ndarray) -> bool:
     """Whether a GL projection matrix is orthographic (its w row is (0, 0, 0, 1))."""
     return bool(proj[3, 2] == 0.0 and proj[3, 3] == 1.0)
+
+
+def ortho_near(proj: np.ndarray) -> float | None:
+    """near / (far - near) of an orthographic `proj` (window depth + this, times far - near, is
+    the view distance); None for a perspective one."""
+    if not is_ortho(proj):
+        return None
+    near, far = view_depth(0.0, proj), view_depth(1.0, proj)
+    return float(near / (far - near))
+
+
+def outline_eye(view: np.ndarray, proj: np.ndarray, radius: float) -> np.ndarray:
+    """Where objects' outlines are seen from (scene origin at 0, as `view` expects): the eye,
+    or in an orthographic view a point far back along the view axis (the outline of a box seen
+    along parallel rays is its outline from infinitely far)."""
+    inv = np.linalg.inv(view)
+    return inv[:3, 3] + inv[:3, 2] * (1e4 * max(radius, 1e-9) if is_ortho(proj) else 0.0)

@@ -1,10 +1,11 @@
-"""glTF/GLB scenes: the node graph is walked here, not by trimesh, so objects are named in
+"""glTF/GLB scenes: the node graph is walked by rtta, not by trimesh, so objects are named in
 file order (never with trimesh's random suffixes), cycles and absurd depths are errors
 rather than hangs, and nothing is dropped without a word.
 
-`prepare(path)` checks the document (rtta.scene.readers.gltf_check), its buffers and base-colour
-images, walks the graph of the chosen scene (iteratively: no recursion, however deep),
-and keeps the drawn (mesh, primitive) pairs. A plain file's primitives are then read
+`prepare(path)` reads the file (rtta.scene.readers.gltf_document), checks the document
+(gltf_check), its buffers and base-colour images, walks the graph of the chosen scene
+(gltf_graph: iteratively, no recursion however deep; a node of singular transform hidden
+with a warning), and keeps the drawn (mesh, primitive) pairs. A plain file's primitives are then read
 directly (rtta.scene.readers.gltf_read); any other is rewritten for trimesh as one single-primitive
 mesh per pair, one node each and no hierarchy, so trimesh only decodes geometry and
 textures. The world transform and the name of every object come from the walk.

@@ -19,6 +19,7 @@ from rtta.scene.loader import load_scene
 from rtta.scene.model import Scene
 from viewer.app import Viewer
 from viewer.run import create_window
+from viewer.views import PANEL_WIDTH
 
 OUT = Path(sys.argv[1])
 ENGINE = Path(__file__).resolve().parents[2] / "shared" / "data" / "engine_2cyl.glb"
@@ -194,8 +195,9 @@ result["framing"] = {}
 for name, scene in (("house", house), *((("engine", load_scene(ENGINE)),) if ENGINE.exists() else ())):
     app.set_scene(scene, mode="std")
     app.state.show_atlas = False
+    app.state.show_cube = False  # the view cube is drawn over the composite's corner
     for aspect in (0.5, 1.0, 2.0):
-        size = (320 + int(600 * aspect), 600)
+        size = (PANEL_WIDTH + int(600 * aspect), 600)  # the composite: the rest of the window
         pw.set_size(*size)
         pw.dispatch_events()
         frames(2)

@@ -27,7 +27,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--scene", dest="scene_opt", metavar="FILE", help="scene file (same as the positional)")
     p.add_argument("--size", default="1280x720", help="window size WxH")
     p.add_argument("--mode", default="ghosted-ao", choices=SNAPSHOT_MODES)
-    p.add_argument("--screenshot-dir", default=".", help="folder for screenshots (F12)")
+    p.add_argument(
+        "--screenshot-dir",
+        default=None,
+        metavar="DIR",
+        help="folder for screenshots (F12; default: rtta in your pictures folder, $XDG_PICTURES_DIR or ~/Pictures)",
+    )
     p.add_argument(
         "--bench",
         type=int,
@@ -100,7 +105,7 @@ def main(argv: list[str] | None = None) -> int:
             args.scene_opt or args.scene,
             size=size,
             mode=args.mode,
-            screenshot_dir=Path(args.screenshot_dir),
+            screenshot_dir=Path(args.screenshot_dir) if args.screenshot_dir else None,
             bench=args.bench,
             load=load_options(args),
             bench_modes=bench_modes,

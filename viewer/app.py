@@ -22,13 +22,16 @@ from rtta.renderer.placing import restage
 from rtta.renderer.renderer import Renderer
 from rtta.scene.model import Scene
 
-from . import overlay, panels
+from . import overlay, panels, ruler, saved
 from .controls import Controls
 from .files import FileBrowser, Stats
+from .gizmo import Turn
 from .imgui_renderer import GrowingImguiRenderer
 from .loading import Loading
 from .orbit import Orbit
 from .pictures import Pictures
+from .pictures import default_dir as default_pictures
+from .ruler import Ruler
 from .state import ViewerState
 from .views import ATLAS_BACKGROUND, Layout, ViewPass, layer_tiles
 
@@ -45,7 +48,10 @@ class Viewer(Pictures, Loading):
         screenshot_dir: Path | None = None,
         mode: str = "ghosted-ao",
         load: dict | None = None,
+        views_dir: Path | None = None,
     ) -> None:
+        """`screenshot_dir` None: the user's pictures folder (pictures.default_dir); `views_dir`
+        None: the saved views' folder (saved.default_dir)."""
         self.wnd = wnd
         self.load_options = dict(load or {})  # smoothing for scenes opened from the panel
         self.ctx: moderngl.Context = wnd.ctx
@@ -58,13 +64,17 @@ class Viewer(Pictures, Loading):
         self.loading: tuple | None = None  # (path, worker thread, result box) while a file loads
         self.controls = Controls(self)
         self.stats = Stats()
-        self.screenshot_dir = Path(screenshot_dir or Path.cwd())
+        self.screenshot_dir = Path(screenshot_dir) if screenshot_dir is not None else default_pictures()
+        self.screenshot_dir_default = screenshot_dir is None
+        self.views_dir = Path(views_dir) if views_dir is not None else saved.default_dir()
+        self.turn: Turn | None = None  # the camera turning to a view (view cube, keys)
         self.message, self.message_is_error = "", False
         self._projector_image = None
         self._lens_cache = None
         self.item_rects: dict[int, tuple] = {}  # object list checkboxes on screen (tests click them)
         self.renderer: Renderer  # set_scene makes it (and the state), and makes it again per scene
         self.layout = Layout.of(wnd.buffer_size, True)
+        self._camera_key: tuple | None = None  # the last frame's camera: did the view move
         self.set_scene(scene, mode=mode)
         notes = [*self.renderer.caps.notes, *scene.warnings]
         if notes:
@@ -78,12 +88,17 @@ class Viewer(Pictures, Loading):
         if old is not None:
             state.settings, state.atlas_max, state.show_atlas = old.settings, old.atlas_max, old.show_atlas
             state.measure, state.navigation_fps = old.measure, old.navigation_fps
+            state.panel_width, state.show_cube = old.panel_width, old.show_cube
             self.renderer.release()
         self.state = state
         self.renderer = Renderer(self.ctx, scene, state.settings)
         self.renderer.measure = state.measure
         self.renderer.python_warnings = False  # what it degrades is said in the panel (frame())
+        projection = self.orbit.projection if old is not None else "perspective"
         self.orbit = Orbit.default(scene.center, scene.radius, up_axis=scene.up_axis)
+        self.orbit.projection = projection
+        self.ruler = Ruler()
+        self.views = saved.Views(self.views_dir, scene)
         self.records = None
         self.scene_label = Path(scene.source).name
         self.scene_dir = Path(scene.source).parent if Path(scene.source).exists() else Path.cwd()
@@ -117,14 +132,17 @@ class Viewer(Pictures, Loading):
     # ---- frame -------------------------------------------------------------------------
     def frame(self) -> None:
         """One frame into the window's framebuffer (call swap_buffers after it)."""
+        t_frame = time.perf_counter()
         self.stats.tick()
+        if self.turn is not None and self.turn.step(self.orbit):
+            self.turn = None
         if self._moved and self.stats.history:  # the last frame's time steers fast navigation
             self.budget.update(self.stats.history[-1])
         self._moved = False
         self._take_loaded()
         minimized = self.wnd.width <= 0 or self.wnd.height <= 0
         size = (0, 0) if minimized else self.wnd.buffer_size
-        self.layout = Layout.of(size, self.state.show_atlas)
+        self.layout = Layout.of(size, self.state.show_atlas, self.state.panel_width)
         self.imgui.io.display_size = imgui.ImVec2(*self.wnd.size)
         t0 = time.perf_counter()
         imgui.new_frame()
@@ -133,6 +151,7 @@ class Viewer(Pictures, Loading):
         self.wnd.fbo.viewport = (0, 0, *size)
         self.wnd.use()
         self.ctx.clear(*WINDOW_CLEAR, 1.0)
+        self._rendered = False
         if size[0] > 0 and size[1] > 0:
             self.renderer.timings.clear()
             said = len(self.renderer.warnings)
@@ -154,6 +173,33 @@ class Viewer(Pictures, Loading):
         if self.state.measure:
             self.ctx.finish()
             self.stats.stage_ms["ui"] = self.stats.last_ms["ui"] = ui_ms + (time.perf_counter() - t1) * 1e3
+        cam = self.orbit.camera()
+        key = (tuple(cam.eye), tuple(cam.target), cam.kind, size)
+        moving, self._camera_key = key != self._camera_key, key
+        frame_ms = (time.perf_counter() - t_frame) * 1e3
+        self.stats.done(moving, frame_ms, dict(self.stats.stage_ms) if self._rendered else None)
+
+    def turn_to(self, az: float, el: float) -> None:
+        """Turn the camera to (az, el) over a moment (the view cube, the view keys)."""
+        self.turn = Turn.to(self.orbit, az, el)
+
+    def measure_at(self, x: float, y: float) -> None:
+        """The measure tool's click at window point (x, y): a point of a measurement."""
+        cx, cy, _, ch = self.layout.composite
+        vp = self.viewport
+        self.renderer.hidden = self.state.hidden
+        found = ruler.point_at(self.renderer, self.orbit.camera(), vp, int(x - cx), int(cy + ch - 1 - y))
+        self._std_key = None  # the direct drawing it made is not the one shown
+        if found is None:
+            self.say("measure: nothing there (click on a part)")
+            return
+        point, oid, snapped = found
+        m = self.ruler.add(point, self.renderer.scene.names[oid])
+        if m is None:
+            self.say(f"measure: from {self.renderer.scene.names[oid]}" + (" (vertex)" if snapped else ""))
+        else:
+            length, delta = ruler.describe(m, self.renderer.scene.unit, self.renderer.scene.radius)
+            self.say(f"measured {length} ({delta})")
 
     @property
     def viewport(self) -> tuple[int, int]:
@@ -165,8 +211,8 @@ class Viewer(Pictures, Loading):
     def _capture(self, camera) -> None:
         vp = self.viewport
         focus = self.renderer.scaled_for(self.state.style.focus)  # empty unless a context scale
-        normals = self.renderer.needs_normals(self.state.mode)  # ghosted-ao, the projector
-        key = (tuple(camera.eye), tuple(camera.target), vp, self.state.capture_key(), focus, normals)
+        normals = self.renderer.needs_normals(self.state.shown_mode())  # ghosted-ao, the projector
+        key = (tuple(camera.eye), tuple(camera.target), vp, camera.kind, self.state.capture_key(), focus, normals)
         if key != self._capture_key or self.left_out:  # a view at rest is captured whole
             moving = self._capture_key is not None and key[:2] != self._capture_key[:2]
             self.renderer.hidden = self.state.hidden
@@ -182,6 +228,7 @@ class Viewer(Pictures, Loading):
             )
             self._capture_key, self._composite_key = key, None
             self._moved = moving
+            self._rendered = True
 
     def _navigation_thinning(self):
         """While the camera moves: what picks the smallest parts on screen in the frame's own
@@ -202,6 +249,7 @@ class Viewer(Pictures, Loading):
 
     def _draw_composite(self) -> None:
         vp, s, r = self.viewport, self.state, self.renderer
+        mode = s.shown_mode()
         if vp[0] < 1 or vp[1] < 1:
             return  # minimized or no room: nothing to draw, nothing to capture
         camera = self.orbit.camera()
@@ -215,14 +263,15 @@ class Viewer(Pictures, Loading):
             s.cutaway.key(),
         )
         atlas_visible = s.show_atlas and self.layout.atlas[2] > 0
-        if s.mode != "std" or atlas_visible:
+        if mode != "std" or atlas_visible:
             self._capture(camera)
-        if s.mode == "std":
-            key = (tuple(camera.eye), tuple(camera.target), vp, painted, s.hidden_rev)
+        if mode == "std":
+            key = (tuple(camera.eye), tuple(camera.target), camera.kind, vp, painted, s.hidden_rev)
             if key != self._std_key:  # a static view is not drawn again
                 r.hidden = s.hidden
                 r.std(camera, vp, s.style.focus)
                 self._std_key = key
+                self._rendered = True
             target = r.single_target
             extent = (vp[0] / target.size[0], vp[1] / target.size[1])
             self.view_pass.render(
@@ -237,8 +286,9 @@ class Viewer(Pictures, Loading):
             return
         key = (self._capture_key, s.style_key(), painted)
         if key != self._composite_key:
-            r.composite(s.mode, s.style)
+            r.composite(mode, s.style)
             self._composite_key = key
+            self._rendered = True
         self.view_pass.render(
             texture=r.target.color,
             extent=r.target.extent,
@@ -299,6 +349,10 @@ class Viewer(Pictures, Loading):
     def mouse(self) -> tuple[float, float]:
         """The last mouse position in window pixels (the overlay's tooltip follows it)."""
         return self.controls.mouse
+
+    @property
+    def splitting(self) -> bool:
+        return self.controls.splitting
 
     def _rect(self, vp: tuple[int, int]) -> tuple[int, int, int, int]:
         x, y, _, _ = self.layout.composite

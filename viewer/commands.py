@@ -20,6 +20,8 @@ if TYPE_CHECKING:
 
     from .files import FileBrowser, Stats
     from .orbit import Orbit
+    from .ruler import Ruler
+    from .saved import Views
     from .state import ViewerState
     from .views import Layout, Rect
 
@@ -32,6 +34,12 @@ class Host(Protocol):
     layout: Layout
     renderer: Renderer
     records: Records | None
+    orbit: Orbit
+    ruler: Ruler  # the measure tool's points and measurements
+
+    def turn_to(self, az: float, el: float) -> None: ...
+
+    def say(self, text: str, error: bool = False) -> bool: ...
 
 
 class OverlayHost(Host, Protocol):
@@ -39,6 +47,9 @@ class OverlayHost(Host, Protocol):
 
     @property
     def mouse(self) -> tuple[float, float]: ...
+
+    @property
+    def splitting(self) -> bool: ...  # the splitter is being dragged
 
     def atlas_tiles(self) -> list[tuple[int, Rect]]: ...
 
@@ -48,7 +59,6 @@ class ControlsHost(Host, Protocol):
     the file browser, and the app's actions."""
 
     wnd: BaseWindow
-    orbit: Orbit
     files: FileBrowser
     scene_dir: Path
 
@@ -56,6 +66,8 @@ class ControlsHost(Host, Protocol):
     def imgui(self) -> ModernglWindowRenderer: ...  # read only here: the app's is a subclass
 
     def move_lens(self, x: float, y: float) -> None: ...
+
+    def measure_at(self, x: float, y: float) -> None: ...
 
     def frame_objects(self, ids=None) -> None: ...
 
@@ -70,10 +82,11 @@ class PanelsHost(Host, Protocol):
     """The side panel: scene label and message, the camera, the file browser, frame
     stats, the capture paths the GL offers, and where it leaves the object checkboxes."""
 
-    orbit: Orbit
     files: FileBrowser
     stats: Stats
+    views: Views  # the scene's saved views
     scene_dir: Path
+    screenshot_dir: Path
     scene_label: str
     message: str
     message_is_error: bool

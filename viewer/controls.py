@@ -3,8 +3,12 @@
 Left-drag rotates, right- or middle-drag pans, the wheel zooms towards the cursor; a click
 toggles the highlight of the object under the cursor (in ghosted modes a highlighted
 object seen through the context wins; Shift+click takes the front-most); a double-click
-orbits around the object. With the lens on (C) it follows the mouse over the composite;
-Space pins it where it is or lets it follow again. Events imgui wants (over the panel) go to imgui only.
+orbits around the object and fits it (both clicks picked with the highlights from before
+the first). With the lens on (C) it follows the mouse over the composite; Space pins it where
+it is or lets it follow again. The view cube (top right) turns the view to a side, an edge or a
+corner; keys 1, 3, 7 (Ctrl: the opposite side) and 0 (iso) do the same, 5 switches
+perspective/orthographic. R measures (clicks give points, Esc drops a first point). The
+splitter at the panel's edge resizes it. Events imgui wants (over the panel) go to imgui only.
 """
 
 from __future__ import annotations
@@ -15,10 +19,12 @@ from typing import TYPE_CHECKING
 from imgui_bundle import imgui
 
 from rtta.passes.picking import objects_at, pick
+from rtta.scene.framing import STANDARD_VIEWS
 
+from . import gizmo
 from .orbit import DEGREES_PER_PIXEL
 from .state import VIEW_MODES
-from .views import contains
+from .views import contains, panel_clamp
 
 if TYPE_CHECKING:
     from .commands import ControlsHost
@@ -27,6 +33,7 @@ CLICK_SLOP_PX = 3
 DOUBLE_CLICK_S = 0.35
 KEY_ROTATE_DEG = 5.0
 KEY_PAN_PX = 20
+SPLITTER_PX = 4  # either side of the panel's edge: the splitter
 
 
 class Controls:
@@ -35,7 +42,9 @@ class Controls:
         self.mouse = (0.0, 0.0)
         self._press = None  # (x, y, button, in composite)
         self._moved = 0.0
-        self._last_click = (0.0, None)  # (time, object) of the last click, for double-clicks
+        # (time, object, highlights before it) of the last click, for double-clicks
+        self._last_click: tuple[float, int | None, set[int] | None] = (0.0, None, None)
+        self.splitting = False  # the splitter is being dragged
 
     def attach(self, wnd) -> None:
         wnd.exit_key = None  # Esc closes popups; Ctrl+Q quits
@@ -61,8 +70,15 @@ class Controls:
         ):
             self.app.move_lens(x, y)
 
+    def on_splitter(self, x: float, y: float) -> bool:
+        _, py, pw, ph = self.app.layout.panel
+        return pw > 0 and abs(x - pw) <= SPLITTER_PX and py <= y < py + ph and not self.app.files.visible
+
     def on_press(self, x, y, button) -> None:
         self.mouse = (x, y)
+        if button == self.app.wnd.mouse.left and self.on_splitter(x, y):
+            self.splitting = True  # imgui never sees it: the panel's edge is no widget
+            return
         self.app.imgui.mouse_press_event(x, y, button)
         if not imgui.get_io().want_capture_mouse:
             self._press = (x, y, button, contains(self.app.layout.composite, x, y))
@@ -70,6 +86,9 @@ class Controls:
 
     def on_drag(self, x, y, dx, dy) -> None:
         self.mouse = (x, y)
+        if self.splitting:
+            self.app.state.panel_width = panel_clamp(x, self.app.wnd.buffer_size[0])
+            return
         self.app.imgui.mouse_drag_event(x, y, dx, dy)
         if self._press is None or not self._press[3]:
             return
@@ -84,6 +103,9 @@ class Controls:
 
     def on_release(self, x, y, button) -> None:
         self.mouse = (x, y)
+        if self.splitting:
+            self.splitting = False
+            return
         self.app.imgui.mouse_release_event(x, y, button)
         press, self._press = self._press, None
         if press is None or not press[3] or button != self.app.wnd.mouse.left or self._moved > CLICK_SLOP_PX:
@@ -92,32 +114,56 @@ class Controls:
 
     def click(self, x: float, y: float, shift: bool = False) -> int | None:
         """Toggle the highlight of the object at window point (x, y); a second click on the
-        same object within DOUBLE_CLICK_S undoes that and orbits around it instead."""
+        same object within DOUBLE_CLICK_S undoes that and orbits around it instead, fitted.
+        The second click is picked with the highlights from before the first changed them
+        (a focus part seen through the context stays the one clicked). On the view cube: its
+        view; with the measure tool on: a point."""
         app = self.app
-        oid = self.object_at(x, y, front_most=shift)
+        found = gizmo.hit(app.layout.composite, app.orbit, x, y) if app.state.show_cube else None
+        if found is not None:
+            part, direction = found
+            if part == "projection":
+                self.toggle_projection()
+            elif direction is not None:
+                app.turn_to(*gizmo.view_angles(direction))
+            return None
+        if app.ruler.on:
+            app.measure_at(x, y)
+            return None
         now = time.perf_counter()
-        last_t, last_oid = self._last_click
-        self._last_click = (now, oid)
-        if oid is not None and oid == last_oid and now - last_t < DOUBLE_CLICK_S:
+        last_t, last_oid, before = self._last_click
+        double = last_oid is not None and now - last_t < DOUBLE_CLICK_S
+        prefer = before if double else set(app.state.highlighted)
+        oid = self.object_at(x, y, front_most=shift, prefer=prefer)
+        self._last_click = (now, oid, prefer)
+        if double and oid is not None and oid == last_oid:
             app.state.toggle(oid)  # undo the first click's toggle
             scene = app.renderer.scene
             app.orbit.orbit_around((scene.aabb_min[oid] + scene.aabb_max[oid]) / 2.0)
             app.frame_objects([oid])  # then fit it, as F fits everything
-            self._last_click = (0.0, None)
+            self._last_click = (0.0, None, None)
             return oid
         if oid is not None:
             app.state.toggle(oid)
             app.state.reveal(oid)  # its row in the tree: opened, scrolled to, marked
         return oid
 
-    def object_at(self, x: float, y: float, front_most: bool = False) -> int | None:
+    def object_at(self, x: float, y: float, front_most: bool = False, prefer: set[int] | None = None) -> int | None:
+        """The object a click at (x, y) means: in ghosted modes the nearest of `prefer`
+        (default: the highlighted objects) under it, else (and with `front_most`) the nearest."""
         app, rec = self.app, self.app.records
         if rec is None:
             return None
         cx, cy, _, ch = app.layout.composite
         px, py = int(x - cx), int(cy + ch - 1 - y)  # viewport pixel, bottom-left origin
-        prefer = None if front_most or not app.state.mode.startswith("ghosted") else app.state.highlighted
+        ghosted = app.state.shown_mode().startswith("ghosted")
+        prefer = None if front_most or not ghosted else (app.state.highlighted if prefer is None else prefer)
         return pick(objects_at(app.renderer.atlas, rec, px, py), prefer)  # reads the candidates' texels alone
+
+    def toggle_projection(self) -> None:
+        """Perspective <-> orthographic (key 5, the switch under the view cube)."""
+        orbit = self.app.orbit
+        orbit.projection = "ortho" if orbit.projection == "perspective" else "perspective"
 
     def on_scroll(self, x_offset, y_offset) -> None:
         self.app.imgui.mouse_scroll_event(x_offset, y_offset)
@@ -132,6 +178,15 @@ class Controls:
     def on_drop(self, x, y, paths) -> None:
         if paths:
             self.app.open_scene_later(paths[0])
+
+    @staticmethod
+    def _views(keys) -> dict:
+        """Key -> (standard view, with Ctrl)."""
+        pairs = {1: ("front", "back"), 3: ("right", "left"), 7: ("top", "bottom"), 0: ("iso", "iso")}
+        out = {}
+        for n, views in pairs.items():
+            out[getattr(keys, f"NUMBER_{n}")] = out[getattr(keys, f"NUMPAD_{n}")] = views
+        return out
 
     def on_key(self, key, action, modifiers) -> None:
         app, keys = self.app, self.app.wnd.keys
@@ -158,7 +213,7 @@ class Controls:
         elif key == keys.A:
             app.state.show_atlas = not app.state.show_atlas
         elif key == keys.M:
-            app.state.mode = VIEW_MODES[(VIEW_MODES.index(app.state.mode) + 1) % len(VIEW_MODES)]
+            app.state.choose_mode(VIEW_MODES[(VIEW_MODES.index(app.state.mode) + 1) % len(VIEW_MODES)])
         elif key == keys.L and app.records is not None:
             app.state.atlas_layer = (app.state.atlas_layer + 2) % (app.records.atlas_size[2] + 1) - 1  # -1: all
         elif key == keys.P:
@@ -172,6 +227,13 @@ class Controls:
         elif key == keys.O:
             app.files.open(app.scene_dir)
         elif key in (keys.NUMBER_5, keys.NUMPAD_5):  # as in Blender: perspective <-> orthographic
-            orbit.projection = "ortho" if orbit.projection == "perspective" else "perspective"
+            self.toggle_projection()
+        elif key in self._views(keys):  # as in Blender: 1 front, 3 right, 7 top; Ctrl: the opposite
+            app.turn_to(*STANDARD_VIEWS[self._views(keys)[key][1 if modifiers.ctrl else 0]])
+        elif key == keys.R:
+            app.ruler.on, app.ruler.first = not app.ruler.on, None
+            app.say("measure: click two points (a vertex within a few pixels snaps)" if app.ruler.on else "")
+        elif key == keys.ESCAPE and app.ruler.on:
+            app.ruler.first = None
         elif key == keys.Q and modifiers.ctrl:
             app.wnd.close()

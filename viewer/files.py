@@ -7,12 +7,14 @@ import time
 from collections import deque
 from collections.abc import Callable
 from pathlib import Path
+from typing import Literal
 
 from imgui_bundle import imgui
 
 from rtta.scene.readers import SUFFIXES
 
 POPUP = "Open scene"
+Frames = Literal["all", "moving", "rest"]
 
 
 def listing(folder: Path) -> tuple[list[Path], list[Path]]:
@@ -75,23 +77,41 @@ class FileBrowser:
 
 
 class Stats:
-    """Frame times (a history for the plot) and the last time of each stage in ms."""
+    """Frame times: every frame's (the plot), those of frames drawn while the view moved (the
+    rate a user navigates at, not the idle redraw's), and the stages of the last frame that
+    rendered, which add up to its time (what the frame spent outside them is 'other')."""
 
     def __init__(self, keep: int = 240) -> None:
-        self.history: deque[float] = deque(maxlen=keep)
+        self.history: deque[float] = deque(maxlen=keep)  # ms between frame starts
+        self.moving_ms: deque[float] = deque(maxlen=keep)  # the same, of frames where the view moved
+        self.rest_ms: deque[float] = deque(maxlen=keep)  # of frames where it did not
         self.stage_ms: dict[str, float] = {}  # stages run in the last frame
-        self.last_ms: dict[str, float] = {}  # the last time each stage ran
+        self.last_ms: dict[str, float] = {}  # the last time each stage ran, whenever that was
+        self.rendered: tuple[float, dict[str, float]] | None = None  # (frame ms, its stages) of the last render
+        self.moving = False  # the frame being drawn moves the view (set by the viewer)
         self._last = time.perf_counter()
 
     def tick(self) -> None:
+        """A frame starts: the time since the last start is the last frame's."""
         now = time.perf_counter()
-        self.history.append((now - self._last) * 1e3)
+        ms = (now - self._last) * 1e3
+        self.history.append(ms)
+        (self.moving_ms if self.moving else self.rest_ms).append(ms)
         self._last = now
 
-    def mean_ms(self, frames: int = 30) -> float:
-        recent = list(self.history)[-frames:]
+    def done(self, moving: bool, frame_ms: float, stages: dict[str, float] | None) -> None:
+        """The frame drawn: whether the view moved, its time in the viewer and the stages
+        it ran (None: it rendered nothing, only the panel)."""
+        self.moving = moving
+        if stages is not None:
+            self.rendered = (frame_ms, dict(stages))
+
+    def mean_ms(self, frames: int = 30, which: Frames = "all") -> float:
+        """Mean frame time over the last `frames` frames: 'all', 'moving' or 'rest' ones."""
+        data = {"all": self.history, "moving": self.moving_ms, "rest": self.rest_ms}[which]
+        recent = list(data)[-frames:]
         return sum(recent) / len(recent) if recent else 0.0
 
-    def fps(self) -> float:
-        ms = self.mean_ms()
+    def fps(self, which: Frames = "all") -> float:
+        ms = self.mean_ms(which=which)
         return 1e3 / ms if ms > 0 else 0.0

@@ -6,6 +6,11 @@ outlines of thousands of atlas regions) makes `Buffer.write` raise "out of range
 buffer is reallocated (to the next power of two) before a draw list that does not fit, and
 the vertex array is rebuilt on the new buffers. imgui-bundle < 1.92 (pinned) uses 32-bit
 indices, so one draw list never needs a vertex offset.
+
+Mouse events go through imgui's input queue (`add_mouse_*_event`) instead of setting
+`io.mouse_down` directly: a press and its release that arrive before the same frame (a tap,
+`xdotool click`) were one state overwritten by the next, so the panel never saw the click;
+queued, imgui trickles them over two frames and the widget gets its click.
 """
 
 from __future__ import annotations
@@ -44,6 +49,29 @@ class GrowingImguiRenderer(ModernglWindowRenderer):
             index_buffer=self._index_buffer,
             index_element_size=imgui.INDEX_SIZE,
         )
+
+    def _buttons(self, button) -> list[int]:
+        m = self.wnd.mouse
+        return [k for k, b in enumerate((m.left, m.right, m.middle)) if button == b]
+
+    def mouse_position_event(self, x, y, dx, dy) -> None:
+        self.io.add_mouse_pos_event(*self._mouse_pos_viewport(x, y))
+
+    def mouse_drag_event(self, x, y, dx, dy) -> None:
+        self.io.add_mouse_pos_event(*self._mouse_pos_viewport(x, y))
+
+    def mouse_press_event(self, x, y, button) -> None:
+        self.io.add_mouse_pos_event(*self._mouse_pos_viewport(x, y))
+        for k in self._buttons(button):
+            self.io.add_mouse_button_event(k, True)
+
+    def mouse_release_event(self, x, y, button) -> None:
+        self.io.add_mouse_pos_event(*self._mouse_pos_viewport(x, y))
+        for k in self._buttons(button):
+            self.io.add_mouse_button_event(k, False)
+
+    def mouse_scroll_event(self, x_offset, y_offset) -> None:
+        self.io.add_mouse_wheel_event(float(x_offset), float(y_offset))
 
     def render(self, draw_data: imgui.ImDrawData) -> None:
         io = self.io

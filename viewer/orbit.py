@@ -14,7 +14,7 @@ from rtta.scene.camera import DEFAULT_ORBIT, Camera, Projection, fit_distance, u
 
 DEGREES_PER_PIXEL = 0.3
 MAX_ELEVATION = 89.0
-ZOOM_PER_STEP = 0.85
+ZOOM_PER_STEP = 0.88  # 12% closer per wheel notch (0.85 went from the whole model to a close-up in 5)
 
 
 def _direction(az: float, el: float, up_axis: str = "y") -> tuple[np.ndarray, np.ndarray]:

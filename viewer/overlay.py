@@ -1,6 +1,6 @@
 """Drawn over the views with imgui's background draw list: atlas region outlines (the
-highlighted ones in the outline colour), the name of the region under the cursor, and
-the atlas size, layers and utilization."""
+highlighted ones in the outline colour), the name of the region under the cursor, the
+atlas size, layers and utilization; the view cube, the measurements and the splitter."""
 
 from __future__ import annotations
 
@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from imgui_bundle import imgui
 
+from . import gizmo, ruler
 from .views import atlas_rects_on_screen, contains
 
 if TYPE_CHECKING:
@@ -17,6 +18,8 @@ if TYPE_CHECKING:
 REGION = imgui.IM_COL32(120, 200, 255, 140)
 TEXT = imgui.IM_COL32(235, 235, 240, 255)
 HOVER = imgui.IM_COL32(255, 200, 80, 255)
+SPLITTER = imgui.IM_COL32(90, 90, 100, 255)
+SPLITTER_HOT = imgui.IM_COL32(255, 200, 80, 255)
 HOVER_MAX = 2000  # outlines drawn for a hovered group at most (imgui's buffers are finite)
 MAX_OUTLINES = 1000  # region outlines drawn per frame: each is a call into imgui (3,000 took 5-8 ms a frame)
 
@@ -88,10 +91,27 @@ def _outlined(app: OverlayHost) -> tuple[np.ndarray, np.ndarray]:
     return ids[keep], boxes[keep]
 
 
+def _composite_tools(app: OverlayHost, dl) -> None:
+    """The measurements, the view cube and the splitter at the panel's edge."""
+    rect, scene = app.layout.composite, app.renderer.scene
+    if rect[2] > 0 and rect[3] > 0 and (app.ruler.done or app.ruler.first is not None):
+        view, proj = app.renderer.matrices(app.orbit.camera(), (rect[2], rect[3]))
+        ruler.draw(dl, app.ruler, proj @ view, rect, scene.origin, scene.unit, scene.radius)
+    if app.state.show_cube:
+        gizmo.draw(dl, rect, app.orbit, scene.up_axis, app.mouse)
+    _, py, pw, ph = app.layout.panel
+    if pw > 0:  # over the panel's edge (the foreground list: above the panel window)
+        hot = app.splitting or abs(app.mouse[0] - pw) <= 4
+        imgui.get_foreground_draw_list().add_rect_filled(
+            imgui.ImVec2(pw - 3, py), imgui.ImVec2(pw, py + ph), SPLITTER_HOT if hot else SPLITTER
+        )
+
+
 def draw(app: OverlayHost) -> None:
     rec = app.records
     dl = imgui.get_background_draw_list()
     _hover(app, dl)
+    _composite_tools(app, dl)
     if not app.state.show_atlas or rec is None or app.layout.atlas[2] <= 0:
         return
     focus_col = _col(app.state.style.outline_color)

@@ -1,11 +1,15 @@
-"""The imgui side panel: scene, mode, highlights, style, atlas settings and stats.
+"""The imgui side panel: scene, mode, view, the part tree, then the sections in SECTIONS
+(measure, saved views, stats, style, projector, lens, atlas).
 
-Each section is one short function reading and writing the viewer's state; the viewer
-decides what to re-run from the state afterwards (capture or compositing only).
+Each section is one short function of the app reading and writing the viewer's state; the
+viewer decides what to re-run from the state afterwards (capture or compositing only). A new
+section is a function added to SECTIONS (a module of its own, as viewer.panel_view). The tree
+takes the height the sections below it leave.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -18,14 +22,17 @@ from rtta.passes.composite import LENS_MODES, ROLES
 from rtta.passes.oit import ORDERS
 from rtta.scene.model import BOUNDS
 
-from . import cutaway, tree
-from .state import ATLAS_MAX_CHOICES, NAVIGATION_FPS, VIEW_MODES
+from . import cutaway, panel_view, tree
+from .state import ATLAS_MAX_CHOICES, GHOSTED, NAVIGATION_FPS, VIEW_MODES
 
 if TYPE_CHECKING:
     from .commands import PanelsHost
 
 ERROR_COLOR = imgui.ImVec4(1.0, 0.45, 0.4, 1.0)
+MESSAGE_COLOR = imgui.ImVec4(0.6, 0.9, 0.6, 1)
 STAGES = ("parameterize", "capture", "post", "composite", "std", "ui")
+LABEL_WIDTH = "transparency order"  # the widest label of a slider or a combo: its room on the right
+_below = {"height": 0.0}  # what the sections below the tree took the last frame
 
 
 def draw(app: PanelsHost) -> None:
@@ -35,55 +42,81 @@ def draw(app: PanelsHost) -> None:
     imgui.set_next_window_pos(imgui.ImVec2(x, y))
     imgui.set_next_window_size(imgui.ImVec2(w, h))
     flags = imgui.WindowFlags_.no_move.value | imgui.WindowFlags_.no_resize.value | imgui.WindowFlags_.no_collapse.value
+    flags |= imgui.WindowFlags_.no_title_bar.value
     imgui.begin("rtta", None, flags)
     _scene(app)
     _mode(app)
-    imgui.push_item_width(-120)
-    _objects(app)
-    _stats(app)
-    _style(app)
-    _projector(app)
-    _lens(app)
-    cutaway.panel(app)
-    _atlas(app)
+    panel_view.view(app)
+    imgui.push_item_width(-(imgui.calc_text_size(LABEL_WIDTH).x + imgui.get_style().item_inner_spacing.x * 2))
+    tree.draw(app, reserve=_below["height"])
+    top = imgui.get_cursor_pos_y()
+    for section in SECTIONS:
+        section(app)
+    _below["height"] = imgui.get_cursor_pos_y() - top + imgui.get_style().window_padding.y
     imgui.pop_item_width()
     imgui.end()
     app.files.draw()
 
 
 def _scene(app: PanelsHost) -> None:
-    imgui.text(f"{app.scene_label}  ({app.renderer.scene.count} objects)")
+    imgui.text_wrapped(f"{app.scene_label}  ({app.renderer.scene.count} objects)")
     if imgui.button("Open... (O)"):
         app.files.open(app.scene_dir)
-    imgui.same_line()
+    tree.same_line_if(tree.button_width("Screenshot (F12)") + 8)
     if imgui.button("Screenshot (F12)"):
         app.screenshot()
+    if imgui.is_item_hovered():
+        imgui.set_tooltip(f"into {app.screenshot_dir}")
     if app.message:
+        _message(app.message, ERROR_COLOR if app.message_is_error else MESSAGE_COLOR)
+
+
+def _message(text: str, color: imgui.ImVec4) -> None:
+    """The message line: one line, wrapped when it fits in two; longer ones and several
+    ('; '-separated: the load's warnings) fold into one line that opens to show them all."""
+    parts = [p for p in text.split("; ") if p]
+    width = imgui.get_content_region_avail().x
+    if len(parts) <= 1 and imgui.calc_text_size(text).x <= 2 * width:
         imgui.push_text_wrap_pos(0.0)
-        imgui.text_colored(ERROR_COLOR if app.message_is_error else imgui.ImVec4(0.6, 0.9, 0.6, 1), app.message)
+        imgui.text_colored(color, text)
         imgui.pop_text_wrap_pos()
+        return
+    more = f" (+{len(parts) - 1} more)" if len(parts) > 1 else " ..."
+    head = tree.fit_text(parts[0], width - imgui.calc_text_size(more).x - imgui.get_tree_node_to_label_spacing())
+    imgui.push_style_color(imgui.Col_.text.value, color)
+    opened = imgui.tree_node(f"{head}{more}###message")
+    imgui.pop_style_color()
+    if imgui.is_item_hovered() and not opened:
+        imgui.set_tooltip("click to show all")
+    if opened:
+        imgui.push_text_wrap_pos(0.0)
+        for p in parts:
+            imgui.bullet()
+            imgui.text_colored(color, p)
+        imgui.pop_text_wrap_pos()
+        imgui.tree_pop()
 
 
 def _mode(app: PanelsHost) -> None:
     s = app.state
     changed, i = imgui.combo("mode (M)", VIEW_MODES.index(s.mode), list(VIEW_MODES))
     if changed:
-        s.mode = VIEW_MODES[i]
+        s.choose_mode(VIEW_MODES[i])
     _, s.show_atlas = imgui.checkbox("atlas view (A)", s.show_atlas)
     imgui.same_line()
     if imgui.button("frame all (F)"):
         app.frame_objects()
     if s.mode == "std":
         imgui.text_disabled("STD draws the scene directly: no highlights")
-
-
-def _objects(app: PanelsHost) -> None:
-    tree.draw(app)
+    elif s.mode in GHOSTED and s.shown_mode() == "std":
+        imgui.push_text_wrap_pos(0.0)
+        imgui.text_disabled(f"solid until a part is highlighted (click one), then {s.mode}")
+        imgui.pop_text_wrap_pos()
 
 
 def _style(app: PanelsHost) -> None:
     st = app.state.style
-    if not imgui.collapsing_header("Style", imgui.TreeNodeFlags_.default_open.value):
+    if not imgui.collapsing_header("Style"):
         return
     _, st.context_opacity = imgui.slider_float("context opacity", st.context_opacity, 0.0, 1.0)
     _, st.desaturate = imgui.slider_float("desaturate", st.desaturate, 0.0, 1.0)
@@ -143,7 +176,7 @@ def _color(label: str, rgba) -> tuple[bool, tuple]:
 
 def _atlas(app: PanelsHost) -> None:
     s = app.state
-    if not imgui.collapsing_header("Atlas", imgui.TreeNodeFlags_.default_open.value):
+    if not imgui.collapsing_header("Atlas"):
         return
     _, s.settings.border = imgui.slider_int("border (px)", s.settings.border, 0, 4)
     changed, i = imgui.combo("max size", ATLAS_MAX_CHOICES.index(s.atlas_max), list(ATLAS_MAX_CHOICES))
@@ -183,16 +216,25 @@ def _navigation(app: PanelsHost) -> None:
 
 
 def _stats(app: PanelsHost) -> None:
-    if not imgui.collapsing_header("Stats", imgui.TreeNodeFlags_.default_open.value):
+    if not imgui.collapsing_header("Stats"):
         return
     st = app.stats
-    imgui.text(f"frame {st.mean_ms():6.1f} ms  ({st.fps():5.1f} fps)")
+    if st.moving_ms:
+        imgui.text(f"moving  {st.fps('moving'):5.1f} fps  ({st.mean_ms(which='moving'):6.1f} ms a frame)")
+    else:
+        imgui.text_disabled("moving  - (orbit, pan or zoom to measure)")
+    if imgui.is_item_hovered():
+        imgui.set_tooltip("the frame rate while the view moves (the last 30 such frames)")
+    imgui.text_disabled(f"at rest {st.fps('rest'):5.1f} fps  (redraws of the panel alone)")
     _, app.state.measure = imgui.checkbox("time stages (syncs the GPU)", app.state.measure)
     _navigation(app)
-    for k in STAGES:
-        if k in st.last_ms:
-            ran = k in st.stage_ms
-            imgui.text(f"  {k:<13}{st.last_ms[k]:7.1f} ms" + ("" if ran else "  (reused)"))
+    if st.rendered is not None and app.state.measure:
+        total, stages = st.rendered
+        imgui.text(f"last rendered frame {total:6.1f} ms:")
+        for k in STAGES:
+            if k in stages:
+                imgui.text(f"  {k:<13}{stages[k]:7.1f} ms")
+        imgui.text_disabled(f"  {'other':<13}{max(0.0, total - sum(stages.values())):7.1f} ms")
     r = app.records
     if r is not None:
         n, vis = len(r.visible), int(r.visible.sum())
@@ -201,7 +243,7 @@ def _stats(app: PanelsHost) -> None:
         imgui.text(f"atlas {r.atlas_size[0]}x{r.atlas_size[1]} x {r.atlas_size[2]} layers")
         imgui.text(f"utilization {100 * r.utilization:.0f}%")
     history = np.asarray(st.history, np.float32)
-    if len(history) and implot.begin_plot("##frametime", imgui.ImVec2(-1, 110)):
+    if len(history) and implot.begin_plot("##frametime", imgui.ImVec2(-1, 90)):
         implot.setup_axes("frame", "ms")
         implot.setup_axis_limits(
             implot.ImAxis_.y1.value, 0, max(50.0, float(history.max()) * 1.1), imgui.Cond_.always.value
@@ -211,3 +253,15 @@ def _stats(app: PanelsHost) -> None:
         )
         implot.plot_line("frame ms", history)
         implot.end_plot()
+
+
+SECTIONS: list[Callable[[PanelsHost], None]] = [
+    panel_view.measure,
+    panel_view.views,
+    _stats,
+    _style,
+    _projector,
+    _lens,
+    cutaway.panel,
+    _atlas,
+]  # drawn in this order below the part tree

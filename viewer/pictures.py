@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import re
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -22,6 +23,23 @@ if TYPE_CHECKING:
     from .state import ViewerState
 
 
+def default_dir() -> Path:
+    """Where screenshots go unless `--screenshot-dir` says: an rtta folder in the user's
+    pictures folder ($XDG_PICTURES_DIR, else the one user-dirs.dirs names, else ~/Pictures).
+    Never the current folder (it is often the one the scene files are in)."""
+    home = Path.home()
+    pictures = os.environ.get("XDG_PICTURES_DIR", "")
+    if not pictures:
+        config = Path(os.environ.get("XDG_CONFIG_HOME") or home / ".config") / "user-dirs.dirs"
+        try:
+            for line in config.read_text(encoding="utf-8", errors="replace").splitlines():
+                if line.startswith("XDG_PICTURES_DIR="):
+                    pictures = line.split("=", 1)[1].strip().strip('"').replace("$HOME", str(home))
+        except OSError:
+            pass
+    return Path(pictures or home / "Pictures") / "rtta"
+
+
 class Pictures:
     """The viewer's screenshots (a part of `viewer.app.Viewer`)."""
 
@@ -31,6 +49,7 @@ class Pictures:
     records: Records | None
     scene_label: str
     screenshot_dir: Path
+    screenshot_dir_default: bool  # the user's pictures folder: made on the first screenshot
 
     if TYPE_CHECKING:  # the viewer's own
 
@@ -44,6 +63,12 @@ class Pictures:
         images = {"composite": self.composite_image(), "atlas": self.atlas_image()}
         images = {k: v for k, v in images.items() if v is not None}
         stem = re.sub(r"[^\w.-]", "_", Path(self.scene_label).stem)[:80] or "scene"
+        if self.screenshot_dir_default:
+            try:
+                self.screenshot_dir.mkdir(parents=True, exist_ok=True)
+            except OSError as exc:
+                self.say(f"screenshot not written: {self.screenshot_dir}: {exc.strerror or exc}", error=True)
+                return []
         n = 0
         while True:
             n += 1
@@ -59,14 +84,14 @@ class Pictures:
             except (RttaError, OSError) as exc:
                 self.say(f"screenshot not written: {exc}", error=True)
                 return []
-            self.say("saved " + ", ".join(p.name for p in written))
+            self.say(f"saved {', '.join(p.name for p in written)} in {self.screenshot_dir}")
             return written
 
     def composite_image(self) -> np.ndarray | None:
         vp = self.viewport
         if vp[0] < 1 or vp[1] < 1:
             return None
-        if self.state.mode == "std":
+        if self.state.shown_mode() == "std":
             return over_background(self.renderer.std(self.orbit.camera(), vp).read(vp, 1)["color"][0])
         return self.renderer.target.read()[0].copy()
 

@@ -35,7 +35,7 @@ def run(
     *,
     size: tuple[int, int],
     mode: str,
-    screenshot_dir: Path,
+    screenshot_dir: Path | None = None,
     bench: int = 0,
     load: dict | None = None,
     bench_modes: tuple[str, ...] | None = None,

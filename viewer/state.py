@@ -20,6 +20,7 @@ from .parts import PartTree
 VIEW_MODES = ("std", *MODES)
 ATLAS_MAX_CHOICES = ("viewport", "512", "1024", "2048", "4096")
 NAVIGATION_FPS = 10.0  # the frame rate fast navigation keeps by default (rtta.renderer.navigation)
+GHOSTED = ("ghosted", "ghosted-ao")  # modes that show nothing but grey until a part is highlighted
 
 
 @dataclass
@@ -117,6 +118,9 @@ class ViewerState:
     hover: int | None = None  # tree node under the mouse: its objects are outlined
     selected: int | None = None  # object picked in the composite: its row is revealed
     scroll_to: int | None = None  # tree node the panel scrolls to on its next frame
+    show_cube: bool = True  # the view cube in the composite's corner
+    touched: bool = False  # a part was highlighted, or a mode chosen, since the scene opened
+    panel_width: int = 0  # the side panel's width as the splitter set it (0: views.PANEL_WIDTH)
 
     def __post_init__(self) -> None:
         if self.mode not in VIEW_MODES:
@@ -126,6 +130,20 @@ class ViewerState:
         self._filtered: tuple[str, list[int], np.ndarray] | None = None
         self._mask: tuple[tuple, np.ndarray] | None = None
         self.tree = PartTree(self.names, self.paths)
+
+    def shown_mode(self) -> str:
+        """The mode drawn now: a ghosted mode shows the scene solid (std) until the first
+        highlight or a mode chosen (an all-grey ghost of a scene opened with nothing in focus
+        shows nothing readable), then the mode itself."""
+        if self.mode in GHOSTED and not self.touched:
+            if not self.style.focus:
+                return "std"
+            self.touched = True
+        return self.mode
+
+    def choose_mode(self, mode: str) -> None:
+        """The user picked `mode` (panel, key M): it is shown as it is from now on."""
+        self.mode, self.touched = mode, True
 
     def hide(self, ids, on: bool = True) -> None:
         """Hide (or show again) these objects."""

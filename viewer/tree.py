@@ -17,7 +17,7 @@ from imgui_bundle import imgui
 if TYPE_CHECKING:
     from .commands import PanelsHost
 
-LIST_HEIGHT = 220
+LIST_MIN = 160  # the tree's least height; it takes what the panel leaves it above that
 SLIDER_W = 64
 INDENT = 12.0
 MIXED = imgui.internal.ItemFlagsPrivate_.mixed_value.value
@@ -25,21 +25,39 @@ SELECTED = imgui.IM_COL32(255, 200, 80, 255)
 HIDDEN_TEXT = imgui.ImVec4(0.55, 0.55, 0.58, 1.0)
 
 
-def draw(app: PanelsHost) -> None:
+def button_width(label: str) -> float:
+    """The width of a small button and the spacing before it."""
+    st = imgui.get_style()
+    return imgui.calc_text_size(label).x + 2 * st.frame_padding.x + st.item_spacing.x
+
+
+def same_line_if(width: float) -> None:
+    """Keep on this line when `width` pixels are left on it; else start the next one."""
+    imgui.same_line()
+    if imgui.get_content_region_avail().x < width - imgui.get_style().item_spacing.x:
+        imgui.new_line()
+
+
+def draw(app: PanelsHost, reserve: float = 0.0) -> None:
+    """The tree section; its list takes the panel's height but `reserve` pixels (what the
+    sections below it took the last frame), LIST_MIN at least."""
     s = app.state
     if not imgui.collapsing_header("Objects", imgui.TreeNodeFlags_.default_open.value):
         return
+    hows = ("all", "none", "invert")
+    imgui.set_next_item_width(max(80.0, imgui.get_content_region_avail().x - sum(button_width(h) for h in hows)))
     _, s.filter = imgui.input_text_with_hint("##filter", "filter by name", s.filter)
     controls = {-1: (*imgui.get_item_rect_min(), *imgui.get_item_rect_max())}
-    for k, how in enumerate(("all", "none", "invert")):
-        imgui.same_line()
+    for k, how in enumerate(hows):
+        same_line_if(button_width(how))
         if imgui.small_button(how):
             s.select(how)
         controls[-2 - k] = (*imgui.get_item_rect_min(), *imgui.get_item_rect_max())
     _toolbar(app)
     tree = s.tree
     rows = tree.rows(s.filter)
-    imgui.begin_child("objects", imgui.ImVec2(0, LIST_HEIGHT), imgui.ChildFlags_.borders.value)
+    list_height = max(LIST_MIN, imgui.get_content_region_avail().y - reserve)
+    imgui.begin_child("objects", imgui.ImVec2(0, list_height), imgui.ChildFlags_.borders.value)
     app.item_rects.clear()
     app.item_rects.update(controls)  # -1: filter box, -2..-4: all/none/invert (tests click them)
     tree.rects = {}  # rows on screen: node -> checkbox rect (tests click them)
@@ -50,7 +68,7 @@ def draw(app: PanelsHost) -> None:
     if s.scroll_to is not None:
         where = np.flatnonzero(rows == s.scroll_to)
         if where.size:
-            imgui.set_scroll_y(max(0.0, float(where[0]) * height - LIST_HEIGHT / 2))
+            imgui.set_scroll_y(max(0.0, float(where[0]) * height - list_height / 2))
         s.scroll_to = None
     s.hover = None
     clipper = imgui.ListClipper()
@@ -73,13 +91,14 @@ def _toolbar(app: PanelsHost) -> None:
         )
     ):
         if k:
-            imgui.same_line()
+            same_line_if(button_width(label))
         if imgui.small_button(label):
             act()
         s.tree.buttons[label] = (*imgui.get_item_rect_min(), *imgui.get_item_rect_max())  # tests click them
     if s.hidden:
-        imgui.same_line()
-        imgui.text_disabled(f"{len(s.hidden)} hidden")
+        text = f"{len(s.hidden)} hidden"
+        same_line_if(imgui.calc_text_size(text).x + imgui.get_style().item_spacing.x)
+        imgui.text_disabled(text)
 
 
 def _row(app: PanelsHost, node: int, focus: np.ndarray, hidden: np.ndarray, sizes: np.ndarray) -> None:
@@ -98,7 +117,7 @@ def _row(app: PanelsHost, node: int, focus: np.ndarray, hidden: np.ndarray, size
         imgui.push_item_flag(MIXED, True)
     label = tree.labels[node] if oid >= 0 else f"{tree.labels[node]}  ({n})"
     if s.mode == "transparent":  # room for the opacity slider on the right
-        label = _fit(label, imgui.get_window_width() - SLIDER_W - 40 - imgui.get_cursor_pos_x())
+        label = fit_text(label, imgui.get_window_width() - SLIDER_W - 40 - imgui.get_cursor_pos_x())
     if off == n:
         imgui.push_style_color(imgui.Col_.text.value, HIDDEN_TEXT)
     changed, _ = imgui.checkbox(label, n > 0 and on == n)
@@ -152,7 +171,7 @@ def _opacity(app: PanelsHost, node: int) -> None:
             s.style.opacity[int(oid)] = a
 
 
-def _fit(label: str, width: float) -> str:
+def fit_text(label: str, width: float) -> str:
     """The label, shortened with '...' to fit `width` pixels (the text, not its checkbox)."""
     if imgui.calc_text_size(label).x <= width:
         return label

@@ -15,8 +15,10 @@ from rtta.gl import glraw, glsl
 from rtta.gl.bindings import Texture
 from rtta.passes.composite import BACKGROUND
 
-PANEL_WIDTH = 320
-ATLAS_FRACTION = 0.4
+PANEL_WIDTH = 360  # at start; the splitter moves it between PANEL_MIN and PANEL_MAX of the window
+PANEL_MIN = 240
+PANEL_MAX = 0.6
+ATLAS_FRACTION = 0.3
 ATLAS_BACKGROUND = (0.16, 0.16, 0.18)
 
 Rect = tuple[int, int, int, int]
@@ -29,13 +31,19 @@ class Layout:
     atlas: Rect  # zero-sized when the atlas view is hidden
 
     @classmethod
-    def of(cls, size: tuple[int, int], show_atlas: bool) -> Layout:
+    def of(cls, size: tuple[int, int], show_atlas: bool, panel_width: int = 0) -> Layout:
+        """The rectangles in a window of `size`; `panel_width` 0: PANEL_WIDTH."""
         w, h = max(0, int(size[0])), max(0, int(size[1]))
-        panel_w = min(PANEL_WIDTH, w)
+        panel_w = min(panel_clamp(panel_width or PANEL_WIDTH, w), w)
         rest = w - panel_w
         atlas_w = int(rest * ATLAS_FRACTION) if show_atlas else 0
         comp_w = rest - atlas_w
         return cls(panel=(0, 0, panel_w, h), composite=(panel_w, 0, comp_w, h), atlas=(panel_w + comp_w, 0, atlas_w, h))
+
+
+def panel_clamp(width: float, window_width: int) -> int:
+    """A panel width the splitter may set in a window this wide."""
+    return int(max(PANEL_MIN, min(float(width), PANEL_MAX * window_width)))
 
 
 def contains(rect: Rect, x: float, y: float) -> bool:

@@ -1,0 +1,125 @@
+"""Saved views in the viewer: the camera, projection, mode, focus, hidden parts, opacities
+and compositing style, written and read as `rtta.renderer.view_file` files (the format
+`rtta snapshot --save-view` writes and `--view-file` renders), one file per named view in
+a folder per scene: DIR/<scene file's stem>/<name>.json.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from rtta.errors import RttaError
+from rtta.renderer.options import CORE_STYLE
+from rtta.renderer.view_file import SavedView, read_view, write_view
+from rtta.scene import framing
+from rtta.scene.select import resolve_names
+
+if TYPE_CHECKING:
+    from rtta.scene.model import Scene
+
+    from .orbit import Orbit
+    from .state import ViewerState
+
+
+def default_dir() -> Path:
+    """$XDG_DATA_HOME/rtta/views, else ~/.local/share/rtta/views."""
+    data = os.environ.get("XDG_DATA_HOME") or str(Path.home() / ".local" / "share")
+    return Path(data) / "rtta" / "views"
+
+
+def clean_name(name: str) -> str:
+    """A view's name as a file name: letters, digits, '-', '_' and '.' kept, the rest '_'."""
+    return re.sub(r"[^\w.-]", "_", name.strip())[:80].strip(".") or "view"
+
+
+def capture(scene: Scene, state: ViewerState, orbit: Orbit) -> SavedView:
+    """What the viewer shows now, as a SavedView (objects by name)."""
+    names = scene.names
+    o = framing.Orbit(
+        float(orbit.az),
+        float(orbit.el),
+        float(orbit.dist),
+        tuple(float(v) for v in orbit.target),  # type: ignore[arg-type]
+        float(orbit.fov_y),
+        orbit.projection,
+    )
+    style = {k: _plain(getattr(state.style, k)) for k in CORE_STYLE}
+    return SavedView(
+        orbit=o,
+        mode=state.mode,
+        focus=[names[i] for i in sorted(state.highlighted)],
+        hidden=[names[i] for i in sorted(state.hidden)],
+        opacity={names[i]: float(a) for i, a in sorted(state.style.opacity.items())},
+        style=style,
+    )
+
+
+def apply(view: SavedView, scene: Scene, state: ViewerState, orbit: Orbit) -> None:
+    """Show `view`: its camera, mode, focus, hidden parts, opacities and style replace the
+    viewer's (names the scene lacks: an RttaError, nothing changed)."""
+    focus = resolve_names(scene, view.focus, "focus")
+    hidden = resolve_names(scene, view.hidden, "hidden")
+    opacity = {i: a for name, a in view.opacity.items() for i in resolve_names(scene, [name], "opacity")}
+    state.mode = view.mode
+    state.style.focus.clear()
+    state.style.focus |= set(focus)
+    state.show_all()
+    if hidden:
+        state.hide(hidden)
+    state.style.opacity.clear()
+    state.style.opacity.update(opacity)
+    for key, value in view.style.items():
+        setattr(state.style, key, value)
+    state.touched = True  # a view chosen: its mode as it was saved
+    if view.orbit is not None:
+        o = view.orbit
+        orbit.az, orbit.el, orbit.dist = o.az, o.el, o.distance
+        orbit.target = np.array(o.target, np.float64)
+        orbit.fov_y, orbit.projection = o.fov, o.projection
+
+
+class Views:
+    """The named views of one scene, in `folder` (made when the first view is saved)."""
+
+    def __init__(self, root: Path, scene: Scene) -> None:
+        stem = clean_name(Path(scene.source).stem) if scene.source else "scene"
+        self.folder = Path(root) / stem
+        self.inputs = list(scene.inputs)
+        self.name = ""  # the panel's name field
+
+    def names(self) -> list[str]:
+        """The saved views' names, sorted."""
+        try:
+            return sorted(p.stem for p in self.folder.glob("*.json") if p.is_file())
+        except OSError:
+            return []
+
+    def save(self, name: str, view: SavedView) -> Path:
+        """Write `view` as `name` (an existing view of that name is replaced)."""
+        self.folder.mkdir(parents=True, exist_ok=True)
+        return write_view(view, self.folder / f"{clean_name(name)}.json", self.inputs)
+
+    def load(self, name: str) -> SavedView:
+        return read_view(self.folder / f"{clean_name(name)}.json")
+
+    def delete(self, name: str) -> None:
+        path = self.folder / f"{clean_name(name)}.json"
+        try:
+            read_view(path)  # only a view file is removed
+            path.unlink()
+        except OSError as exc:
+            raise RttaError(f"cannot remove the view ({exc.strerror or exc})", path) from None
+
+
+def _plain(value):
+    """A style value as JSON holds it (enums as their strings, numpy numbers as floats)."""
+    if isinstance(value, str):
+        return str(value)
+    if isinstance(value, (bool, int)):
+        return int(value)
+    return float(value)

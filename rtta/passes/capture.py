@@ -49,7 +49,12 @@ class ScenePass:
         self._programs: dict[tuple, moderngl.Program] = {}
         self._indirect: moderngl.Buffer | None = None
         self._cullable = np.zeros(0, bool)  # per object, for the view of the last setup()
-        self._capped = self._cut = self._whole = self._drawn = None  # sections (setup)
+        # sections (setup): the capped and cut objects, the program without the cut, what setup drew with
+        self._capped: np.ndarray | None = None
+        self._cut: np.ndarray | None = None
+        self._whole: moderngl.VertexArray | None = None
+        self._drawn: tuple | None = None
+        self.binder: Callable[[moderngl.Program], None] | None = None  # more uniforms, on every program
         self.program = self.program_for(False)
 
     def program_for(self, textured: bool, normals: bool = True, **variant: bool) -> moderngl.Program:
@@ -103,10 +108,12 @@ class ScenePass:
         placement = gpu.placement
         extra = {**(placement.variant() if placement is not None else {}), **variant}
         program = self.program_for(gpu.textured, target is None or target.normals, **extra)
-        program["u_view"].write(mat_bytes(view))
-        program["u_proj"].write(mat_bytes(proj))
+        glsl.uniform(program, "u_view").write(mat_bytes(view))
+        glsl.uniform(program, "u_proj").write(mat_bytes(proj))
         if placement is not None:
             placement.apply(program, proj @ view)
+        if self.binder is not None:
+            self.binder(program)
         return program
 
     def draw_objects(self, vao: moderngl.VertexArray, gpu: GpuScene, objects: np.ndarray | None) -> None:
@@ -119,12 +126,11 @@ class ScenePass:
         placement = gpu.placement
         if placement is not None and placement.removed.any():  # cut away whole
             objects = ~placement.removed if objects is None else objects & ~placement.removed
+        cut, whole = self._cut, self._whole  # set together by setup()
         try:
             for cull, kind in ((True, closed), (False, ~closed)):
                 mask = kind if objects is None else kind & objects
-                for program, part in (
-                    ((vao, None),) if self._cut is None else ((self._whole, ~self._cut), (vao, self._cut))
-                ):
+                for program, part in ((vao, None),) if cut is None or whole is None else ((whole, ~cut), (vao, cut)):
                     drawn = mask if part is None else mask & part
                     if drawn.any():
                         self.cull(cull)
@@ -147,7 +153,9 @@ class ScenePass:
         """Cap `capped` (bool [n]) where the view ray enters the kept region inside them: their
         surfaces beyond that point counted into the stencil (its winding number), then their
         back faces drawn as the cap where the count is not 0, resetting it (rtta.passes.sections)."""
+        assert self._drawn is not None, "setup() first"
         gpu, view, proj, target, variant = self._drawn
+        assert target is not None, "caps only with a target (setup)"
         runs = gpu.scene.index_runs(capped)
         masks = target.color_writes(False)
         try:
@@ -326,10 +334,10 @@ class StdPass(ScenePass):
             if self._painted is None:
                 self._painted = ScenePass(self.ctx, PROJECTOR=True)
             scene_pass = self._painted
-        vao = scene_pass.setup(gpu, view, proj, target)
-        if projection is not None:
+        if projection is not None:  # every program the pass draws with (sections: several)
             pass_, projector = projection
-            pass_.bind(scene_pass.program, projector, gpu.scene.origin)
+            scene_pass.binder = lambda program: pass_.bind(program, projector, gpu.scene.origin)
+        vao = scene_pass.setup(gpu, view, proj, target)
         target.bind((0, 0, *viewport))
         scene_pass.draw_objects(vao, gpu, objects)
 

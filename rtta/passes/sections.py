@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import moderngl
 import numpy as np
 
-from ..gl import glraw
+from ..gl import glraw, glsl
 from ..gl.bindings import Storage
 from ..scene.cutaway import Cutaway
 
@@ -77,18 +77,18 @@ class Placement:
             return
         planes = np.zeros((6, 4), np.float32)
         planes[: len(self.planes)] = self.planes
-        program["u_sections"].write(planes.tobytes())
-        program["u_section_count"].value = len(self.planes)
+        glsl.uniform(program, "u_sections").write(planes.tobytes())
+        glsl.uniform(program, "u_section_count").value = len(self.planes)
         for name, value in (("u_caps", self.caps), ("u_hatch_spacing", self.hatch)):
             if name in program:
-                program[name].value = value
+                glsl.uniform(program, name).value = value
         inverse = np.linalg.inv(np.asarray(view_proj, np.float64))
         if "u_section_inverse" in program:
-            program["u_section_inverse"].write(np.ascontiguousarray(inverse.T, np.float32).tobytes())
+            glsl.uniform(program, "u_section_inverse").write(np.ascontiguousarray(inverse.T, np.float32).tobytes())
         if "u_section_near" in program:
             near = np.zeros((6, 3), np.float32)
             near[: len(self.planes)] = near_coefficients(self.planes, inverse)
-            program["u_section_near"].write(near.tobytes())
+            glsl.uniform(program, "u_section_near").write(near.tobytes())
 
     def release(self) -> None:
         self.buffer.release()

@@ -70,7 +70,9 @@ void main() {
     base = cap_color(fs_in.color, hit, u_sections[plane].xyz);
 #endif
     vec3 rgb = base * light;
-#ifdef PROJECTOR
+#if defined(PROJECTOR) && defined(CAP_DRAW)
+    rgb = painted(rgb, light, hit);   // the cap's point on the plane, not the back face's
+#elif defined(PROJECTOR)
     rgb = painted(rgb, light, fs_in.world);
 #endif
     out_color = vec4(rgb, 1.0);

@@ -241,3 +241,14 @@ def test_viewer_cutaway_state(make_renderer, demo_scene):
     assert (cut != whole).mean() > 0.05
     restage(r, CutawayState().staging(demo_scene))  # back to whole
     assert np.array_equal(r.std(cam, VP).read(VP, 1)["id"][0], whole)
+
+
+def test_projector_paints_caps_alike(gl, demo_scene):
+    """The projector paints the caps at their points on the plane, in STD as in the composite,
+    and what the planes cut away casts no shadow (its shadow map is cut too)."""
+    opts = dict(size=VP, projector="default", sections=["z=0.1"], camera=(35, 25, 2.2))
+    std, sprites = rtta.snapshot(demo_scene, "std", **opts), rtta.snapshot(demo_scene, "sprites", **opts)
+    close = np.abs(std[..., :3].astype(int) - sprites[..., :3].astype(int)).max(-1) <= 3
+    assert close.mean() >= 0.99, close.mean()
+    plain = rtta.snapshot(demo_scene, "std", size=VP, sections=["z=0.1"], camera=(35, 25, 2.2))
+    assert (std != plain).any(axis=-1).mean() > 0.08  # painted

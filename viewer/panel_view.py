@@ -99,7 +99,9 @@ def views(app: PanelsHost) -> None:
             v.delete(remove)
         except RttaError as exc:
             app.say(str(exc), error=True)
+    imgui.push_text_wrap_pos(0.0)
     imgui.text_disabled(f"in {v.folder}")
+    imgui.pop_text_wrap_pos()
 
 
 def save(app: PanelsHost, name: str) -> None:

@@ -161,7 +161,7 @@ def _lens(app: PanelsHost) -> None:
     changed, i = imgui.combo("shape", LENS_SHAPES.index(p.shape), list(LENS_SHAPES))
     if changed:
         p.shape = LensShape(LENS_SHAPES[i])
-    _, p.radius = imgui.slider_float("radius (scene radii)", p.radius, 0.02, 1.5)
+    _, p.radius = imgui.slider_float("radius (radii)", p.radius, 0.02, 1.5)
     _, p.follow = imgui.checkbox("follows the mouse (Space)", p.follow)
     if imgui.button("on the focus"):
         p.center = None
@@ -243,7 +243,7 @@ def _stats(app: PanelsHost) -> None:
         imgui.text(f"atlas {r.atlas_size[0]}x{r.atlas_size[1]} x {r.atlas_size[2]} layers")
         imgui.text(f"utilization {100 * r.utilization:.0f}%")
     history = np.asarray(st.history, np.float32)
-    if len(history) and implot.begin_plot("##frametime", imgui.ImVec2(-1, 90)):
+    if len(history) and implot.begin_plot("##frametime", imgui.ImVec2(-1, 110), implot.Flags_.no_legend.value):
         implot.setup_axes("frame", "ms")
         implot.setup_axis_limits(
             implot.ImAxis_.y1.value, 0, max(50.0, float(history.max()) * 1.1), imgui.Cond_.always.value

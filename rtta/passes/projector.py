@@ -137,7 +137,8 @@ class ProjectorPass:
         if id(projector.image) != self._image_id:
             self._upload(projector.image)
             self._image_id = id(projector.image)
-        key = (projector.key(), None if ranges is None else tuple(ranges), id(gpu.placement))  # cut, exploded
+        placed = None if gpu.placement is None else gpu.placement.serial  # cut, exploded
+        key = (projector.key(), None if ranges is None else tuple(ranges), placed)
         if key == self._key:
             return
         vao = self.shadow.setup(gpu, np.identity(4), projector.view_projection(gpu.scene.origin))

@@ -17,7 +17,8 @@ parts inside its solid as each part's own image does.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import itertools
+from dataclasses import dataclass, field
 
 import moderngl
 import numpy as np
@@ -45,6 +46,7 @@ class Placement:
     caps: int  # CAP_STYLES
     hatch: float  # world units between hatch lines
     buffer: moderngl.Buffer
+    serial: int = field(default_factory=itertools.count().__next__)  # a new one each time: a cache key
 
     @classmethod
     def make(cls, ctx: moderngl.Context, scene, cutaway: Cutaway, sides: tuple, offsets: np.ndarray | None):

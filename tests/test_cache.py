@@ -130,6 +130,9 @@ def test_the_cached_scene_is_the_files(write, folder, tmp_path, monkeypatch):
         assert again.textured and len(again.inputs) == 3 and again.paths is None
     if write is _ifc:
         assert again.unit == "mm" and again.up_axis == "z" and again.paths
+        monkeypatch.setitem(sys.modules, "ifcopenshell", None)  # as if rtta[bim] were uninstalled since
+        with pytest.raises(RttaError, match=r"needs ifcopenshell: pip install 'rtta\[bim\]'"):
+            load_scene(path)
 
 
 def test_a_changed_file_or_input_misses(folder, tmp_path, monkeypatch):

@@ -49,7 +49,9 @@ def load_scene(
     gc.disable()  # the document's 10^5-10^6 objects would be traversed again and again by
     try:  # automatic collections while the load allocates; trimesh's cycles are
         scene = scene_cache.load(path, options) if cache else None  # collected explicitly (mesh._read)
-        if scene is None:
+        if scene is not None:
+            readers.reader_of(path)  # its format's library still installed: the answer a read would give
+        else:
             scene = _load(path, smooth_angle, smooth)
             if cache:
                 scene_cache.store(path, options, scene, started)

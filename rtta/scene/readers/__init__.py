@@ -96,12 +96,13 @@ def load(path: Path, smooth_angle: float, smooth: bool) -> Scene:
         scene = _assembled(read(path), path, 180.0 if smooth else smooth_angle)
         scene.inputs = [str(path.resolve())]
         return scene
-    module = importlib.import_module(f"{__name__}.{_reader(path).module}")
+    module = importlib.import_module(f"{__name__}.{reader_of(path).module}")
     return module.load(path, smooth_angle, smooth)
 
 
-def _reader(path: Path) -> Reader:
-    """The format's reader, once the import it needs is found (else one line naming the extra)."""
+def reader_of(path: Path) -> Reader:
+    """The reader of `path`'s format (a suffix in SUFFIXES) once the import it needs is found,
+    else RttaError naming the extra that installs it."""
     reader = READERS[path.suffix.lower()]
     try:
         found = importlib.util.find_spec(reader.needs) is not None
@@ -115,7 +116,7 @@ def _reader(path: Path) -> Reader:
 
 def read(path: Path) -> Assembly:
     """The assembly in `path` (an assembly format of READERS); RttaError when it cannot be read."""
-    module = _reader(path).module
+    module = reader_of(path).module
     if module in ISOLATED:  # native libraries: a crash or a hang stays in a child
         from . import isolated
 

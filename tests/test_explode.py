@@ -135,8 +135,8 @@ def test_explode_scope_focus_moves_the_focus_alone(gl, demo_scene):
 def test_everything_combined(gl, demo_scene):
     """Sections, explode, ghosting, the lens and hidden parts in one picture: it renders, each
     differs from the picture without it, and the GL stays error-free (the gl fixture)."""
-    base = dict(size=VP, focus=["caliper", "piston_1"])
-    full = dict(sections=["z=0.1"], explode=0.6, lens="sphere", hidden=["rotor"])
+    base = dict(size=VP, focus=["caliper", "piston_1"], lens_at="0,0,-0.5")  # the lens amid the context
+    full = dict(sections=["z=0.1"], explode=0.6, lens="sphere,1.2", hidden=["rotor"])
     everything = rtta.snapshot(demo_scene, "ghosted-ao", **base, **full)
     for key in full:
         without = rtta.snapshot(demo_scene, "ghosted-ao", **base, **{k: v for k, v in full.items() if k != key})

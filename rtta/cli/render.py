@@ -139,7 +139,8 @@ def cmd_snapshot(args) -> int:
         order=args.order,
         halo=args.halo,
     )
-    camera, hidden = camera_of(args, check_staging(staging, scene, style.focus), viewport)
+    framed = check_staging(staging, scene, style.focus)  # the scene, or exploded its boxes moved
+    camera, hidden = camera_of(args, framed, viewport)
     targets = _snapshot_targets(args, [*scene.inputs, *_projector_files(args)])
     renderer = make_renderer(shared_context(), scene, settings_of(args))
     renderer.staging = staging
@@ -147,7 +148,7 @@ def cmd_snapshot(args) -> int:
     if args.projector is not None:
         renderer.projector = _projector(args, scene, camera)
     if args.lens is not None:
-        renderer.lens = _lens(args, scene, style.focus)
+        renderer.lens = _lens(args, framed, style.focus)
     try:
         images = render_modes(renderer, camera, viewport, list(targets), style)
     except ValueError as exc:

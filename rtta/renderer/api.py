@@ -272,7 +272,7 @@ def snapshot(
     if isinstance(projector, str):
         projector = make_projector(scene, cam, projector, projector_fov, projector_shadows)
     if isinstance(lens, str):
-        lens = make_lens(scene, lens, lens_at, st.focus)
+        lens = make_lens(framed, lens, lens_at, st.focus)  # on the focus where explode moved it
     renderer = _prepare(scene, settings, projector, lens, hidden_ids, staging)
     try:
         rgba = render_modes(renderer, cam, viewport, [mode], st)[mode]

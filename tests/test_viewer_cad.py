@@ -194,3 +194,35 @@ def test_pictures_folder(monkeypatch, tmp_path):
     monkeypatch.setenv("HOME", str(tmp_path / "home"))
     (tmp_path / "user-dirs.dirs").write_text('XDG_PICTURES_DIR="$HOME/Bilder"\n')
     assert pictures.default_dir() == tmp_path / "home" / "Bilder" / "rtta"
+
+
+def test_measure_points_snap_to_shown_vertices_only(make_renderer):
+    """ruler.point_at on a box: a pixel near a front corner gives that corner exactly; near
+    where a back corner projects (behind the box's faces) it gives the surface point, not the
+    hidden corner; the background far from any vertex gives None."""
+    from rtta.scene.camera import Camera
+    from rtta.scene.generators.shapes import box
+    from rtta.scene.model import from_meshes
+    from viewer.ruler import point_at
+
+    cube = box(2.0)
+    scene = from_meshes([("box", np.asarray(cube.vertices), np.asarray(cube.faces), None)])
+    r = make_renderer(scene)
+    cam = Camera.orbit(scene.center, scene.radius, 30.0, 25.0, 3.0)
+    vp = (200, 160)
+    view, proj = r.matrices(cam, vp)
+    corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
+    eye = np.asarray(cam.eye, float) - np.asarray(cam.target, float)
+    front, back = corners[np.argmax(corners @ eye)], corners[np.argmin(corners @ eye)]
+
+    def pixel(p):
+        clip = proj @ view @ np.append(p - scene.origin, 1.0)
+        return ((clip[:2] / clip[3] + 1) / 2 * np.array(vp)).astype(int)
+
+    x, y = pixel(front)
+    point, oid, snapped = point_at(r, cam, vp, int(x) + 2, int(y) - 2)
+    assert snapped and oid == 0 and np.allclose(point, front)
+    x, y = pixel(back)
+    point, _, snapped = point_at(r, cam, vp, int(x), int(y))
+    assert not snapped and np.linalg.norm(point - back) > 0.5 and np.abs(point).max() == pytest.approx(1.0, abs=0.02)
+    assert point_at(r, cam, vp, 1, 1) is None

@@ -4,7 +4,8 @@ file's unit, drawn as a labelled line that stays on the model while the view mov
 A click is picked on the scene drawn directly (the renderer's STD pass, the parts not hidden):
 the surface point under the cursor, unprojected in float64 as `rtta.pick` does, or the
 nearest vertex of the parts there within SNAP_PX pixels that the view shows (not behind a
-surface), so an edge's two corners give its exact length.
+surface), so an edge's two corners give its exact length (where an exploded view moved the
+parts: as shown, moved).
 """
 
 from __future__ import annotations
@@ -117,14 +118,14 @@ def _snap(renderer: Renderer, camera: Camera, m: np.ndarray, viewport, px: int, 
     """The nearest shown vertex within SNAP_PX of the pixel, of the part hit or of the parts
     whose screen box is there; None when there is none."""
     scene, (W, H) = renderer.scene, viewport
-    corners = scene.box_corners("aabb")  # [N, 8, 3] relative to the origin
+    staging = renderer.staging  # an exploded view moves the parts; a section removes some whole
+    hidden, corners = staging.staged(renderer.hidden_mask(), scene.box_corners("aabb"))  # relative to the origin
     xy, front = _project(m, W, H, corners.reshape(-1, 3))
     xy, front = xy.reshape(-1, 8, 2), front.reshape(-1, 8).all(axis=1)
     lo, hi = xy.min(axis=1) - SNAP_PX, xy.max(axis=1) + SNAP_PX
     near = front & (lo[:, 0] <= px) & (px <= hi[:, 0]) & (lo[:, 1] <= py) & (py <= hi[:, 1])
-    shown = renderer.shown_mask()
-    if shown is not None:
-        near &= shown
+    if hidden is not None:
+        near &= ~hidden
     ids = [oid] if oid >= 0 else []
     ids += [int(i) for i in np.flatnonzero(near) if i != oid][: MAX_CANDIDATES - len(ids)]
     if not ids:
@@ -137,6 +138,8 @@ def _snap(renderer: Renderer, camera: Camera, m: np.ndarray, viewport, px: int, 
         first, count = (int(v) for v in scene.index_ranges[o])
         verts = np.unique(scene.indices[first : first + count])
         pts = scene.positions[verts].astype(np.float64)
+        if staging.offsets is not None:
+            pts += staging.offsets[o]
         vxy, ok = _project(m, W, H, pts)
         dist = np.hypot(vxy[:, 0] - (px + 0.5), vxy[:, 1] - (py + 0.5))
         ok &= (dist <= SNAP_PX) & (vxy[:, 0] >= 0) & (vxy[:, 0] < W) & (vxy[:, 1] >= 0) & (vxy[:, 1] < H)

@@ -169,6 +169,20 @@ def test_a_file_just_written_is_not_cached(folder, tmp_path):
     assert not _entries(folder)
 
 
+def test_a_file_changed_during_its_load_is_not_cached(folder, tmp_path, monkeypatch):
+    path = _obj(tmp_path / "files")
+    real = rtta.scene.readers.load
+
+    def then_touched(*args):
+        scene = real(*args)
+        os.utime(path)  # written again while it was read
+        return scene
+
+    monkeypatch.setattr("rtta.scene.readers.load", then_touched)
+    load_scene(path)
+    assert not _entries(folder)
+
+
 def _rewritten(entry: Path, change) -> None:
     """The entry with its metadata changed by `change` and its checksum made to match."""
     data = bytearray(entry.read_bytes())

@@ -124,10 +124,8 @@ def store(path: Path, options: dict, scene: Scene, started_ns: int) -> None:
         stats = {p: _stat(Path(p)) for p in scene.inputs}
     except OSError:
         return
-    if _stat(path.resolve()) != (key["size"], key["mtime_ns"]):
-        return  # changed while it was read
     if any(mtime > started_ns - RACY_NS for _, mtime in stats.values()):
-        return
+        return  # modified just before the load or during it: perhaps not what was read
     head, chunks, size = _encode(scene, key, stats)
     where = folder()
     if size > max_bytes():  # never kept: the others still fit the bound, which may have shrunk

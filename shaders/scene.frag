@@ -45,6 +45,9 @@ void main() {
     if (!gl_FrontFacing) n = -n;
 #if defined(CAP_COUNT) || defined(CAP_DRAW)
     if (!section_beyond(fs_in.world)) discard;   // every surface beyond the entry counts, removed ones too
+#ifdef CAP_COUNT
+    return;   // the stencil is all it writes (colour masked)
+#endif
 #ifdef CAP_DRAW
     vec3 hit;
     int plane;

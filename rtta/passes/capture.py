@@ -112,7 +112,7 @@ class ScenePass:
         glsl.uniform(program, "u_proj").write(mat_bytes(proj))
         if placement is not None:
             placement.apply(program, proj @ view)
-        if self.binder is not None:
+        if self.binder is not None and not variant.get("CAP_COUNT"):  # the count writes the stencil alone
             self.binder(program)
         return program
 
@@ -230,6 +230,8 @@ class CapturePass(ScenePass):
         "vs": the layer chosen in the vertex shader (GL_ARB_shader_viewport_layer_array);
         "gs": the paper's geometry shader.
     """
+
+    disjoint = True  # every texel belongs to one object's region: all caps at once
 
     def __init__(self, ctx: moderngl.Context, path: Literal["vs", "gs"] | CapturePath) -> None:
         if path not in (CapturePath.VS, CapturePath.GS):

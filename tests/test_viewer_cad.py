@@ -171,6 +171,7 @@ def test_saved_view_round_trip(demo_scene, tmp_path):
     state.toggle(demo_scene.index("hub"))
     state.hide([demo_scene.index("rotor")])
     state.style.opacity[demo_scene.index("caliper")] = 0.4
+    state.cutaway.axis, state.cutaway.at, state.cutaway.explode = "-y", 0.25, 1.5
     o = Orbit.default(demo_scene.center, demo_scene.radius)
     o.az, o.projection = 123.0, "ortho"
     views = saved.Views(tmp_path, demo_scene)
@@ -180,6 +181,13 @@ def test_saved_view_round_trip(demo_scene, tmp_path):
     saved.apply(views.load("a_b_c"), demo_scene, other, o2)
     assert other.highlighted == state.highlighted and other.hidden == state.hidden
     assert other.style.opacity == state.style.opacity and (o2.az, o2.projection, o2.dist) == (123.0, "ortho", o.dist)
+    assert (other.cutaway.axis, other.cutaway.explode) == ("-y", 1.5)
+    assert other.cutaway.at == pytest.approx(0.25) and other.cutaway.spec(demo_scene) == state.cutaway.spec(demo_scene)
+    two = saved.capture(demo_scene, state, o)
+    two.sections = {"planes": ["x=0", "y=0"], "caps": "solid", "scope": "all"}
+    with pytest.raises(saved.RttaError, match="one plane along an axis"):
+        saved.apply(two, demo_scene, other, o2)
+    assert other.cutaway.axis == "-y" and other.highlighted == state.highlighted  # nothing changed
     (views.folder / "notes.json").write_text("{}")
     with pytest.raises(saved.RttaError):
         views.delete("notes")

@@ -49,6 +49,7 @@ def capture(scene: Scene, state: ViewerState, orbit: Orbit) -> SavedView:
         orbit.projection,
     )
     style = {k: _plain(getattr(state.style, k)) for k in CORE_STYLE}
+    c, spec = state.cutaway, state.cutaway.spec(scene)
     return SavedView(
         orbit=o,
         mode=state.mode,
@@ -56,6 +57,8 @@ def capture(scene: Scene, state: ViewerState, orbit: Orbit) -> SavedView:
         hidden=[names[i] for i in sorted(state.hidden)],
         opacity={names[i]: float(a) for i, a in sorted(state.style.opacity.items())},
         style=style,
+        sections={"planes": [spec], "caps": str(c.caps), "scope": str(c.scope)} if spec else None,
+        explode={"factor": float(c.explode), "scope": str(c.explode_scope)} if c.explode > 0 else None,
     )
 
 
@@ -65,6 +68,7 @@ def apply(view: SavedView, scene: Scene, state: ViewerState, orbit: Orbit) -> No
     focus = resolve_names(scene, view.focus, "focus")
     hidden = resolve_names(scene, view.hidden, "hidden")
     opacity = {i: a for name, a in view.opacity.items() for i in resolve_names(scene, [name], "opacity")}
+    plane = _plane(view, scene)
     state.mode = view.mode
     state.style.focus.clear()
     state.style.focus |= set(focus)
@@ -75,6 +79,7 @@ def apply(view: SavedView, scene: Scene, state: ViewerState, orbit: Orbit) -> No
     state.style.opacity.update(opacity)
     for key, value in view.style.items():
         setattr(state.style, key, value)
+    _cutaway(view, plane, state)
     state.touched = True  # a view chosen: its mode as it was saved
     if view.orbit is not None:
         o = view.orbit
@@ -114,6 +119,37 @@ class Views:
             path.unlink()
         except OSError as exc:
             raise RttaError(f"cannot remove the view ({exc.strerror or exc})", path) from None
+
+
+def _plane(view: SavedView, scene: Scene) -> tuple[str, float] | None:
+    """The view's section as (axis, where over the scene's bounds 0..1), None without one; the
+    viewer shows one plane along an axis (x=V, -y=V, ...): other sections are an RttaError."""
+    if not view.sections or not view.sections.get("planes"):
+        return None
+    planes = view.sections["planes"]
+    m = re.fullmatch(r"\s*(-?[xyz])\s*=\s*([^,\s]+)\s*", planes[0]) if len(planes) == 1 else None
+    try:
+        value = float(m.group(2)) if m else float("nan")
+    except ValueError:
+        value = float("nan")
+    if m is None or not np.isfinite(value):
+        raise RttaError(f"sections {planes}: the viewer shows one plane along an axis (x=V, -z=V, ...)")
+    lo, hi = scene.bounds
+    k = "xyz".index(m.group(1)[-1])
+    return m.group(1), float(np.clip((value - lo[k]) / max(hi[k] - lo[k], 1e-30), 0.0, 1.0))
+
+
+def _cutaway(view: SavedView, plane: tuple[str, float] | None, state: ViewerState) -> None:
+    """The view's section plane and explode into the viewer's cutaway state."""
+    c = state.cutaway
+    c.axis = "off"
+    if plane is not None and view.sections:
+        c.axis, c.at = plane  # type: ignore[assignment]
+        c.caps = view.sections.get("caps", c.caps)  # type: ignore[assignment]
+        c.scope = view.sections.get("scope", c.scope)  # type: ignore[assignment]
+    c.explode = float(view.explode.get("factor", 0.0)) if view.explode else 0.0
+    if view.explode:
+        c.explode_scope = view.explode.get("scope", c.explode_scope)  # type: ignore[assignment]
 
 
 def _plain(value):

@@ -60,6 +60,7 @@ def test_measure_between_box_vertices_shows_the_edge_length(cad):
     assert np.allclose(np.abs(m["delta"]), [0, 0, 2], atol=1e-6) and np.allclose(m["a"], m["expect_a"])
     assert "2.000 mm" in m["message"] and "dz" in m["message"]
     assert cad[0]["measure_after_orbit"] == 1
+    assert cad[0]["ruler_after_esc"] == [False, 1]
 
 
 def test_double_click_keeps_a_focus_part_seen_through_the_context_and_fits_it(cad):

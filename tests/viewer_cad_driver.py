@@ -225,6 +225,8 @@ for k in range(1, 6):
 send("on_mouse_release", cx + cw // 2 + 50, h - (cy + ch // 2), mouse.LEFT, 0)
 frames(2, shot="measured_orbited")
 result["measure_after_orbit"] = len(app.ruler.done)
+press_key(key.ESCAPE)  # no first point pending: the tool ends, the measurements stay
+result["ruler_after_esc"] = [app.ruler.on, len(app.ruler.done)]
 total, stages = app.stats.rendered or (0.0, {})
 result["stats"] = {
     "moving_frames": len(app.stats.moving_ms),

@@ -7,7 +7,7 @@ orbits around the object and fits it (both clicks picked with the highlights fro
 the first). With the lens on (C) it follows the mouse over the composite; Space pins it where
 it is or lets it follow again. The view cube (top right) turns the view to a side, an edge or a
 corner; keys 1, 3, 7 (Ctrl: the opposite side) and 0 (iso) do the same, 5 switches
-perspective/orthographic. R measures (clicks give points, Esc drops a first point). The
+perspective/orthographic. R measures (clicks give points; Esc drops a first point, or ends). The
 splitter at the panel's edge resizes it. Events imgui wants (over the panel) go to imgui only.
 """
 
@@ -233,7 +233,8 @@ class Controls:
         elif key == keys.R:
             app.ruler.on, app.ruler.first = not app.ruler.on, None
             app.say("measure: click two points (a vertex within a few pixels snaps)" if app.ruler.on else "")
-        elif key == keys.ESCAPE and app.ruler.on:
+        elif key == keys.ESCAPE and app.ruler.on:  # drop a first point; without one, leave the tool
+            app.ruler.on = app.ruler.first is not None
             app.ruler.first = None
         elif key == keys.Q and modifiers.ctrl:
             app.wnd.close()

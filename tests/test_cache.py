@@ -331,3 +331,23 @@ def test_every_command_that_loads_a_scene_has_no_cache(command):
     if command is None or command[0] != "ldi":
         assert load_options(args)["cache"] is False
         assert load_options(type(args)(**{**vars(args), "no_cache": False}))["cache"] is True
+
+
+def test_closed_is_kept_beside_the_entry(folder, tmp_path, monkeypatch):
+    """Scene.closed (the closure test, seconds for 10^5 parts) is worked out once per entry."""
+    from rtta.scene import model
+
+    path = write_assembly(tmp_path / "parts.glb", 40)
+    _aged(path)
+    expected = load_scene(path, cache=False).closed
+    first = load_scene(path)
+    assert np.array_equal(first.closed, expected) and expected.any()
+    (side,) = folder.glob(f"*{cache.CLOSED}")
+    with monkeypatch.context() as m:
+        m.setattr(model, "closed_objects", lambda *a: pytest.fail("worked out again"))
+        assert np.array_equal(load_scene(path).closed, expected)
+    side.write_bytes(side.read_bytes()[:-1])  # damaged: worked out again, and written again
+    assert np.array_equal(load_scene(path).closed, expected) and side.stat().st_size == 4 + len(expected)
+    (entry,) = _entries(folder)
+    cache.evict(folder, entry.stat().st_size)  # the entry and its side file: over the bound, both go
+    assert not list(folder.iterdir())

@@ -49,6 +49,7 @@ from .model import Scene
 FORMAT = 2  # 2: CRC-32 (1 had blake2b)
 MAGIC = b"rtta-scene-cache"
 SUFFIX = ".scene"
+CLOSED = ".closed"  # beside an entry: its Scene.closed, once a process has worked it out
 DEFAULT_MAX_BYTES = 2 << 30
 RACY_NS = 2_000_000_000
 STALE_TEMP_S = 3600  # a temporary file this old was left by a process that died while writing
@@ -111,6 +112,7 @@ def load(path: Path, options: dict) -> Scene | None:
         os.utime(entry)  # its last use, for the eviction
     except OSError:
         pass
+    _closed(scene, entry)
     return scene
 
 
@@ -146,34 +148,66 @@ def store(path: Path, options: dict, scene: Scene, started_ns: int) -> None:
         _remove(Path(temp))
         return
     evict(where, max_bytes())
+    _closed(scene, where / f"{_digest(key)}{SUFFIX}")
+
+
+def _closed(scene: Scene, entry: Path) -> None:
+    """Scene.closed (seconds for 10^5 parts) from the file beside `entry` when a process has
+    worked it out before; else the scene writes it there once it does (a byte per object
+    after their CRC-32: a file that does not fit is ignored)."""
+    side = entry.with_suffix(CLOSED)
+    try:
+        data = side.read_bytes()
+        bits = np.frombuffer(data, np.uint8, offset=4)
+        if len(bits) == scene.count and zlib.crc32(data[4:]) == int.from_bytes(data[:4], "little") and bits.max() <= 1:
+            scene._corners["closed"] = bits.astype(bool)
+            return
+    except (OSError, ValueError):
+        pass
+    scene._corners["keep_closed"] = lambda closed: _write(side, np.asarray(closed, bool).astype(np.uint8).tobytes())
+
+
+def _write(path: Path, data: bytes) -> None:
+    """`data` into `path` by a temporary file renamed into place; failures ignored."""
+    try:
+        fd, temp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-", suffix=SUFFIX)
+    except OSError:
+        return
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(zlib.crc32(data).to_bytes(4, "little") + data)
+        os.replace(temp, path)
+    except OSError:
+        _remove(Path(temp))
 
 
 def evict(where: Path, bound: int) -> None:
-    """Remove the least recently used entries until the folder's entries fit in `bound`
-    bytes, and temporary files left by processes that died while writing."""
-    entries = []
-    now = time.time()
+    """Remove the least recently used entries (each with its Scene.closed file) until the
+    folder's files fit in `bound` bytes, and temporary files left by processes that died
+    while writing."""
+    sizes: dict[str, list[int]] = {}  # entry stem -> [last use, bytes with its side file]
     try:
         names = os.listdir(where)
     except OSError:
         return
     for name in names:
-        if not name.endswith(SUFFIX):
-            continue
         try:
             st = os.stat(where / name)
         except OSError:
             continue
         if name.startswith(".tmp-"):
-            if now - st.st_mtime > STALE_TEMP_S:
+            if time.time() - st.st_mtime > STALE_TEMP_S:
                 _remove(where / name)
+        elif name.endswith((SUFFIX, CLOSED)):
+            row = sizes.setdefault(name.rsplit(".", 1)[0], [0, 0])
+            row[0] = max(row[0], st.st_mtime_ns if name.endswith(SUFFIX) else 0)
+            row[1] += st.st_size
+    total = sum(size for _, size in sizes.values())
+    for stem, (used, size) in sorted(sizes.items(), key=lambda item: item[1][0]):
+        if total <= bound and used:  # a side file without its entry (used 0) goes regardless
             continue
-        entries.append((st.st_mtime_ns, st.st_size, name))
-    total = sum(size for _, size, _ in entries)
-    for _, size, name in sorted(entries):
-        if total <= bound:
-            break
-        _remove(where / name)
+        _remove(where / f"{stem}{SUFFIX}")
+        _remove(where / f"{stem}{CLOSED}")
         total -= size
 
 

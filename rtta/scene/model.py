@@ -125,6 +125,9 @@ class Scene:
         if "closed" not in self._corners:
             centers = (self.aabb_min + self.aabb_max) / 2 - self.origin
             self._corners["closed"] = closed_objects(self.positions, self.indices, self.index_ranges, centers)
+            keep = self._corners.get("keep_closed")  # kept beside the scene's cache entry (rtta.scene.cache)
+            if keep is not None:
+                keep(self._corners["closed"])
         return self._corners["closed"]
 
     def index_runs(self, mask: np.ndarray) -> np.ndarray:

@@ -264,6 +264,8 @@ def _pass(
     v = meshes.vertices[vi]
     if smoothed:
         return smooth_grouped(v, f, group, uv, angle)
+    if meshes.normals is None:
+        raise ValueError("meshes without normals need `smooth` set (smoothing makes their normals)")
     return index_grouped(v, f, group, meshes.normals[vi], uv)
 
 
@@ -351,6 +353,9 @@ def instance(meshes: Meshes, mesh_of: np.ndarray, transforms: np.ndarray, consum
     `meshes` is not used afterwards, so where each mesh is placed once, in order (CAD
     assemblies: one mesh per part), its arrays are transformed in place, not copied."""
     vcount, fcount = meshes.vcount[mesh_of], meshes.fcount[mesh_of]
+    given = meshes.normals
+    if given is None:
+        raise ValueError("instance() places meshes with normals")
     once = consume and len(mesh_of) == len(meshes.vcount) and bool((mesh_of == np.arange(len(mesh_of))).all())
     vi = None if once else np.repeat(meshes.vstart[mesh_of], vcount) + ramp(vcount)
     r = transforms[:, :3, :3]
@@ -358,14 +363,14 @@ def instance(meshes: Meshes, mesh_of: np.ndarray, transforms: np.ndarray, consum
         normal_matrix = np.linalg.inv(r)  # n' = n @ inv(R) is (inv(R)^T n)^T
     total = int(vcount.sum())
     world = meshes.vertices if once else np.empty((total, 3))
-    normals = meshes.normals if once else np.empty((total, 3), np.float32)
+    normals = given if once else np.empty((total, 3), np.float32)
     owner = np.repeat(np.arange(len(mesh_of)), vcount)
     step = 1 << 16
 
     def place(a: int) -> None:  # rows a..a+step: each chunk reads and writes its own
-        rows = slice(a, a + step) if once else vi[a : a + step]
+        rows = slice(a, a + step) if vi is None else vi[a : a + step]  # (vi is None when once)
         o, local = owner[a : a + step], meshes.vertices[rows]
-        n = np.einsum("vj,vji->vi", meshes.normals[rows].astype(np.float64), normal_matrix[o])
+        n = np.einsum("vj,vji->vi", given[rows].astype(np.float64), normal_matrix[o])
         world[a : a + step] = np.einsum("vj,vij->vi", local, r[o]) + transforms[o, :3, 3]
         length = np.linalg.norm(n, axis=1, keepdims=True)
         normals[a : a + step] = n / np.where(length > 0, length, 1.0)

@@ -76,13 +76,13 @@ def parse_section(spec: str) -> SectionPlane:
             v = float(value)
             if normal is None or not math.isfinite(v) or abs(v) > LIMIT:
                 raise bad
-            return SectionPlane(tuple(sign * c for c in normal), sign * v)
+            return SectionPlane((sign * normal[0], sign * normal[1], sign * normal[2]), sign * v)
         parts = [float(p) for p in text.split(",")]
     except ValueError:
         raise bad from None
     if len(parts) != 4 or not all(math.isfinite(p) and abs(p) <= LIMIT for p in parts) or not any(parts[:3]):
         raise bad
-    return SectionPlane(tuple(parts[:3]), parts[3])
+    return SectionPlane((parts[0], parts[1], parts[2]), parts[3])
 
 
 @dataclass(frozen=True)

@@ -153,7 +153,7 @@ def _threemf_graph(stream, head: bytes, path: Path) -> None:
             load_dtd=False,
             huge_tree=False,
         ):
-            if el.tag.endswith("object"):
+            if str(el.tag).endswith("object"):
                 children[el.get("id", "")] = [c.get("objectid", "") for c in el.iter("{*}component")]
                 el.clear(keep_tail=False)
             else:

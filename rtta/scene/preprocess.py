@@ -59,7 +59,11 @@ def _smooth(v, f, uv, angle):
     nlen = np.linalg.norm(normals, axis=1, keepdims=True)
     normals = np.where(nlen > 0, normals / np.where(nlen > 0, nlen, 1.0), unit[corner_face])
     corner_uv = None if uv is None else np.asarray(uv)[corner_vertex]
-    return _index(v[corner_vertex], np.arange(len(corner_vertex)).reshape(-1, 3), normals.astype(np.float32), corner_uv)
+    v, f, n, uv = _index(
+        v[corner_vertex], np.arange(len(corner_vertex)).reshape(-1, 3), normals.astype(np.float32), corner_uv
+    )
+    assert n is not None  # (given)
+    return v, f, n, uv
 
 
 def _grouped_sums(

@@ -13,6 +13,8 @@ from pathlib import Path
 
 import numpy as np
 import trimesh
+from trimesh.visual import TextureVisuals
+from trimesh.visual.material import PBRMaterial
 
 DEMO_NAME = "brake_assembly.glb"
 
@@ -75,7 +77,9 @@ def _caliper() -> trimesh.Trimesh:
         _box((-0.62, 1.02, 0.12), (0.62, 1.1, 0.2)),  # lower lips
         _box((-0.62, 1.02, -0.2), (0.62, 1.1, -0.12)),
     ]
-    return trimesh.util.concatenate(parts)
+    whole = trimesh.util.concatenate(parts)
+    assert isinstance(whole, trimesh.Trimesh)  # (trimesh types it as any geometry)
+    return whole
 
 
 def build_brake_assembly() -> trimesh.Scene:
@@ -135,10 +139,8 @@ def build_brake_assembly() -> trimesh.Scene:
     for name, kind, mesh in parts:
         r, g, b = COLORS[kind]
         mesh = mesh.smooth_shaded  # split vertices at sharp edges so normals stay crisp
-        mesh.visual = trimesh.visual.TextureVisuals(
-            material=trimesh.visual.material.PBRMaterial(
-                name=kind, baseColorFactor=[r, g, b, 255], metallicFactor=0.0, roughnessFactor=0.8
-            )
+        mesh.visual = TextureVisuals(
+            material=PBRMaterial(name=kind, baseColorFactor=[r, g, b, 255], metallicFactor=0.0, roughnessFactor=0.8)
         )
         scene.add_geometry(mesh, node_name=name, geom_name=name)
     return scene
@@ -146,5 +148,7 @@ def build_brake_assembly() -> trimesh.Scene:
 
 def write_demo(path: str | Path) -> Path:
     path = Path(path)
-    path.write_bytes(build_brake_assembly().export(file_type="glb", include_normals=True))
+    glb = build_brake_assembly().export(file_type="glb", include_normals=True)
+    assert isinstance(glb, bytes)  # (a GLB: trimesh types export's result as any format's)
+    path.write_bytes(glb)
     return path

@@ -207,9 +207,9 @@ def _assembled(asm: Assembly, path: Path, smooth_angle: float) -> Scene:
         colors.append(color)
         paths.append(group)
     every = _meshes(arrays) if arrays else None
-    area = batch.has_area(every) if arrays else np.zeros(0, bool)
+    area = batch.has_area(every) if every is not None else np.zeros(0, bool)
     keep = np.flatnonzero(area).tolist()
-    if not keep:
+    if every is None or not keep:
         raise RttaError("the file has no parts with triangle geometry", path)
     kept = every if len(keep) == len(arrays) else _meshes([arrays[i] for i in keep])
     meshes = batch.preprocess(kept, np.ones(len(keep), bool), smooth_angle)

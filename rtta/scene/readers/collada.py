@@ -16,11 +16,12 @@ MAX_DEPTH = 256
 
 def read(path: Path) -> Assembly:
     import collada
+    from collada.common import DaeBrokenRefError, DaeUnsupportedError
 
     if path.suffix.lower() == ".zae":
         check_archive(path)
     try:
-        dae = collada.Collada(str(path), ignore=[collada.common.DaeUnsupportedError, collada.common.DaeBrokenRefError])
+        dae = collada.Collada(str(path), ignore=[DaeUnsupportedError, DaeBrokenRefError])
     except Exception as exc:  # pycollada raises many types for bad files
         raise RttaError(f"cannot read COLLADA file ({reason(exc)})", path) from None
     info = dae.assetInfo

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -46,14 +47,16 @@ def read(path: Path, left_out: tuple[str, ...] = LEFT_OUT) -> Assembly:
     if not [p for p in products if p.is_a() not in left_out]:
         raise RttaError("the IFC file has no products with geometry", path)
     try:
-        it = ifcopenshell.geom.iterator(settings, model, THREADS, exclude=exclude or None)
+        # (by_type's entities are what exclude takes: ifcopenshell's annotations say otherwise)
+        it = ifcopenshell.geom.iterator(settings, model, THREADS, exclude=exclude or None)  # pyright: ignore[reportArgumentType]
         ok = it.initialize()
     except Exception as exc:
         raise RttaError(f"cannot read IFC geometry ({_reason(exc)})", path) from None
     found, memo = [], {}
     while ok:
-        shape = it.get()
+        shape: Any = it.get()  # a triangulated element: id, geometry (not in ifcopenshell's annotations)
         element = model.by_id(shape.id)
+        assert element is not None, "the iterator yields the model's own elements"
         geometry = shape.geometry
         v = np.asarray(geometry.verts, np.float64).reshape(-1, 3) / scale
         f = np.asarray(geometry.faces, np.int64).reshape(-1, 3)

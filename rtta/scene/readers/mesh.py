@@ -185,7 +185,7 @@ def _items(path: Path, suffix: str) -> tuple[list[str], list[Path], list[tuple]]
         transform, geom_name = loaded.graph[node]
         name, key = str(node), order.get(geom_name, len(order))
         k = object_number(name) if names is not None else None
-        if k is not None and k < len(names):
+        if names is not None and k is not None and k < len(names):
             name, key = names[k], k
         items.append((key, name, loaded.geometry.get(geom_name), np.asarray(transform, np.float64), tree))
     items.sort(key=lambda item: item[0])  # file order
@@ -197,7 +197,7 @@ def _items(path: Path, suffix: str) -> tuple[list[str], list[Path], list[tuple]]
 
 def _texture_notes(scene: Scene) -> list[str]:
     """A warning when textures are too large for the material atlas and get halved."""
-    if not scene.textured:
+    if not scene.textured or scene.texture_ids is None:
         return []
     from ..material_atlas import oversized_note
 

@@ -71,9 +71,9 @@ def decode(data: bytes, names: list[str]) -> list[tuple[int, Decoded]] | None:
         return None
     if corners is None:
         return None
-    *corners, uv = corners
+    tri, tri_n, objects, uv = corners
     # faces with texture coordinates get trimesh's grey for a material it made up, others the palette
-    return _objects(names, v, vn, *corners, NO_FACTOR if uv else None)
+    return _objects(names, v, vn, tri, tri_n, objects, NO_FACTOR if uv else None)
 
 
 def has_materials(data: bytes) -> bool:
@@ -90,7 +90,9 @@ def material_skeleton(data: bytes) -> tuple[bytes, dict[int, int]]:
     face over three dummy vertices in the run's corner form (so trimesh makes the same
     visuals: a made-up material where faces have texture coordinates). Objects of the same
     content get the same colour from trimesh, so 100,000 parts of 6 materials cost it 6."""
-    libraries, contents, material = [], {}, None
+    libraries: list[bytes] = []
+    contents: dict[int, list[bytes]] = {}  # by object number
+    material: bytes | None = None
     content: list[bytes] | None = None
     for m in _KEPT.finditer(b"\n" + data):
         line = m.group(0).strip()
@@ -115,11 +117,11 @@ def material_skeleton(data: bytes) -> tuple[bytes, dict[int, int]]:
     lines = [*libraries, b"v 0 0 0", b"v 1 0 0", b"v 0 1 0", b"vt 0 0", b"vn 0 0 1"]
     standing: dict[tuple, int] = {}
     stands_for: dict[int, int] = {}
-    for k, content in contents.items():
-        key = tuple(content)
+    for k, kept in contents.items():
+        key = tuple(kept)
         if key not in standing:
             standing[key] = k
-            lines += [b"o rtta.o.%d" % k, *content]
+            lines += [b"o rtta.o.%d" % k, *kept]
         stands_for[k] = standing[key]
     return b"\n".join(lines) + b"\n", stands_for
 
@@ -147,7 +149,7 @@ def _texture_rows(data: bytes) -> int | None:
 
 def _corners(
     face_rows: list[bytes], face_sizes: list[list[int]], face_object: list[int], n_v: int, n_vn: int, n_vt: int
-):
+) -> tuple[np.ndarray, np.ndarray | None, np.ndarray, bool] | None:
     """(triangle corners' vertex indices [T, 3], their normal indices [T, 3] or None, the
     object of each triangle [T], whether the corners name texture coordinates) with 0-based
     indices checked, or None. Per object with faces: its face rows joined, their sizes, its number."""

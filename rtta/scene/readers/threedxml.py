@@ -14,6 +14,7 @@ from lxml import etree
 from ...errors import RttaError, reason
 from ..precheck import ZIP_ERRORS
 from . import Assembly, check_archive, hidden
+from .trimesh_io import as_scene
 
 
 def read(path: Path) -> Assembly:
@@ -25,6 +26,7 @@ def read(path: Path) -> Assembly:
         loaded = trimesh.load(str(path), file_type="3dxml", force="scene", process=False)
     except Exception as exc:  # trimesh raises many types for corrupt files
         raise RttaError(f"cannot read 3DXML file ({reason(exc)})", path) from None
+    loaded = as_scene(loaded, path)
     out = Assembly(unit="mm", up_axis="z")
     graph = loaded.graph
     hiders: dict[str, None] = {}  # parts placed by a singular transform (trimesh keeps no other nodes)
@@ -52,12 +54,14 @@ def _products(path: Path) -> dict[str, str]:
         with zipfile.ZipFile(path) as z:
             root = etree.fromstring(z.read("Manifest.xml"), etree.XMLParser(resolve_entities=False, no_network=True))
             main = root.find("{*}Root")
+            if main is None or not main.text:
+                raise KeyError("the manifest names no Root")
             doc = etree.fromstring(
                 z.read(main.text.strip()), etree.XMLParser(resolve_entities=False, no_network=True, huge_tree=True)
             )
     except (KeyError, AttributeError, etree.XMLSyntaxError, *ZIP_ERRORS) as exc:  # a damaged member too
         raise RttaError(f"cannot read 3DXML file (no readable product structure: {str(exc)[:120]})", path) from None
-    return {r.get("id"): r.get("name") or r.get("id") for r in doc.iter("{*}Reference3D")}
+    return {r.get("id", ""): r.get("name") or r.get("id", "") for r in doc.iter("{*}Reference3D")}
 
 
 def _color(mesh) -> list[float] | None:

@@ -5,22 +5,36 @@ from __future__ import annotations
 
 import logging
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ...errors import RttaError, reason
 
+if TYPE_CHECKING:
+    import trimesh
 
-def trimesh_load(source, file_type: str, path: Path, resolver):
+
+def trimesh_load(source, file_type: str, path: Path, resolver) -> trimesh.Scene:
     """trimesh's scene of `source` (OBJ: one geometry per object, materials not merged)."""
     import trimesh
 
     logging.getLogger("trimesh").setLevel(logging.ERROR)
     try:
         options = {"split_objects": True, "group_material": False} if file_type == "obj" else {}
-        return trimesh.load(source, file_type=file_type, force="scene", process=False, resolver=resolver, **options)
+        loaded = trimesh.load(source, file_type=file_type, force="scene", process=False, resolver=resolver, **options)
     except Exception as exc:  # trimesh raises many types for corrupt files (MemoryError, RecursionError too)
         raise RttaError(f"cannot read {path.suffix[1:].upper()} file ({reason(exc)})", path) from None
+    return as_scene(loaded, path)
+
+
+def as_scene(loaded, path: Path) -> trimesh.Scene:
+    """`loaded` as the trimesh.Scene that force="scene" makes (an RttaError if it is not)."""
+    import trimesh
+
+    if not isinstance(loaded, trimesh.Scene):
+        raise RttaError(f"cannot read {path.suffix[1:].upper()} file (trimesh made no scene of it)", path)
+    return loaded
 
 
 def base_color(mesh) -> list[float] | None:

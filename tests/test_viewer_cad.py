@@ -49,6 +49,7 @@ def test_view_cube_top_face_gives_the_top_view(cad):
     assert r["top_face_shown"]
     assert np.allclose(r["after_top"]["forward"], [0.0, 0.0, -1.0], atol=1e-6), r["after_top"]
     assert r["after_top"]["el"] == 90.0 and r["gl_errors"] == []
+    assert r["turn_after_drag"]  # a drag during a turn stops it
 
 
 def test_measure_between_box_vertices_shows_the_edge_length(cad):

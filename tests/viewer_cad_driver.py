@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -184,6 +185,18 @@ if top:
 result["after_top"] = {"forward": forward(), "az": app.orbit.az, "el": app.orbit.el}
 frames(1, shot="top_view")
 press_key(key._0)  # iso
+settle()
+cx, cy, cw, ch = app.layout.composite  # a turn under way (held at its start), then a drag: the drag wins
+app.turn = gizmo.Turn(app.orbit.az, app.orbit.el, 0.0, 0.0, time.perf_counter() + 1e3)
+send("on_mouse_motion", cx + cw // 2, h - (cy + ch // 2), 0, 0)
+frames()
+send("on_mouse_press", cx + cw // 2, h - (cy + ch // 2), mouse.LEFT, 0)
+for k in range(1, 3):
+    send("on_mouse_drag", cx + cw // 2 + 5 * k, h - (cy + ch // 2), 5, 0, mouse.LEFT, 0)
+    frames()  # the window's events are handled in the frame
+result["turn_after_drag"] = app.turn is None
+send("on_mouse_release", cx + cw // 2 + 10, h - (cy + ch // 2), mouse.LEFT, 0)
+press_key(key._0)
 settle()
 cx, cy, cw, ch = app.layout.composite
 dist = app.orbit.dist

@@ -183,6 +183,10 @@ class Viewer(Pictures, Loading):
         """Turn the camera to (az, el) over a moment (the view cube, the view keys)."""
         self.turn = Turn.to(self.orbit, az, el)
 
+    def stop_turn(self) -> None:
+        """Leave the camera where a view turn under way has taken it."""
+        self.turn = None
+
     def measure_at(self, x: float, y: float) -> None:
         """The measure tool's click at window point (x, y): a point of a measurement."""
         cx, cy, _, ch = self.layout.composite

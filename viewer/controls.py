@@ -95,6 +95,7 @@ class Controls:
         self._moved += abs(dx) + abs(dy)
         if self._moved <= CLICK_SLOP_PX:
             return
+        self.app.stop_turn()  # a drag takes the camera from a view turn under way
         buttons = self.app.wnd.mouse_states
         if buttons.left:
             self.app.orbit.rotate(dx, dy)

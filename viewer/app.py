@@ -116,7 +116,9 @@ class Viewer(Pictures, Loading):
         if ids is None:
             ids = [i for i in range(scene.count) if i not in self.state.hidden] or range(scene.count)
         ids = np.asarray(list(ids), np.int64)
-        corners = scene.box_corners("aabb")[ids].reshape(-1, 3) + scene.origin
+        moved = self.renderer.staging.offsets  # exploded: where the parts are drawn
+        corners = (scene.box_corners("aabb")[ids] + (0.0 if moved is None else moved[ids, None, :])).reshape(-1, 3)
+        corners = corners + scene.origin
         _, _, w, h = self.layout.composite
         self.orbit.frame(corners=corners, aspect=w / h if w > 0 and h > 0 else 1.0)
 

@@ -236,3 +236,22 @@ def test_measure_points_snap_to_shown_vertices_only(make_renderer):
     point, _, snapped = point_at(r, cam, vp, int(x), int(y))
     assert not snapped and np.linalg.norm(point - back) > 0.5 and np.abs(point).max() == pytest.approx(1.0, abs=0.02)
     assert point_at(r, cam, vp, 1, 1) is None
+
+
+def test_bench_times_a_ghosted_mode_as_itself():
+    """`rtta-view --bench` on the demo (nothing highlighted): the ghosted row composites and
+    draws no STD, so the first view's solid shading never stands in for the mode timed."""
+    from test_viewer import RTTA_VIEW
+
+    proc = subprocess.run(
+        [RTTA_VIEW, "--bench", "2", "--bench-modes", "ghosted", "--size", "320x200"],  # 2: the view moves
+        env=_env(None, headless=False),
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    lines = proc.stdout.splitlines()
+    header = [c.strip() for c in next(ln for ln in lines if ln.startswith("| mode")).split("|")]
+    row = [c.strip() for c in next(ln for ln in lines if ln.startswith("| ghosted |")).split("|")]
+    assert float(row[header.index("composite")]) > 0 and float(row[header.index("std")]) == 0

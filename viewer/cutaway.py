@@ -15,7 +15,7 @@ if TYPE_CHECKING:
     from rtta.scene.model import Scene
 
 Axis = Literal["off", "x", "y", "z", "-x", "-y", "-z"]
-AXES: tuple[str, ...] = get_args(Axis)
+AXES: tuple[Axis, ...] = get_args(Axis)
 
 
 @dataclass

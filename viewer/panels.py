@@ -20,6 +20,7 @@ from rtta.ldi.lens import SHAPES as LENS_SHAPES
 from rtta.ldi.lens import LensShape
 from rtta.passes.composite import LENS_MODES, ROLES
 from rtta.passes.oit import ORDERS
+from rtta.scene.bounds import Bounds
 from rtta.scene.model import BOUNDS
 
 from . import cutaway, panel_view, tree
@@ -186,7 +187,7 @@ def _atlas(app: PanelsHost) -> None:
     _, s.settings.context_scale = imgui.slider_float("context scale", s.settings.context_scale, 0.25, 1.0, "%.2f")
     changed, i = imgui.combo("bounds", BOUNDS.index(s.settings.bounds), list(BOUNDS))
     if changed:
-        s.settings.bounds = BOUNDS[i]
+        s.settings.bounds = Bounds(BOUNDS[i])
     paths = app.capture_paths
     current = app.renderer.caps.capture_path(s.settings.capture_path)
     changed, i = imgui.combo("capture path", paths.index(current), paths)

@@ -25,9 +25,10 @@ import moderngl
 import numpy as np
 
 from ..errors import RttaError
-from ..gl.context import Capabilities, shared_context
+from ..gl.context import Capabilities, CapturePath, CapturePathName, shared_context
 from ..ldi.lens import Lens
 from ..passes.projector import Projector
+from ..scene.bounds import Bounds, BoundsName
 from ..scene.camera import Camera, Projection
 from ..scene.cutaway import Caps, SectionPlane, SectionScope
 from ..scene.explode import ExplodeScope
@@ -150,10 +151,10 @@ def snapshot(
     border: int = 1,
     atlas_max: str | tuple[int, int] | None = None,
     max_layers: int | None = None,
-    capture_path: str = "auto",
+    capture_path: CapturePathName | CapturePath = "auto",
     region_scale: float = 1.0,
     context_scale: float | None = None,
-    bounds: str = "aabb",
+    bounds: BoundsName | Bounds = "aabb",
     projector: str | Projector | None = None,
     projector_fov: float = 30.0,
     projector_shadows: bool = True,
@@ -290,9 +291,9 @@ def capture(
     border: int = 1,
     atlas_max: str | tuple[int, int] | None = None,
     max_layers: int | None = None,
-    capture_path: str = "auto",
+    capture_path: CapturePathName | CapturePath = "auto",
     region_scale: float = 1.0,
-    bounds: str = "aabb",
+    bounds: BoundsName | Bounds = "aabb",
     smooth_angle: float = DEFAULT_SMOOTH_ANGLE,
     smooth: bool = False,
     projection: Projection = "perspective",

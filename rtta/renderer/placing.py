@@ -14,7 +14,7 @@ import numpy as np
 from ..errors import RttaError
 from ..gl.targets import LayeredTarget
 from ..passes.sections import Placement
-from ..scene.cutaway import Cutaway, SectionPlane, parse_section
+from ..scene.cutaway import Caps, Cutaway, SectionPlane, SectionScope, parse_section
 from ..scene.explode import ExplodeScope, check_explode, explode_offsets
 
 
@@ -124,7 +124,11 @@ def restage(renderer, staging: Staging | None) -> None:
 
 
 def make_staging(
-    sections=(), caps: str = "solid", section_scope: str = "all", explode: float = 0.0, explode_scope: str = "all"
+    sections=(),
+    caps: Caps = "solid",
+    section_scope: SectionScope = "all",
+    explode: float | str = 0.0,
+    explode_scope: ExplodeScope = "all",
 ) -> Staging:
     """A checked Staging from the CLI's flags or the one-call API's keywords: `sections` are
     SPEC strings (`x=V`, `-x=V`, `nx,ny,nz,d`; rtta.scene.cutaway.parse_section) or
@@ -132,7 +136,7 @@ def make_staging(
     if isinstance(sections, (str, SectionPlane)):
         sections = [sections]
     planes = tuple(p if isinstance(p, SectionPlane) else parse_section(p) for p in sections or ())
-    return Staging(Cutaway(planes, caps, section_scope), explode, explode_scope)
+    return Staging(Cutaway(planes, caps, section_scope), check_explode(explode, explode_scope), explode_scope)
 
 
 def check_staging(staging: Staging, scene, focus=(), hidden=()):

@@ -10,7 +10,7 @@ from typing import Literal
 import numpy as np
 
 from ..errors import RttaError
-from ..ldi.lens import SHAPES, Lens, default_placement
+from ..ldi.lens import SHAPES, Lens, LensShape, default_placement
 from ..outputs import save_png
 from ..passes.composite import BACKGROUND, MODES, Style
 from ..passes.projector import Projector, default_image, load_image
@@ -58,7 +58,7 @@ def make_lens(scene: Scene, spec: str, at: str | Sequence[float] | None, focus: 
             radius = float("nan")
         if not 0 < radius <= 1e15:
             raise RttaError(f"--lens radius must be a number in (0, 1e15], got '{size}'")
-        return Lens.shape(kind, center, radius)
+        return Lens.shape(LensShape(kind), center, radius)
     if size:
         raise RttaError(f"--lens {kind}: an object lens takes no radius")
     (oid,) = resolve_names(scene, [kind], "--lens", groups=False)

@@ -19,8 +19,8 @@ from ..errors import RttaError
 
 Caps = Literal["solid", "hatch", "off"]
 SectionScope = Literal["all", "context"]
-CAPS: tuple[str, ...] = get_args(Caps)
-SECTION_SCOPES: tuple[str, ...] = get_args(SectionScope)
+CAPS: tuple[Caps, ...] = get_args(Caps)
+SECTION_SCOPES: tuple[SectionScope, ...] = get_args(SectionScope)
 MAX_SECTIONS = 6
 _AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
 LIMIT = 1e15  # |d| and |normal| components above this are refused (float32 and NaN safety)

@@ -20,14 +20,14 @@ import numpy as np
 from ..errors import RttaError
 
 ExplodeScope = Literal["all", "focus"]
-EXPLODE_SCOPES: tuple[str, ...] = get_args(ExplodeScope)
+EXPLODE_SCOPES: tuple[ExplodeScope, ...] = get_args(ExplodeScope)
 EXPLODE_MAX = 4.0
 CENTRAL = 0.05  # a child this close to its group's centre (times the group's radius) shares it
 MAX_SPEED = 0.9  # scene radii per unit of F
 STAGGER = 0.5  # the deepest level starts ramping at F = STAGGER * (levels - 1) / levels
 
 
-def check_explode(factor: float, scope: str = "all") -> float:
+def check_explode(factor: float | str, scope: str = "all") -> float:
     """The explode factor as a float in [0, EXPLODE_MAX], or RttaError naming the flag."""
     try:
         f = float(factor)

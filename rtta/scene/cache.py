@@ -296,7 +296,7 @@ def _encode(scene: Scene, key: dict, stats: dict) -> tuple[bytes, list, int]:
     body = json.dumps(meta).encode()
     chunks: list = [body, bytes(-len(body) % ALIGN)]
     for a in arrays.values():
-        chunks += [memoryview(np.ascontiguousarray(a)).cast("B"), bytes(-a.nbytes % ALIGN)]
+        chunks += [np.ascontiguousarray(a).reshape(-1).view(np.uint8).data, bytes(-a.nbytes % ALIGN)]
     checksum = 0
     for chunk in chunks:
         checksum = zlib.crc32(chunk, checksum)

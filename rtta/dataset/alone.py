@@ -63,9 +63,8 @@ def alone_rtta(
     else:
         layer = records.layer[o].astype(np.int64)[col]
         depth = atlas["depth"].ravel().take((layer * th + ty) * tw + tx, mode="clip")
-    colors = None
-    if appearance:
-        colors = []
+    colors = [] if appearance else None
+    if colors is not None and atlas is not None:  # (no atlas: no object in view)
         for i, oid in enumerate(oids):
             a, b = lay["offsets"][i : i + 2]
             shape = (rects[i, 2], rects[i, 3] + 2)

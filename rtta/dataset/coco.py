@@ -57,7 +57,7 @@ def layout(rects: np.ndarray) -> dict[str, np.ndarray]:
     }
 
 
-def flatten(crops: list[np.ndarray], rects: np.ndarray, fill=0) -> np.ndarray:
+def flatten(crops: list[np.ndarray], rects: np.ndarray, fill: float = 0) -> np.ndarray:
     """Crops (each [h, w], top row first) into the flat layout (`fill` on the zeros)."""
     rects = np.asarray(rects, np.int64).reshape(-1, 4)
     tall = rects[:, 3] + 2
@@ -112,8 +112,11 @@ def encode_flat(
     if not len(np.asarray(rects).reshape(-1, 4)):
         return [], np.zeros(0, np.int64), np.zeros((0, 4))
     mask = _mask_api()
-    rles = mask.frPyObjects(
-        [{"size": [height, width], "counts": c} for c in run_counts(flat, rects, height, width)], height, width
+    # uncompressed RLEs (counts a list): pycocotools takes them, its stubs list only compressed ones
+    rles = mask.frPyObjects(  # pyright: ignore[reportCallIssue]
+        [{"size": [height, width], "counts": c} for c in run_counts(flat, rects, height, width)],  # pyright: ignore[reportArgumentType]
+        height,
+        width,
     )
     # mask.area sizes a uint8 scratch array by the count (numpy 2 refuses 256 or more): 255 at a time
     areas = np.concatenate([mask.area(rles[k : k + 255]) for k in range(0, len(rles), 255)]).astype(np.int64)

@@ -16,6 +16,7 @@ import os
 import zlib
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -174,6 +175,7 @@ def parse_cameras(path: str) -> list[dict]:
     for i, c in enumerate(data):
         try:
             fov = float(c.get("fov", 45.0))
+            cam: dict[str, Any]  # (JSON: lists of numbers, and the fov)
             if "orbit" in c:
                 cam = {"orbit": [float(v) for v in c["orbit"]], "fov": fov}
                 ok = len(cam["orbit"]) == 3 and cam["orbit"][2] > 0

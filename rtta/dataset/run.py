@@ -222,10 +222,12 @@ def _exit(*_):
 
 
 def _task(chunk):
+    worker = _worker
+    assert worker is not None, "the pool's initializer made it"
     try:
-        return _worker.run(chunk)
+        return worker.run(chunk)
     finally:
-        _worker.writer.wait()  # the chunk's views are on disk before it is reported
+        worker.writer.wait()  # the chunk's views are on disk before it is reported
 
 
 def execute(s: dict, how: Run, todo: list[tuple[int, int]], scenes: dict | None = None) -> set[int]:

@@ -131,8 +131,9 @@ def run_command(
             _import_readers()
         code = handler(args)
         sys.stdout.flush()
-        if outputs.interrupt_requested():  # a library swallowed it before the output was in place
-            raise outputs.Interrupted(outputs.interrupt_requested())
+        requested = outputs.interrupt_requested()
+        if requested:  # a library swallowed it before the output was in place
+            raise outputs.Interrupted(requested)
         return code
     except KeyboardInterrupt:  # Interrupted too: the run stops, its temporaries gone
         print("rtta: interrupted", file=sys.stderr)

@@ -49,7 +49,8 @@ def create_headless_context() -> moderngl.Context:
     True
     """
     try:
-        ctx = moderngl.create_standalone_context(backend="egl", require=430)
+        # (moderngl's stubs type every keyword setting as a dict; backend is a string)
+        ctx = moderngl.create_standalone_context(backend="egl", require=430)  # pyright: ignore[reportArgumentType]
     except Exception as exc:
         offered = _offered_version()
         if offered:
@@ -66,7 +67,7 @@ def create_headless_context() -> moderngl.Context:
 def _offered_version() -> str | None:
     """'3.3 (llvmpipe ...)' for the best context EGL gives without a version demand, or None."""
     try:
-        probe = moderngl.create_standalone_context(backend="egl")
+        probe = moderngl.create_standalone_context(backend="egl")  # pyright: ignore[reportArgumentType]  (as above)
     except Exception:
         return None
     try:

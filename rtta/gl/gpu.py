@@ -39,6 +39,7 @@ class GpuScene:
         self.ibo = ctx.buffer(scene.indices.astype(np.uint32).tobytes())
         self.objects = ctx.buffer(np.ascontiguousarray(scene.colors, np.float32).tobytes())
         self.records = ctx.buffer(reserve=max(1, scene.count) * RECORD_DTYPE.itemsize)
+        self.written: Records | None = None  # R the GPU wrote into records (Settings.parameterize 'gpu')
         self._vaos: dict[int, moderngl.VertexArray] = {}
         # B_world per object as two vec4 (min, max), the scene origin at 0 as for the vertex
         # positions: compositing draws sprites over their projected outlines (composite.geom)
@@ -79,6 +80,7 @@ class GpuScene:
         self.material_atlas = tex
         rows = np.zeros(self.scene.count, MATERIAL_DTYPE)
         ids = self.scene.texture_ids
+        assert ids is not None, "textured scenes have texture ids"
         has = ids >= 0
         rect = atlas.rects[np.where(has, ids, 0)]
         rows["rect"] = rect[:, [1, 2, 3, 4]]
@@ -93,6 +95,9 @@ class GpuScene:
 
     def upload_records(self, records: Records) -> None:
         """Write R for this frame (same size every frame: no reallocation)."""
+        if records is self.written:  # there already: rtta.passes.atlas_gpu wrote it
+            return
+        self.written = None
         self.records.write(records.packed(reuse=True))  # no copy to bytes: 8 MB a frame at 10^5 objects
 
     def bind_storage(self) -> None:

@@ -243,7 +243,7 @@ def from_meshes(
                 for p, uv in zip(parts, uvs, strict=True)
             ]
         )
-        if textured
+        if textured and uvs is not None  # (textured says so too)
         else None,
     )
     return from_batch(

@@ -223,6 +223,7 @@ DAMAGE = {
     "foreign format": lambda e: e.write_bytes(e.read_bytes().replace(FORMAT, b'"format": 9', 1)),
     "not json": lambda e: e.write_bytes(cache.MAGIC + (40).to_bytes(8, "little") + b"{" * 40 + e.read_bytes()[64:]),
     "wrong shape": lambda e: _rewritten(e, lambda m: _shape(m, "positions", [3, 3])),
+    "fewer normals": lambda e: _rewritten(e, lambda m: _shape(m, "normals", [3, 3])),
     "wrong dtype": lambda e: _rewritten(e, lambda m: _dtype(m, "indices", "float64")),
     "fewer names": lambda e: _rewritten(e, lambda m: m["names"].pop()),
     "other version": lambda e: _rewritten(e, lambda m: m["key"].__setitem__("version", "0.0.1")),

@@ -15,6 +15,7 @@ import numpy as np
 from imgui_bundle import imgui, implot
 
 from rtta.errors import RttaError, printable
+from rtta.passes.style import Mode
 from rtta.renderer.navigation import FrameBudget, left_out
 from rtta.renderer.placing import restage
 from rtta.renderer.renderer import Renderer
@@ -291,7 +292,7 @@ class Viewer(Pictures, Loading, Painting):
             return
         key = (self._capture_key, s.style_key(), painted)
         if key != self._composite_key:
-            r.composite(mode, s.style)
+            r.composite(Mode(mode), s.style)  # (not std here)
             self._composite_key = key
             self._rendered = True
         self.view_pass.render(

@@ -6,7 +6,11 @@ struct Record {
     vec4 viewport;    // inner B_viewport in pixels (x0, y0, x1, y1)
     ivec4 info;       // (layer, visible, border, floatBitsToInt(scale))
 };
+#ifdef RECORDS_WRITE  // parameterize.comp writes R
+layout(std430, binding = BINDING_RECORDS) writeonly buffer RecordBuffer { Record records[]; };
+#else
 layout(std430, binding = BINDING_RECORDS) readonly buffer RecordBuffer { Record records[]; };
+#endif
 layout(std430, binding = BINDING_OBJECTS) readonly buffer ObjectBuffer { vec4 object_colors[]; };
 
 // Screen-space vertex displacement, done in clip space: T is affine in NDC, so

@@ -88,6 +88,12 @@ def view_args(p: argparse.ArgumentParser) -> None:
         help="object bounds projected per frame: the paper's AABB or the tighter oriented box",
     )
     p.add_argument(
+        "--parameterize",
+        choices=("cpu", "gpu"),
+        default="cpu",
+        help="where Algorithm 1 runs: numpy (the reference) or compute shaders (opt-in, its own shelf packing)",
+    )
+    p.add_argument(
         "--context-scale",
         type=float,
         default=None,
@@ -125,6 +131,7 @@ def settings_of(args):
         args.region_scale,
         args.bounds,
         getattr(args, "context_scale", None),
+        getattr(args, "parameterize", "cpu"),
     )
 
 

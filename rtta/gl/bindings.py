@@ -57,6 +57,11 @@ class Storage:
     OIT_NODES: Final = 6  # oit.glsl: the lists' nodes
     OIT_BASES: Final = 7  # composite.geom: per object, its first node (one per pixel of its sprite)
     PLACEMENT: Final = 8  # section.glsl: per object, its explode offset and cut flags (cutaways)
+    PARAM_CORNERS: Final = 9  # parameterize.comp: B_world's corners per object (doubles)
+    PARAM_SCALES: Final = 10  # parameterize.comp: the region scale wanted per object (0: hidden)
+    PARAM_ITEMS: Final = 11  # parameterize.comp: per object, its rectangle, size and place
+    PARAM_CLASSES: Final = 12  # parameterize.comp: per height class, its shelves and layers
+    PARAM_STATE: Final = 13  # parameterize.comp: layers, used size, the scale-down factor
 
 
 KINDS: Final = (Texture, Image, Storage)

@@ -19,6 +19,7 @@ from ..scene.camera import Camera, Projection
 from ..scene.framing import StandardView, scene_orbit
 from ..scene.model import Scene
 from .renderer import Settings
+from .settings import PARAMETERIZE_ON, ParameterizeName, ParameterizeOn
 from .snapshot import resolve_names
 
 CORE_STYLE = (
@@ -42,6 +43,7 @@ def make_settings(
     region_scale: float = 1.0,
     bounds: BoundsName | Bounds = "aabb",
     context_scale: float | None = None,
+    parameterize: ParameterizeName | ParameterizeOn = "cpu",
 ) -> Settings:
     """Checked Settings (the messages name the CLI flags, as `rtta snapshot` says them)."""
     if border < 0 or border > 64:
@@ -56,6 +58,7 @@ def make_settings(
     atlas_max = check_size(atlas_max, "--atlas-max") if atlas_max else None
     check_choice("--capture-path", capture_path, CAPTURE_PATHS)
     check_choice("--bounds", bounds, BOUNDS)
+    check_choice("--parameterize", parameterize, PARAMETERIZE_ON)
     return Settings(
         border=border,
         atlas_max=atlas_max,
@@ -64,6 +67,7 @@ def make_settings(
         region_scale=region_scale,
         bounds=bounds,
         context_scale=context_scale,
+        parameterize=parameterize,
     )
 
 

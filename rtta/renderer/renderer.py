@@ -21,6 +21,7 @@ from ..gl.gpu import GpuScene
 from ..gl.targets import LayeredTarget
 from ..ldi.lens import Lens, LensPass
 from ..passes import oit
+from ..passes.atlas_gpu import GpuParameterize
 from ..passes.capture import CapturePass, RttPass, StdPass
 from ..passes.composite import LENS_MODES, CompositePass, CompositeTarget, Style
 from ..passes.post import AtlasPostPass
@@ -56,6 +57,7 @@ class Renderer:
         self.gpu = GpuScene(ctx, scene)
         self.gpu.cull_closed = self.settings.cull_closed
         self._capture: dict[str, CapturePass] = {}
+        self._gpu_atlas: GpuParameterize | None = None  # Algorithm 1 in compute shaders (Settings.parameterize)
         self._std: StdPass | None = None
         self._rtt: RttPass | None = None
         self.atlas = LayeredTarget(ctx, (64, 64), 1, depth_keyed=True)
@@ -127,17 +129,13 @@ class Renderer:
         atlas_max = s.atlas_max or default_atlas_max(viewport, s.border, largest)
         atlas_max = (min(atlas_max[0], self.caps.max_texture), min(atlas_max[1], self.caps.max_texture))
         max_layers = min(s.max_layers or self.caps.max_layers, self.caps.max_layers)
-        return parameterize(
-            corners,
-            proj @ view,
-            viewport,
-            border=s.border,
-            atlas_max=atlas_max,
-            max_layers=max_layers,
-            region_scale=self.region_scales(focus),
-            hidden=hidden,
-            thin=thin,
-        )
+        args = dict(border=s.border, atlas_max=atlas_max, max_layers=max_layers, hidden=hidden)
+        if s.parameterize == "gpu" and thin is None:  # thinning (fast navigation) stays on the CPU
+            self._gpu_atlas = self._gpu_atlas or GpuParameterize(self.ctx)
+            return self._gpu_atlas.run(
+                self.gpu, corners, proj @ view, viewport, **args, region_scale=self.region_scales(focus)
+            )
+        return parameterize(corners, proj @ view, viewport, **args, region_scale=self.region_scales(focus), thin=thin)
 
     def hidden_mask(self) -> np.ndarray | None:
         """bool [n] of the hidden objects (None when none is hidden)."""
@@ -380,11 +378,12 @@ class Renderer:
             self._projector_pass,
             self._lens_pass,
             self.staging,
+            self._gpu_atlas,
         ]:
             if p is not None:
                 p.release()
         self._capture.clear()
-        self._std = self._rtt = None
+        self._std = self._rtt = self._gpu_atlas = None
         self.target.release()
         for t in (self.atlas, self._single):
             if t is not None:

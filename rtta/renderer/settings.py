@@ -3,9 +3,22 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from enum import StrEnum
+from typing import Literal
 
 from ..gl.context import CapturePath, CapturePathName
 from ..scene.bounds import Bounds, BoundsName
+
+
+class ParameterizeOn(StrEnum):
+    """Where Algorithm 1 runs (Settings.parameterize)."""
+
+    CPU = "cpu"  # rtta.atlas.parameterize, numpy: the reference
+    GPU = "gpu"  # rtta.passes.atlas_gpu, compute shaders (opt-in)
+
+
+ParameterizeName = Literal["cpu", "gpu"]
+PARAMETERIZE_ON: tuple[str, ...] = tuple(p.value for p in ParameterizeOn)
 
 
 @dataclass
@@ -34,6 +47,9 @@ class Settings:
     cull_closed : bool, default True
         Cull the back faces of closed parts (`rtta.scene.closure`); the images are the same,
         False draws every object double-sided.
+    parameterize : {"cpu", "gpu"}, default "cpu"
+        Where Algorithm 1 runs: numpy (the reference) or compute shaders (opt-in; its shelf
+        packing differs, and a frame that thins objects for fast navigation runs on the CPU).
 
     Examples
     --------
@@ -49,3 +65,4 @@ class Settings:
     context_scale: float = 1.0
     bounds: BoundsName | Bounds = "aabb"
     cull_closed: bool = True
+    parameterize: ParameterizeName | ParameterizeOn = "cpu"

@@ -169,6 +169,14 @@ def test_a_file_just_written_is_not_cached(folder, tmp_path):
     assert not _entries(folder)
 
 
+def test_the_demo_is_not_cached(folder):
+    from rtta.scene.generators.demo import demo_path
+    from rtta.scene.loader import load_scene_or_demo
+
+    assert load_scene_or_demo(None).count == load_scene(demo_path()).count == 24
+    assert not folder.exists()
+
+
 def test_a_file_changed_during_its_load_is_not_cached(folder, tmp_path, monkeypatch):
     path = _obj(tmp_path / "files")
     real = rtta.scene.readers.load

@@ -20,7 +20,8 @@ Entries are written to a temporary file in the folder and renamed into place, so
 processes loading the same file at once each write a whole entry and the last one stays;
 an entry is never changed in place, so a scene's arrays can map it (copy-on-write: no
 copy of a 300 MB entry before its checksum, 1.7 s of a 2.4 s cached load here).
-A folder that cannot be written means no cache, never an error.
+A folder that cannot be written means no cache, never an error; the demo (in rtta's
+assets) is not cached.
 
 A file modified less than RACY_NS before its load began is not cached: its next change
 could fall within the same timestamp tick (a few ms on Linux, 2 s on FAT) and leave its
@@ -38,6 +39,7 @@ import sys
 import tempfile
 import time
 import zlib
+from importlib import resources
 from pathlib import Path
 
 import numpy as np
@@ -218,6 +220,8 @@ def _key(path: Path, options: dict) -> dict | None:
         limit = memory_limit()
     except (OSError, RuntimeError, RttaError):  # the load itself says what is wrong
         return None
+    if resolved.parent == Path(str(resources.files("rtta.assets"))).resolve():
+        return None  # the demo: shipped with rtta, small
     return {
         "path": str(resolved),
         "size": size,

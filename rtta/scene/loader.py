@@ -78,10 +78,7 @@ def _load(path: Path, smooth_angle: float, smooth: bool) -> Scene:
 
 
 def load_scene_or_demo(path: str | None, **options) -> Scene:
-    """The scene at `path`, or the built-in demo assembly when no path is given (not cached:
-    it is small and ships with rtta)."""
+    """The scene at `path`, or the built-in demo assembly when no path is given."""
     from .generators.demo import demo_path
 
-    if path:
-        return load_scene(path, **options)
-    return load_scene(str(demo_path()), **{**options, "cache": False})
+    return load_scene(path or str(demo_path()), **options)

@@ -208,3 +208,15 @@ def test_cli_refuses_an_unknown_place(gl, tmp_path, capsys):
 
     assert main(["snapshot", "--parameterize", "tpu", "--out", str(tmp_path / "x.png")]) == 2
     assert "--parameterize" in capsys.readouterr().err and not (tmp_path / "x.png").exists()
+
+
+def test_bench_rows(gl, capsys):
+    """rtta bench capture's rows for both paths (no timing asserted: a shared machine)."""
+    from rtta.bench.param_gpu import param_paths, print_paths
+
+    (row,) = param_paths(gl, [1000], (256, 256), 1)
+    assert row["objects"] == 1000 and row["visible"] > 0 and row["same_rects"]
+    assert 0 < row["gpu_util"] <= 1 and 0 < row["cpu_util"] <= 1 and row["gpu_layers"] >= 1
+    assert all(row[k] > 0 for k in ("cpu_ms", "gpu_ms", "cpu_wall_ms", "gpu_wall_ms"))
+    print_paths([row])
+    assert "GPU path" in capsys.readouterr().out

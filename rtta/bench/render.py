@@ -21,6 +21,7 @@ from ..gl.context import create_headless_context
 from ..renderer.renderer import Renderer
 from ..scene.camera import Camera, Projection
 from ..scene.generators.generate import TABLE1, random_scene, table1_scene
+from . import param_gpu
 
 
 def shared_data() -> Path:
@@ -108,9 +109,11 @@ def run_capture(
     json_path: str | None = None,
     ctx=None,
     projection: Projection = "perspective",
+    full: bool = False,
 ) -> int:
     """Table 1's frame times (STD, RTT, RTTA both paths) and Algorithm 1's scaling, with a
-    perspective (the paper's) or orthographic camera."""
+    perspective (the paper's) or orthographic camera; Algorithm 1 on the CPU against the GPU
+    path at 1k and 10k parts (--quick: 1k; full: and 100k)."""
     ctx = ctx or create_headless_context()
     renderer = str(ctx.info["GL_RENDERER"])
     frames = 3 if quick else 15
@@ -122,10 +125,19 @@ def run_capture(
     counts = [100, 1000] if quick else [100, 300, 1000, 3000, 10000]
     scaling = param_scaling(counts, viewport, 5 if quick else 21, projection)
     _print_capture(rows, scaling, f"{renderer}; {projection}", viewport)
+    paths = param_gpu.param_paths(ctx, param_gpu.counts_for(quick, full), viewport, frames)
+    param_gpu.print_paths(paths)
     if json_path:
         Path(json_path).write_text(
             json.dumps(
-                {"renderer": renderer, "viewport": list(viewport), "scenes": rows, "param_scaling": scaling}, indent=1
+                {
+                    "renderer": renderer,
+                    "viewport": list(viewport),
+                    "scenes": rows,
+                    "param_scaling": scaling,
+                    "paths": paths,
+                },
+                indent=1,
             )
         )
     return 0

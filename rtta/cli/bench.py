@@ -13,6 +13,7 @@ def add_parsers(sub):
     b = bsub.add_parser("capture", help="STD / RTT / RTTA frame times on the paper's Table 1 sizes")
     b.add_argument("--size", default="1024x1024")
     b.add_argument("--quick", action="store_true", help="short run (fewer frames, smaller scenes)")
+    b.add_argument("--full", action="store_true", help="also Algorithm 1's CPU and GPU paths at 100k parts")
     b.add_argument("--json", default=None, help="also write the figures as JSON")
     _projection(b)
     b = bsub.add_parser("composite", help="per-mode frame time against STD, and re-composite time")
@@ -93,7 +94,7 @@ def cmd_bench(args) -> int:
 
     if args.bench == "capture":
         return bench.run_capture(
-            parse_size(args.size), quick=args.quick, json_path=args.json, projection=args.projection
+            parse_size(args.size), quick=args.quick, json_path=args.json, projection=args.projection, full=args.full
         )
     if args.bench == "composite":
         return bench.run_composite(

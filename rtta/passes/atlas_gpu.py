@@ -18,6 +18,8 @@ before the CPU reads the state; more only while it says they do not fit yet.
 
 from __future__ import annotations
 
+import time
+
 import moderngl
 import numpy as np
 
@@ -62,6 +64,7 @@ class GpuParameterize:
         self._corners_of: np.ndarray | None = None  # the array uploaded (compared by identity)
         self._wanted = np.zeros(0)
         self.last_state = np.zeros(1, STATE_DTYPE)[0]  # the state read back by the last run
+        self.cpu_seconds = 0.0  # of the last run, in Python and numpy outside GL calls (rtta bench capture)
 
     def _upload(self, corners: np.ndarray, wanted: np.ndarray, boxes: int) -> None:
         """Corners [k, n, 8, 3] and the scales wanted [n], each when it changed."""
@@ -121,6 +124,7 @@ class GpuParameterize:
         Records
             R as the GPU wrote it (float32 where the record buffer holds floats).
         """
+        t0 = time.perf_counter()
         n = corners.shape[-3]
         boxes = 1 if corners.ndim == 3 else corners.shape[0]
         W, H = int(viewport[0]), int(viewport[1])
@@ -133,6 +137,7 @@ class GpuParameterize:
             raise ValueError("region scale must be in (0, 16]")
         if hidden is not None:
             wanted[np.asarray(hidden, bool)] = 0.0
+        outside = time.perf_counter() - t0
         self._upload(corners, wanted, boxes)
         uniforms = {
             "u_vpm": np.asarray(vpm, np.float64).T.tobytes(),
@@ -178,8 +183,11 @@ class GpuParameterize:
             self.ctx.memory_barrier(moderngl.SHADER_STORAGE_BARRIER_BIT)
         state = self._read_state()
         self.last_state = state
-        records = _records(gpu.records, n, (W, H), border, state)
+        packed = _read_packed(gpu.records, n)
+        t0 = time.perf_counter()
+        records = _records(packed, (W, H), border, state)
         gpu.written = records
+        self.cpu_seconds = outside + time.perf_counter() - t0
         return records
 
     def _rounds(self, groups: int, rounds: int) -> np.void:
@@ -212,11 +220,13 @@ def _replace(ctx: moderngl.Context, old: moderngl.Buffer | None, size: int) -> m
     return ctx.buffer(reserve=size)
 
 
-def _records(buffer: moderngl.Buffer, n: int, viewport: tuple[int, int], border: int, state: np.void) -> Records:
-    """Records from the record buffer's first n entries (std430, RECORD_DTYPE)."""
-    packed = (
-        np.frombuffer(buffer.read(size=n * RECORD_DTYPE.itemsize), RECORD_DTYPE) if n else np.zeros(0, RECORD_DTYPE)
-    )
+def _read_packed(buffer: moderngl.Buffer, n: int) -> np.ndarray:
+    """The record buffer's first n entries (std430, RECORD_DTYPE)."""
+    return np.frombuffer(buffer.read(size=n * RECORD_DTYPE.itemsize), RECORD_DTYPE) if n else np.zeros(0, RECORD_DTYPE)
+
+
+def _records(packed: np.ndarray, viewport: tuple[int, int], border: int, state: np.void) -> Records:
+    """Records from the packed entries read back."""
     info = packed["info"]
     layers = int(state["layers"])
     return Records(

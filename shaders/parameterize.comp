@@ -10,9 +10,10 @@
 //   STAGE 4 (per object): T and the record (records.glsl), written where capture reads it
 // Packing: regions of one height class (exact below 16 texels, then 2^(1/8) steps) share
 // shelves as tall as the class's tallest. A narrow region (w <= max_w / 2) takes its offset
-// in the class's strip of widths (one atomicAdd: a prefix sum in any order) and its shelf
-// is offset / cap with cap = max_w - the class's widest narrow region, so it never crosses
-// the shelf's end; a wide one gets a shelf of its own.
+// in the class's strip of widths (one atomicAdd: a prefix sum in any order); its shelf is
+// offset / max_w unless it would cross that shelf's end. Those that would (one per shelf at
+// most) take an offset in a second strip, whose shelves hold cap = max_w - the widest of them,
+// so none crosses an end there. A wide region gets a shelf of its own.
 #define RECORDS_WRITE 1
 #include "records.glsl"
 
@@ -24,23 +25,23 @@ layout(local_size_x = LOCAL_SIZE) in;
 
 struct Class {
     uint height;     // the tallest region (its shelves' height), 0: no region this round
-    uint narrow_w;   // the widest narrow region
+    uint narrow_w;   // the widest region of the second strip
     uint strip;      // the narrow regions' widths summed (their offsets, by atomicAdd)
     uint wide;       // wide regions counted
-    uint cap;        // shelf capacity for the narrow ones
-    uint shelves;    // narrow shelves (the wide ones follow)
+    uint cap;        // shelf capacity of the second strip
+    uint shelves;    // shelves of the first strip (the second's follow, then the wide ones)
     uint layer;      // the layer and height its first shelf starts at
     uint y;
     uint first;      // shelves that fit in that layer
     uint per_layer;  // shelves per later layer
-    uint pad0;
-    uint pad1;
+    uint strip2;     // the second strip's widths summed
+    uint shelves2;   // its shelves
 };
 
 struct Item {
     ivec4 rect;   // inner B_viewport x0, y0, x1, y1 (pixels)
     ivec4 size;   // w, h (border included), class, visible
-    ivec4 place;  // offset in the strip (narrow) or wide index, -, -, narrow
+    ivec4 place;  // offset in its strip or wide index, -, -, 0 wide / 1 first strip / 2 second
     ivec4 at;     // x, y, layer, -
     dvec2 scale;  // the scale wanted before the rounds' factor, -
 };
@@ -146,9 +147,14 @@ void project(int i) {
         int c = height_class(size.y);
         bool narrow = 2 * size.x <= u_atlas_max.x;
         atomicMax(classes[c].height, uint(size.y));
+        uint W = uint(u_atlas_max.x);
         if (narrow) {
-            atomicMax(classes[c].narrow_w, uint(size.x));
-            it.place = ivec4(int(atomicAdd(classes[c].strip, uint(size.x))), 0, 0, 1);
+            uint start = atomicAdd(classes[c].strip, uint(size.x));
+            it.place = ivec4(int(start), 0, 0, 1);
+            if (start / W != (start + uint(size.x) - 1u) / W) {  // would cross the shelf's end
+                atomicMax(classes[c].narrow_w, uint(size.x));
+                it.place = ivec4(int(atomicAdd(classes[c].strip2, uint(size.x))), 0, 0, 2);
+            }
         } else {
             it.place = ivec4(int(atomicAdd(classes[c].wide, 1u)), 0, 0, 0);
         }
@@ -166,11 +172,13 @@ void layout_classes() {
         uint hc = classes[c].height;
         if (hc == 0u) continue;
         uint cap = W - classes[c].narrow_w;
-        uint narrow = classes[c].narrow_w == 0u ? 0u : (classes[c].strip + cap - 1u) / cap;
-        uint total = narrow + classes[c].wide;
+        uint narrow = (classes[c].strip + W - 1u) / W;
+        uint second = classes[c].narrow_w == 0u ? 0u : (classes[c].strip2 + cap - 1u) / cap;
+        uint total = narrow + second + classes[c].wide;
         uint per = H / hc, first = (H - y) / hc;
         classes[c].cap = cap;
         classes[c].shelves = narrow;
+        classes[c].shelves2 = second;
         classes[c].layer = layer;
         classes[c].y = y;
         classes[c].first = first;
@@ -199,7 +207,7 @@ void layout_classes() {
     factor *= min(0.9LF, sqrt(double(u_max_layers) / double(count)) * 0.95LF);
     rounds += 1u;
     for (int c = 0; c < CLASSES; c++) {
-        classes[c].height = classes[c].narrow_w = classes[c].strip = classes[c].wide = 0u;
+        classes[c].height = classes[c].narrow_w = classes[c].strip = classes[c].strip2 = classes[c].wide = 0u;
     }
 }
 
@@ -208,11 +216,15 @@ void place(int i) {
     if (it.size.w == 0) return;
     Class k = classes[it.size.z];
     uint shelf, x;
+    uint W = uint(u_atlas_max.x);
     if (it.place.w == 1) {
-        shelf = uint(it.place.x) / k.cap;
+        shelf = uint(it.place.x) / W;
+        x = uint(it.place.x) % W;
+    } else if (it.place.w == 2) {
+        shelf = k.shelves + uint(it.place.x) / k.cap;
         x = uint(it.place.x) % k.cap;
     } else {
-        shelf = k.shelves + uint(it.place.x);
+        shelf = k.shelves + k.shelves2 + uint(it.place.x);
         x = 0u;
     }
     uint layer, y;

@@ -129,13 +129,17 @@ class Renderer:
         atlas_max = s.atlas_max or default_atlas_max(viewport, s.border, largest)
         atlas_max = (min(atlas_max[0], self.caps.max_texture), min(atlas_max[1], self.caps.max_texture))
         max_layers = min(s.max_layers or self.caps.max_layers, self.caps.max_layers)
-        args = dict(border=s.border, atlas_max=atlas_max, max_layers=max_layers, hidden=hidden)
+        vpm, scales = proj @ view, self.region_scales(focus)
         if s.parameterize == "gpu" and thin is None:  # thinning (fast navigation) stays on the CPU
             self._gpu_atlas = self._gpu_atlas or GpuParameterize(self.ctx)
             return self._gpu_atlas.run(
-                self.gpu, corners, proj @ view, viewport, **args, region_scale=self.region_scales(focus)
-            )
-        return parameterize(corners, proj @ view, viewport, **args, region_scale=self.region_scales(focus), thin=thin)
+                self.gpu, corners, vpm, viewport, border=s.border, atlas_max=atlas_max, max_layers=max_layers,
+                hidden=hidden, region_scale=scales,
+            )  # fmt: skip
+        return parameterize(
+            corners, vpm, viewport, border=s.border, atlas_max=atlas_max, max_layers=max_layers,
+            hidden=hidden, region_scale=scales, thin=thin,
+        )  # fmt: skip
 
     def hidden_mask(self) -> np.ndarray | None:
         """bool [n] of the hidden objects (None when none is hidden)."""

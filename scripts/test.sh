@@ -5,5 +5,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh test        # the base install carries the viewer: its tests run without any viewer extra
 .venv/bin/ruff check rtta viewer tests scripts
+.venv/bin/ruff format --check rtta viewer tests scripts   # the tree as `ruff format` leaves it
 .venv/bin/lint-imports              # the layers and no-cycle contracts in pyproject.toml
-exec .venv/bin/pytest "$@"
+.venv/bin/basedpyright              # types, basic mode, over rtta and viewer ([tool.basedpyright] in pyproject.toml)
+exec .venv/bin/pytest "$@"          # -m "not slow", -m "not viewer", -m gl: see the markers in pyproject.toml

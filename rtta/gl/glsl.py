@@ -88,6 +88,21 @@ def program(
 
 
 def uniform(prog: moderngl.Program | moderngl.ComputeShader, name: str) -> moderngl.Uniform:
-    """`prog[name]` as the uniform it is, for `.value` and `.write`: moderngl types a program's
-    members as any kind (uniform, uniform block, attribute, varying), which have neither."""
+    """`prog[name]` as the uniform it is, for `.value` and `.write`.
+
+    moderngl types a program's members as any kind (uniform, uniform block, attribute,
+    varying), and only a uniform has both; this says which one the caller means.
+
+    Parameters
+    ----------
+    prog : moderngl.Program or moderngl.ComputeShader
+        The program holding the uniform.
+    name : str
+        The uniform's name in the shader (a KeyError where the compiler dropped it).
+
+    Returns
+    -------
+    moderngl.Uniform
+        ``prog[name]``, unchanged.
+    """
     return cast("moderngl.Uniform", prog[name])

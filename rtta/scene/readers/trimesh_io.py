@@ -29,7 +29,20 @@ def trimesh_load(source, file_type: str, path: Path, resolver) -> trimesh.Scene:
 
 
 def as_scene(loaded, path: Path) -> trimesh.Scene:
-    """`loaded` as the trimesh.Scene that force="scene" makes (an RttaError if it is not)."""
+    """`loaded` as the trimesh.Scene that ``force="scene"`` makes.
+
+    Parameters
+    ----------
+    loaded : object
+        What ``trimesh.load(..., force="scene")`` returned.
+    path : Path
+        The file read, for the message.
+
+    Returns
+    -------
+    trimesh.Scene
+        `loaded` itself; an RttaError if it is not a scene.
+    """
     import trimesh
 
     if not isinstance(loaded, trimesh.Scene):

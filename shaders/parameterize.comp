@@ -268,9 +268,9 @@ void main() {
 #if STAGE == 1
     if (done == 0u) project(i);
 #elif STAGE == 3
-    place(i);
+    if (done == 1u) place(i);
 #else
-    write_record(i);
+    if (done == 1u) write_record(i);  // else the CPU dispatches more rounds first
 #endif
 #endif
 }

@@ -147,6 +147,20 @@ def test_scaled_down_when_the_layers_run_out(gl, atlas_gpu):
     assert coverage_max(rec) <= 1
 
 
+def test_refused_as_the_cpu_path_when_nothing_fits(gl, atlas_gpu):
+    """1-texel regions of 2,000 parts cannot share one 3x3 layer: both paths say so."""
+    scene = scene_of(2000)
+    cam = camera(scene, 10, 10, 1.5, 0.0)
+    vpm = cam.projection(VIEWPORT[0] / VIEWPORT[1]) @ cam.view(scene.origin)
+    kw = {"border": 1, "atlas_max": (3, 3), "max_layers": 1}
+    for run in (
+        lambda: parameterize(scene.box_corners(), vpm, VIEWPORT, **kw),
+        lambda: atlas_gpu(2000, scene.box_corners(), vpm, VIEWPORT, **kw),
+    ):
+        with pytest.raises(ValueError, match="do not fit"):
+            run()
+
+
 def test_hidden_and_per_object_scales(gl, atlas_gpu):
     scene = scene_of(10)
     cam = camera(scene, 0, 0, 2.5, 0.0)

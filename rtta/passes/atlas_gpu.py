@@ -5,15 +5,16 @@ and region scales, in doubles, and a parallel shelf packing (shaders/parameteriz
 Per object data live on the GPU: B_world's corners (uploaded when the array changes: once
 per scene, every frame of an exploded view) and the scale wanted per object, 0 for the hidden
 (uploaded when it changes: the focus, hiding). Per frame the CPU issues a constant number of
-calls: a small state write, a round of two dispatches twice, a read of the 32-byte state,
-two dispatches that write T and the records straight into the record buffer the capture,
-post-processing and compositing read (shaders/records.glsl), and, in this first step, a read
-of that buffer back into `Records`, which the draw lists and compositing still take on the CPU.
+calls: a small state write, a round of two dispatches twice, two dispatches that write T and
+the records straight into the record buffer the capture, post-processing and compositing read
+(shaders/records.glsl), a read of the 32-byte state and, in this first step, a read of the
+records back into `Records`, which the draw lists and compositing still take on the CPU.
 
 Scale-down policy: when the regions need more layers than allowed, the layout stage itself
 lowers every region's scale (by min(0.9, 0.95 sqrt(max / needed)), as the CPU loop does
 with areas) and the next round packs again; no visible object is dropped. Two rounds run
-before the CPU reads the state; more only while it says they do not fit yet.
+before the CPU reads the state (placing and the records are no-ops until the regions fit);
+more only while it says they do not fit yet.
 """
 
 from __future__ import annotations
@@ -170,19 +171,15 @@ class GpuParameterize:
         ):
             buf.bind_to_storage_buffer(binding)
         groups = max(1, -(-n // LOCAL_SIZE))
-        state = self._rounds(groups, ROUNDS)
-        while not state["done"] and state["rounds"] < MAX_ROUNDS:
-            state = self._rounds(groups, ROUNDS)
+        state = self._rounds(groups)
+        while not state["done"] and state["rounds"] < MAX_ROUNDS:  # rare: scaled down more than twice
+            state = self._rounds(groups)
+        self.last_state = state
         if not state["done"]:
             raise ValueError(
                 f"{n} regions with border {border} do not fit into {max_layers} layer(s) of "
                 f"{atlas_max[0]}x{atlas_max[1]} even at the smallest scale"
             )
-        for stage in (PLACE, RECORD):
-            self.programs[stage].run(groups)
-            self.ctx.memory_barrier(moderngl.SHADER_STORAGE_BARRIER_BIT)
-        state = self._read_state()
-        self.last_state = state
         packed = _read_packed(gpu.records, n)
         t0 = time.perf_counter()
         records = _records(packed, (W, H), border, state)
@@ -190,12 +187,16 @@ class GpuParameterize:
         self.cpu_seconds = outside + time.perf_counter() - t0
         return records
 
-    def _rounds(self, groups: int, rounds: int) -> np.void:
-        """Dispatch `rounds` rounds of projection and layout (no-ops once the regions fit); the state."""
-        for _ in range(rounds):
+    def _rounds(self, groups: int) -> np.void:
+        """ROUNDS rounds of projection and layout (no-ops once the regions fit), then placing and
+        the records (no-ops unless they fit); the state, the one read that waits for the GPU."""
+        for _ in range(ROUNDS):
             self.programs[PROJECT].run(groups)
             self.ctx.memory_barrier(moderngl.SHADER_STORAGE_BARRIER_BIT)
             self.programs[LAYOUT].run(1)
+            self.ctx.memory_barrier(moderngl.SHADER_STORAGE_BARRIER_BIT)
+        for stage in (PLACE, RECORD):
+            self.programs[stage].run(groups)
             self.ctx.memory_barrier(moderngl.SHADER_STORAGE_BARRIER_BIT | moderngl.BUFFER_UPDATE_BARRIER_BIT)
         return self._read_state()
 

@@ -234,3 +234,14 @@ def test_bench_rows(gl, capsys):
     assert all(row[k] > 0 for k in ("cpu_ms", "gpu_ms", "cpu_wall_ms", "gpu_wall_ms"))
     print_paths([row])
     assert "GPU path" in capsys.readouterr().out
+
+
+def test_a_driver_that_cannot_build_it_says_so_in_one_line(gl, monkeypatch):
+    from rtta.errors import RttaError
+    from rtta.passes import atlas_gpu
+
+    broken = "#version 430\nlayout(local_size_x = 1) in;\nvoid main() { no_such_function(); }\n"
+    monkeypatch.setattr(atlas_gpu.glsl, "load", lambda *args, **kw: broken)
+    with pytest.raises(RttaError, match="--parameterize gpu: this driver cannot build") as exc:
+        GpuParameterize(gl)
+    assert "\n" not in str(exc.value)

@@ -25,6 +25,7 @@ import moderngl
 import numpy as np
 
 from ..atlas.records import RECORD_DTYPE, Records
+from ..errors import RttaError
 from ..gl import glsl
 from ..gl.bindings import Storage
 from ..gl.gpu import GpuScene
@@ -53,10 +54,14 @@ class GpuParameterize:
 
     def __init__(self, ctx: moderngl.Context) -> None:
         self.ctx = ctx
-        self.programs = {
-            stage: ctx.compute_shader(glsl.load("parameterize.comp", STAGE=stage, LOCAL_SIZE=LOCAL_SIZE))
-            for stage in (PROJECT, LAYOUT, PLACE, RECORD)
-        }
+        try:
+            self.programs = {
+                stage: ctx.compute_shader(glsl.load("parameterize.comp", STAGE=stage, LOCAL_SIZE=LOCAL_SIZE))
+                for stage in (PROJECT, LAYOUT, PLACE, RECORD)
+            }
+        except moderngl.Error as exc:  # e.g. a driver without doubles in compute shaders
+            first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+            raise RttaError(f"--parameterize gpu: this driver cannot build its compute shaders ({first})") from None
         self.classes = ctx.buffer(reserve=CLASSES * CLASS_BYTES)
         self.state = ctx.buffer(reserve=STATE_DTYPE.itemsize)
         self.corners: moderngl.Buffer | None = None

@@ -100,7 +100,7 @@ class Viewer(Pictures, Loading, Painting):
         self.ruler = Ruler()
         self.views = saved.Views(self.views_dir, scene)
         self.records = None
-        self.scene_label = Path(scene.source).name
+        self.scene_label = printable(Path(scene.source).name)  # a file name of any bytes: imgui takes UTF-8
         self.scene_dir = Path(scene.source).parent if Path(scene.source).exists() else Path.cwd()
         self._capture_key = self._composite_key = self._std_key = None
         self.budget = FrameBudget()  # its target follows state.navigation_fps when used

@@ -11,6 +11,7 @@ from typing import Literal
 
 from imgui_bundle import imgui
 
+from rtta.errors import printable
 from rtta.scene.readers import SUFFIXES
 
 POPUP = "Open scene"
@@ -58,16 +59,16 @@ class FileBrowser:
         self.visible, _ = imgui.begin_popup_modal(POPUP, None)
         if not self.visible:
             return
-        imgui.text_wrapped(str(self.folder))
+        imgui.text_wrapped(printable(self.folder))  # names of any bytes: imgui takes UTF-8
         imgui.begin_child("entries", imgui.ImVec2(0, -30), imgui.ChildFlags_.borders.value)
         dirs, files = listing(self.folder)
         if self.folder.parent != self.folder and imgui.selectable("../", False)[0]:
             self.folder = self.folder.parent
         for d in dirs:
-            if imgui.selectable(d.name + "/", False)[0]:
+            if imgui.selectable(printable(d.name) + "/", False)[0]:
                 self.folder = d
         for f in files:
-            if imgui.selectable(f.name, False)[0]:
+            if imgui.selectable(printable(f.name), False)[0]:
                 imgui.close_current_popup()
                 self.on_choose(f)
         imgui.end_child()

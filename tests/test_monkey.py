@@ -49,6 +49,7 @@ def test_monkey_finds_nothing(display, tmp_path, scene, seed, actions):  # noqa:
     assert r["findings"] == [] and r["actions"] == actions
     assert set(r["by_action"]) >= {"orbit", "key", "click_panel", "open", "drop", "cutaway", "views", "measure"}
     assert r["frames"] > actions and r["max_frame_s"] < 10
+    assert r["reached"]["scenes"] + r["reached"]["errors_said"] > 0  # a file opened or refused
     assert len(r["settled"]) >= 2 and all(s["gl"]["programs"] > 0 for s in r["settled"])
     assert r["objects"] == (20_000 if scene == "large" else r["objects"]) and r["objects"] > 1
 

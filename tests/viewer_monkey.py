@@ -91,6 +91,7 @@ class Monkey(Actions):
         self.findings: list[str] = []
         self.actions: dict[str, int] = {}
         self.rss_mb: list[float] = []  # every RSS_EVERY actions
+        self.reached, self.said = {"scenes": 0, "errors_said": 0}, ("", False, 0)
         self.frames_drawn, self.max_frame_s, self.t0 = 0, 0.0, time.perf_counter()
         threading.excepthook = lambda a: self.findings.append(
             "thread: " + "".join(traceback.format_exception(a.exc_type, a.exc_value, a.exc_traceback))
@@ -111,6 +112,11 @@ class Monkey(Actions):
             self.max_frame_s = max(self.max_frame_s, dt)
             if dt > MAX_FRAME_S:
                 self.findings.append(f"frame {self.frames_drawn} took {dt:.1f} s ({self.last})")
+            said = (app.message, app.message_is_error, id(app.renderer.scene))
+            if said != self.said:  # what the run reached: scenes opened, errors said
+                self.reached["scenes"] += said[2] != self.said[2]
+                self.reached["errors_said"] += said[1] and said[:2] != self.said[:2]
+                self.said = said
             err = app.ctx.error
             if err != "GL_NO_ERROR":
                 self.findings.append(f"GL error {err} after {self.last}")
@@ -265,7 +271,7 @@ def main() -> int:
         m.findings.append(f"exception in {m.last}: {traceback.format_exc()}")
     result["settled"] = settled
     result.update(actions=done, by_action=m.actions, frames=m.frames_drawn, seconds=time.perf_counter() - t0)
-    result.update(max_frame_s=m.max_frame_s, findings=m.findings, rss_mb=m.rss_mb)
+    result.update(max_frame_s=m.max_frame_s, findings=m.findings, rss_mb=m.rss_mb, reached=m.reached)
     (a.out / "result.json").write_text(json.dumps(result, indent=1))
     w, e = (settled[0], settled[-1]) if settled else ({}, {})
     print(
@@ -273,7 +279,7 @@ def main() -> int:
         f"in {result['seconds']:.0f} s, "
         f"max frame {m.max_frame_s:.2f} s; GL objects {sum(w.get('gl', {}).values())} -> "
         f"{sum(e.get('gl', {}).values())}, RSS {w.get('rss_mb', 0):.0f} -> {e.get('rss_mb', 0):.0f} MB; "
-        f"{len(m.findings)} findings"
+        f"{m.reached['scenes']} scenes shown, {m.reached['errors_said']} errors said; {len(m.findings)} findings"
     )
     for f in m.findings:
         print("FINDING:", f, file=sys.stderr)

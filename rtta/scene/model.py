@@ -14,6 +14,7 @@ import numpy as np
 from ..errors import RttaError, printable
 from .bounds import BOUNDS, Bounds, BoundsName
 from .closure import closed_objects
+from .meshes_check import checked_colors, checked_parts
 
 # Corner i of a box has bit 0 -> x max, bit 1 -> y max, bit 2 -> z max.
 BOX_EDGES = np.array(
@@ -226,12 +227,12 @@ def from_meshes(
     -------
     Scene
     """
-    if not parts:
-        raise RttaError("scene has no objects with geometry", source)
+    parts = checked_parts(parts, source)
+    colors = checked_colors(colors, len(parts), source)
     textured = bool(textures) and uvs is not None and texture_ids is not None
     batch = Batch(
-        vertices=np.concatenate([np.asarray(p[1], np.float64).reshape(-1, 3) for p in parts]),
-        faces=np.concatenate([np.asarray(p[2], np.int64).reshape(-1, 3) for p in parts]),
+        vertices=np.concatenate([p[1] for p in parts]),
+        faces=np.concatenate([p[2] for p in parts]),
         vcount=np.array([len(p[1]) for p in parts], np.int64),
         fcount=np.array([len(p[2]) for p in parts], np.int64),
         normals=np.concatenate(

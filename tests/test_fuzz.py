@@ -159,3 +159,35 @@ def test_a_name_pattern_of_thousands_of_brackets_is_refused_quickly():
         resolve_names(scene, ["[" * 65536], "--focus")
     assert time.perf_counter() - start < 0.5
     assert len(resolve_names(scene, ["b*"], "--focus")) == 2  # globs as before
+
+
+def _dag_then_chain(levels: int, chain: int, broken: bool) -> bytes:
+    """Nodes 0..levels-1 each with two children edges to the next (2^levels paths), then a chain
+    of `chain` nodes to one mesh node; `broken`: the last DAG node's children misspelled."""
+    from bad_gltf import box_doc, glb
+
+    nodes = [{"children": [i + 1, i + 1]} for i in range(levels)]
+    nodes += [{"children": [levels + k + 1]} for k in range(chain)] + [{"mesh": 0, "name": "leaf"}]
+    if broken:
+        nodes[levels - 1] = {"chilfren": [levels, levels]}
+    return glb(*box_doc(nodes))
+
+
+@pytest.mark.parametrize(
+    "levels, chain, broken, says",
+    [(40, 20, True, "no objects with triangle geometry"), (13, 100, False, "node paths to walk to its meshes")],
+    ids=["no-mesh-below-2^40-paths", "8192-paths-of-100-nodes"],
+)
+def test_gltf_graph_walks_no_path_to_nothing_and_few_paths_in_all(tmp_path, levels, chain, broken, says):
+    """Found by the gltf target (atheris): a 2^40-path DAG whose one path to the mesh was cut by
+    a misspelled 'children' passed the mesh-path count (0 meshes) but the walk followed every
+    path (minutes); subtrees without a mesh are not walked now, and the paths walked are bounded."""
+    from rtta.errors import RttaError
+    from rtta.scene.loader import load_scene
+
+    path = tmp_path / "dag.glb"
+    path.write_bytes(_dag_then_chain(levels, chain, broken))
+    start = time.perf_counter()
+    with pytest.raises(RttaError, match=says):
+        load_scene(path)
+    assert time.perf_counter() - start < 1.0

@@ -15,6 +15,7 @@ from ..files import MAX_OBJECTS_LARGE
 from . import hidden
 
 MAX_DEPTH = 1000  # levels of the node graph
+WALK_PER_OBJECT = 50  # node paths the walk may follow per object a file may make
 
 
 def local_transforms(nodes: list) -> np.ndarray:
@@ -77,7 +78,7 @@ def walk(doc: dict, path: Path, warnings: list[str], limit: int) -> list[tuple[s
         for child in node.get("children", []):
             parents[child] += 1
     roots = scenes[doc.get("scene", 0)].get("nodes", []) if scenes else [i for i, p in enumerate(parents) if p == 0]
-    _measure(nodes, roots, path, limit)
+    meshes = _measure(nodes, roots, path, limit)
     shared = [i for i, p in enumerate(parents) if p > 1]
     if shared:
         warnings.append(
@@ -101,7 +102,8 @@ def walk(doc: dict, path: Path, warnings: list[str], limit: int) -> list[tuple[s
             else:
                 hiders[hider] = None
         below = (*tree, name.replace("/", "\u2215"))
-        stack.extend((c, world, below, hider) for c in reversed(node.get("children", [])))
+        # a subtree without a mesh is not walked: its paths can be 2^levels (found by fuzzing, issue 42)
+        stack.extend((c, world, below, hider) for c in reversed(node.get("children", [])) if meshes[c])
     if found:  # products of regular transforms that flatten to float64's precision
         squashed = hidden.singular(np.array([f[2] for f in found]))
         hiders.update((f[0], None) for f, s in zip(found, squashed, strict=True) if s)
@@ -110,12 +112,17 @@ def walk(doc: dict, path: Path, warnings: list[str], limit: int) -> list[tuple[s
     return found
 
 
-def _measure(nodes: list, roots: list[int], path: Path, limit: int) -> None:
+def _measure(nodes: list, roots: list[int], path: Path, limit: int) -> list[int]:
     """Cycle, depth and path-count checks over the nodes reachable from `roots`, iteratively
-    (each node once: a graph of shared children is not unfolded to count its paths)."""
+    (each node once: a graph of shared children is not unfolded to count its paths). Returns
+    per node the mesh nodes on all paths below and including it (capped): the walk skips the
+    subtrees of none. The paths the walk follows (to a mesh, through any node) are bounded too,
+    at WALK_PER_OBJECT per object the file may make."""
     state = [0] * len(nodes)  # 0 new, 1 on the current path, 2 done
     depth = [0] * len(nodes)  # levels below and including the node
     meshes = [0] * len(nodes)  # mesh nodes on all paths below and including it
+    walked = [0] * len(nodes)  # paths the walk follows from the node (itself included), 0 without a mesh below
+    cap = WALK_PER_OBJECT * limit + 1
     for root in roots:
         stack = [root]
         while stack:
@@ -127,6 +134,7 @@ def _measure(nodes: list, roots: list[int], path: Path, limit: int) -> None:
             if state[i] == 1:
                 depth[i] = 1 + max((depth[c] for c in children), default=0)
                 meshes[i] = min(int("mesh" in nodes[i]) + sum(meshes[c] for c in children), 10 * MAX_OBJECTS_LARGE)
+                walked[i] = min(1 + sum(walked[c] for c in children), cap) if meshes[i] else 0
                 state[i] = 2
                 stack.pop()
                 continue
@@ -147,6 +155,14 @@ def _measure(nodes: list, roots: list[int], path: Path, limit: int) -> None:
             "for a file of its size)",
             path,
         )
+    steps = sum(walked[r] for r in roots)
+    if steps > WALK_PER_OBJECT * limit:
+        raise RttaError(
+            f"glTF node graph has {steps:,} or more node paths to walk to its meshes (at most "
+            f"{WALK_PER_OBJECT * limit:,} for a file of its size)",
+            path,
+        )
+    return meshes
 
 
 def _node_name(nodes: list, i: int) -> str:

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import base64
 import json
-import shutil
 import struct
 import tempfile
 from pathlib import Path
@@ -166,8 +165,8 @@ def views_seeds() -> dict[str, bytes]:
 
 
 def write_corpus(folder: Path, targets: list[str] | None = None) -> dict[str, int]:
-    """The seeds of `targets` (default: all) into folder/<target>/, replacing what was there;
-    {target: count}."""
+    """The seeds of `targets` (default: all) into folder/<target>/, replacing what was there
+    but the inputs fuzzing found (found_*); {target: count written}."""
     makers = {
         "gltf": gltf_seeds,
         "obj": obj_seeds,
@@ -180,8 +179,10 @@ def write_corpus(folder: Path, targets: list[str] | None = None) -> dict[str, in
     for target in targets or list(makers):
         seeds = makers[target]()
         where = folder / target
-        shutil.rmtree(where, ignore_errors=True)
-        where.mkdir(parents=True)
+        where.mkdir(parents=True, exist_ok=True)
+        for old in where.iterdir():  # the inputs fuzzing found (found_*) stay: regression seeds
+            if not old.name.startswith("found_"):
+                old.unlink()
         kept = {name: data for name, data in seeds.items() if len(data) <= (4 if target == "step" else 1) * MAX_SEED}
         for name, data in kept.items():
             (where / name).write_bytes(data)

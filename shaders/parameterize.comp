@@ -36,6 +36,10 @@ struct Class {
     uint per_layer;  // shelves per later layer
     uint strip2;     // the second strip's widths summed
     uint shelves2;   // its shelves
+    uint wide_w;     // the wide regions' widths summed
+    uint pad0;
+    uint pad1;
+    uint pad2;
 };
 
 struct Item {
@@ -157,6 +161,7 @@ void project(int i) {
             }
         } else {
             it.place = ivec4(int(atomicAdd(classes[c].wide, 1u)), 0, 0, 0);
+            atomicAdd(classes[c].wide_w, uint(size.x));
         }
         it.size = ivec4(size, c, 1);
         it.scale = dvec2(first, 0.0);
@@ -166,6 +171,7 @@ void project(int i) {
 
 void layout_classes() {
     uint layer = 0u, y = 0u, used_h_ = 0u;
+    double area = 0.0;  // the regions' area, each as tall as its class
     bool any = false;
     uint W = uint(u_atlas_max.x), H = uint(u_atlas_max.y);
     for (int c = CLASSES - 1; c >= 0; c--) {
@@ -175,6 +181,7 @@ void layout_classes() {
         uint narrow = (classes[c].strip + W - 1u) / W;
         uint second = classes[c].narrow_w == 0u ? 0u : (classes[c].strip2 + cap - 1u) / cap;
         uint total = narrow + second + classes[c].wide;
+        area += (double(classes[c].strip) + double(classes[c].wide_w)) * double(hc);
         uint per = H / hc, first = (H - y) / hc;
         classes[c].cap = cap;
         classes[c].shelves = narrow;
@@ -203,11 +210,13 @@ void layout_classes() {
         used_w = 0u;
         return;
     }
-    // too many layers: every region smaller next round (none dropped), as the CPU path's loop
-    factor *= min(0.9LF, sqrt(double(u_max_layers) / double(count)) * 0.95LF);
+    // too many layers: every region smaller next round (none dropped), by the CPU path's rule
+    double capacity = double(W) * double(H) * double(u_max_layers);
+    factor *= min(0.9LF, sqrt(capacity / area) * 0.95LF);
     rounds += 1u;
     for (int c = 0; c < CLASSES; c++) {
-        classes[c].height = classes[c].narrow_w = classes[c].strip = classes[c].strip2 = classes[c].wide = 0u;
+        classes[c].height = classes[c].narrow_w = classes[c].strip = classes[c].strip2 = 0u;
+        classes[c].wide = classes[c].wide_w = 0u;
     }
 }
 

@@ -11,8 +11,9 @@ the records straight into the record buffer the capture, post-processing and com
 records back into `Records`, which the draw lists and compositing still take on the CPU.
 
 Scale-down policy: when the regions need more layers than allowed, the layout stage itself
-lowers every region's scale (by min(0.9, 0.95 sqrt(max / needed)), as the CPU loop does
-with areas) and the next round packs again; no visible object is dropped. Two rounds run
+lowers every region's scale by min(0.9, 0.95 sqrt(capacity / area)), the CPU loop's rule
+(the area counts each region as tall as its height class), and the next round packs
+again; no visible object is dropped. Two rounds run
 before the CPU reads the state (placing and the records are no-ops until the regions fit);
 more only while it says they do not fit yet.
 """
@@ -32,7 +33,7 @@ from ..gl.gpu import GpuScene
 
 LOCAL_SIZE = 64
 CLASSES = 128  # height classes (parameterize.comp)
-CLASS_BYTES = 48
+CLASS_BYTES = 64
 ITEM_BYTES = 80
 ROUNDS = 2  # rounds of projection and layout dispatched before the state is read
 MAX_ROUNDS = 64  # as the CPU path's loop
@@ -188,6 +189,7 @@ class GpuParameterize:
         packed = _read_packed(gpu.records, n)
         t0 = time.perf_counter()
         records = _records(packed, (W, H), border, state)
+        records.scale[:] = _scales(records, wanted, atlas_max, float(state["factor"]))
         gpu.written = records
         self.cpu_seconds = outside + time.perf_counter() - t0
         return records
@@ -229,6 +231,15 @@ def _replace(ctx: moderngl.Context, old: moderngl.Buffer | None, size: int) -> m
 def _read_packed(buffer: moderngl.Buffer, n: int) -> np.ndarray:
     """The record buffer's first n entries (std430, RECORD_DTYPE)."""
     return np.frombuffer(buffer.read(size=n * RECORD_DTYPE.itemsize), RECORD_DTYPE) if n else np.zeros(0, RECORD_DTYPE)
+
+
+def _scales(records: Records, wanted: np.ndarray, atlas_max: tuple[int, int], factor: float) -> np.ndarray:
+    """The region scales in doubles, as the shader worked them out (the record holds float32):
+    min(wanted, the fit into a layer) x the rounds' factor; 0 for objects without a region."""
+    inner = np.maximum(records.viewport_rect[:, 2:] - records.viewport_rect[:, :2], 1).astype(np.float64)
+    room = np.asarray(atlas_max, np.float64) - 2 * records.border
+    fit = np.minimum(room[0] / inner[:, 0], room[1] / inner[:, 1])
+    return np.where(records.visible, np.minimum(wanted, fit) * factor, 0.0)
 
 
 def _records(packed: np.ndarray, viewport: tuple[int, int], border: int, state: np.void) -> Records:

@@ -1,19 +1,24 @@
 #version 430
 // defines: STAGE LOCAL_SIZE
 // Algorithm 1 on the GPU (rtta.passes.atlas_gpu), one stage per dispatch, in doubles as the CPU
-// reference (rtta.atlas.parameterize) computes it:
+// reference (rtta.atlas.parameterize) computes it. A round (stages 1-4) packs; it runs again,
+// every region smaller, while the layers do not suffice (none dropped):
 //   STAGE 1 (per object): cull, project B_world (clipped against the near plane), viewport
-//            rectangle, scale, region size, height class; a place in its class by atomics
-//   STAGE 2 (one invocation): shelves per class, layers by a scan over the classes tallest
-//            first; more layers than allowed: a smaller scale for the next round
-//   STAGE 3 (per object): x, y, layer of each region; the used atlas width
-//   STAGE 4 (per object): T and the record (records.glsl), written where capture reads it
-// Packing: regions of one height class (exact below 16 texels, then 2^(1/8) steps) share
-// shelves as tall as the class's tallest. A narrow region (w <= max_w / 2) takes its offset
-// in the class's strip of widths (one atomicAdd: a prefix sum in any order); its shelf is
-// offset / max_w unless it would cross that shelf's end. Those that would (one per shelf at
-// most) take an offset in a second strip, whose shelves hold cap = max_w - the widest of them,
-// so none crosses an end there. A wide region gets a shelf of its own.
+//            rectangle, scale, region size, height class; an offset in its class's strip
+//   STAGE 2 (one invocation): the classes' strips laid end to end, tallest class first, and
+//            cut into shelves of max_w; each shelf as tall as the class at its start; layers
+//            next-fit over the shelves
+//   STAGE 3 (per object): a region in one shelf placed; one that would cross a shelf's end
+//            takes an offset in the second strip instead
+//   STAGE 4 (one invocation): the second strip's shelves (cap = max_w - its widest region, so
+//            none crosses an end), then a shelf per wide region; enough layers, or a smaller
+//            scale for the next round
+//   STAGE 5 (per object): the second strip's and the wide regions placed; the used width
+//   STAGE 6 (per object): T and the record (records.glsl), written where capture reads it
+// This is next-fit decreasing height (the CPU path's packing) with the strips' order in a
+// class given by atomics and the regions that cross a shelf's end moved to the second strip.
+// Narrow: w <= max_w / 2; a wide region gets a shelf of its own. Height classes: exact below
+// 16 texels, then 2^(1/8) steps.
 #define RECORDS_WRITE 1
 #include "records.glsl"
 
@@ -24,22 +29,18 @@ layout(local_size_x = LOCAL_SIZE) in;
 #define TINY 2.2250738585072014e-308LF
 
 struct Class {
-    uint height;     // the tallest region (its shelves' height), 0: no region this round
-    uint narrow_w;   // the widest region of the second strip
+    uint height;     // the tallest region, 0: no region this round
     uint strip;      // the narrow regions' widths summed (their offsets, by atomicAdd)
+    uint strip2;     // the second strip's
     uint wide;       // wide regions counted
-    uint cap;        // shelf capacity of the second strip
-    uint shelves;    // shelves of the first strip (the second's follow, then the wide ones)
-    uint layer;      // the layer and height its first shelf starts at
+    uint wide_w;     // their widths summed
+    uint base;       // where the class's strip starts in the strips laid end to end
+    uint base2;      // likewise in the second strip
+    uint layer;      // the layer and height the class's first wide shelf starts at
     uint y;
-    uint first;      // shelves that fit in that layer
-    uint per_layer;  // shelves per later layer
-    uint strip2;     // the second strip's widths summed
-    uint shelves2;   // its shelves
-    uint wide_w;     // the wide regions' widths summed
+    uint first;      // wide shelves that fit in that layer
+    uint per_layer;  // wide shelves per later layer
     uint pad0;
-    uint pad1;
-    uint pad2;
 };
 
 struct Item {
@@ -54,14 +55,20 @@ layout(std430, binding = BINDING_PARAM_CORNERS) readonly buffer Corners { double
 layout(std430, binding = BINDING_PARAM_SCALES) readonly buffer Scales { double wanted[]; };  // 0: hidden
 layout(std430, binding = BINDING_PARAM_ITEMS) buffer Items { Item items[]; };
 layout(std430, binding = BINDING_PARAM_CLASSES) coherent buffer Classes { Class classes[CLASSES]; };
+layout(std430, binding = BINDING_PARAM_SHELVES) coherent buffer Shelves { uvec2 shelves[]; };  // layer, y
 layout(std430, binding = BINDING_PARAM_STATE) coherent buffer State {
     uint done;       // 1: the regions fit
     uint layers;
     uint used_w;     // the atlas's used width and height
     uint used_h;
     uint rounds;
-    uint pad2;
+    uint cursor_layer;  // next-fit's layer and height after the first strip's shelves
+    uint cursor_y;
+    uint shelves1;   // the first strip's shelves (the second's follow in Shelves)
+    uint wide2;      // the widest region of the second strip
+    uint cap2;       // its shelves' width
     double factor;   // the scale-down of every region, 1 until the layers run out
+    double area;     // the regions' area, each as tall as its class (for the scale-down)
 };
 
 uniform dmat4 u_vpm;          // world to clip
@@ -149,16 +156,9 @@ void project(int i) {
         double first = min(wanted[i], min(room.x / inner.x, room.y / inner.y));
         ivec2 size = ivec2(max(ceil(inner * (first * factor) - 1.0e-9LF), dvec2(1.0))) + 2 * u_border;
         int c = height_class(size.y);
-        bool narrow = 2 * size.x <= u_atlas_max.x;
         atomicMax(classes[c].height, uint(size.y));
-        uint W = uint(u_atlas_max.x);
-        if (narrow) {
-            uint start = atomicAdd(classes[c].strip, uint(size.x));
-            it.place = ivec4(int(start), 0, 0, 1);
-            if (start / W != (start + uint(size.x) - 1u) / W) {  // would cross the shelf's end
-                atomicMax(classes[c].narrow_w, uint(size.x));
-                it.place = ivec4(int(atomicAdd(classes[c].strip2, uint(size.x))), 0, 0, 2);
-            }
+        if (2 * size.x <= u_atlas_max.x) {
+            it.place = ivec4(int(atomicAdd(classes[c].strip, uint(size.x))), 0, 0, 1);
         } else {
             it.place = ivec4(int(atomicAdd(classes[c].wide, 1u)), 0, 0, 0);
             atomicAdd(classes[c].wide_w, uint(size.x));
@@ -169,44 +169,101 @@ void project(int i) {
     items[i] = it;
 }
 
-void layout_classes() {
-    uint layer = 0u, y = 0u, used_h_ = 0u;
-    double area = 0.0;  // the regions' area, each as tall as its class
-    bool any = false;
-    uint W = uint(u_atlas_max.x), H = uint(u_atlas_max.y);
+// next-fit: a shelf of height h at the cursor (layer, y), or at the top of the next layer
+uvec2 next_fit(uint h, inout uint layer, inout uint y, inout uint top) {
+    if (y + h > uint(u_atlas_max.y)) {
+        layer += 1u;
+        y = 0u;
+    }
+    uvec2 at = uvec2(layer, y);
+    y += h;
+    top = max(top, y);
+    return at;
+}
+
+// the shelves of a strip laid end to end (tallest class first), cut every `width` texels,
+// stored from `first`; each as tall as the class whose strip covers its start
+void strip_shelves(bool second, uint width, uint first, inout uint layer, inout uint y, inout uint top) {
+    uint base = 0u;
     for (int c = CLASSES - 1; c >= 0; c--) {
-        uint hc = classes[c].height;
-        if (hc == 0u) continue;
-        uint cap = W - classes[c].narrow_w;
-        uint narrow = (classes[c].strip + W - 1u) / W;
-        uint second = classes[c].narrow_w == 0u ? 0u : (classes[c].strip2 + cap - 1u) / cap;
-        uint total = narrow + second + classes[c].wide;
-        area += (double(classes[c].strip) + double(classes[c].wide_w)) * double(hc);
+        if (second) classes[c].base2 = base; else classes[c].base = base;
+        base += second ? classes[c].strip2 : classes[c].strip;
+    }
+    uint count = (base + width - 1u) / width;
+    int c = CLASSES - 1;
+    for (uint s = 0u; s < count; s++) {
+        uint at = s * width;
+        while (c > 0 && (second ? classes[c].base2 + classes[c].strip2 : classes[c].base + classes[c].strip) <= at) c--;
+        shelves[first + s] = next_fit(classes[c].height, layer, y, top);
+    }
+    if (!second) shelves1 = count;
+}
+
+void layout_first() {
+    uint layer = 0u, y = 0u, top = 0u;
+    double total = 0.0;
+    for (int c = 0; c < CLASSES; c++) {
+        total += (double(classes[c].strip) + double(classes[c].wide_w)) * double(classes[c].height);
+    }
+    area = total;
+    strip_shelves(false, uint(u_atlas_max.x), 0u, layer, y, top);
+    cursor_layer = layer;
+    cursor_y = y;
+    used_h = top;
+}
+
+void place_first(int i) {
+    Item it = items[i];
+    if (it.size.w == 0 || it.place.w != 1) return;
+    uint W = uint(u_atlas_max.x), w = uint(it.size.x);
+    uint at = classes[it.size.z].base + uint(it.place.x);
+    if (at / W != (at + w - 1u) / W) {  // would cross its shelf's end: to the second strip
+        atomicMax(wide2, w);
+        items[i].place = ivec4(int(atomicAdd(classes[it.size.z].strip2, w)), 0, 0, 2);
+        return;
+    }
+    uvec2 shelf = shelves[at / W];
+    items[i].at = ivec4(int(at % W), int(shelf.y), int(shelf.x), 0);
+}
+
+void layout_second() {
+    uint layer = cursor_layer, y = cursor_y, top = used_h;
+    uint W = uint(u_atlas_max.x), H = uint(u_atlas_max.y);
+    bool some = shelves1 > 0u;
+    cap2 = W - wide2;
+    if (wide2 > 0u) {
+        strip_shelves(true, cap2, shelves1, layer, y, top);
+        some = true;
+    }
+    for (int c = CLASSES - 1; c >= 0; c--) {  // a shelf per wide region, class by class
+        uint hc = classes[c].height, count = classes[c].wide;
+        if (count == 0u) continue;
+        if (y + hc > H) {
+            layer += 1u;
+            y = 0u;
+        }
         uint per = H / hc, first = (H - y) / hc;
-        classes[c].cap = cap;
-        classes[c].shelves = narrow;
-        classes[c].shelves2 = second;
         classes[c].layer = layer;
         classes[c].y = y;
         classes[c].first = first;
         classes[c].per_layer = per;
-        any = true;
-        if (total <= first) {
-            y += total * hc;
+        some = true;
+        if (count <= first) {
+            y += count * hc;
         } else {
-            used_h_ = max(used_h_, y + first * hc);
-            uint rest = total - first;
+            top = max(top, y + first * hc);
+            uint rest = count - first;
             layer += 1u + (rest - 1u) / per;
-            if (rest > per) used_h_ = max(used_h_, per * hc);
+            if (rest > per) top = max(top, per * hc);
             y = ((rest - 1u) % per + 1u) * hc;
         }
-        used_h_ = max(used_h_, y);
+        top = max(top, y);
     }
-    uint count = any ? layer + 1u : 0u;
+    uint count = some ? layer + 1u : 0u;
     if (count <= uint(u_max_layers)) {
         done = 1u;
         layers = count;
-        used_h = used_h_;
+        used_h = top;
         used_w = 0u;
         return;
     }
@@ -214,39 +271,34 @@ void layout_classes() {
     double capacity = double(W) * double(H) * double(u_max_layers);
     factor *= min(0.9LF, sqrt(capacity / area) * 0.95LF);
     rounds += 1u;
+    wide2 = 0u;
     for (int c = 0; c < CLASSES; c++) {
-        classes[c].height = classes[c].narrow_w = classes[c].strip = classes[c].strip2 = 0u;
-        classes[c].wide = classes[c].wide_w = 0u;
+        classes[c].height = classes[c].strip = classes[c].strip2 = classes[c].wide = classes[c].wide_w = 0u;
     }
 }
 
-void place(int i) {
+void place_second(int i) {
     Item it = items[i];
     if (it.size.w == 0) return;
     Class k = classes[it.size.z];
-    uint shelf, x;
-    uint W = uint(u_atlas_max.x);
-    if (it.place.w == 1) {
-        shelf = uint(it.place.x) / W;
-        x = uint(it.place.x) % W;
-    } else if (it.place.w == 2) {
-        shelf = k.shelves + uint(it.place.x) / k.cap;
-        x = uint(it.place.x) % k.cap;
-    } else {
-        shelf = k.shelves + k.shelves2 + uint(it.place.x);
-        x = 0u;
+    if (it.place.w == 2) {
+        uint at = k.base2 + uint(it.place.x);
+        uvec2 shelf = shelves[shelves1 + at / cap2];
+        it.at = ivec4(int(at % cap2), int(shelf.y), int(shelf.x), 0);
+    } else if (it.place.w == 0) {
+        uint shelf = uint(it.place.x), layer, y;
+        if (shelf < k.first) {
+            layer = k.layer;
+            y = k.y + shelf * k.height;
+        } else {
+            uint rest = shelf - k.first;
+            layer = k.layer + 1u + rest / k.per_layer;
+            y = (rest % k.per_layer) * k.height;
+        }
+        it.at = ivec4(0, int(y), int(layer), 0);
     }
-    uint layer, y;
-    if (shelf < k.first) {
-        layer = k.layer;
-        y = k.y + shelf * k.height;
-    } else {
-        uint rest = shelf - k.first;
-        layer = k.layer + 1u + rest / k.per_layer;
-        y = (rest % k.per_layer) * k.height;
-    }
-    items[i].at = ivec4(int(x), int(y), int(layer), 0);
-    atomicMax(used_w, x + uint(it.size.x));
+    items[i].at = it.at;
+    atomicMax(used_w, uint(it.at.x + it.size.x));
 }
 
 void write_record(int i) {
@@ -270,14 +322,21 @@ void write_record(int i) {
 
 void main() {
     int i = int(gl_GlobalInvocationID.x);
+#if STAGE == 2 || STAGE == 4
+    if (i != 0 || done != 0u) return;
 #if STAGE == 2
-    if (i == 0 && done == 0u) layout_classes();
+    layout_first();
+#else
+    layout_second();
+#endif
 #else
     if (i >= u_count) return;
 #if STAGE == 1
     if (done == 0u) project(i);
 #elif STAGE == 3
-    if (done == 1u) place(i);
+    if (done == 0u) place_first(i);
+#elif STAGE == 5
+    if (done == 1u) place_second(i);
 #else
     if (done == 1u) write_record(i);  // else the CPU dispatches more rounds first
 #endif

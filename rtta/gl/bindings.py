@@ -62,6 +62,7 @@ class Storage:
     PARAM_ITEMS: Final = 11  # parameterize.comp: per object, its rectangle, size and place
     PARAM_CLASSES: Final = 12  # parameterize.comp: per height class, its shelves and layers
     PARAM_STATE: Final = 13  # parameterize.comp: layers, used size, the scale-down factor
+    PARAM_SHELVES: Final = 14  # parameterize.comp: per shelf, its layer and height
 
 
 KINDS: Final = (Texture, Image, Storage)

@@ -33,15 +33,16 @@ from ..gl.gpu import GpuScene
 
 LOCAL_SIZE = 64
 CLASSES = 128  # height classes (parameterize.comp)
-CLASS_BYTES = 64
+CLASS_BYTES = 48
 ITEM_BYTES = 80
 ROUNDS = 2  # rounds of projection and layout dispatched before the state is read
 MAX_ROUNDS = 64  # as the CPU path's loop
 STATE_DTYPE = np.dtype(
-    [("done", "<u4"), ("layers", "<u4"), ("used_w", "<u4"), ("used_h", "<u4"), ("rounds", "<u4"), ("pad", "<u4")]
-    + [("factor", "<f8")]
+    [(name, "<u4") for name in ("done", "layers", "used_w", "used_h", "rounds", "cursor_layer", "cursor_y")]
+    + [("shelves1", "<u4"), ("wide2", "<u4"), ("cap2", "<u4"), ("factor", "<f8"), ("area", "<f8")]
 )
-PROJECT, LAYOUT, PLACE, RECORD = 1, 2, 3, 4  # the shader's stages
+PROJECT, LAYOUT, PLACE, LAYOUT_SECOND, PLACE_SECOND, RECORD = 1, 2, 3, 4, 5, 6  # the shader's stages
+ROUND = (PROJECT, LAYOUT, PLACE, LAYOUT_SECOND)
 
 
 class GpuParameterize:
@@ -58,7 +59,7 @@ class GpuParameterize:
         try:
             self.programs = {
                 stage: ctx.compute_shader(glsl.load("parameterize.comp", STAGE=stage, LOCAL_SIZE=LOCAL_SIZE))
-                for stage in (PROJECT, LAYOUT, PLACE, RECORD)
+                for stage in (*ROUND, PLACE_SECOND, RECORD)
             }
         except moderngl.Error as exc:  # e.g. a driver without doubles in compute shaders
             first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
@@ -68,6 +69,7 @@ class GpuParameterize:
         self.corners: moderngl.Buffer | None = None
         self.scales: moderngl.Buffer | None = None
         self.items: moderngl.Buffer | None = None
+        self.shelves: moderngl.Buffer | None = None
         self._corners_of: np.ndarray | None = None  # the array uploaded (compared by identity)
         self._wanted = np.zeros(0)
         self.last_state = np.zeros(1, STATE_DTYPE)[0]  # the state read back by the last run
@@ -86,6 +88,7 @@ class GpuParameterize:
             if self.scales is None or self.scales.size != max(n, 1) * 8:
                 self.scales = _replace(self.ctx, self.scales, max(n, 1) * 8)
                 self.items = _replace(self.ctx, self.items, max(n, 1) * ITEM_BYTES)
+                self.shelves = _replace(self.ctx, self.shelves, (n + 8) * 8)  # at most n + 3 shelves
             self.scales.write(wanted)
             self._wanted = wanted
 
@@ -167,10 +170,12 @@ class GpuParameterize:
         self.state.write(start)
         self.classes.clear()
         assert self.corners is not None and self.scales is not None and self.items is not None
+        assert self.shelves is not None
         for buf, binding in (
             (self.corners, Storage.PARAM_CORNERS),
             (self.scales, Storage.PARAM_SCALES),
             (self.items, Storage.PARAM_ITEMS),
+            (self.shelves, Storage.PARAM_SHELVES),
             (self.classes, Storage.PARAM_CLASSES),
             (self.state, Storage.PARAM_STATE),
             (gpu.records, Storage.RECORDS),
@@ -198,11 +203,10 @@ class GpuParameterize:
         """ROUNDS rounds of projection and layout (no-ops once the regions fit), then placing and
         the records (no-ops unless they fit); the state, the one read that waits for the GPU."""
         for _ in range(ROUNDS):
-            self.programs[PROJECT].run(groups)
-            self.ctx.memory_barrier(moderngl.SHADER_STORAGE_BARRIER_BIT)
-            self.programs[LAYOUT].run(1)
-            self.ctx.memory_barrier(moderngl.SHADER_STORAGE_BARRIER_BIT)
-        for stage in (PLACE, RECORD):
+            for stage in ROUND:
+                self.programs[stage].run(1 if stage in (LAYOUT, LAYOUT_SECOND) else groups)
+                self.ctx.memory_barrier(moderngl.SHADER_STORAGE_BARRIER_BIT)
+        for stage in (PLACE_SECOND, RECORD):
             self.programs[stage].run(groups)
             self.ctx.memory_barrier(moderngl.SHADER_STORAGE_BARRIER_BIT | moderngl.BUFFER_UPDATE_BARRIER_BIT)
         return self._read_state()
@@ -215,10 +219,10 @@ class GpuParameterize:
         for prog in self.programs.values():
             prog.release()
         self.programs.clear()
-        for buf in (self.classes, self.state, self.corners, self.scales, self.items):
+        for buf in (self.classes, self.state, self.corners, self.scales, self.items, self.shelves):
             if buf is not None:
                 buf.release()
-        self.corners = self.scales = self.items = None
+        self.corners = self.scales = self.items = self.shelves = None
         self._corners_of = None
 
 

@@ -53,6 +53,7 @@ struct Item {
 
 layout(std430, binding = BINDING_PARAM_CORNERS) readonly buffer Corners { double corners[]; };
 layout(std430, binding = BINDING_PARAM_SCALES) readonly buffer Scales { double wanted[]; };  // 0: hidden
+layout(std430, binding = BINDING_PARAM_OFFSETS) readonly buffer Offsets { double offsets[]; };  // explode, xyz
 layout(std430, binding = BINDING_PARAM_ITEMS) buffer Items { Item items[]; };
 layout(std430, binding = BINDING_PARAM_CLASSES) coherent buffer Classes { Class classes[CLASSES]; };
 layout(std430, binding = BINDING_PARAM_SHELVES) coherent buffer Shelves { uvec2 shelves[]; };  // layer, y
@@ -74,6 +75,7 @@ layout(std430, binding = BINDING_PARAM_STATE) coherent buffer State {
 uniform dmat4 u_vpm;          // world to clip
 uniform int u_count;
 uniform int u_boxes;          // enclosing boxes per object (1: AABB, 2: with the OBB)
+uniform bool u_offsets;       // the objects moved by Offsets (an exploded view)
 uniform ivec2 u_viewport;
 uniform int u_border;
 uniform ivec2 u_atlas_max;
@@ -87,8 +89,9 @@ bool project_box(int b, int i, out dvec3 lo, out dvec3 hi) {
     dvec4 c[8];
     bool all_front = true, some_front = false;
     int base = (b * u_count + i) * 24;
+    dvec3 moved = u_offsets ? dvec3(offsets[3 * i], offsets[3 * i + 1], offsets[3 * i + 2]) : dvec3(0.0);
     for (int k = 0; k < 8; k++) {
-        dvec3 p = dvec3(corners[base + 3 * k], corners[base + 3 * k + 1], corners[base + 3 * k + 2]);
+        dvec3 p = dvec3(corners[base + 3 * k], corners[base + 3 * k + 1], corners[base + 3 * k + 2]) + moved;
         c[k] = u_vpm * dvec4(p, 1.0);
         bool front = c[k].z + c[k].w >= 0.0;
         all_front = all_front && front;

@@ -245,3 +245,19 @@ def test_a_driver_that_cannot_build_it_says_so_in_one_line(gl, monkeypatch):
     with pytest.raises(RttaError, match="--parameterize gpu: this driver cannot build") as exc:
         GpuParameterize(gl)
     assert "\n" not in str(exc.value)
+
+
+def test_exploded_view_on_the_gpu(make_renderer, demo_scene):
+    """The GPU adds the explode offsets to the unmoved corners: the same records as the CPU
+    path's moved corners; the atlas equals RTT and STD (tests/checks.py)."""
+    from rtta.renderer.placing import check_staging, make_staging
+
+    staging = make_staging(explode=1.5)
+    framed = check_staging(staging, demo_scene)
+    cam = Camera.orbit(framed.center, framed.radius, 35, 25, 2.2)
+    renderers = [make_renderer(demo_scene, Settings(parameterize=where)) for where in ("cpu", "gpu")]
+    for r in renderers:
+        r.staging = make_staging(explode=1.5)
+    cpu, gpu = (r.capture(cam, (200, 150)) for r in renderers)
+    assert gpu.visible.sum() == demo_scene.count and np.array_equal(cpu.viewport_rect, gpu.viewport_rect)
+    check_frame(renderers[1], cam, (200, 150), "vs")

@@ -63,6 +63,7 @@ class Storage:
     PARAM_CLASSES: Final = 12  # parameterize.comp: per height class, its shelves and layers
     PARAM_STATE: Final = 13  # parameterize.comp: layers, used size, the scale-down factor
     PARAM_SHELVES: Final = 14  # parameterize.comp: per shelf, its layer and height
+    PARAM_OFFSETS: Final = 15  # parameterize.comp: per object, its explode offset (doubles)
 
 
 KINDS: Final = (Texture, Image, Storage)

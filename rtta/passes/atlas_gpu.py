@@ -71,6 +71,8 @@ class GpuParameterize:
         self.items: moderngl.Buffer | None = None
         self.shelves: moderngl.Buffer | None = None
         self._corners_of: np.ndarray | None = None  # the array uploaded (compared by identity)
+        self.offsets = ctx.buffer(reserve=8)
+        self._offsets_of: np.ndarray | None = None  # likewise
         self._wanted = np.zeros(0)
         self.last_state = np.zeros(1, STATE_DTYPE)[0]  # the state read back by the last run
         self.cpu_seconds = 0.0  # of the last run, in Python and numpy outside GL calls (rtta bench capture)
@@ -104,6 +106,7 @@ class GpuParameterize:
         max_layers: int,
         region_scale: float | np.ndarray = 1.0,
         hidden: np.ndarray | None = None,
+        offsets: np.ndarray | None = None,
     ) -> Records:
         """Algorithm 1 as `rtta.atlas.parameterize` (same arguments but `thin`), its records
         written into `gpu.records` and read back.
@@ -128,6 +131,9 @@ class GpuParameterize:
             Atlas texels per viewport pixel, for all or per object [n].
         hidden : numpy.ndarray, optional
             bool [n]: objects given no region.
+        offsets : numpy.ndarray, optional
+            float64 [n, 3]: each object's B_world moved by its offset (an exploded view:
+            uploaded when the array changes, the corners stay).
 
         Returns
         -------
@@ -149,10 +155,17 @@ class GpuParameterize:
             wanted[np.asarray(hidden, bool)] = 0.0
         outside = time.perf_counter() - t0
         self._upload(corners, wanted, boxes)
+        if offsets is not None and offsets is not self._offsets_of:
+            data = np.ascontiguousarray(offsets, np.float64).reshape(n * 3)
+            if self.offsets.size < max(data.nbytes, 8):
+                self.offsets = _replace(self.ctx, self.offsets, data.nbytes)
+            self.offsets.write(data)
+            self._offsets_of = offsets
         uniforms = {
             "u_vpm": np.asarray(vpm, np.float64).T.tobytes(),
             "u_count": n,
             "u_boxes": boxes,
+            "u_offsets": offsets is not None,
             "u_viewport": (W, H),
             "u_border": border,
             "u_atlas_max": tuple(int(v) for v in atlas_max),
@@ -176,6 +189,7 @@ class GpuParameterize:
             (self.scales, Storage.PARAM_SCALES),
             (self.items, Storage.PARAM_ITEMS),
             (self.shelves, Storage.PARAM_SHELVES),
+            (self.offsets, Storage.PARAM_OFFSETS),
             (self.classes, Storage.PARAM_CLASSES),
             (self.state, Storage.PARAM_STATE),
             (gpu.records, Storage.RECORDS),
@@ -219,11 +233,11 @@ class GpuParameterize:
         for prog in self.programs.values():
             prog.release()
         self.programs.clear()
-        for buf in (self.classes, self.state, self.corners, self.scales, self.items, self.shelves):
+        for buf in (self.classes, self.state, self.corners, self.scales, self.items, self.shelves, self.offsets):
             if buf is not None:
                 buf.release()
         self.corners = self.scales = self.items = self.shelves = None
-        self._corners_of = None
+        self._corners_of = self._offsets_of = None
 
 
 def _replace(ctx: moderngl.Context, old: moderngl.Buffer | None, size: int) -> moderngl.Buffer:

@@ -130,11 +130,11 @@ class Renderer:
         atlas_max = (min(atlas_max[0], self.caps.max_texture), min(atlas_max[1], self.caps.max_texture))
         max_layers = min(s.max_layers or self.caps.max_layers, self.caps.max_layers)
         vpm, scales = proj @ view, self.region_scales(focus)
-        if s.parameterize == "gpu" and thin is None:  # thinning (fast navigation) stays on the CPU
+        if s.parameterize == "gpu" and thin is None:  # thinning stays on the CPU; the GPU adds explode offsets
             self._gpu_atlas = self._gpu_atlas or GpuParameterize(self.ctx)
             return self._gpu_atlas.run(
-                self.gpu, corners, vpm, viewport, border=s.border, atlas_max=atlas_max, max_layers=max_layers,
-                hidden=hidden, region_scale=scales,
+                self.gpu, self.scene.box_corners(s.bounds), vpm, viewport, border=s.border, atlas_max=atlas_max,
+                max_layers=max_layers, hidden=hidden, region_scale=scales, offsets=self.staging.offsets,
             )  # fmt: skip
         return parameterize(
             corners, vpm, viewport, border=s.border, atlas_max=atlas_max, max_layers=max_layers,

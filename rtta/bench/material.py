@@ -11,7 +11,7 @@ from dataclasses import replace
 from functools import partial
 from pathlib import Path
 
-from ..gl.context import create_headless_context
+from ..gl.context import shared_context
 from ..gl.targets import LayeredTarget
 from ..passes.batching import ChunkedStdPass, SeparatePass
 from ..renderer.renderer import Renderer
@@ -90,7 +90,7 @@ def run_material(
     viewport: tuple[int, int] = (1024, 768),
     max_vertices: int = 480,
 ) -> int:
-    ctx = create_headless_context()
+    ctx = shared_context()
     renderer = ctx.info["GL_RENDERER"]
     frames = 5 if quick else 30
     scene = textured_scene(objects, seed=1, textures=48 if not quick else 16, untextured_every=9)

@@ -12,7 +12,7 @@ import time
 from pathlib import Path
 
 from ..errors import RttaError
-from ..gl.context import create_headless_context
+from ..gl.context import shared_context
 from ..renderer.renderer import Renderer
 from ..scene.generators.generate import random_scene
 from .reliability import drift, soak, sweep
@@ -68,7 +68,7 @@ def run_reliability(
     if unknown:
         raise RttaError(f"--scenes: unknown {', '.join(unknown)}; choose from {', '.join(makers)}")
     names = [name for name in makers if only is None or name in only]
-    ctx = ctx or create_headless_context()
+    ctx = ctx or shared_context()
     renderer_name = str(ctx.info["GL_RENDERER"])
     print(
         f"renderer: {renderer_name}; cpu: {platform.processor() or platform.machine()}; "

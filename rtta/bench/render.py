@@ -17,7 +17,7 @@ import numpy as np
 
 from ..atlas.packing import pack_shelves
 from ..atlas.parameterize import parameterize
-from ..gl.context import create_headless_context
+from ..gl.context import shared_context
 from ..renderer.renderer import Renderer
 from ..scene.camera import Camera, Projection
 from ..scene.generators.generate import TABLE1, random_scene, table1_scene
@@ -114,7 +114,7 @@ def run_capture(
     """Table 1's frame times (STD, RTT, RTTA both paths) and Algorithm 1's scaling, with a
     perspective (the paper's) or orthographic camera; Algorithm 1 on the CPU against the GPU
     path at 1k and 10k parts (--quick: 1k; full: and 100k)."""
-    ctx = ctx or create_headless_context()
+    ctx = ctx or shared_context()
     renderer = str(ctx.info["GL_RENDERER"])
     frames = 3 if quick else 15
     rows = []
@@ -251,7 +251,7 @@ def run_composite(
     projection: Projection = "perspective",
 ) -> int:
     """Every mode's frame time against STD, with a perspective or orthographic camera."""
-    ctx = ctx or create_headless_context()
+    ctx = ctx or shared_context()
     renderer = str(ctx.info["GL_RENDERER"])
     frames = 3 if quick else 11
     named = composite_scenes(scenes, quick)

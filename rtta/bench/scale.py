@@ -22,7 +22,7 @@ import numpy as np
 
 from ..atlas.parameterize import parameterize
 from ..errors import RttaError
-from ..gl.context import create_headless_context
+from ..gl.context import shared_context
 from ..renderer.renderer import Renderer
 from ..scene.camera import Camera
 from ..scene.generators.assembly import write_assembly
@@ -147,7 +147,7 @@ def run_scale(
     normals: bool = False,
 ) -> int:
     counts = parse_parts(sizes)
-    ctx = ctx or create_headless_context()
+    ctx = ctx or shared_context()
     renderer = str(ctx.info["GL_RENDERER"])
     rounds = 3 if quick else 7
     rows = []

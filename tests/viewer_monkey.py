@@ -29,6 +29,7 @@ import sys
 import threading
 import time
 import traceback
+import warnings
 from pathlib import Path
 
 from pyglet.window import key, mouse
@@ -93,9 +94,14 @@ class Monkey(Actions):
         self.rss_mb: list[float] = []  # every RSS_EVERY actions
         self.reached, self.said = {"scenes": 0, "errors_said": 0}, ("", False, 0)
         self.frames_drawn, self.max_frame_s, self.t0 = 0, 0.0, time.perf_counter()
+        warnings.showwarning = self.warned  # a warning (numpy's overflow, ...) is a finding, with where it came from
         threading.excepthook = lambda a: self.findings.append(
             "thread: " + "".join(traceback.format_exception(a.exc_type, a.exc_value, a.exc_traceback))
         )
+
+    def warned(self, message, category, filename, lineno, file=None, line=None) -> None:
+        stack = "".join(traceback.format_stack(limit=10)[:-1])
+        self.findings.append(f"{category.__name__} in {self.last}: {message} ({filename}:{lineno})\n{stack}")
 
     # ---- events and frames ----------------------------------------------------------------
     def send(self, event: str, *args) -> None:

@@ -41,7 +41,7 @@ def add_parsers(sub) -> None:
         "--ao-objects",
         choices=("focus", "all"),
         default=None,
-        help="ambient occlusion on the focus objects only or on all (ghosted-ao; default: see README)",
+        help="ambient occlusion on the focus objects only or on all (ghosted-ao; default: see docs/modes.md)",
     )
     p.add_argument(
         "--halo",
@@ -56,13 +56,13 @@ def add_parsers(sub) -> None:
         default=None,
         help="transparency order (transparent, ghosted context): by object (bounds centres) or per "
         "pixel (each object's surface depth; nested parts blend right); auto (default): per pixel "
-        "in transparent, by object in the ghosted context (see README)",
+        "in transparent, by object in the ghosted context (see docs/modes.md)",
     )
     p.add_argument(
         "--edge-objects",
         choices=("focus", "all"),
         default=None,
-        help="edges on the focus objects only or on all (ghosted-ao; default: see README)",
+        help="edges on the focus objects only or on all (ghosted-ao; default: see docs/modes.md)",
     )
     p.add_argument(
         "--projector",

@@ -82,7 +82,7 @@ def export(
     out_dir: str | Path,
     inputs: list[str | Path] | None = None,
 ) -> Path:
-    """Capture once and write the export format (see README) to out_dir atomically. An
+    """Capture once and write the export format (docs/library.md) to out_dir atomically. An
     existing out_dir is replaced only when rtta export wrote it (see rtta.outputs), never
     when it holds an input (the scene's files, and `inputs`)."""
     out_dir = check_folder(out_dir, [*renderer.scene.inputs, *(inputs or [])])

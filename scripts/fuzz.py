@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import pkgutil
 import re
 import subprocess
@@ -25,6 +26,7 @@ from pathlib import Path
 
 TESTS = Path(__file__).resolve().parents[1] / "tests"
 sys.path.insert(0, str(TESTS))
+os.environ.setdefault("RTTA_MEMORY_LIMIT_MB", "512")  # fuzz_targets.LOADER_LIMIT_MB: the loader's limits bite early
 
 
 def main() -> int:

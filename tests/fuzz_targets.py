@@ -16,7 +16,6 @@ dataset's cameras file).
 from __future__ import annotations
 
 import json
-import os
 import random
 import tempfile
 from collections.abc import Callable, Iterator
@@ -28,7 +27,8 @@ LIMIT_S = 2.0  # seconds one input may take
 MEMORY_MB = 2048  # the fuzzing process's resident memory (libFuzzer's -rss_limit_mb)
 INPUT_MB = 256  # what one input may allocate (traced) in the test's smoke run
 MAX_LEN = 1 << 16  # bytes of one fuzzed input
-os.environ.setdefault("RTTA_MEMORY_LIMIT_MB", "512")  # the loader's limits bite early
+LOADER_LIMIT_MB = "512"  # RTTA_MEMORY_LIMIT_MB while fuzzing: the loader's limits bite early (set by the
+# fuzzing process and by test_fuzz for its tests, never at import: it would leak into the whole test session)
 CORPUS = Path(__file__).resolve().parent / "fuzz_corpus"
 _WORK = Path(tempfile.mkdtemp(prefix="rtta-fuzz-"))
 

@@ -11,9 +11,15 @@ import tracemalloc
 
 import pytest
 from fuzz_corpus_make import STEP_HEAD, STEP_TAIL
-from fuzz_targets import INPUT_MB, LIMIT_S, TARGETS, mutants, run_one, seeds, warm
+from fuzz_targets import INPUT_MB, LIMIT_S, LOADER_LIMIT_MB, TARGETS, mutants, run_one, seeds, warm
 
 MUTANTS = {"obj": 60, "gltf": 60, "step": 200, "ifc": 60, "specs": 150, "views": 200}  # a few seconds each
+
+
+@pytest.fixture(autouse=True)
+def _loader_limit(monkeypatch):
+    """The fuzzing process's memory limit for the loader, for these tests only."""
+    monkeypatch.setenv("RTTA_MEMORY_LIMIT_MB", LOADER_LIMIT_MB)
 
 
 @pytest.mark.parametrize("target", list(TARGETS))

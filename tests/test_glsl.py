@@ -57,3 +57,19 @@ def test_scene_pass_routes_defines_by_declaration_and_rejects_unknown(gl):
         assert "u_textured" in p.program_for(True)
     finally:
         p.release()
+
+
+def test_matrices_past_float32_saturate_instead_of_inf():
+    """The inverse of a nearly singular view-projection at an extreme camera can hold entries
+    past float32's range: they saturate (a finite uniform), with no overflow warning."""
+    import warnings
+
+    import numpy as np
+
+    from rtta.gl.glsl import mat_bytes
+
+    m = np.diag([1e300, -1e300, 1.0, 2.0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        out = np.frombuffer(mat_bytes(m), np.float32).reshape(4, 4)
+    assert np.isfinite(out).all() and out[0, 0] > 3e38 and out[1, 1] < -3e38 and out[3, 3] == 2.0

@@ -13,6 +13,8 @@ from functools import cache
 from importlib import resources
 from typing import TYPE_CHECKING, cast
 
+import numpy as np
+
 from ..outputs import signals_held
 from . import bindings
 
@@ -106,3 +108,13 @@ def uniform(prog: moderngl.Program | moderngl.ComputeShader, name: str) -> moder
         ``prog[name]``, unchanged.
     """
     return cast("moderngl.Uniform", prog[name])
+
+
+F32_MAX = float(np.finfo(np.float32).max)
+
+
+def mat_bytes(m: np.ndarray) -> bytes:
+    """Row-major float64 4x4 -> column-major float32 bytes for a GLSL mat4 (entries past
+    float32's range saturate: an inf would be NaN in a shader)."""
+    m = np.clip(np.asarray(m, np.float64), -F32_MAX, F32_MAX)
+    return np.ascontiguousarray(m.T, np.float32).tobytes()

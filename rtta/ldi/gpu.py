@@ -10,8 +10,8 @@ import numpy as np
 
 from ..gl import glraw, glsl
 from ..gl.bindings import Image, Texture
+from ..gl.glsl import mat_bytes
 from ..gl.targets import release_all
-from ..passes.capture import mat_bytes
 from .pack import CompressedLDI, compress
 from .peel import NIL, LayeredDepthImage
 

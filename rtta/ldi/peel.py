@@ -23,8 +23,8 @@ import numpy as np
 from ..errors import RttaError
 from ..gl import glraw, glsl
 from ..gl.bindings import Texture
+from ..gl.glsl import mat_bytes
 from ..gl.targets import release_all
-from ..passes.capture import mat_bytes
 
 NIL = 4.0  # depth of "no surface" (> every linear depth in [0, 1])
 MAX_LAYERS = 256  # a closed mesh needing more is refused, not peeled forever

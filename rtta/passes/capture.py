@@ -22,17 +22,13 @@ import numpy as np
 from ..atlas.parameterize import Records
 from ..gl import glraw, glsl
 from ..gl.context import CapturePath
+from ..gl.glsl import mat_bytes
 from ..gl.gpu import GpuScene
 from ..gl.targets import LayeredTarget
 from ..scene.closure import beyond_near
 from . import sections
 
 DIRECT_RUNS = 1  # more runs of visible objects than this: one indirect multi-draw
-
-
-def mat_bytes(m: np.ndarray) -> bytes:
-    """Row-major float64 4x4 -> column-major float32 bytes for a GLSL mat4."""
-    return np.ascontiguousarray(np.asarray(m, np.float64).T, np.float32).tobytes()
 
 
 class ScenePass:

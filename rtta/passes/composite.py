@@ -24,9 +24,9 @@ import numpy as np
 from ..atlas.parameterize import Records
 from ..gl import glraw
 from ..gl.bindings import Storage, Texture
+from ..gl.glsl import mat_bytes
 from ..gl.gpu import GpuScene
 from ..gl.targets import CompositeTarget, LayeredTarget, release_framebuffer
-from .capture import mat_bytes
 from .oit import PixelOrderPass, Refusal, blended_in_place, resolved_order
 from .sprites import UPSAMPLE_BELOW, Depth, SpriteDraw, SpritePass, upload
 from .style import BACKGROUND, LENS_MODES, MODES, ROLES, Mode, ModeName, Order, Style

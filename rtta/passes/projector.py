@@ -18,9 +18,10 @@ import numpy as np
 
 from ..gl import glsl
 from ..gl.bindings import Texture
+from ..gl.glsl import mat_bytes
 from ..gl.gpu import GpuScene
 from ..scene.camera import Camera
-from .capture import ScenePass, mat_bytes
+from .capture import ScenePass
 
 BIAS = np.array([[0.5, 0, 0, 0.5], [0, 0.5, 0, 0.5], [0, 0, 0.5, 0.5], [0, 0, 0, 1.0]])
 SHADOW_SIZE = 1024

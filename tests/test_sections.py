@@ -252,3 +252,14 @@ def test_projector_paints_caps_alike(gl, demo_scene):
     assert close.mean() >= 0.99, close.mean()
     plain = rtta.snapshot(demo_scene, "std", size=VP, sections=["z=0.1"], camera=(35, 25, 2.2))
     assert (std != plain).any(axis=-1).mean() > 0.08  # painted
+
+
+def test_a_plane_below_can_follow_the_flag_as_its_own_word(tmp_path, gl):
+    """`--section -y=0` (what the docs write) works as `--section=-y=0`: argparse would take
+    the leading dash for an option."""
+    from rtta.cli.main import main
+
+    a, b = tmp_path / "a.png", tmp_path / "b.png"
+    assert main(["snapshot", "--size", "64x48", "--section", "-y=0", "--out", str(a)]) == 0
+    assert main(["snapshot", "--size", "64x48", "--section=-y=0", "--out", str(b)]) == 0
+    assert a.read_bytes() == b.read_bytes()

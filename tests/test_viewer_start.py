@@ -69,3 +69,19 @@ def test_a_view_file_opens_on_its_camera(demo_scene, tmp_path, gl):
 def test_the_viewer_parses_the_flags():
     args = build_parser().parse_args(["--focus", "a", "b", "--view", "iso", "--projection", "ortho", "--hide", "c"])
     assert (args.focus, args.view, args.projection, args.hide) == (["a", "b"], "iso", "ortho", ["c"])
+
+
+def test_a_view_file_brings_its_style_section_and_explode(demo_scene, tmp_path, gl):
+    """rtta-view --view-file shows what `rtta snapshot --view-file` renders: the style, the
+    section plane with its caps and scope, and the explode, not only camera and parts."""
+    from rtta.cli.main import main
+
+    path = tmp_path / "v.json"
+    args = ["--focus", "hub", "--mode", "ghosted", "--context-opacity", "0.3", "--section", "-y=0.01"]
+    args += ["--caps", "hatch", "--explode", "0.5"]
+    assert main(["snapshot", "--size", "64x48", "--out", str(tmp_path / "a.png"), *args, "--save-view", str(path)]) == 0
+    app = _App(demo_scene)
+    apply_start(app, Start(view_file=str(path)))
+    cut = app.state.cutaway
+    assert (cut.axis, cut.caps, cut.explode) == ("-y", "hatch", 0.5)
+    assert cut.spec(demo_scene) is not None and app.state.style.context_opacity == pytest.approx(0.3)

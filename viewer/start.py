@@ -32,29 +32,23 @@ def apply_start(app, start: Start) -> None:
     from rtta.scene.select import resolve_names
 
     scene = app.renderer.scene
-    saved = None
     if start.view_file:
         if start.camera or start.view or start.projection:
             raise RttaError("--view-file gives the camera: leave out --camera, --view and --projection")
         saved = read_view(start.view_file)
-        start.focus, start.hidden = saved.focus, saved.hidden
-        app.state.mode = saved.mode
+        from .saved import apply as apply_view  # the viewer's saved views: style, sections, explode too
+
+        apply_view(saved, scene, app.state, app.orbit)
+        if saved.orbit is None:
+            app.frame_objects()
+        return
     focus = resolve_names(scene, start.focus, "--focus")
     hidden = resolve_names(scene, start.hidden, "--hide")
     if hidden:
         app.state.hide(hidden)
     if focus:
         app.state.style.focus |= set(focus)
-    if saved is not None:
-        for name, alpha in saved.opacity.items():
-            for oid in resolve_names(scene, [name], "opacity"):
-                app.state.style.opacity[oid] = float(alpha)
     orbit = app.orbit
-    if saved is not None and saved.orbit is not None:
-        o = saved.orbit
-        orbit.az, orbit.el, orbit.dist, orbit.target = o.az, o.el, o.distance, np.array(o.target, np.float64)
-        orbit.fov_y, orbit.projection = o.fov, o.projection
-        return
     orbit.projection = start.projection or "perspective"
     dist = None
     if start.camera is not None or start.view is not None:

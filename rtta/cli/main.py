@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 
 from ..errors import RttaError
@@ -41,6 +42,18 @@ def cmd_info(args) -> int:
     return run(_load(args), args.tree)
 
 
+def section_values(argv: list[str]) -> list[str]:
+    """`--section -x=V` as `--section=-x=V`: a plane that removes what lies below starts with a
+    dash, which argparse would take for an option of its own."""
+    out: list[str] = []
+    for arg in argv:
+        if out and out[-1] == "--section" and re.fullmatch(r"-[xyzXYZ]=.*", arg):
+            out[-1] = f"--section={arg}"
+        else:
+            out.append(arg)
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     from ..memory import steady_heap
     from .dataset import cmd_dataset
@@ -49,7 +62,7 @@ def main(argv: list[str] | None = None) -> int:
     if argv is None:  # the whole process: `rtta info x.glb >&-` must not hand fd 1 to a file it opens
         hold_closed_streams()
     try:
-        args = build_parser().parse_args(argv)
+        args = build_parser().parse_args(section_values(sys.argv[1:] if argv is None else argv))
     except RttaError as exc:
         say("error", str(exc))
         return 2

@@ -21,7 +21,7 @@ from imgui_bundle import imgui
 from rtta.passes.picking import objects_at, pick
 from rtta.scene.framing import STANDARD_VIEWS
 
-from . import gizmo
+from . import cutaway, gizmo
 from .orbit import DEGREES_PER_PIXEL
 from .state import VIEW_MODES
 from .views import contains, panel_clamp
@@ -83,6 +83,8 @@ class Controls:
         if not imgui.get_io().want_capture_mouse:
             self._press = (x, y, button, contains(self.app.layout.composite, x, y))
             self._moved = 0.0
+            if button == self.app.wnd.mouse.left and self._press[3]:
+                cutaway.grab(self.app, x, y)  # the section plane's handle
 
     def on_drag(self, x, y, dx, dy) -> None:
         self.mouse = (x, y)
@@ -93,6 +95,9 @@ class Controls:
         if self._press is None or not self._press[3]:
             return
         self._moved += abs(dx) + abs(dy)
+        if self.app.state.cutaway.dragging:
+            cutaway.drag(self.app, dx, dy)
+            return
         if self._moved <= CLICK_SLOP_PX:
             return
         self.app.stop_turn()  # a drag takes the camera from a view turn under way
@@ -109,6 +114,9 @@ class Controls:
             return
         self.app.imgui.mouse_release_event(x, y, button)
         press, self._press = self._press, None
+        if self.app.state.cutaway.dragging:
+            self.app.state.cutaway.dragging = False
+            return
         if press is None or not press[3] or button != self.app.wnd.mouse.left or self._moved > CLICK_SLOP_PX:
             return
         self.click(x, y, shift=self.app.wnd.modifiers.shift)
@@ -127,6 +135,9 @@ class Controls:
                 self.toggle_projection()
             elif direction is not None:
                 app.turn_to(*gizmo.view_angles(direction))
+            return None
+        if app.state.cutaway.picking:  # the section plane goes on the surface clicked
+            cutaway.place_at(app, x, y)
             return None
         if app.ruler.on:
             app.measure_at(x, y)
@@ -223,6 +234,8 @@ class Controls:
             app.state.lens.on = not app.state.lens.on
         elif key == keys.SPACE and app.state.lens.on:
             app.state.lens.follow = not app.state.lens.follow
+        elif key == keys.X:  # the section plane keeps its other side
+            app.state.cutaway.flip()
         elif key == keys.F12:
             app.screenshot()
         elif key == keys.O:

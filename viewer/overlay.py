@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from imgui_bundle import imgui
 
-from . import gizmo, ruler
+from . import cutaway, gizmo, ruler
 from .views import atlas_rects_on_screen, contains
 
 if TYPE_CHECKING:
@@ -97,6 +97,7 @@ def _composite_tools(app: OverlayHost, dl) -> None:
     if rect[2] > 0 and rect[3] > 0 and (app.ruler.done or app.ruler.first is not None):
         view, proj = app.renderer.matrices(app.orbit.camera(), (rect[2], rect[3]))
         ruler.draw(dl, app.ruler, proj @ view, rect, scene.origin, scene.unit, scene.radius)
+    cutaway.draw(dl, app)  # the section plane and its handle
     if app.state.show_cube:
         gizmo.draw(dl, rect, app.orbit, scene.up_axis, app.mouse)
     _, py, pw, ph = app.layout.panel

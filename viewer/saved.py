@@ -17,6 +17,7 @@ from rtta.errors import RttaError
 from rtta.renderer.options import CORE_STYLE
 from rtta.renderer.view_file import SavedView, read_view, write_view
 from rtta.scene import framing
+from rtta.scene.cutaway import SectionPlane, parse_section
 from rtta.scene.select import resolve_names
 
 if TYPE_CHECKING:
@@ -121,30 +122,37 @@ class Views:
             raise RttaError(f"cannot remove the view ({exc.strerror or exc})", path) from None
 
 
-def _plane(view: SavedView, scene: Scene) -> tuple[str, float] | None:
-    """The view's section as (axis, where over the scene's bounds 0..1), None without one; the
-    viewer shows one plane along an axis (x=V, -y=V, ...): other sections are an RttaError."""
+def _plane(view: SavedView, scene: Scene) -> tuple[str, float] | tuple[SectionPlane] | None:
+    """The view's section as (axis, where over the scene's bounds 0..1), or (SectionPlane,) for a
+    plane along a normal (nx,ny,nz,d), None without one; the viewer shows one plane: more are an
+    RttaError."""
     if not view.sections or not view.sections.get("planes"):
         return None
     planes = view.sections["planes"]
     m = re.fullmatch(r"\s*(-?[xyz])\s*=\s*([^,\s]+)\s*", planes[0]) if len(planes) == 1 else None
+    if m is None and len(planes) == 1 and str(planes[0]).count(",") == 3:
+        return (parse_section(str(planes[0])),)
     try:
         value = float(m.group(2)) if m else float("nan")
     except ValueError:
         value = float("nan")
     if m is None or not np.isfinite(value):
-        raise RttaError(f"sections {planes}: the viewer shows one plane along an axis (x=V, -z=V, ...)")
+        one = "one plane along an axis (x=V, -z=V, ...) or a normal (nx,ny,nz,d)"
+        raise RttaError(f"sections {planes}: the viewer shows {one}")
     lo, hi = scene.bounds
     k = "xyz".index(m.group(1)[-1])
     return m.group(1), float(np.clip((value - lo[k]) / max(hi[k] - lo[k], 1e-30), 0.0, 1.0))
 
 
-def _cutaway(view: SavedView, plane: tuple[str, float] | None, state: ViewerState) -> None:
+def _cutaway(view: SavedView, plane, state: ViewerState) -> None:
     """The view's section plane and explode into the viewer's cutaway state."""
     c = state.cutaway
-    c.axis = "off"
+    c.axis, c.normal, c.enabled, c.picking = "off", None, True, False
     if plane is not None and view.sections:
-        c.axis, c.at = plane  # type: ignore[assignment]
+        if len(plane) == 1:
+            c.normal, c.offset = plane[0].normal, plane[0].d
+        else:
+            c.axis, c.at = plane  # type: ignore[assignment]
         c.caps = view.sections.get("caps", c.caps)  # type: ignore[assignment]
         c.scope = view.sections.get("scope", c.scope)  # type: ignore[assignment]
     c.explode = float(view.explode.get("factor", 0.0)) if view.explode else 0.0

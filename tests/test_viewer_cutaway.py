@@ -1,0 +1,107 @@
+"""The viewer's cutaways and exploded views (issue 41): a plane placed on a picked surface, its
+handle dragged, flipped, the one-button reset, the explode slider, and picking on a moved
+part. The real window under Xvfb is driven by tests/viewer_cutaway_driver.py."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from PIL import Image
+from test_viewer import HERE, _env, _region, display  # noqa: F401  (the Xvfb fixture)
+
+from viewer.cutaway import CutawayState
+
+pytestmark = pytest.mark.viewer
+
+
+@pytest.fixture(scope="module")
+def cut(display, tmp_path_factory):  # noqa: F811
+    out, cwd = tmp_path_factory.mktemp("cutaway"), tmp_path_factory.mktemp("cwd")
+    proc = subprocess.run(
+        [sys.executable, str(HERE / "viewer_cutaway_driver.py"), str(out)],
+        env=_env(display),
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    result = json.loads((out / "result.json").read_text())
+    shots = {p.stem: np.asarray(Image.open(p).convert("RGB")) for p in out.glob("*.png")}
+    return result, shots
+
+
+def _changed(a: np.ndarray, b: np.ndarray) -> float:
+    """The share of pixels that changed by more than 10/255 in some channel."""
+    return float((np.abs(a.astype(int) - b.astype(int)).max(-1) > 10).mean())
+
+
+def _parts(result, shots, a: str, b: str) -> tuple[float, float]:
+    rects = result["layout"]
+    return tuple(_changed(_region(shots[a], rects[k]), _region(shots[b], rects[k])) for k in ("composite", "atlas"))
+
+
+def test_plane_on_a_picked_surface_changes_composite_and_atlas(cut):
+    r, shots = cut
+    p = r["plane"]
+    assert p["normal"] is not None and abs(np.linalg.norm(p["normal"]) - 1) < 1e-9 and not p["picking"]
+    assert p["focus"] == []  # the click placed the plane, it selected nothing
+    composite, atlas = _parts(r, shots, "first", "plane")
+    assert composite > 0.01 and atlas > 0.01, (composite, atlas)
+    composite, atlas = _parts(r, shots, "plane", "plane_quad")
+    assert composite > 0.01 and atlas == 0.0  # the translucent quad shows, over the composite alone
+    assert r["gl_errors"] == []
+
+
+def test_dragging_the_handle_moves_the_plane_along_its_normal(cut):
+    r, shots = cut
+    d = r["drag"]
+    assert r["grabbed"] and not d["dragging"]
+    assert d["after"] > d["before"]  # along the normal (away from the camera here: less is removed)
+    composite, atlas = _parts(r, shots, "plane", "dragged")
+    assert composite > 0.005 and atlas > 0.005, (composite, atlas)
+
+
+def test_flip_keeps_the_other_side(cut):
+    r, shots = cut
+    assert np.allclose(r["flipped_normal"], -np.asarray(r["plane"]["normal"]))
+    before, after = set(r["removed_before_flip"]), set(r["removed_after_flip"])
+    assert after and not before & after  # the parts beyond the plane now are those kept before
+    composite, atlas = _parts(r, shots, "dragged", "flipped")
+    assert composite > 0.05 and atlas > 0.05, (composite, atlas)
+
+
+def test_reset_clears_everything_active(cut):
+    r, shots = cut
+    assert r["active_before_reset"] == ["section", "explode 0.50", "lens", "1 hidden"]
+    assert r["active_after_reset"] == []
+    assert np.array_equal(shots["reset"], shots["first"])
+
+
+def test_explode_slider_at_one_then_zero_gives_the_first_image_back(cut):
+    r, shots = cut
+    assert _parts(r, shots, "reset", "exploded")[0] > 0.05
+    assert np.array_equal(shots["unexploded"], shots["reset"])
+
+
+def test_a_click_on_a_part_moved_by_explode_selects_it(cut):
+    m = cut[0]["moved"]
+    assert m is not None and m["offset"] > 0.05 * m["radius"]
+    assert m["focus"] == [m["part"]]
+
+
+def test_flip_and_toggle_of_the_state(demo_scene):
+    c = CutawayState(axis="x", at=0.25)
+    spec = c.spec(demo_scene)
+    c.flip()
+    assert c.spec(demo_scene) == "-" + spec
+    c.enabled = False
+    assert c.spec(demo_scene) is None and c.staging(demo_scene).cutaway.planes == ()
+    c.set_plane((0.0, 0.0, 0.01), (0.0, 0.0, 2.0))
+    assert c.spec(demo_scene) == "0,0,1,0.01"
+    c.flip()
+    assert c.staging(demo_scene).cutaway.planes[0].normal == (-0.0, -0.0, -1.0)

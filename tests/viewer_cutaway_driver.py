@@ -1,0 +1,167 @@
+"""Drives the real viewer window through cutaways and exploded views (issue 41), for
+tests/test_viewer_cutaway.py.
+
+Run as `python tests/viewer_cutaway_driver.py OUT_DIR` with DISPLAY set (Xvfb): a plane placed
+on a picked surface, its handle dragged, the plane flipped (key X), the one-button reset, the
+explode slider at 1 and back at 0, and a click on a part the explode moved. Events go through
+the pyglet window's own dispatch, as in tests/viewer_cad_driver.py. Writes window screenshots
+(PNG) and `result.json`.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+from pyglet.window import key, mouse
+
+from rtta.gl import glraw
+from rtta.outputs import save_png
+from rtta.scene.loader import load_scene_or_demo
+from viewer import cutaway
+from viewer.app import Viewer
+from viewer.run import create_window
+
+OUT = Path(sys.argv[1])
+wnd = create_window((1280, 720))
+demo = load_scene_or_demo(None)
+app = Viewer(wnd, demo, views_dir=OUT / "views")
+pw = wnd._window
+c = app.state.cutaway
+errors: list[str] = []
+result: dict = {}
+
+
+def frames(n: int = 1, shot: str | None = None) -> None:
+    for i in range(n):
+        app.frame()
+        if shot and i == n - 1:
+            save_png(OUT / f"{shot}.png", glraw.read_window(*wnd.buffer_size))
+        wnd.swap_buffers()
+        if app.ctx.error != "GL_NO_ERROR":
+            errors.append(f"after {shot or 'frame'}")
+
+
+def shot(name: str) -> None:
+    """A screenshot without the plane's quad (the cut itself, not its overlay)."""
+    show, c.show_quad = c.show_quad, False
+    frames(2, shot=name)
+    c.show_quad = show
+
+
+def send(event: str, *args) -> None:
+    pw.dispatch_event(event, *args)
+
+
+def click(x: float, y: float) -> None:
+    h = wnd.size[1]
+    x, y = int(round(x)), int(round(y))
+    send("on_mouse_motion", x, h - y, 0, 0)
+    frames()
+    send("on_mouse_press", x, h - y, mouse.LEFT, 0)
+    frames()
+    send("on_mouse_release", x, h - y, mouse.LEFT, 0)
+    frames()
+
+
+def press_key(symbol: int) -> None:
+    send("on_key_press", symbol, 0)
+    send("on_key_release", symbol, 0)
+    frames()
+
+
+def front_id(x: float, y: float) -> int:
+    """The nearest object under window point (x, y), from the std pass."""
+    cx, cy, _, ch = app.layout.composite
+    target = app.renderer.std(app.orbit.camera(), app.viewport)
+    return int(target.texels(np.array([[int(x - cx), int(cy + ch - 1 - y), 0]]), ids=True)["id"][0])
+
+
+frames(3)
+result["layout"] = {k: list(getattr(app.layout, k)) for k in ("composite", "atlas")}
+shot("first")
+
+# 1. a plane on the surface under the composite's centre (the pick path), then its quad
+cx, cy, cw, ch = app.layout.composite
+c.picking = True
+click(cx + cw / 2, cy + ch / 2)
+result["plane"] = {"normal": c.normal, "offset": c.offset, "picking": c.picking, "focus": sorted(app.state.highlighted)}
+shot("plane")
+frames(2, shot="plane_quad")
+
+# 2. drag the handle 40 px along the normal's screen direction: the plane moves that way
+(hx, hy), per_unit = cutaway.handle(app)
+direction = per_unit / np.linalg.norm(per_unit)
+h = wnd.size[1]
+before = c.offset
+send("on_mouse_motion", int(hx), h - int(hy), 0, 0)
+frames()
+send("on_mouse_press", int(hx), h - int(hy), mouse.LEFT, 0)
+frames()
+result["grabbed"] = c.dragging
+x, y = float(hx), float(hy)
+for _ in range(8):
+    dx, dy = 5 * direction
+    x, y = x + dx, y + dy
+    send("on_mouse_drag", int(round(x)), h - int(round(y)), int(round(dx)), -int(round(dy)), mouse.LEFT, 0)
+    frames()
+send("on_mouse_release", int(round(x)), h - int(round(y)), mouse.LEFT, 0)
+frames()
+result["drag"] = {"before": before, "after": c.offset, "dragging": c.dragging, "camera_az": app.orbit.az}
+shot("dragged")
+removed = app.renderer.staging.removed
+result["removed_before_flip"] = [] if removed is None else np.flatnonzero(removed).tolist()
+
+# 3. flip (key X): the other side is kept
+press_key(key.X)
+result["flipped_normal"] = c.normal
+shot("flipped")
+removed = app.renderer.staging.removed
+result["removed_after_flip"] = [] if removed is None else np.flatnonzero(removed).tolist()
+
+# 4. the active list and the one-button reset (hide a part and open the lens too)
+app.state.hide([0])
+app.state.lens.on = True
+c.explode = 0.5
+result["active_before_reset"] = cutaway.active(app)
+cutaway.reset(app)
+result["active_after_reset"] = cutaway.active(app)
+shot("reset")
+
+# 5. the explode slider at 1, then back at 0
+c.explode = 1.0
+shot("exploded")
+c.explode = 0.0
+shot("unexploded")
+
+# 6. a click on a part the explode moved selects it
+c.explode = 1.0
+frames(2)
+offsets = app.renderer.staging.offsets
+rec = app.records
+chosen = None
+for oid in np.argsort(-np.linalg.norm(offsets, axis=1)):
+    x0, y0, x1, y1 = rec.viewport_rect[oid]
+    if x1 <= x0 or y1 <= y0:
+        continue
+    px, py = cx + (x0 + x1) / 2, cy + ch - 1 - (y0 + y1) / 2
+    if front_id(px, py) == oid:
+        chosen = (int(oid), px, py)
+        break
+app.state.select("none")
+frames()
+result["moved"] = None
+if chosen is not None:
+    oid, px, py = chosen
+    click(px, py)
+    result["moved"] = {
+        "part": oid,
+        "offset": float(np.linalg.norm(offsets[oid])),
+        "focus": sorted(app.state.highlighted),
+        "radius": float(demo.radius),
+    }
+
+result["gl_errors"] = errors
+(OUT / "result.json").write_text(json.dumps(result, default=float))

@@ -75,6 +75,12 @@ def test_flip_keeps_the_other_side(cut):
     assert composite > 0.05 and atlas > 0.05, (composite, atlas)
 
 
+def test_toggle_off_and_on(cut):
+    _, shots = cut
+    assert np.array_equal(shots["toggled_off"], shots["first"])
+    assert np.array_equal(shots["toggled_on"], shots["flipped"])
+
+
 def test_reset_clears_everything_active(cut):
     r, shots = cut
     assert r["active_before_reset"] == ["section", "explode 0.50", "lens", "1 hidden"]
@@ -86,6 +92,20 @@ def test_explode_slider_at_one_then_zero_gives_the_first_image_back(cut):
     r, shots = cut
     assert _parts(r, shots, "reset", "exploded")[0] > 0.05
     assert np.array_equal(shots["unexploded"], shots["reset"])
+
+
+def test_key_e_animates_the_explode_open_and_closed(cut):
+    r, shots = cut
+    a = r["animated"]
+    assert a["end"] == 0.0 and 1.0 in a["seen"]
+    assert any(0.0 < v < 1.0 for v in a["seen"])  # frames between: animated, not jumped
+    assert _parts(r, shots, "reset", "animated_open")[0] > 0.05
+    assert np.array_equal(shots["animated_closed"], shots["reset"])
+
+
+def test_a_click_on_a_capped_part_selects_it(cut):
+    m = cut[0]["capped"]
+    assert m is not None and m["focus"] == [m["part"]]
 
 
 def test_a_click_on_a_part_moved_by_explode_selects_it(cut):
@@ -105,3 +125,21 @@ def test_flip_and_toggle_of_the_state(demo_scene):
     assert c.spec(demo_scene) == "0,0,1,0.01"
     c.flip()
     assert c.staging(demo_scene).cutaway.planes[0].normal == (-0.0, -0.0, -1.0)
+
+
+def test_saved_view_keeps_a_plane_along_a_normal(demo_scene, tmp_path):
+    from viewer import saved
+    from viewer.orbit import Orbit
+    from viewer.state import ViewerState
+
+    state = ViewerState(demo_scene.names, paths=demo_scene.paths)
+    state.cutaway.set_plane((0.1, 0.2, 0.3), (1.0, 1.0, 0.0))
+    state.cutaway.flip()
+    o = Orbit.default(demo_scene.center, demo_scene.radius)
+    views = saved.Views(tmp_path, demo_scene)
+    views.save("n", saved.capture(demo_scene, state, o))
+    other = ViewerState(demo_scene.names, paths=demo_scene.paths)
+    saved.apply(views.load("n"), demo_scene, other, o)
+    assert other.cutaway.normal == pytest.approx(state.cutaway.normal) and other.cutaway.axis == "off"
+    assert other.cutaway.offset == pytest.approx(state.cutaway.offset)
+    assert other.cutaway.spec(demo_scene) == state.cutaway.spec(demo_scene)

@@ -121,6 +121,12 @@ shot("flipped")
 removed = app.renderer.staging.removed
 result["removed_after_flip"] = [] if removed is None else np.flatnonzero(removed).tolist()
 
+# 3b. toggled off: no cut (the first image); on again: the flipped cut
+c.enabled = False
+shot("toggled_off")
+c.enabled = True
+shot("toggled_on")
+
 # 4. the active list and the one-button reset (hide a part and open the lens too)
 app.state.hide([0])
 app.state.lens.on = True
@@ -135,6 +141,43 @@ c.explode = 1.0
 shot("exploded")
 c.explode = 0.0
 shot("unexploded")
+
+# 5b. key E animates the explode open to 1 and closed again
+cutaway.EXPLODE_ANIM_S = 1.5  # a few frames on a loaded llvmpipe
+seen = []
+for name in ("animated_open", "animated_closed"):
+    press_key(key.E)
+    for _ in range(300):
+        seen.append(c.explode)
+        if c.anim is None:
+            break
+        frames()
+    shot(name)
+result["animated"] = {"seen": seen, "end": c.explode}
+
+
+def click_on(flags: np.ndarray) -> dict | None:
+    """Click the first of these parts (bool [n]) whose box centre shows it in front; what it selected."""
+    rec = app.records
+    app.state.select("none")
+    frames()
+    for oid in np.flatnonzero(flags):
+        x0, y0, x1, y1 = rec.viewport_rect[oid]
+        if x1 <= x0 or y1 <= y0:
+            continue
+        px, py = cx + (x0 + x1) / 2, cy + ch - 1 - (y0 + y1) / 2
+        if front_id(px, py) == oid:
+            click(px, py)
+            return {"part": int(oid), "focus": sorted(app.state.highlighted)}
+    return None
+
+
+# 5c. a click on a capped part (an axis plane through the middle, solid caps) selects it
+c.axis, c.at, c.caps = "y", 0.5, "solid"
+frames(2)
+capped = app.renderer.gpu.placement.capped
+result["capped"] = click_on(capped)
+c.axis = "off"
 
 # 6. a click on a part the explode moved selects it
 c.explode = 1.0
@@ -152,6 +195,7 @@ for oid in np.argsort(-np.linalg.norm(offsets, axis=1)):
         break
 app.state.select("none")
 frames()
+frames(2)
 result["moved"] = None
 if chosen is not None:
     oid, px, py = chosen

@@ -236,6 +236,8 @@ class Controls:
             app.state.lens.follow = not app.state.lens.follow
         elif key == keys.X:  # the section plane keeps its other side
             app.state.cutaway.flip()
+        elif key == keys.E:  # the explode opens (or closes), animated
+            app.state.cutaway.animate_explode()
         elif key == keys.F12:
             app.screenshot()
         elif key == keys.O:

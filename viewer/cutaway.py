@@ -6,6 +6,7 @@ lens and hide/isolate at once; the panel lists which of them are active."""
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Literal, get_args
 
@@ -20,6 +21,7 @@ if TYPE_CHECKING:
 
 Axis = Literal["off", "x", "y", "z", "-x", "-y", "-z"]
 AXES: tuple[Axis, ...] = get_args(Axis)
+EXPLODE_ANIM_S = 0.8  # an animated explode opens or closes in this many seconds
 _FLIPPED: dict[Axis, Axis] = {"off": "off", "x": "-x", "y": "-y", "z": "-z", "-x": "x", "-y": "y", "-z": "z"}
 
 
@@ -43,6 +45,8 @@ class CutawayState:
     picking: bool = False
     show_quad: bool = True  # the plane drawn on the composite, with its handle
     dragging: bool = False  # the handle is being dragged
+    explode_open: float = 1.0  # the factor an animated explode opens to (the slider's last non-zero)
+    anim: tuple[float, float, float] | None = None  # an explode under way: (start, from, to)
 
     def key(self) -> tuple:
         """Changes whenever the capture must run again."""
@@ -66,7 +70,26 @@ class CutawayState:
         k = "xyz".index(self.axis[-1])
         return f"{self.axis}={float(lo[k] + self.at * (hi[k] - lo[k])):.9g}"
 
+    def animate_explode(self) -> None:
+        """Open the explode to `explode_open` (closed now) or close it, over EXPLODE_ANIM_S."""
+        to = 0.0 if self.explode > 0 and (self.anim is None or self.anim[2] > 0) else self.explode_open
+        self.anim = (time.perf_counter(), self.explode, to)
+
+    def tick(self, now: float | None = None) -> None:
+        """Advance an animated explode (smoothstep in time) to `now`."""
+        if self.anim is None:
+            return
+        t0, a, b = self.anim
+        t = ((time.perf_counter() if now is None else now) - t0) / EXPLODE_ANIM_S
+        if t >= 1.0:
+            self.explode, self.anim = b, None
+        else:
+            t = max(t, 0.0)
+            self.explode = float(a + (b - a) * t * t * (3 - 2 * t))
+
     def staging(self, scene: Scene) -> Staging:
+        """The renderer's Staging of this state (an animated explode advanced to now)."""
+        self.tick()
         spec = self.spec(scene)
         return make_staging([spec] if spec else [], self.caps, self.scope, self.explode, self.explode_scope)
 
@@ -264,7 +287,7 @@ def reset(app) -> None:
     """Sections, explode, lens and hide/isolate back to none, at one click."""
     s = app.state
     c = s.cutaway
-    c.axis, c.normal, c.enabled, c.picking, c.explode = "off", None, True, False, 0.0
+    c.axis, c.normal, c.enabled, c.picking, c.explode, c.anim = "off", None, True, False, 0.0, None
     s.lens.on = False
     if s.hidden:
         s.show_all()
@@ -308,7 +331,13 @@ def panel(app) -> None:
         if changed:
             c.scope = SECTION_SCOPES[i]
         imgui.text_disabled(c.spec(app.renderer.scene) or "(off)")
-    _, c.explode = imgui.slider_float("explode", c.explode, 0.0, EXPLODE_MAX)
+    changed, c.explode = imgui.slider_float("explode", c.explode, 0.0, EXPLODE_MAX)
+    if changed:
+        c.anim = None  # the slider takes it from an animation
+        c.explode_open = c.explode if c.explode > 0 else c.explode_open
+    imgui.same_line()
+    if imgui.small_button("animate (E)"):
+        c.animate_explode()
     changed, i = imgui.combo("explode scope", EXPLODE_SCOPES.index(c.explode_scope), list(EXPLODE_SCOPES))
     if changed:
         c.explode_scope = EXPLODE_SCOPES[i]

@@ -136,7 +136,7 @@ class CutawayState:
 
 
 HANDLE_PX = 9.0  # the handle's radius on screen (a press within it drags the plane)
-QUAD_FILL, QUAD_EDGE, HANDLE = 0x3CE0A040, 0xC0E0A040, 0xF040C0F0  # ABGR: translucent amber, cyan
+QUAD_FILL, QUAD_EDGE, HANDLE = 0x28E0A040, 0xC0E0A040, 0xF040C0F0  # ABGR: translucent amber, cyan
 
 
 def quad(scene: Scene, c: CutawayState) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
@@ -306,19 +306,19 @@ def panel(app) -> None:
         imgui.same_line()
         if imgui.small_button("reset all"):
             reset(app)
-    changed, i = imgui.combo("section plane", AXES.index(c.axis) if c.normal is None else 0, list(AXES))
-    if changed:
+    items = list(AXES) + ([] if c.normal is None else ["on a surface"])
+    changed, i = imgui.combo("section plane", AXES.index(c.axis) if c.normal is None else len(AXES), items)
+    if changed and i < len(AXES):
         c.axis, c.normal, c.enabled = AXES[i], None, True
-    if imgui.small_button("on a surface (click it)" if not c.picking else "click a surface..."):
+    if imgui.small_button("on a surface (then click it)" if not c.picking else "click a surface..."):
         c.picking = not c.picking
     if c.has_plane:
         imgui.same_line()
-        if imgui.small_button("flip"):
+        if imgui.small_button("flip (X)"):
             c.flip()
-        imgui.same_line()
         _, c.enabled = imgui.checkbox("on", c.enabled)
         imgui.same_line()
-        _, c.show_quad = imgui.checkbox("show plane", c.show_quad)
+        _, c.show_quad = imgui.checkbox("show the plane (drag its handle)", c.show_quad)
         if c.normal is None:
             _, c.at = imgui.slider_float("at (of the bounds)", c.at, 0.0, 1.0)
         else:
@@ -335,9 +335,8 @@ def panel(app) -> None:
     if changed:
         c.anim = None  # the slider takes it from an animation
         c.explode_open = c.explode if c.explode > 0 else c.explode_open
-    imgui.same_line()
-    if imgui.small_button("animate (E)"):
-        c.animate_explode()
     changed, i = imgui.combo("explode scope", EXPLODE_SCOPES.index(c.explode_scope), list(EXPLODE_SCOPES))
     if changed:
         c.explode_scope = EXPLODE_SCOPES[i]
+    if imgui.small_button("animate the explode (E)"):
+        c.animate_explode()

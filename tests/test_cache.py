@@ -287,7 +287,10 @@ def test_processes_loading_at_once_leave_one_valid_entry(folder, tmp_path, monke
     code = "import sys\nfrom rtta.scene.loader import load_scene\nprint(load_scene(sys.argv[1]).count)"
     env = {**os.environ, "RTTA_CACHE_DIR": str(folder)}
     runs = [
-        subprocess.Popen([sys.executable, "-c", code, str(path)], env=env, stdout=subprocess.PIPE, text=True)
+        # in tmp_path: `python -c` puts its cwd first on sys.path (from a checkout, its rtta/)
+        subprocess.Popen(
+            [sys.executable, "-c", code, str(path)], env=env, stdout=subprocess.PIPE, text=True, cwd=tmp_path
+        )
         for _ in range(8)
     ]
     outs = [run.communicate(timeout=300)[0] for run in runs]

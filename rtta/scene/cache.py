@@ -10,23 +10,18 @@ memory limit; it is used only when every file the scene was read from (a glTF's 
 and textures, an OBJ's materials) still has its size and mtime.
 
 An entry is one file: a magic line, a JSON head (format version, CRC-32 of what follows:
-it finds damage, and at 1.3 GB/s here against blake2b's 0.3-0.8 it is not what a second
-open waits for; an entry written on purpose to deceive is still held to the checks below),
-the scene's JSON metadata (names, tree paths, warnings, inputs, unit, up axis,
-the arrays' dtypes, shapes and offsets) and the arrays' raw bytes. Nothing in it is
+it finds damage at 1.3 GB/s, blake2b 0.3-0.8; a deceiving entry still meets the checks below),
+the scene's JSON metadata (names, tree paths, warnings, inputs, unit, up axis, the arrays'
+dtypes, shapes and offsets) and the arrays' raw bytes. Nothing in it is
 unpickled; an entry that is damaged, truncated, of another format or version, or whose
 arrays do not fit together is ignored (and replaced by the next load), never trusted.
-Entries are written to a temporary file in the folder and renamed into place, so
-processes loading the same file at once each write a whole entry and the last one stays;
-an entry is never changed in place, so a scene's arrays can map it (copy-on-write: no
-copy of a 300 MB entry before its checksum, 1.7 s of a 2.4 s cached load here).
-A folder that cannot be written means no cache, never an error; the demo (in rtta's
-assets) is not cached.
+Entries are written to a temporary file in the folder and renamed into place (processes
+loading a file at once each write a whole entry; the last stays) and never changed in place,
+so a scene's arrays map it (copy-on-write: no copy of a 300 MB entry, 1.7 s of 2.4 here).
+A folder that cannot be written means no cache, never an error; the demo is not cached.
 
-A file modified less than RACY_NS before its load began is not cached: its next change
-could fall within the same timestamp tick (a few ms on Linux, 2 s on FAT) and leave its
-size and mtime as they were.
-"""
+A file modified less than RACY_NS before its load is not cached: its next change could
+fall in the same timestamp tick (2 s on FAT) and leave its size and mtime as they were."""
 
 from __future__ import annotations
 
@@ -213,6 +208,14 @@ def evict(where: Path, bound: int) -> None:
         total -= size
 
 
+def _assets() -> Path | None:
+    """rtta's shipped scenes' folder (None: rtta imported from a source tree, no rtta.assets)."""
+    try:
+        return Path(str(resources.files("rtta.assets"))).resolve()
+    except (ImportError, OSError, TypeError):
+        return None
+
+
 def _key(path: Path, options: dict) -> dict | None:
     try:
         resolved = path.resolve()
@@ -220,7 +223,7 @@ def _key(path: Path, options: dict) -> dict | None:
         limit = memory_limit()
     except (OSError, RuntimeError, RttaError):  # the load itself says what is wrong
         return None
-    if resolved.parent == Path(str(resources.files("rtta.assets"))).resolve():
+    if resolved.parent == _assets():
         return None  # the demo: shipped with rtta, small
     return {
         "path": str(resolved),

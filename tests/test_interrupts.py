@@ -139,3 +139,12 @@ def test_a_signal_while_the_finished_run_shuts_down_does_not_kill_it():
     export interrupted in its last milliseconds exited -2 with its new output in place)."""
     proc = subprocess.run([sys.executable, "-c", _LATE_SIGNAL], capture_output=True, text=True, timeout=60)
     assert (proc.returncode, proc.stderr) == (0, "finished\n")
+
+
+def test_import_rtta_starts_no_native_reader():
+    """`import rtta` leaves trimesh (and with it cascadio's OpenCASCADE) to the CLI, which
+    imports it with signals held (rtta.cli.guard): a SIGINT inside cascadio's module start
+    crashed `rtta export` with SIGSEGV when rtta.renderer.pick imported trimesh at the top."""
+    code = "import sys, rtta; print(sorted({'trimesh', 'cascadio'} & set(sys.modules)))"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, cwd="/")
+    assert out.returncode == 0 and out.stdout.strip() == "[]", out.stdout + out.stderr

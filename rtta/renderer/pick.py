@@ -6,7 +6,6 @@ from collections.abc import Iterable, Sequence
 from typing import NamedTuple
 
 import numpy as np
-import trimesh
 
 from ..errors import RttaError
 from ..scene.camera import Camera, Projection
@@ -123,6 +122,8 @@ def _normal(scene: Scene, oid: int, point: np.ndarray, towards: np.ndarray) -> n
     """The unit normal of the object's triangle nearest `point`, turned to face `towards`."""
     first, count = (int(v) for v in scene.index_ranges[oid])
     tris = scene.positions[scene.indices[first : first + count].reshape(-1, 3)].astype(np.float64) + scene.origin
+    import trimesh  # here, not at import: `import rtta` must not start cascadio's OpenCASCADE (rtta.cli.guard)
+
     near = trimesh.triangles.closest_point(tris, np.broadcast_to(point, (len(tris), 3)))
     a, b, c = tris[int(np.argmin(np.linalg.norm(near - point, axis=1)))]
     n = np.cross(b - a, c - a)

@@ -1,5 +1,5 @@
-"""Regenerate the gallery: run every example, then write its picture, small, and a copy of
-the script into docs/examples/, and the page docs/examples.md (title and text from each
+"""Regenerate the gallery: run every example, then write its picture, small, into
+docs/examples/, and the page docs/examples.md (title and text from each
 script's docstring, the picture, a link to the script).
 
     python examples/make_gallery.py              # the pictures and the page
@@ -8,7 +8,6 @@ script's docstring, the picture, a link to the script).
 
 import argparse
 import ast
-import shutil
 import subprocess
 import sys
 import tempfile
@@ -35,7 +34,7 @@ INTRO = """# Examples
 Short scripts in `examples/` (at the top of the repository) that each write one picture with the
 library's public API (`import rtta`). Run one with `python examples/NAME.py [OUT_DIR]`
 (default `out/examples/`). `python examples/make_gallery.py` regenerates this page, its
-pictures and the copies of the scripts linked here; `tests/test_examples.py` runs every
+pictures and the scripts shown here (included from examples/); `tests/test_examples.py` runs every
 script and checks what it draws.
 """
 
@@ -57,7 +56,7 @@ def page() -> str:
     for name in EXAMPLES:
         title, text, usage = parts(name)
         out.append(f"## {title}\n\n![{title}](examples/{name}.png)\n\n{text}\n")
-        out.append(f"Source: [examples/{name}.py](examples/{name}.py)\n\n```sh\n{usage}\n```\n")
+        out.append(f'```sh\n{usage}\n```\n\n```python\n--8<-- "examples/{name}.py"\n```\n')
     return "\n".join(out)
 
 
@@ -74,7 +73,7 @@ def small_png(src: Path, dst: Path) -> int:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--page-only", action="store_true", help="docs/examples.md and the scripts' copies only")
+    parser.add_argument("--page-only", action="store_true", help="docs/examples.md only")
     args = parser.parse_args()
     if not args.page_only:
         (DOCS / "examples").mkdir(parents=True, exist_ok=True)
@@ -83,8 +82,6 @@ def main() -> int:
                 subprocess.run([sys.executable, str(HERE / f"{name}.py"), tmp], check=True, stdout=subprocess.DEVNULL)
                 size = small_png(Path(tmp) / f"{name}.png", DOCS / "examples" / f"{name}.png")
                 print(f"docs/examples/{name}.png: {size / 1e3:.0f} KB")
-    for name in EXAMPLES:  # the scripts the page links to (mkdocs serves only what is under docs/)
-        shutil.copyfile(HERE / f"{name}.py", DOCS / "examples" / f"{name}.py")
     (DOCS / "examples.md").write_text(page(), encoding="utf-8")
     print("wrote docs/examples.md")
     return 0

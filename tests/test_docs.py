@@ -19,6 +19,7 @@ ROOT = Path(__file__).resolve().parents[1]
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
 FENCE = re.compile(r"^```(\w*)[^\n]*\n(.*?)^```[ \t]*$", re.M | re.S)
 NOT_RUN = re.compile(r"<!--\s*not run:\s*(\S[^>]*?)\s*-->\s*$")
+EXAMPLE = re.compile(r'--8<-- "(examples/\w+\.py)"')  # a script included whole: tests/test_examples.py runs it
 TWO_COMMANDS = ["bash scripts/run.sh", "bash scripts/test.sh"]
 
 
@@ -36,6 +37,9 @@ def _python_blocks() -> list:
     found = []
     for page in PAGES:
         for line, lang, code, skip in code_blocks(page.read_text(encoding="utf-8")):
+            if lang in ("python", "py") and EXAMPLE.fullmatch(code.strip()):
+                assert (ROOT / EXAMPLE.fullmatch(code.strip()).group(1)).is_file(), code  # run by test_examples
+                continue
             if lang in ("python", "py"):
                 name = f"{page.relative_to(ROOT)}:{line}"
                 marks = [pytest.mark.skip(reason=f"marked <!-- not run: {skip} -->")] if skip else []

@@ -117,6 +117,7 @@ def test_view_angles_and_turns():
     o = Orbit.default(np.zeros(3), 1.0, up_axis="z")
     o.az, o.el = 350.0, 10.0
     turn = gizmo.Turn.to(o, 20.0, 90.0)
+    turn.t0 = 8607.636727584  # a clock reading where (t0 + TURN_S) - t0 falls an ulp short of TURN_S
     assert not turn.step(o, turn.t0 + gizmo.TURN_S / 2)
     assert o.az > 350.0 or o.az < 20.0  # the short way round, through 0
     assert turn.step(o, turn.t0 + gizmo.TURN_S) and (o.az, o.el) == (20.0, 90.0)

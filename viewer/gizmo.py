@@ -171,7 +171,8 @@ class Turn:
 
     def step(self, orbit: Orbit, now: float | None = None) -> bool:
         """Move `orbit` to where the turn is at `now`; True once it has arrived."""
-        k = min(1.0, max(0.0, ((time.perf_counter() if now is None else now) - self.t0) / TURN_S))
+        k = ((time.perf_counter() if now is None else now) - self.t0) / TURN_S
+        k = 1.0 if k >= 1.0 - 1e-9 else max(0.0, k)  # (t0 + TURN_S) - t0 can fall an ulp short
         s = k * k * (3.0 - 2.0 * k)
         d_az = (self.az1 - self.az0 + 180.0) % 360.0 - 180.0
         orbit.az = (self.az0 + s * d_az) % 360.0 if k < 1.0 else self.az1 % 360.0

@@ -87,3 +87,56 @@ class Records:
         area = tw * th * td
         r = self.atlas_rect[self.visible]
         return float((r[:, 2] * r[:, 3]).sum() / area) if area else 0.0
+
+
+class GpuRecords:
+    """R of a frame that the GPU wrote into the record buffer (`Settings(parameterize="gpu")`):
+    what the CPU knows without waiting for the GPU, and the planar arrays read back on first use.
+
+    The GPU-driven passes (the capture's draw lists, compositing's sort and sprite draws) take
+    the record buffer as it is and read none of the arrays; picking, the export, pixel-order
+    blending and the dataset read them (`read()`, or any `Records` attribute), which waits for
+    the GPU once per frame.
+
+    Parameters
+    ----------
+    count : int
+        Objects (entries in the record buffer).
+    viewport : tuple of int
+        (W, H) in pixels.
+    atlas_size : tuple of int
+        (T_w, T_h, T_d): the atlas extent the transforms T map to (the allocation, not the
+        extent used: that is known on the GPU alone until read).
+    border : int
+        Empty texels around each region.
+    reader : callable
+        Returns the frame's `Records` (reads the record buffer back).
+    """
+
+    on_gpu = True
+
+    def __init__(
+        self, count: int, viewport: tuple[int, int], atlas_size: tuple[int, int, int], border: int, reader
+    ) -> None:
+        self.count = count
+        self.viewport = viewport
+        self.atlas_size = atlas_size
+        self.border = border
+        self._reader = reader
+        self._read: Records | None = None
+
+    @property
+    def is_read(self) -> bool:
+        """Whether the arrays were read back already."""
+        return self._read is not None
+
+    def read(self) -> Records:
+        """The frame's records as planar arrays (read back once; waits for the GPU)."""
+        if self._read is None:
+            self._read = self._reader()
+        return self._read
+
+    def __getattr__(self, name: str):
+        if name.startswith("_"):
+            raise AttributeError(name)
+        return getattr(self.read(), name)

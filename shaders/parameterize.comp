@@ -68,6 +68,8 @@ layout(std430, binding = BINDING_PARAM_STATE) coherent buffer State {
     uint shelves1;   // the first strip's shelves (the second's follow in Shelves)
     uint wide2;      // the widest region of the second strip
     uint cap2;       // its shelves' width
+    uint demand;     // the layers the first round needed, before any scale-down
+    uint pad;
     double factor;   // the scale-down of every region, 1 until the layers run out
     double area;     // the regions' area, each as tall as its class (for the scale-down)
 };
@@ -80,6 +82,7 @@ uniform ivec2 u_viewport;
 uniform int u_border;
 uniform ivec2 u_atlas_max;
 uniform int u_max_layers;
+uniform ivec2 u_extent;       // the atlas extent T maps to; (0, 0): the extent used
 
 const ivec2 EDGES[12] = ivec2[12](ivec2(0, 1), ivec2(2, 3), ivec2(4, 5), ivec2(6, 7), ivec2(0, 2), ivec2(1, 3),
                                   ivec2(4, 6), ivec2(5, 7), ivec2(0, 4), ivec2(1, 5), ivec2(2, 6), ivec2(3, 7));
@@ -263,6 +266,7 @@ void layout_second() {
         top = max(top, y);
     }
     uint count = some ? layer + 1u : 0u;
+    if (rounds == 0u) demand = count;
     if (count <= uint(u_max_layers)) {
         done = 1u;
         layers = count;
@@ -309,9 +313,10 @@ void write_record(int i) {
     Record r;
     r.info = ivec4(0, 0, u_border, 0);
     r.transform = r.clip = r.atlas = r.viewport = vec4(0.0);
-    if (it.size.w == 1) {
+    if (it.size.w == 1 && done == 1u) {
         double s = it.scale.x * factor;
-        dvec2 vp = dvec2(u_viewport), at = dvec2(max(uvec2(used_w, used_h), uvec2(1u)));
+        uvec2 extent = u_extent.x > 0 ? uvec2(u_extent) : uvec2(used_w, used_h);
+        dvec2 vp = dvec2(u_viewport), at = dvec2(max(extent, uvec2(1u)));
         dvec2 x0 = dvec2(it.rect.xy);
         dvec2 t = (s * (vp - 2.0 * x0) + 2.0 * (dvec2(it.at.xy) + double(u_border))) / at - 1.0;
         r.transform = vec4(vec2(s * vp / at), vec2(t));
@@ -341,7 +346,7 @@ void main() {
 #elif STAGE == 5
     if (done == 1u) place_second(i);
 #else
-    if (done == 1u) write_record(i);  // else the CPU dispatches more rounds first
+    write_record(i);  // no region while the regions do not fit yet (more rounds follow)
 #endif
 #endif
 }

@@ -89,9 +89,10 @@ def view_args(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--parameterize",
-        choices=("cpu", "gpu"),
-        default="cpu",
-        help="where Algorithm 1 runs: numpy (the reference) or compute shaders (opt-in, its own shelf packing)",
+        choices=("auto", "cpu", "gpu"),
+        default="auto",
+        help="where Algorithm 1, the capture's draw lists and compositing's order are made: compute shaders "
+        "(gpu; auto: where they build) or numpy (cpu, the reference)",
     )
     p.add_argument(
         "--context-scale",
@@ -131,7 +132,7 @@ def settings_of(args):
         args.region_scale,
         args.bounds,
         getattr(args, "context_scale", None),
-        getattr(args, "parameterize", "cpu"),
+        getattr(args, "parameterize", "auto"),
     )
 
 

@@ -3,29 +3,42 @@
 and region scales, in doubles, and a parallel shelf packing (shaders/parameterize.comp).
 
 Per object data live on the GPU: B_world's corners (uploaded when the array changes: once
-per scene, every frame of an exploded view) and the scale wanted per object, 0 for the hidden
-(uploaded when it changes: the focus, hiding). Per frame the CPU issues a constant number of
-calls: a small state write, a round of two dispatches twice, two dispatches that write T and
+per scene), the explode offsets (when they change) and the scale wanted per object, 0 for the
+hidden (uploaded when its key changes: the focus, hiding). Per frame the CPU issues a constant
+number of calls: a small state write, rounds of dispatches, two dispatches that write T and
 the records straight into the record buffer the capture, post-processing and compositing read
-(shaders/records.glsl), a read of the 32-byte state and, in this first step, a read of the
-records back into `Records`, which the draw lists and compositing still take on the CPU.
+(shaders/records.glsl). It returns a `GpuRecords`: nothing of R is read back unless a caller
+asks for its arrays (picking, the export, the dataset).
+
+Sizing the atlas, two policies (`GpuParameterize.sizing`):
+
+- "exact" (the default; one-shot renders, the library): the 64-byte state is read after the
+  rounds (the GPU finishes the frame's packing first); more rounds run while the regions do not
+  fit, and the atlas is sized to the extent used, as on the CPU path.
+- "ahead" (the viewer, the benchmarks): no read waits for the GPU. The atlas is allocated at
+  the largest layer size with a layer count chosen ahead, and T maps into that allocation;
+  the GPU packs into it with a fixed number of rounds. The state is copied aside each frame
+  and read at the next one, when the throttle (glraw.Throttle) has already waited for it: the
+  layers the frame wanted before any scale-down. When they exceed the allocation, the next
+  frame allocates them plus an eighth (so one frame of a sudden jump in demand is scaled down,
+  never dropped); a frame that did not fit in the fixed rounds makes the next frame exact. The
+  first frame, and a frame after the viewport or the largest layer changed, are exact.
 
 Scale-down policy: when the regions need more layers than allowed, the layout stage itself
 lowers every region's scale by min(0.9, 0.95 sqrt(capacity / area)), the CPU loop's rule
 (the area counts each region as tall as its height class), and the next round packs
-again; no visible object is dropped. Two rounds run
-before the CPU reads the state (placing and the records are no-ops until the regions fit);
-more only while it says they do not fit yet.
+again; no visible object is dropped.
 """
 
 from __future__ import annotations
 
 import time
+from typing import Literal
 
 import moderngl
 import numpy as np
 
-from ..atlas.records import RECORD_DTYPE, Records
+from ..atlas.records import RECORD_DTYPE, GpuRecords, Records
 from ..errors import RttaError
 from ..gl import glsl
 from ..gl.bindings import Storage
@@ -35,12 +48,15 @@ LOCAL_SIZE = 64
 CLASSES = 128  # height classes (parameterize.comp)
 CLASS_BYTES = 48
 ITEM_BYTES = 80
-ROUNDS = 2  # rounds of projection and layout dispatched before the state is read
+ROUNDS = 2  # rounds of projection and layout dispatched before the state is read ("exact")
+AHEAD_ROUNDS = 4  # rounds dispatched per frame when nothing is read ("ahead")
 MAX_ROUNDS = 64  # as the CPU path's loop
 STATE_DTYPE = np.dtype(
     [(name, "<u4") for name in ("done", "layers", "used_w", "used_h", "rounds", "cursor_layer", "cursor_y")]
-    + [("shelves1", "<u4"), ("wide2", "<u4"), ("cap2", "<u4"), ("factor", "<f8"), ("area", "<f8")]
+    + [("shelves1", "<u4"), ("wide2", "<u4"), ("cap2", "<u4"), ("demand", "<u4"), ("pad", "<u4")]
+    + [("factor", "<f8"), ("area", "<f8")]
 )
+Sizing = Literal["exact", "ahead"]
 PROJECT, LAYOUT, PLACE, LAYOUT_SECOND, PLACE_SECOND, RECORD = 1, 2, 3, 4, 5, 6  # the shader's stages
 ROUND = (PROJECT, LAYOUT, PLACE, LAYOUT_SECOND)
 
@@ -52,10 +68,14 @@ class GpuParameterize:
     ----------
     ctx : moderngl.Context
         An OpenGL 4.3+ context with double precision in shaders (core since 4.0).
+    sizing : {"exact", "ahead"}, default "exact"
+        How the atlas is sized (the module's docstring): reading the frame's state, or a
+        layer count chosen ahead from the state of the frame before.
     """
 
-    def __init__(self, ctx: moderngl.Context) -> None:
+    def __init__(self, ctx: moderngl.Context, sizing: Sizing = "exact") -> None:
         self.ctx = ctx
+        self.sizing: Sizing = sizing
         try:
             self.programs = {
                 stage: ctx.compute_shader(glsl.load("parameterize.comp", STAGE=stage, LOCAL_SIZE=LOCAL_SIZE))
@@ -66,6 +86,9 @@ class GpuParameterize:
             raise RttaError(f"--parameterize gpu: this driver cannot build its compute shaders ({first})") from None
         self.classes = ctx.buffer(reserve=CLASSES * CLASS_BYTES)
         self.state = ctx.buffer(reserve=STATE_DTYPE.itemsize)
+        self.late = ctx.buffer(reserve=STATE_DTYPE.itemsize)  # the state of the frame before ("ahead")
+        self._start = np.zeros(1, STATE_DTYPE)
+        self._start["factor"] = 1.0
         self.corners: moderngl.Buffer | None = None
         self.scales: moderngl.Buffer | None = None
         self.items: moderngl.Buffer | None = None
@@ -74,7 +97,12 @@ class GpuParameterize:
         self.offsets = ctx.buffer(reserve=8)
         self._offsets_of: np.ndarray | None = None  # likewise
         self._wanted = np.zeros(0)
-        self.last_state = np.zeros(1, STATE_DTYPE)[0]  # the state read back by the last run
+        self._wanted_key: object = None
+        self.layers = 0  # "ahead": the layers allocated (0: none yet, the next frame is exact)
+        self._ahead_of: tuple | None = None  # (viewport, atlas_max, max_layers) the allocation is for
+        self._late_pending = False  # a state was copied aside and not read yet
+        self.last_state = np.zeros(1, STATE_DTYPE)[0]  # the state read back last ("exact")
+        self.reads = 0  # reads that waited for the GPU (the state, the records)
         self.cpu_seconds = 0.0  # of the last run, in Python and numpy outside GL calls (rtta bench capture)
 
     def _upload(self, corners: np.ndarray, wanted: np.ndarray, boxes: int) -> None:
@@ -94,6 +122,22 @@ class GpuParameterize:
             self.scales.write(wanted)
             self._wanted = wanted
 
+    def knows(self, key: object, n: int) -> bool:
+        """Whether the scales wanted uploaded are those of `key` (run's `key`) for n objects."""
+        return key is not None and key == self._wanted_key and len(self._wanted) == n
+
+    def _wanted_scales(self, n: int, region_scale, hidden, key) -> np.ndarray | None:
+        """The scales wanted [n] (0: hidden), or None when `key` says they are as uploaded."""
+        if self.knows(key, n):
+            return None
+        wanted = np.broadcast_to(np.asarray(region_scale, np.float64), (n,)).copy()
+        if not (np.isfinite(wanted).all() and (wanted > 0).all() and (wanted <= 16).all()):
+            raise ValueError("region scale must be in (0, 16]")
+        if hidden is not None:
+            wanted[np.asarray(hidden, bool)] = 0.0
+        self._wanted_key = key
+        return wanted
+
     def run(
         self,
         gpu: GpuScene,
@@ -107,9 +151,10 @@ class GpuParameterize:
         region_scale: float | np.ndarray = 1.0,
         hidden: np.ndarray | None = None,
         offsets: np.ndarray | None = None,
-    ) -> Records:
+        key: object = None,
+    ) -> GpuRecords:
         """Algorithm 1 as `rtta.atlas.parameterize` (same arguments but `thin`), its records
-        written into `gpu.records` and read back.
+        written into `gpu.records`.
 
         Parameters
         ----------
@@ -134,11 +179,15 @@ class GpuParameterize:
         offsets : numpy.ndarray, optional
             float64 [n, 3]: each object's B_world moved by its offset (an exploded view:
             uploaded when the array changes, the corners stay).
+        key : hashable, optional
+            Equal keys promise equal `region_scale` and `hidden` (they are then neither
+            checked nor uploaded again: a frame's cost does not grow with n).
 
         Returns
         -------
-        Records
-            R as the GPU wrote it (float32 where the record buffer holds floats).
+        GpuRecords
+            R on the GPU; its arrays (float32 where the record buffer holds floats) are read
+            back on first use.
         """
         t0 = time.perf_counter()
         n = corners.shape[-3]
@@ -148,13 +197,14 @@ class GpuParameterize:
             raise ValueError(f"viewport must be at least 1x1, got {W}x{H}")
         if atlas_max[0] < 1 + 2 * border or atlas_max[1] < 1 + 2 * border:
             raise ValueError(f"atlas maximum {atlas_max} cannot hold a 1-pixel region with border {border}")
-        wanted = np.broadcast_to(np.asarray(region_scale, np.float64), (n,)).copy()
-        if not (np.isfinite(wanted).all() and (wanted > 0).all() and (wanted <= 16).all()):
-            raise ValueError("region scale must be in (0, 16]")
-        if hidden is not None:
-            wanted[np.asarray(hidden, bool)] = 0.0
+        atlas_max = (int(atlas_max[0]), int(atlas_max[1]))
+        wanted = self._wanted_scales(n, region_scale, hidden, key)
+        ahead = self._ahead_layers((W, H), atlas_max, int(max_layers))
         outside = time.perf_counter() - t0
-        self._upload(corners, wanted, boxes)
+        if wanted is not None:
+            self._upload(corners, wanted, boxes)
+        elif corners is not self._corners_of:
+            self._upload(corners, self._wanted, boxes)
         if offsets is not None and offsets is not self._offsets_of:
             data = np.ascontiguousarray(offsets, np.float64).reshape(n * 3)
             if self.offsets.size < max(data.nbytes, 8):
@@ -168,9 +218,51 @@ class GpuParameterize:
             "u_offsets": offsets is not None,
             "u_viewport": (W, H),
             "u_border": border,
-            "u_atlas_max": tuple(int(v) for v in atlas_max),
-            "u_max_layers": int(max_layers),
+            "u_atlas_max": atlas_max,
+            "u_max_layers": ahead or int(max_layers),
+            "u_extent": atlas_max if ahead else (0, 0),
         }
+        self._bind(gpu, uniforms)
+        groups = max(1, -(-n // LOCAL_SIZE))
+        if ahead:
+            self._dispatch(groups, AHEAD_ROUNDS)
+            self.ctx.copy_buffer(self.late, self.state)
+            self._late_pending = True
+            size = (*atlas_max, ahead)
+        else:
+            state = self._exact(groups, n, border, atlas_max, int(max_layers))
+            layers = int(state["layers"])
+            size = (int(state["used_w"]), int(state["used_h"]), layers) if layers else (0, 0, 0)
+            if self.sizing == "ahead":  # the first frame: allocate what it used, and an eighth more
+                self.layers = min(int(max_layers), layers + max(1, layers // 8))
+                self._ahead_of = ((W, H), atlas_max, int(max_layers))
+        t1 = time.perf_counter()
+        wanted_now = self._wanted
+        records = GpuRecords(
+            n, (W, H), size, border, lambda: self._read_records(gpu, n, (W, H), size, border, wanted_now, atlas_max)
+        )
+        gpu.written = records
+        self.cpu_seconds = outside + time.perf_counter() - t1
+        return records
+
+    def _ahead_layers(self, viewport: tuple[int, int], atlas_max: tuple[int, int], max_layers: int) -> int:
+        """The layers to pack into without reading ("ahead"), from the state of the frame
+        before; 0: this frame is exact (the first, after a resize, or after a frame that did
+        not fit in AHEAD_ROUNDS)."""
+        if self.sizing != "ahead" or self._ahead_of != (viewport, atlas_max, max_layers) or not self.layers:
+            self._late_pending = False
+            return 0
+        if self._late_pending:
+            late = np.frombuffer(self.late.read(), STATE_DTYPE)[0]  # done: the throttle waited for it
+            self._late_pending = False
+            if not late["done"]:
+                return 0
+            demand = int(late["demand"])
+            if demand > self.layers:
+                self.layers = min(max_layers, demand + max(1, demand // 8))
+        return self.layers
+
+    def _bind(self, gpu: GpuScene, uniforms: dict) -> None:
         for prog in self.programs.values():
             for name, value in uniforms.items():
                 if name in prog:
@@ -178,9 +270,7 @@ class GpuParameterize:
                         glsl.uniform(prog, name).write(value)
                     else:
                         glsl.uniform(prog, name).value = value
-        start = np.zeros(1, STATE_DTYPE)
-        start["factor"] = 1.0
-        self.state.write(start)
+        self.state.write(self._start)
         self.classes.clear()
         assert self.corners is not None and self.scales is not None and self.items is not None
         assert self.shelves is not None
@@ -195,7 +285,9 @@ class GpuParameterize:
             (gpu.records, Storage.RECORDS),
         ):
             buf.bind_to_storage_buffer(binding)
-        groups = max(1, -(-n // LOCAL_SIZE))
+
+    def _exact(self, groups: int, n: int, border: int, atlas_max: tuple[int, int], max_layers: int) -> np.void:
+        """Rounds until the regions fit, reading the state after each batch of ROUNDS."""
         state = self._rounds(groups)
         while not state["done"] and state["rounds"] < MAX_ROUNDS:  # rare: scaled down more than twice
             state = self._rounds(groups)
@@ -205,35 +297,41 @@ class GpuParameterize:
                 f"{n} regions with border {border} do not fit into {max_layers} layer(s) of "
                 f"{atlas_max[0]}x{atlas_max[1]} even at the smallest scale"
             )
-        packed = _read_packed(gpu.records, n)
-        t0 = time.perf_counter()
-        records = _records(packed, (W, H), border, state)
-        records.scale[:] = _scales(records, wanted, atlas_max, float(state["factor"]))
-        gpu.written = records
-        self.cpu_seconds = outside + time.perf_counter() - t0
-        return records
+        return state
 
-    def _rounds(self, groups: int) -> np.void:
-        """ROUNDS rounds of projection and layout (no-ops once the regions fit), then placing and
-        the records (no-ops unless they fit); the state, the one read that waits for the GPU."""
-        for _ in range(ROUNDS):
+    def _dispatch(self, groups: int, rounds: int) -> None:
+        """`rounds` rounds of projection and layout (no-ops once the regions fit), then placing
+        and the records (the records of no region unless they fit)."""
+        for _ in range(rounds):
             for stage in ROUND:
                 self.programs[stage].run(1 if stage in (LAYOUT, LAYOUT_SECOND) else groups)
                 self.ctx.memory_barrier(moderngl.SHADER_STORAGE_BARRIER_BIT)
         for stage in (PLACE_SECOND, RECORD):
             self.programs[stage].run(groups)
             self.ctx.memory_barrier(moderngl.SHADER_STORAGE_BARRIER_BIT | moderngl.BUFFER_UPDATE_BARRIER_BIT)
-        return self._read_state()
 
-    def _read_state(self) -> np.void:
+    def _rounds(self, groups: int) -> np.void:
+        """ROUNDS rounds, placing and the records; the state, a read that waits for the GPU."""
+        self._dispatch(groups, ROUNDS)
+        self.reads += 1
         return np.frombuffer(self.state.read(), STATE_DTYPE)[0]
+
+    def _read_records(self, gpu, n, viewport, size, border, wanted, atlas_max) -> Records:
+        """The frame's records read back (GpuRecords.read): waits for the GPU."""
+        self.reads += 1
+        state = np.frombuffer(self.state.read(), STATE_DTYPE)[0]
+        records = _records(_read_packed(gpu.records, n), viewport, border, size)
+        records.scale[:] = _scales(records, wanted, atlas_max, float(state["factor"]))
+        return records
 
     def release(self) -> None:
         """Free the programs and buffers."""
         for prog in self.programs.values():
             prog.release()
         self.programs.clear()
-        for buf in (self.classes, self.state, self.corners, self.scales, self.items, self.shelves, self.offsets):
+        for buf in (
+            self.classes, self.state, self.late, self.corners, self.scales, self.items, self.shelves, self.offsets
+        ):  # fmt: skip
             if buf is not None:
                 buf.release()
         self.corners = self.scales = self.items = self.shelves = None
@@ -260,10 +358,9 @@ def _scales(records: Records, wanted: np.ndarray, atlas_max: tuple[int, int], fa
     return np.where(records.visible, np.minimum(wanted, fit) * factor, 0.0)
 
 
-def _records(packed: np.ndarray, viewport: tuple[int, int], border: int, state: np.void) -> Records:
-    """Records from the packed entries read back."""
+def _records(packed: np.ndarray, viewport: tuple[int, int], border: int, size: tuple[int, int, int]) -> Records:
+    """Records from the packed entries read back; `size`: the atlas extent T maps to."""
     info = packed["info"]
-    layers = int(state["layers"])
     return Records(
         visible=info[:, 1] != 0,
         viewport_rect=packed["viewport"].astype(np.int64),
@@ -273,6 +370,6 @@ def _records(packed: np.ndarray, viewport: tuple[int, int], border: int, state: 
         transform=packed["transform"].astype(np.float64),
         clip_ndc=packed["clip"].astype(np.float64),
         viewport=viewport,
-        atlas_size=(int(state["used_w"]), int(state["used_h"]), layers) if layers else (0, 0, 0),
+        atlas_size=size,
         border=border,
     )

@@ -43,7 +43,7 @@ def make_settings(
     region_scale: float = 1.0,
     bounds: BoundsName | Bounds = "aabb",
     context_scale: float | None = None,
-    parameterize: ParameterizeName | ParameterizeOn = "cpu",
+    parameterize: ParameterizeName | ParameterizeOn = "auto",
 ) -> Settings:
     """Checked Settings (the messages name the CLI flags, as `rtta snapshot` says them)."""
     if border < 0 or border > 64:

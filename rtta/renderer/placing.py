@@ -88,11 +88,16 @@ class Staging:
 
     def staged(self, hidden: np.ndarray | None, corners: np.ndarray) -> tuple[np.ndarray | None, np.ndarray]:
         """The objects not packed (hidden, or cut away whole) and B_world's corners, moved."""
-        if self.removed is not None:
-            hidden = self.removed if hidden is None else hidden | self.removed
+        hidden = self.not_packed(hidden)
         if self.offsets is not None:
             corners = corners + self.offsets[..., None, :]
         return hidden, corners
+
+    def not_packed(self, hidden: np.ndarray | None) -> np.ndarray | None:
+        """bool [n]: the objects not packed, `hidden` or cut away whole (None: none)."""
+        if self.removed is None:
+            return hidden
+        return self.removed if hidden is None else hidden | self.removed
 
     @property
     def shift(self) -> np.ndarray | float:

@@ -15,13 +15,15 @@ import numpy as np
 
 from ..atlas import scratch
 from ..atlas.parameterize import Records, Thinning, default_atlas_max, parameterize
+from ..atlas.records import GpuRecords
+from ..errors import RttaError
 from ..gl import glraw
 from ..gl.context import Capabilities, CapturePath, CapturePathName
 from ..gl.gpu import GpuScene
 from ..gl.targets import LayeredTarget
 from ..ldi.lens import Lens, LensPass
 from ..passes import oit
-from ..passes.atlas_gpu import GpuParameterize
+from ..passes.atlas_gpu import GpuParameterize, Sizing
 from ..passes.capture import CapturePass, RttPass, StdPass
 from ..passes.composite import LENS_MODES, CompositePass, CompositeTarget, Style
 from ..passes.post import AtlasPostPass
@@ -57,7 +59,8 @@ class Renderer:
         self.gpu = GpuScene(ctx, scene)
         self.gpu.cull_closed = self.settings.cull_closed
         self._capture: dict[str, CapturePass] = {}
-        self._gpu_atlas: GpuParameterize | None = None  # Algorithm 1 in compute shaders (Settings.parameterize)
+        self._gpu_atlas: GpuParameterize | None | bool = None  # Algorithm 1 in compute shaders (on_gpu); False: failed
+        self.atlas_sizing: Sizing = "exact"  # "ahead": no read waits for the GPU (rtta.passes.atlas_gpu)
         self._std: StdPass | None = None
         self._rtt: RttPass | None = None
         self.atlas = LayeredTarget(ctx, (64, 64), 1, depth_keyed=True)
@@ -123,22 +126,51 @@ class Renderer:
         """`thin`: picks objects not packed this time besides the hidden ones, from this
         frame's projection (fast navigation, rtta.renderer.navigation; atlas.parameterize)."""
         view, proj = matrices or self.matrices(camera, viewport)
-        hidden, corners = self.staging.staged(self.hidden_mask(), self.scene.box_corners(self.settings.bounds))
         s = self.settings
         largest = max(s.region_scale, s.region_scale * s.context_scale)
         atlas_max = s.atlas_max or default_atlas_max(viewport, s.border, largest)
         atlas_max = (min(atlas_max[0], self.caps.max_texture), min(atlas_max[1], self.caps.max_texture))
         max_layers = min(s.max_layers or self.caps.max_layers, self.caps.max_layers)
-        vpm, scales = proj @ view, self.region_scales(focus)
-        if s.parameterize == "gpu" and thin is None:  # thinning stays on the CPU; the GPU adds explode offsets
-            self._gpu_atlas = self._gpu_atlas or GpuParameterize(self.ctx)
-            return self._gpu_atlas.run(
-                self.gpu, self.scene.box_corners(s.bounds), vpm, viewport, border=s.border, atlas_max=atlas_max,
-                max_layers=max_layers, hidden=hidden, region_scale=scales, offsets=self.staging.offsets,
-            )  # fmt: skip
+        vpm = proj @ view
+        if thin is None and self.on_gpu:  # thinning stays on the CPU
+            return self._parameterize_gpu(vpm, viewport, atlas_max, max_layers, focus)
+        hidden, corners = self.staging.staged(self.hidden_mask(), self.scene.box_corners(s.bounds))
+        scales = self.region_scales(focus)
         return parameterize(
             corners, vpm, viewport, border=s.border, atlas_max=atlas_max, max_layers=max_layers,
             hidden=hidden, region_scale=scales, thin=thin,
+        )  # fmt: skip
+
+    @property
+    def on_gpu(self) -> bool:
+        """Whether Algorithm 1 runs on the GPU (Settings.parameterize; "auto" falls back to
+        the CPU, saying so once, where the compute shaders do not build)."""
+        if self.settings.parameterize == "cpu" or self._gpu_atlas is False:
+            return False
+        if self._gpu_atlas is None:
+            try:
+                self._gpu_atlas = GpuParameterize(self.ctx, self.atlas_sizing)
+            except RttaError as exc:
+                if self.settings.parameterize == "gpu":
+                    raise
+                self._gpu_atlas = False
+                self._warn(f"{exc}: Algorithm 1 runs on the CPU")
+                return False
+        return True
+
+    def _parameterize_gpu(self, vpm, viewport, atlas_max, max_layers, focus) -> GpuRecords:
+        """Algorithm 1 on the GPU (rtta.passes.atlas_gpu); the objects not packed and the scales
+        wanted are made (over n) only when what they depend on changed."""
+        s = self.settings
+        assert isinstance(self._gpu_atlas, GpuParameterize), "on_gpu made it"
+        self._gpu_atlas.sizing = self.atlas_sizing
+        key = (frozenset(self.hidden), self.staging.key(focus), frozenset(focus), s.region_scale, s.context_scale)
+        hidden = scales = None
+        if not self._gpu_atlas.knows(key, self.scene.count):
+            hidden, scales = self.staging.not_packed(self.hidden_mask()), self.region_scales(focus)
+        return self._gpu_atlas.run(
+            self.gpu, self.scene.box_corners(s.bounds), vpm, viewport, border=s.border, atlas_max=atlas_max,
+            max_layers=max_layers, hidden=hidden, region_scale=scales, offsets=self.staging.offsets, key=key,
         )  # fmt: skip
 
     def hidden_mask(self) -> np.ndarray | None:
@@ -382,7 +414,7 @@ class Renderer:
             self._projector_pass,
             self._lens_pass,
             self.staging,
-            self._gpu_atlas,
+            self._gpu_atlas or None,
         ]:
             if p is not None:
                 p.release()

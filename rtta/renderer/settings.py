@@ -13,11 +13,12 @@ from ..scene.bounds import Bounds, BoundsName
 class ParameterizeOn(StrEnum):
     """Where Algorithm 1 runs (Settings.parameterize)."""
 
-    CPU = "cpu"  # rtta.atlas.parameterize, numpy: the reference
-    GPU = "gpu"  # rtta.passes.atlas_gpu, compute shaders (opt-in)
+    AUTO = "auto"  # the GPU where its compute shaders build, else the CPU (said once)
+    CPU = "cpu"  # rtta.atlas.parameterize, numpy: the reference and the fallback
+    GPU = "gpu"  # rtta.passes.atlas_gpu, compute shaders: records, draw lists and order on the GPU
 
 
-ParameterizeName = Literal["cpu", "gpu"]
+ParameterizeName = Literal["auto", "cpu", "gpu"]
 PARAMETERIZE_ON: tuple[str, ...] = tuple(p.value for p in ParameterizeOn)
 
 
@@ -47,9 +48,12 @@ class Settings:
     cull_closed : bool, default True
         Cull the back faces of closed parts (`rtta.scene.closure`); the images are the same,
         False draws every object double-sided.
-    parameterize : {"cpu", "gpu"}, default "cpu"
-        Where Algorithm 1 runs: numpy (the reference) or compute shaders (opt-in; its shelf
-        packing differs, and a frame that thins objects for fast navigation runs on the CPU).
+    parameterize : {"auto", "cpu", "gpu"}, default "auto"
+        Where Algorithm 1 runs: compute shaders ("gpu": the records, the capture's draw lists
+        and compositing's order made on the GPU, so a frame's CPU cost does not grow with the
+        number of parts), numpy ("cpu": the reference) or "auto" (the GPU where its shaders
+        build). The GPU's shelf packing differs from the CPU's; a frame that thins objects for
+        fast navigation runs on the CPU.
 
     Examples
     --------
@@ -65,4 +69,4 @@ class Settings:
     context_scale: float = 1.0
     bounds: BoundsName | Bounds = "aabb"
     cull_closed: bool = True
-    parameterize: ParameterizeName | ParameterizeOn = "cpu"
+    parameterize: ParameterizeName | ParameterizeOn = "auto"

@@ -1,0 +1,118 @@
+"""The GPU-driven frame's atlas sizing (rtta.passes.atlas_gpu, sizing "ahead"): after the
+first frame nothing waits for the GPU, the layers follow the demand a frame late, a jump in
+demand scales one frame down without dropping an object, and the pictures equal the CPU path's."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from test_gpu_parameterize import VIEWPORT, assert_valid, camera, coverage_max, scene_of
+
+from rtta.atlas.parameterize import parameterize
+from rtta.gl.gpu import GpuScene
+from rtta.passes.atlas_gpu import GpuParameterize
+from rtta.passes.style import Style
+from rtta.renderer.settings import Settings
+from rtta.scene.camera import Camera
+
+KW = {"border": 1, "atlas_max": (162, 122), "max_layers": 256}
+
+
+@pytest.fixture
+def ahead(gl):
+    made = []
+
+    def make(n):
+        gpu, param = GpuScene(gl, scene_of(n)), GpuParameterize(gl, "ahead")
+        made.append((gpu, param))
+        return gpu, param
+
+    yield make
+    for gpu, param in made:
+        param.release()
+        gpu.release()
+
+
+def frame(param, gpu, scene, az, dist, key="same"):
+    cam = camera(scene, az, 20, dist, 0.0)
+    vpm = cam.projection(VIEWPORT[0] / VIEWPORT[1]) @ cam.view(scene.origin)
+    return vpm, param.run(gpu, scene.box_corners(), vpm, VIEWPORT, key=key, **KW)
+
+
+def test_only_the_first_frame_waits(ahead):
+    """Frames after the first read nothing back, and their records hold the invariants."""
+    scene = scene_of(2000)
+    gpu, param = ahead(2000)
+    for f, az in enumerate((10, 25, 40, 55)):
+        before = param.reads
+        vpm, rec = frame(param, gpu, scene, az, 1.5)
+        assert param.reads == before + (1 if f == 0 else 0)
+        assert not rec.is_read and rec.count == 2000
+        if f:  # T maps into the allocation: the largest layer, the layers chosen ahead
+            assert rec.atlas_size == (*KW["atlas_max"], param.layers)
+        ref = parameterize(scene.box_corners(), vpm, VIEWPORT, **KW)
+        assert_valid(rec, ref, KW["atlas_max"], KW["max_layers"])
+
+
+def test_a_jump_in_demand_scales_one_frame_down_then_grows(ahead):
+    """From far away (few layers) to inside the scene (many): that frame packs into the layers
+    it has, every visible object scaled down and none dropped; the next has the layers."""
+    scene = scene_of(2000)
+    gpu, param = ahead(2000)
+    frame(param, gpu, scene, 10, 3.0)
+    first = param.layers
+    vpm, jumped = frame(param, gpu, scene, 10, 0.6)
+    ref = parameterize(scene.box_corners(), vpm, VIEWPORT, **KW)
+    assert ref.atlas_size[2] > first, "the view must need more layers than the first frame had"
+    assert np.array_equal(jumped.visible, ref.visible) and jumped.atlas_size[2] == first
+    assert (jumped.scale[jumped.visible] < 1).all() and coverage_max(jumped) <= 1
+    _, grown = frame(param, gpu, scene, 10, 0.6)
+    assert param.layers >= ref.atlas_size[2] and grown.atlas_size[2] == param.layers
+    assert_valid(grown, ref, KW["atlas_max"], KW["max_layers"])
+    assert (grown.scale[grown.visible] == 1).all()
+
+
+def test_a_resize_makes_the_frame_exact(ahead):
+    scene = scene_of(2000)
+    gpu, param = ahead(2000)
+    frame(param, gpu, scene, 10, 1.5)
+    frame(param, gpu, scene, 20, 1.5)
+    before = param.reads
+    cam = camera(scene, 20, 20, 1.5, 0.0)
+    vpm = cam.projection(1.0) @ cam.view(scene.origin)
+    param.run(gpu, scene.box_corners(), vpm, (120, 120), key="same", **KW)
+    assert param.reads == before + 1
+
+
+def test_a_key_keeps_the_scales_uploaded(ahead):
+    """Equal keys: the hidden and the scales are neither made nor checked again; a new key uploads."""
+    scene = scene_of(10)
+    gpu, param = ahead(10)
+    hidden = np.zeros(10, bool)
+    hidden[3] = True
+    cam = camera(scene, 0, 0, 2.5, 0.0)
+    vpm = cam.projection(VIEWPORT[0] / VIEWPORT[1]) @ cam.view(scene.origin)
+    rec = param.run(gpu, scene.box_corners(), vpm, VIEWPORT, hidden=hidden, key=("a",), **KW)
+    assert not rec.visible[3]
+    rec = param.run(gpu, scene.box_corners(), vpm, VIEWPORT, key=("a",), **KW)  # no mask given: as before
+    assert not rec.visible[3]
+    rec = param.run(gpu, scene.box_corners(), vpm, VIEWPORT, key=("b",), **KW)
+    assert rec.visible[3]
+
+
+@pytest.mark.parametrize("mode", ["sprites", "ghosted", "transparent"])
+def test_ahead_pictures_equal_the_cpu_path(make_renderer, demo_scene, mode):
+    """Orbiting and zooming in, every frame of the ahead policy equals the CPU path's
+    picture (frames that jump in demand excepted: they are scaled down, and said to be)."""
+    style = Style(focus=frozenset({2}))
+    cpu = make_renderer(demo_scene, Settings(parameterize="cpu"))
+    gpu = make_renderer(demo_scene, Settings(parameterize="gpu"))
+    gpu.atlas_sizing = "ahead"
+    for az, dist in ((30, 2.5), (40, 2.4), (50, 2.2), (60, 2.2)):
+        cam = Camera.orbit(demo_scene.center, demo_scene.radius, az, 20, dist)
+        images = []
+        for r in (cpu, gpu):
+            r.capture(cam, (240, 180), focus=style.focus)
+            images.append(r.composite(mode, style).read()[0].astype(int))
+        differ = np.abs(images[0] - images[1]).max(axis=-1)
+        assert differ.max() <= 8 and (differ > 0).mean() < 0.002, f"{(differ > 0).sum()} px at {az}"

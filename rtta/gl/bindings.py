@@ -64,6 +64,13 @@ class Storage:
     PARAM_STATE: Final = 13  # parameterize.comp: layers, used size, the scale-down factor
     PARAM_SHELVES: Final = 14  # parameterize.comp: per shelf, its layer and height
     PARAM_OFFSETS: Final = 15  # parameterize.comp: per object, its explode offset (doubles)
+    SORT_KEYS: Final = 16  # depth_order.comp: the sort's keys (ids sorted with them in DRAW_LIST)
+    COMPOSITE_COMMAND: Final = 17  # depth_order.comp: compositing's indirect DrawArrays command (the count drawn)
+    SORT_OFFSETS: Final = 18  # depth_order.comp: per object, an offset of its bounds centre (floats)
+    DRAW_FLAGS: Final = 2  # capture_lists.comp: per object, closed and cut away whole
+    DRAW_RANGES: Final = 3  # capture_lists.comp: per object, its (first, count) in the index buffer
+    DRAW_COMMANDS: Final = 5  # capture_lists.comp: the capture's indirect draw commands, a list per kind
+    DRAW_COUNTS: Final = 6  # capture_lists.comp: the commands in each kind's list
 
 
 KINDS: Final = (Texture, Image, Storage)

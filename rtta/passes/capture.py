@@ -3,7 +3,8 @@
 - `CapturePass` (RTTA): the whole batch in ONE pass into the layered atlas; each vertex
   displaced by its object's T and routed to its layer (vertex- or geometry-shader path). On the
   vertex-shader path the objects whose region meets the viewport's edge, the only ones that
-  must be clipped to their regions, take a second draw call.
+  must be clipped to their regions, take a second draw call. R on the GPU alone
+  (GpuRecords): the draw lists are built there too (rtta.passes.draw_lists).
 - `StdPass`: the scene drawn normally into one target (baseline STD).
 - `RttPass`: each object drawn alone into its own full-viewport target (baseline RTT).
 
@@ -20,13 +21,14 @@ import moderngl
 import numpy as np
 
 from ..atlas.parameterize import Records
-from ..gl import glraw, glsl
+from ..gl import glsl
 from ..gl.context import CapturePath
 from ..gl.glsl import mat_bytes
 from ..gl.gpu import GpuScene
 from ..gl.targets import LayeredTarget
 from ..scene.closure import beyond_near
 from . import sections
+from .draw_lists import CaptureLists, capture_from_lists, capture_from_records, draws_from_lists
 
 DIRECT_RUNS = 1  # more runs of visible objects than this: one indirect multi-draw
 
@@ -92,6 +94,18 @@ class ScenePass:
             if target is not None and target.stencil and placement.capped.any():
                 self._capped = placement.capped
         self._drawn = (gpu, view, proj, target, variant)
+        return self._bind(gpu)
+
+    def prepare(
+        self, gpu: GpuScene, view: np.ndarray, proj: np.ndarray, target: LayeredTarget, **variant: bool
+    ) -> moderngl.VertexArray:
+        """setup() without the per-object work (culling, sections): for draws whose lists the
+        GPU built (rtta.passes.draw_lists), a placement without sections."""
+        self.program = self._program(gpu, view, proj, target, variant)
+        return self._bind(gpu)
+
+    def _bind(self, gpu: GpuScene) -> moderngl.VertexArray:
+        """The buffers, material and depth state for drawing with self.program."""
         gpu.bind_storage()
         gpu.bind_material(self.program)
         self.ctx.enable_only(moderngl.DEPTH_TEST)
@@ -234,6 +248,8 @@ class CapturePass(ScenePass):
             raise ValueError(f"capture path must be 'vs' or 'gs', got {path!r}")
         self.path = CapturePath(path)
         self.frames = 0
+        self.lists: CaptureLists | None = None  # made on the first frame of R on the GPU
+        self.gpu_lists_used = False  # whether the last frame drew from GPU-built lists
         if self.path is CapturePath.VS:
             super().__init__(ctx, CAPTURE_VS=True)
         else:
@@ -252,7 +268,9 @@ class CapturePass(ScenePass):
     ) -> None:
         """Upload R, then draw the whole batch once into `atlas` (sized to records.atlas_size):
         one draw call, two on the vertex-shader path when some regions meet the viewport's edge
-        (those alone are clipped); objects without a region (culled, hidden) are left out. normals=False
+        (those alone are clipped); objects without a region (culled, hidden) are left out. R on
+        the GPU (GpuRecords) and no sections: lists built there, a constant number of calls
+        (rtta.passes.draw_lists; `gpu_lists_used`). normals=False
         or ids=False: that image is not written (a colour mask). Compositing never reads ids
         and reads normals only for AO, edges and the projector; picking reads depths."""
         tw, th, td = records.atlas_size
@@ -260,41 +278,29 @@ class CapturePass(ScenePass):
         atlas.ensure((tw, th), td)
         atlas.clear()
         atlas.normals_written, atlas.ids_written = normals and atlas.normals, ids
+        self.gpu_lists_used = False
         if td == 0:
             return
-        gpu.upload_records(records)
+        on_gpu = getattr(records, "on_gpu", False)
+        if not on_gpu:  # GpuRecords: R is in the buffer already
+            gpu.upload_records(records)
         atlas.bind((0, 0, tw, th))
         atlas.write_mask(normals, ids)
         try:
-            if self.path is CapturePath.GS:  # the geometry shader clips every triangle
-                self._draw(gpu, view, proj, atlas, records.visible, clip=True)
-            else:  # only regions on the viewport's edge clip
-                edge = records.visible & records.meets_edge
-                self._draw(gpu, view, proj, atlas, records.visible & ~edge, clip=False)
-                self._draw(gpu, view, proj, atlas, edge, clip=True)
+            if on_gpu and draws_from_lists(records, gpu):
+                self.lists = self.lists or CaptureLists(self.ctx)
+                capture_from_lists(self, self.lists, gpu, view, proj, atlas, records.viewport)
+                self.gpu_lists_used = True
+            else:
+                capture_from_records(self, gpu, view, proj, atlas, records)
         finally:
             atlas.write_mask()
 
-    def _draw(
-        self,
-        gpu: GpuScene,
-        view: np.ndarray,
-        proj: np.ndarray,
-        atlas: LayeredTarget,
-        objects: np.ndarray,
-        *,
-        clip: bool,
-    ) -> None:
-        """Draw the objects in `objects` (bool [n]; culled and hidden ones are never in it),
-        clipped to their regions or not, in one call."""
-        if not objects.any():
-            return
-        vao = self.setup(gpu, view, proj, atlas, REGION_CLIP=clip and self.path is CapturePath.VS)
-        glraw.set_clip_distances(4, clip)
-        try:
-            self.draw_objects(vao, gpu, None if objects.all() else objects)
-        finally:
-            glraw.set_clip_distances(4, False)
+    def release(self) -> None:
+        super().release()
+        if self.lists is not None:
+            self.lists.release()
+            self.lists = None
 
 
 class StdPass(ScenePass):

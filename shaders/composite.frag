@@ -1,6 +1,6 @@
 #version 450
 // defines: MODE_SPRITE MODE_BLEND MODE_OUTLINE MODE_COLLECT FIRST_FETCHED MODE_HALO FOCUS_CLIP WITH_AO PROJECTOR LENS UPSAMPLE
-// defines: SPRITE_OUTLINE OUTLINE_QUAD
+// defines: SPRITE_OUTLINE OUTLINE_QUAD UPSAMPLE_DYNAMIC
 // Per-object compositing from the atlas:
 //   MODE_SPRITE  depth sprite: atlas colour, gl_FragDepth = atlas depth (focus objects, `sprites`)
 //   MODE_BLEND   premultiplied blend with the object's opacity (`transparent`, ghosted context)
@@ -26,6 +26,8 @@
 //   LENS         cut away (discard) texels whose world position is inside the lens (parity test)
 //   UPSAMPLE     the objects' regions hold less than one texel per pixel: depth-aware upsampling
 //                (a variant, not a branch: on llvmpipe both sides of a branch cost)
+//   UPSAMPLE_DYNAMIC  each sprite upsampled where its own scale is below u_upsample_below (a
+//                branch: draws from a GPU list, whose objects' scales the CPU does not know)
 #ifdef FIRST_FETCHED
 #extension GL_EXT_shader_framebuffer_fetch : require
 #extension GL_ARM_shader_framebuffer_fetch_depth_stencil : require
@@ -63,6 +65,9 @@ uniform vec4 u_outline_color;  // MODE_OUTLINE, SPRITE_OUTLINE
 uniform int u_outline_width;    // pixels (MODE_OUTLINE)
 uniform int u_halo_width;       // pixels (MODE_HALO)
 uniform vec4 u_halo_color;      // (rgb, strength)
+#ifdef UPSAMPLE_DYNAMIC
+uniform float u_upsample_below;  // sprites.UPSAMPLE_BELOW
+#endif
 uniform vec2 u_ortho_depth;     // an orthographic view: (1, near / (far - near)); perspective: (0, 0)
 layout(binding = BINDING_CONTEXT_DEPTH) uniform sampler2D u_context_depth;   // farthest context depth per pixel, 0: none (MODE_HALO)
 #ifdef FOCUS_CLIP
@@ -191,6 +196,8 @@ bool upsampled(vec2 px, out Sample o) {
 bool sampled(vec2 px, out Sample o) {
 #ifdef UPSAMPLE
     return upsampled(px, o);
+#elif defined(UPSAMPLE_DYNAMIC)
+    if (g_scale < u_upsample_below) return upsampled(px, o);
 #endif
     o.t = atlas_texel(g_map, g_scale, g_layer, px);
     if (outside(o.t.xy)) return false;

@@ -1,5 +1,5 @@
 #version 430
-// defines: MODE_COLLECT MODE_HALO
+// defines: MODE_COLLECT MODE_HALO UPSAMPLE_DYNAMIC
 // Point-sprite expansion: a screen-aligned quad over the object's B_viewport (its atlas
 // bounds mapped back through T^-1). What the fragments need of the record and the style
 // goes as flat values: no fragment reads the buffers (per-fragment loads cost on llvmpipe).
@@ -8,6 +8,9 @@
 // covers a quarter to a third fewer pixels than B_viewport (fragments outside B_viewport are
 // discarded by the fragment shader, which reads nothing outside B_atlas). A uniform, not a
 // define: one program draws with and without it (the choice is made per draw).
+// UPSAMPLE_DYNAMIC (draws from a GPU list, whose objects the CPU does not know): the outline
+// per sprite, where u_hull and its own B_viewport covers u_hull_min_area pixels and is not
+// upsampled, grown by the margin of its own scale (outlines.hull_margin's rule).
 #include "composite.glsl"
 
 layout(points) in;
@@ -36,6 +39,10 @@ uniform bool u_hull;
 uniform mat4 u_view_proj;
 uniform vec3 u_eye;        // the camera's position, scene origin at 0
 uniform float u_hull_margin;   // pixels: float32 and sub-pixel snapping, and the reach of a texel (CompositePass)
+#ifdef UPSAMPLE_DYNAMIC
+uniform float u_upsample_below;   // sprites.UPSAMPLE_BELOW
+uniform float u_hull_min_area;    // outlines.HULL_MIN_AREA
+#endif
 
 // The corners (bit 0: x, 1: y, 2: z at the maximum) on the outline of a box seen from each of
 // the 27 regions around it (a perspective view: the outline follows from the eye's position) (per axis: 0 within the slab, 1 below, 2 above; region 0, inside,
@@ -53,7 +60,7 @@ const int OUTLINE[162] = int[](
 // (0, 1, n-1, 2, n-2, ...); returns its vertex count, 0 where B_viewport's rectangle is drawn
 // instead: the camera inside the box, a corner behind the near plane or far off screen, a
 // flat box (an edge of no length) or a corner too sharp to grow by a small step.
-int hull(int object, out vec2 strip[6]) {
+int hull(int object, float margin, out vec2 strip[6]) {
     vec3 lo = bounds[2 * object].xyz, hi = bounds[2 * object + 1].xyz;
     ivec3 side = ivec3(lessThan(u_eye, lo)) + 2 * ivec3(greaterThan(u_eye, hi));
     int region = side.x + 3 * side.y + 9 * side.z;
@@ -83,7 +90,7 @@ int hull(int object, out vec2 strip[6]) {
         vec2 n0 = s * vec2(d0.y, -d0.x) / l0, n1 = s * vec2(d1.y, -d1.x) / l1;   // outward
         float c = 1.0 + dot(n0, n1);
         if (i < n && c < 0.01) return 0;
-        grown[i] = p[i] + u_hull_margin * (n0 + n1) / max(c, 0.01);
+        grown[i] = p[i] + margin * (n0 + n1) / max(c, 0.01);
     }
     strip[0] = grown[0];
     strip[1] = grown[1];
@@ -104,9 +111,17 @@ void main() {
 #endif
     vec2 corners[6] = vec2[](ndc.xy, ndc.zy, ndc.xw, ndc.zw, ndc.zw, ndc.zw);
     int count = 4;
-    if (u_hull) {
+    bool outlined = u_hull;
+    float margin = u_hull_margin;
+#ifdef UPSAMPLE_DYNAMIC
+    float scale = intBitsToFloat(r.info.w);
+    vec2 size = r.viewport.zw - r.viewport.xy;
+    outlined = outlined && scale >= u_upsample_below && size.x * size.y >= u_hull_min_area;
+    margin = scale == 1.0 ? 1.0 / 16.0 : 1.0 / 16.0 + 0.75 / scale;
+#endif
+    if (outlined) {
         vec2 strip[6];
-        int n = hull(v_object[0], strip);
+        int n = hull(v_object[0], margin, strip);
         if (n > 0) {
             count = n;
             for (int i = 0; i < 6; ++i) corners[i] = strip[i] / u_viewport * 2.0 - 1.0;

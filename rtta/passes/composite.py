@@ -13,7 +13,8 @@ oit.py), the ghosted context with 'pixel'; Style.halo draws halos around focus o
 context lies behind them.
 
 Here the order of a mode's draws (CompositePass); each draw is a SpriteDraw of sprites.py
-(SpritePass), the options are style.py's (Style, Mode, Order, Role).
+(SpritePass), the options are style.py's (Style, Mode, Order, Role). Where R stays on the GPU
+(a GpuRecords), the draws come from GPU lists (composite_gpu.py, order_gpu.py).
 """
 
 from __future__ import annotations
@@ -27,9 +28,10 @@ from ..gl.bindings import Storage, Texture
 from ..gl.glsl import mat_bytes
 from ..gl.gpu import GpuScene
 from ..gl.targets import CompositeTarget, LayeredTarget, release_framebuffer
+from .composite_gpu import GpuDraws, gpu_driven
 from .oit import PixelOrderPass, Refusal, blended_in_place, resolved_order
 from .sprites import UPSAMPLE_BELOW, Depth, SpriteDraw, SpritePass, upload
-from .style import BACKGROUND, LENS_MODES, MODES, ROLES, Mode, ModeName, Order, Style
+from .style import BACKGROUND, LENS_MODES, MODES, ROLES, Mode, ModeName, Order, Style, focus_ids, style_params
 
 # re-exported: what the renderer, the viewer, the benchmarks and the tests import from here
 __all__ = ["BACKGROUND", "LENS_MODES", "MODES", "ROLES", "CompositePass", "CompositeTarget", "Style", "back_to_front"]
@@ -62,6 +64,8 @@ class CompositePass:
         self._context_fbo: moderngl.Framebuffer | None = None
         self.fallbacks = 0  # frames that asked for pixel order and got object order
         self._opacity = np.zeros(0, np.float32)  # per object, as the last render draws them
+        self._gpu: GpuDraws | None = None  # the GPU-driven branch's state, made on first use
+        self.gpu_driven = False  # whether the last render drew from GPU lists (composite_gpu)
 
     @property
     def passes(self) -> list[str]:
@@ -81,7 +85,7 @@ class CompositePass:
         gpu: GpuScene,
         style: Style,
         mode: ModeName | Mode,
-        view_depth: np.ndarray,
+        view_depth: np.ndarray | None = None,
         target: CompositeTarget,
         post=None,
         view_proj=None,
@@ -89,14 +93,31 @@ class CompositePass:
         lens=None,
         eye=None,
         ortho_near: float | None = None,
+        view: np.ndarray | None = None,
+        offsets: np.ndarray | None = None,
     ) -> None:
         """Composite the captured atlas into `target` (sized to the records' viewport).
         `projection`: (ProjectorPass, Projector, scene origin) to paint with; `lens`: (LensPass,
         Lens, scene origin) cutting the context away in the ghosted modes. Both need `view_proj`.
         `eye`: the camera's position (scene origin at 0); with `view_proj`, sprites cover the
-        projected outline of each object's B_world instead of all of B_viewport."""
+        projected outline of each object's B_world instead of all of B_viewport.
+
+        The back-to-front order is by `view_depth` (per object: the view depth of its bounds
+        centre), or from `view` (the view matrix, scene origin at 0) and the bounds centres:
+        on the GPU from `gpu.bounds` (moved as drawn), on the CPU from the scene's bounds
+        moved by `offsets` ([n, 3] explode offsets; None: none).
+
+        GPU-driven (`gpu_driven` after the call): where `records` is a GpuRecords and `view` is
+        given, `ghosted`, `ghosted-ao`, `sprites` and `transparent` in object order (with
+        outlines and halos) draw from lists sorted on the GPU and read nothing of R back
+        (composite_gpu.py); pixel order, a lens and a projector take the CPU branch, which
+        reads R back (GpuRecords.read)."""
         if lens is not None and mode not in LENS_MODES:
             lens = None
+        try:
+            mode = Mode(mode)
+        except ValueError:
+            raise ValueError(f"unknown mode {mode!r}; modes: {', '.join(MODES)}") from None
         inv_view_proj = None  # (P V)^-1 once per render, for every draw that rebuilds world positions
         if projection is not None or lens is not None:
             if view_proj is None:
@@ -109,34 +130,21 @@ class CompositePass:
             hull=None if eye is None or view_proj is None else (mat_bytes(view_proj), tuple(float(v) for v in eye)),
             ortho_near=ortho_near,
         )
-        try:
-            mode = Mode(mode)
-        except ValueError:
-            raise ValueError(f"unknown mode {mode!r}; modes: {', '.join(MODES)}") from None
+        self.gpu_driven = gpu_driven(records, mode, style, view, projection, lens)
+        if self.gpu_driven:
+            return self._render_gpu(atlas, records, gpu, style, mode, view, target, post)
+        if self._gpu is not None:
+            self._gpu.styles_key = None  # the style buffer is written below
         n = len(records.visible)
-        params = np.zeros((max(n, 1), 4), np.float32)
-        params[:n, 0] = style.default_opacity if mode is Mode.TRANSPARENT else 1.0
-        for oid, a in style.opacity.items():
-            params[oid, 0] = float(np.clip(a, 0.0, 1.0))
-        focus = np.array(sorted(o for o in style.focus if 0 <= o < n), np.int64)
-        params[focus, 1] = 1.0
-        if mode is Mode.GHOSTED_AO:
-            ao, edges = style.shaded(n)
-            params[:n, 2], params[:n, 3] = ao, edges
+        if view_depth is None:
+            if view is None:
+                raise ValueError("compositing needs view_depth or view")
+            view_depth = self.view_depth(gpu, view, offsets)
+        params = style_params(style, mode, n)
+        focus = focus_ids(style, n)
         upload(self.styles, params)
         self._opacity = params[:n, 0]  # a view: as drawn (the ghosted context's too), for OrderMarks
-        target.ensure(records.viewport)
-        target.fbo.use()
-        target.fbo.clear(*BACKGROUND, depth=1.0)
-        gpu.bind_storage()
-        gpu.bounds.bind_to_storage_buffer(Storage.BOUNDS)
-        self.styles.bind_to_storage_buffer(Storage.STYLES)
-        atlas.color.use(Texture.ATLAS_COLOR)
-        glraw.bind_texture_array(Texture.ATLAS_DEPTH, atlas.depth.glo)  # depth-keyed: no id image is read
-        if projection is not None:
-            if atlas.normal is None:
-                raise ValueError("a projection reads the atlas normals: an atlas made with normals=False has none")
-            atlas.normal.use(Texture.ATLAS_NORMAL)
+        self._bind(atlas, gpu, target, records, projection)
         everyone = np.arange(n)
         outlined = style.outline_width >= 1
         draw = self.sprites.draw
@@ -170,6 +178,63 @@ class CompositePass:
                 self._halo(focus, context, style, records, target)
             if outlined and not fused:
                 draw(focus, SpriteDraw.outlines(), style, records)
+
+    @staticmethod
+    def view_depth(gpu: GpuScene, view: np.ndarray, offsets: np.ndarray | None = None) -> np.ndarray:
+        """The view depth of each object's bounds centre (moved by `offsets`), for the CPU branch."""
+        scene = gpu.scene
+        centers = (scene.aabb_min + scene.aabb_max) / 2 - scene.origin + (0.0 if offsets is None else offsets)
+        return -(centers @ view[2, :3] + view[2, 3])
+
+    def _bind(self, atlas: LayeredTarget, gpu: GpuScene, target: CompositeTarget, records, projection=None) -> None:
+        """The target cleared and bound, the buffers and atlas images bound for the sprite draws."""
+        target.ensure(records.viewport)
+        target.fbo.use()
+        target.fbo.clear(*BACKGROUND, depth=1.0)
+        gpu.bind_storage()
+        gpu.bounds.bind_to_storage_buffer(Storage.BOUNDS)
+        self.styles.bind_to_storage_buffer(Storage.STYLES)
+        atlas.color.use(Texture.ATLAS_COLOR)
+        glraw.bind_texture_array(Texture.ATLAS_DEPTH, atlas.depth.glo)  # depth-keyed: no id image is read
+        if projection is not None:
+            if atlas.normal is None:
+                raise ValueError("a projection reads the atlas normals: an atlas made with normals=False has none")
+            atlas.normal.use(Texture.ATLAS_NORMAL)
+
+    def _render_gpu(self, atlas, records, gpu: GpuScene, style: Style, mode: Mode, view, target, post) -> None:
+        """The GPU-driven branch (composite_gpu.py): the same draws as the CPU branch's, from
+        GPU lists; the focus outlines in a pass of their own (the general variant: whether a
+        focus region is upsampled is not known here)."""
+        if self._gpu is None:
+            self._gpu = GpuDraws(self.ctx)
+        n = records.count
+        self._gpu.styles(self.styles, style, mode, n)
+        focus = focus_ids(style, n)
+        focused = self.sprites.listed(focus) if len(focus) else None
+        draw = self.sprites.draw
+        outlined = style.outline_width >= 1 and focused is not None
+        if mode is Mode.SPRITES:
+            self._bind(atlas, gpu, target, records)
+            draw(self._gpu.everyone(n), SpriteDraw.opaque(), style, records)
+        elif mode is Mode.TRANSPARENT:
+            ordered = self._gpu.sorted(n=n, gpu=gpu, view=view, styles=None)
+            self._bind(atlas, gpu, target, records)
+            draw(ordered, SpriteDraw.transparent(), style, records)
+        else:
+            with_ao = mode is Mode.GHOSTED_AO
+            if with_ao:
+                if post is None or post.texture is None:
+                    raise ValueError("ghosted-ao needs the post-processed atlas (post, AtlasPostPass)")
+                post.texture.use(Texture.ATLAS_POST)
+            context = self._gpu.sorted(n=n, gpu=gpu, view=view, styles=self.styles)
+            self._bind(atlas, gpu, target, records)
+            if focused is not None:
+                draw(focused, SpriteDraw.opaque(shaded=with_ao), style, records)
+            draw(context, SpriteDraw.context(desaturate=style.desaturate, shaded=with_ao), style, records)
+            if style.halo > 0 and focused is not None:
+                self._halo(focused, context, style, records, target)
+        if outlined:
+            draw(focused, SpriteDraw.outlines(), style, records)
 
     def _halo(self, focus, context, style: Style, records: Records, target: CompositeTarget) -> None:
         """Halos around the focus objects where context lies behind them: the farthest
@@ -269,5 +334,7 @@ class CompositePass:
         self._release_context_depth()
         if self._pixel_order is not None:
             self._pixel_order.release()
+        if self._gpu is not None:
+            self._gpu.release()
         self.sprites.release()
         self.styles.release()

@@ -4,7 +4,9 @@ atlas images. Every draw of compositing is one of these; `SpriteDraw` says which
 
 `SpritePass.draw(ids, draw, style, records)` draws `ids` in order into the bound framebuffer,
 from the atlas, records and style buffers CompositePass bound (rtta.gl.bindings), with the
-frame's projector, lens and outline hull (`SpritePass.frame`).
+frame's projector, lens and outline hull (`SpritePass.frame`). `ids` is a CPU list, or a
+`Listed`: a list on the GPU (compositing's GPU-driven draws, order_gpu.GpuOrder), drawn with the
+CPU's per-draw choices made per sprite in the shaders (UPSAMPLE_DYNAMIC) and no read of R.
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ import numpy as np
 from ..atlas.parameterize import Records
 from ..gl import glsl
 from ..gl.bindings import Storage
-from .outlines import hull_margin, worth_outlines
+from .outlines import HULL_MIN_AREA, hull_margin, worth_outlines
 from .style import Style
 
 UPSAMPLE_BELOW = 0.999  # regions with fewer texels per pixel are upsampled
@@ -125,6 +127,27 @@ class SpriteDraw:
         return dataclasses.replace(self, kind=kind, depth=Depth.NEAREST if tested else Depth.OFF, fetched=fetched)
 
 
+@dataclass(frozen=True)
+class Listed:
+    """Ids to draw from a buffer on the GPU, in its order: the first `count`, or as many as the
+    indirect DrawArrays `command` says (order_gpu.GpuOrder's). Objects not visible in R draw
+    nothing (composite.geom), so a list may hold them.
+
+    Attributes
+    ----------
+    ids : moderngl.Buffer
+        int32 object ids.
+    count : int
+        How many to draw, where `command` is None.
+    command : moderngl.Buffer or None
+        (count, 1, 0, 0) uint32, written on the GPU.
+    """
+
+    ids: moderngl.Buffer
+    count: int = 0
+    command: moderngl.Buffer | None = None
+
+
 def upload(buf: moderngl.Buffer, data) -> None:
     """`data`: bytes or a contiguous array (written as it is: no copy to bytes)."""
     size = memoryview(data).nbytes
@@ -165,9 +188,19 @@ class SpritePass:
             self._vaos[key] = self.ctx.vertex_array(prog, [])
         return self._programs[key], self._vaos[key]
 
+    def listed(self, ids) -> Listed:
+        """A small CPU list of ids (the focus) as a `Listed` (uploaded; no read of R)."""
+        ids = np.ascontiguousarray(ids, np.int32)
+        if len(ids):
+            upload(self.order, ids)
+        return Listed(self.order, len(ids))
+
     def draw(self, ids, draw: SpriteDraw, style: Style, records: Records) -> None:
         """Draw `ids` in order: one draw per run of objects captured at one texel per pixel
-        or more, and per run below it (those are upsampled); outlines read texels as they are."""
+        or more, and per run below it (those are upsampled); outlines read texels as they are.
+        A `Listed` is drawn as one run, each sprite choosing for itself (`draw_listed`)."""
+        if isinstance(ids, Listed):
+            return self.draw_listed(ids, draw, style, records)
         ids = np.asarray(ids, np.int32)
         ids = ids[records.visible[ids]] if len(ids) else ids
         if len(ids) == 0:
@@ -180,7 +213,26 @@ class SpritePass:
             upsample = bool(records.scale[run[0]] < UPSAMPLE_BELOW)
             self._run(run, dataclasses.replace(draw, upsample=upsample), style, records)
 
+    def draw_listed(self, listed: Listed, draw: SpriteDraw, style: Style, records) -> None:
+        """Draw a GPU list with one draw call: each sprite upsampled where its own scale asks
+        for it, and over its projected outline where its own B_viewport is large enough
+        (composite.geom/frag's UPSAMPLE_DYNAMIC); the general outline variant (OUTLINE_QUAD
+        needs every scale). `records` need only `viewport` (a GpuRecords is not read)."""
+        if listed.command is None and listed.count == 0:
+            return
+        listed.ids.bind_to_storage_buffer(Storage.DRAW_LIST)
+        defines = self._defines(None, draw, style, records)
+        defines["UPSAMPLE_DYNAMIC"] = draw.kind not in (Kind.OUTLINES, Kind.HALOS)
+        hull = None if draw.kind is Kind.HALOS else self._hull
+        prog, vao = self._setup(defines, draw, style, records, hull)
+        if "u_upsample_below" in prog:
+            glsl.uniform(prog, "u_upsample_below").value = UPSAMPLE_BELOW
+        if "u_hull_min_area" in prog:
+            glsl.uniform(prog, "u_hull_min_area").value = float(HULL_MIN_AREA)
+        self._render(vao, listed, draw)
+
     def _defines(self, ids, draw: SpriteDraw, style: Style, records: Records) -> dict[str, bool]:
+        """The draw's variant; `ids` None: a GPU list (no OUTLINE_QUAD: it needs their scales)."""
         kind, outline = draw.kind, draw.kind is Kind.OUTLINES
         return {
             "MODE_SPRITE": kind is Kind.OPAQUE,
@@ -192,7 +244,8 @@ class SpritePass:
             "FOCUS_CLIP": kind is Kind.COLLECTED,
             "SPRITE_OUTLINE": draw.outlined,
             "OUTLINE_QUAD": (
-                (outline or draw.outlined)
+                ids is not None
+                and (outline or draw.outlined)
                 and int(style.outline_width) == 1
                 and records.border >= 1
                 and bool((records.scale[ids] == 1.0).all())
@@ -207,11 +260,18 @@ class SpritePass:
         upload(self.order, np.ascontiguousarray(ids, np.int32))
         self.order.bind_to_storage_buffer(Storage.DRAW_LIST)
         defines = self._defines(ids, draw, style, records)
-        projection = self._projection if defines["PROJECTOR"] else None
-        lens = self._lens if defines["LENS"] else None
         # upsampled pixels reach past the outline; small sprites do not repay the outline's cost
         halo = draw.kind is Kind.HALOS
         hull = None if halo or draw.upsample or self._hull is None or not worth_outlines(records, ids) else self._hull
+        margin = hull_margin(records.scale[ids]) if hull is not None else 0.0
+        _, vao = self._setup(defines, draw, style, records, hull, margin)
+        self._render(vao, len(ids), draw)
+
+    def _setup(self, defines, draw: SpriteDraw, style: Style, records, hull, margin: float = 0.0):
+        """The draw's program with its uniforms set (`hull`: (P V bytes, eye) or None, `margin`
+        its growth in pixels); returns (program, vertex array)."""
+        projection = self._projection if defines["PROJECTOR"] else None
+        lens = self._lens if defines["LENS"] else None
         on = [k for k, v in defines.items() if v]
         self.passes.append(
             "+".join(
@@ -230,7 +290,8 @@ class SpritePass:
             view_proj, eye = hull
             glsl.uniform(prog, "u_view_proj").write(view_proj)
             glsl.uniform(prog, "u_eye").value = eye
-            glsl.uniform(prog, "u_hull_margin").value = hull_margin(records.scale[ids])
+            if "u_hull_margin" in prog:  # UPSAMPLE_DYNAMIC: each sprite's own
+                glsl.uniform(prog, "u_hull_margin").value = margin
         if projection is not None:
             pass_, projector, origin = projection
             pass_.bind(prog, projector, origin)
@@ -248,10 +309,10 @@ class SpritePass:
         ):
             if name in prog:  # the compiler drops what a variant does not use
                 glsl.uniform(prog, name).value = value
-        self._render(vao, len(ids), draw)
+        return prog, vao
 
-    def _render(self, vao: moderngl.VertexArray, count: int, draw: SpriteDraw) -> None:
-        """The draw's GL state around one draw call, then the defaults back."""
+    def _render(self, vao: moderngl.VertexArray, count: int | Listed, draw: SpriteDraw) -> None:
+        """The draw's GL state around one draw call (of `count` points, or a Listed's), then the defaults back."""
         flags = moderngl.NOTHING
         if draw.depth is not Depth.OFF:
             flags |= moderngl.DEPTH_TEST
@@ -266,7 +327,12 @@ class SpritePass:
         if masked:
             fbo.color_mask = (False, False, False, False)
         fbo.use()
-        vao.render(moderngl.POINTS, vertices=count)
+        if not isinstance(count, Listed):
+            vao.render(moderngl.POINTS, vertices=count)
+        elif count.command is None:
+            vao.render(moderngl.POINTS, vertices=count.count)
+        else:
+            vao.render_indirect(count.command, moderngl.POINTS, count=1)
         fbo.depth_mask = True
         self.ctx.depth_func = "<"
         if masked:

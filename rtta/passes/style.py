@@ -153,3 +153,60 @@ class Style:
         every = np.ones(n, bool)
         ao, edges = (choice(Role, getattr(self, name), name) for name in ("ao_objects", "edge_objects"))
         return (every if ao is Role.ALL else focus), (every if edges is Role.ALL else focus)
+
+
+def style_params(style: Style, mode: Mode, n: int, *, faded: bool = False) -> np.ndarray:
+    """Compositing's style parameters per object (composite.glsl's Style): [max(n, 1), 4]
+    float32 of (opacity, focus, uses AO, uses edges).
+
+    Parameters
+    ----------
+    style : Style
+        Opacities, focus, and the roles of AO and edges (ghosted-ao).
+    mode : Mode
+        `transparent` takes `style.default_opacity` where `style.opacity` names none, the
+        other modes 1; `ghosted-ao` gives the AO and edge roles.
+    n : int
+        Objects.
+    faded : bool, default False
+        The context's opacities times `style.context_opacity` (the ghosted context's blend).
+
+    Returns
+    -------
+    numpy.ndarray
+        The parameters, row `i` object `i`'s.
+    """
+    params = np.zeros((max(n, 1), 4), np.float32)
+    params[:n, 0] = style.default_opacity if mode is Mode.TRANSPARENT else 1.0
+    for oid, a in style.opacity.items():
+        params[oid, 0] = float(np.clip(a, 0.0, 1.0))
+    focus = focus_ids(style, n)
+    params[focus, 1] = 1.0
+    if mode is Mode.GHOSTED_AO:
+        ao, edges = style.shaded(n)
+        params[:n, 2], params[:n, 3] = ao, edges
+    if faded:
+        context = np.ones(n, bool)
+        context[focus] = False
+        params[:n][context, 0] = style.context_opacity * params[:n][context, 0]
+    return params
+
+
+def focus_ids(style: Style, n: int) -> np.ndarray:
+    """The focus objects among `n`, ascending (int64)."""
+    return np.array(sorted(o for o in style.focus if 0 <= o < n), np.int64)
+
+
+def style_key(style: Style, mode: Mode, n: int) -> tuple:
+    """What `style_params` depends on, to build and upload them only when it changes
+    (the work of it grows with the opacities and focus named, not with `n`)."""
+    return (
+        mode,
+        n,
+        style.default_opacity,
+        tuple(sorted(style.opacity.items())),
+        tuple(sorted(style.focus)),
+        style.context_opacity,
+        str(style.ao_objects),
+        str(style.edge_objects),
+    )

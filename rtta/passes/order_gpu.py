@@ -1,0 +1,163 @@
+"""Compositing's draw order on the GPU (issue 43): the objects to draw, back to front, as
+`composite.back_to_front` orders them (view depth of each bounds centre, farthest first, ties
+by id), sorted in compute shaders (shaders/depth_order.comp) into the draw list that sprite
+draws read (`Storage.DRAW_LIST`), with their count in an indirect DrawArrays command. Nothing
+of it is read back, and the CPU's work per frame does not grow with the objects (the sort's
+dispatches grow with log² of them: 36 at 131,072).
+
+The sort is bitonic over (key, id) pairs padded to a power of two: the pairs are unique, so
+the order is the same on every driver; the steps within a block of BLOCK elements run in
+shared memory, one dispatch per block-sized merge.
+"""
+
+from __future__ import annotations
+
+import moderngl
+import numpy as np
+
+from ..gl import glsl
+from ..gl.bindings import Storage
+
+KEYS, BLOCK_SORT, STEP, BLOCK_MERGE = 1, 2, 3, 4  # depth_order.comp's stages
+BLOCK = 1024  # elements sorted in shared memory by one work group
+GROUP = 64  # invocations of that work group (each compares BLOCK / 2 / GROUP pairs a step)
+STEP_GROUP = 256  # invocations per work group of the key and global step stages
+
+
+def sort_length(count: int) -> int:
+    """The sort's length for `count` objects: a power of two, at least BLOCK."""
+    return max(BLOCK, 1 << max(count - 1, 0).bit_length())
+
+
+class GpuOrder:
+    """Sorts a frame's objects back to front on the GPU into `ids` (the draw list) and counts
+    the ones to draw into `command` (an indirect DrawArrays command).
+
+    Parameters
+    ----------
+    ctx : moderngl.Context
+        An OpenGL 4.3+ context (compute shaders).
+
+    Attributes
+    ----------
+    ids : moderngl.Buffer
+        After `sort`: int32 ids, the objects to draw first (farthest first), then the others.
+    command : moderngl.Buffer
+        After `sort`: (count, 1, 0, 0) uint32, count the objects to draw; for
+        `VertexArray.render_indirect(command, moderngl.POINTS, count=1)`.
+    """
+
+    def __init__(self, ctx: moderngl.Context) -> None:
+        self.ctx = ctx
+        self.programs: dict[tuple[int, bool], moderngl.ComputeShader] = {}
+        self.keys = ctx.buffer(reserve=4 * BLOCK)
+        self.ids = ctx.buffer(reserve=4 * BLOCK)
+        self.command = ctx.buffer(reserve=16)
+        self.offsets = ctx.buffer(reserve=12)
+        self._offsets_of: np.ndarray | None = None  # the offsets uploaded (compared by identity)
+        self.dispatches = 0  # of the last sort
+
+    def _program(self, stage: int, offsets: bool = False) -> moderngl.ComputeShader:
+        key = (stage, offsets)
+        if key not in self.programs:
+            self.programs[key] = self.ctx.compute_shader(
+                glsl.load("depth_order.comp", STAGE=stage, BLOCK=BLOCK, GROUP=GROUP, OFFSETS=offsets)
+            )
+        return self.programs[key]
+
+    def _ensure(self, length: int) -> None:
+        for buf in (self.keys, self.ids):
+            if buf.size < 4 * length:
+                buf.orphan(4 * length)
+
+    def _upload_offsets(self, offsets: np.ndarray | None) -> bool:
+        """Upload per-object offsets [n, 3] when the array object changed; whether there are any."""
+        if offsets is None:
+            return False
+        if offsets is not self._offsets_of:
+            data = np.ascontiguousarray(offsets, np.float32)
+            if self.offsets.size < data.nbytes:
+                self.offsets.orphan(data.nbytes)
+            self.offsets.write(data)
+            self._offsets_of = offsets
+        self.offsets.bind_to_storage_buffer(Storage.SORT_OFFSETS)
+        return True
+
+    def sort(
+        self,
+        *,
+        count: int,
+        records: moderngl.Buffer,
+        bounds: moderngl.Buffer,
+        view: np.ndarray,
+        styles: moderngl.Buffer | None = None,
+        offsets: np.ndarray | None = None,
+    ) -> None:
+        """Order `count` objects back to front for `view` into `ids`, their count in `command`.
+
+        Parameters
+        ----------
+        count : int
+            Objects (entries of the record, bounds and style buffers).
+        records : moderngl.Buffer
+            R (shaders/records.glsl): objects whose `info.y` is 0 are not drawn.
+        bounds : moderngl.Buffer
+            B_world per object as (min, max) vec4 pairs, relative to the scene origin (GpuScene.bounds).
+        view : numpy.ndarray
+            The 4x4 view matrix (scene origin at 0): view depth is -(view @ centre).z.
+        styles : moderngl.Buffer, optional
+            Compositing's style parameters (opacity, focus, ao, edges) per object: the objects
+            flagged focus are not drawn (the ghosted context). None: every visible object is.
+        offsets : numpy.ndarray, optional
+            [count, 3] added to the bounds centres (uploaded when the array object changes).
+        """
+        length = sort_length(count)
+        self._ensure(length)
+        self.command.write(np.array([0, 1, 0, 0], np.uint32))
+        self.keys.bind_to_storage_buffer(Storage.SORT_KEYS)
+        self.ids.bind_to_storage_buffer(Storage.DRAW_LIST)
+        self.command.bind_to_storage_buffer(Storage.COMPOSITE_COMMAND)
+        records.bind_to_storage_buffer(Storage.RECORDS)
+        bounds.bind_to_storage_buffer(Storage.BOUNDS)
+        if styles is not None:
+            styles.bind_to_storage_buffer(Storage.STYLES)
+        moved = self._upload_offsets(offsets)
+        prog = self._program(KEYS, moved)
+        glsl.uniform(prog, "u_count").value = count
+        glsl.uniform(prog, "u_length").value = length
+        glsl.uniform(prog, "u_depth_row").value = tuple(float(v) for v in np.asarray(view, np.float64)[2])
+        glsl.uniform(prog, "u_exclude_focus").value = styles is not None
+        self.dispatches = 0
+        self._run(prog, length // STEP_GROUP)
+        self._run(self._program(BLOCK_SORT), length // BLOCK)
+        k = 2 * BLOCK
+        while k <= length:
+            j = k // 2
+            while j >= BLOCK:
+                step = self._program(STEP)
+                glsl.uniform(step, "u_k").value = k
+                glsl.uniform(step, "u_j").value = j
+                glsl.uniform(step, "u_length").value = length
+                self._run(step, length // 2 // STEP_GROUP)
+                j //= 2
+            merge = self._program(BLOCK_MERGE)
+            glsl.uniform(merge, "u_k").value = k
+            self._run(merge, length // BLOCK)
+            k *= 2
+        self.ctx.memory_barrier(moderngl.COMMAND_BARRIER_BIT | moderngl.SHADER_STORAGE_BARRIER_BIT)
+
+    def _run(self, prog: moderngl.ComputeShader, groups: int) -> None:
+        if self.dispatches:
+            self.ctx.memory_barrier(moderngl.SHADER_STORAGE_BARRIER_BIT)
+        prog.run(group_x=groups)
+        self.dispatches += 1
+
+    def read(self) -> np.ndarray:
+        """The ids to draw, in order (reads back and waits: for tests and inspection)."""
+        count = int(np.frombuffer(self.command.read(4), np.uint32)[0])
+        return np.frombuffer(self.ids.read(4 * count), np.int32).copy() if count else np.zeros(0, np.int32)
+
+    def release(self) -> None:
+        for obj in [*self.programs.values(), self.keys, self.ids, self.command, self.offsets]:
+            obj.release()
+        self.programs.clear()

@@ -1,0 +1,122 @@
+#version 430
+// defines: STAGE BLOCK GROUP OFFSETS
+// Compositing's draw order on the GPU (rtta.passes.order_gpu.GpuOrder): objects back to front by
+// the view depth of their bounds centre, ties by id (composite.back_to_front's order), as a
+// bitonic sort of (key, id) over a power-of-two length; (key, id) pairs are unique, so the
+// order is one and the same on every driver. One stage per dispatch:
+//   STAGE 1 (per element): the key of each object, an order-preserving uint of its view z
+//            (ascending: farthest first); objects not drawn (invisible in R, or a focus object
+//            where u_exclude_focus) and the padding keyed last; the drawn ones counted into
+//            the indirect DrawArrays command (count, 1, 0, 0)
+//   STAGE 2 (per BLOCK elements): the whole bitonic sort of each block, in shared memory
+//   STAGE 3 (per element pair): one compare-exchange step (u_k, u_j) with j >= BLOCK
+//   STAGE 4 (per BLOCK elements): the steps j < BLOCK of merge u_k, in shared memory
+// OFFSETS: per-object offsets (x, y, z float triples) added to the bounds centres.
+#include "records.glsl"
+
+#if STAGE == 1 || STAGE == 3
+layout(local_size_x = 256) in;
+#else
+layout(local_size_x = GROUP) in;  // each invocation compares BLOCK / 2 / GROUP pairs a step
+#endif
+
+layout(std430, binding = BINDING_SORT_KEYS) buffer KeyBuffer { uint keys[]; };
+layout(std430, binding = BINDING_DRAW_LIST) buffer IdBuffer { uint ids[]; };
+
+uniform uint u_k;       // the bitonic merge's size (stages 3, 4)
+uniform uint u_j;       // the compare distance (stage 3)
+uniform uint u_length;  // elements (a power of two >= u_count; stages 1, 3)
+
+bool after(uint ka, uint ia, uint kb, uint ib) { return ka > kb || (ka == kb && ia > ib); }
+
+#if STAGE == 1
+struct Style { vec4 params; };  // composite.glsl's: (opacity, focus, uses AO, uses edges)
+layout(std430, binding = BINDING_STYLES) readonly buffer StyleBuffer { Style styles[]; };
+layout(std430, binding = BINDING_BOUNDS) readonly buffer BoundsBuffer { vec4 bounds[]; };
+layout(std430, binding = BINDING_COMPOSITE_COMMAND) buffer CommandBuffer { uint command[4]; };
+#ifdef OFFSETS
+layout(std430, binding = BINDING_SORT_OFFSETS) readonly buffer OffsetBuffer { float offsets[]; };
+#endif
+uniform uint u_count;          // objects
+uniform vec4 u_depth_row;      // the view matrix's third row: view z = dot(row.xyz, p) + row.w
+uniform bool u_exclude_focus;  // objects with the style's focus flag are not drawn
+
+// float -> uint with the same order (-0 as +0, so that they tie as numpy's keys do)
+uint ordered(float f) {
+    uint u = f == 0.0 ? 0u : floatBitsToUint(f);
+    return (u & 0x80000000u) != 0u ? ~u : u | 0x80000000u;
+}
+
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= u_length) return;
+    uint key = 0xFFFFFFFFu;
+    if (i < u_count) {
+        bool drawn = records[i].info.y != 0 && !(u_exclude_focus && styles[i].params.y > 0.5);
+        if (drawn) {
+            vec3 c = (bounds[2 * i].xyz + bounds[2 * i + 1].xyz) * 0.5;
+#ifdef OFFSETS
+            c += vec3(offsets[3 * i], offsets[3 * i + 1], offsets[3 * i + 2]);
+#endif
+            precise float z = dot(u_depth_row.xyz, c) + u_depth_row.w;
+            key = min(ordered(z), 0xFFFFFFFEu);  // a drawn key stays before every undrawn one
+            atomicAdd(command[0], 1u);
+        }
+    }
+    keys[i] = key;
+    ids[i] = i;  // the padding's ids (>= u_count) stay after every object's
+}
+
+#elif STAGE == 3
+void main() {
+    uint g = gl_GlobalInvocationID.x;
+    uint i = 2u * u_j * (g / u_j) + (g % u_j), l = i + u_j;
+    if (l >= u_length) return;
+    bool ascending = (i & u_k) == 0u;
+    uint ka = keys[i], kb = keys[l], ia = ids[i], ib = ids[l];
+    if (after(ka, ia, kb, ib) == ascending) {
+        keys[i] = kb; keys[l] = ka;
+        ids[i] = ib; ids[l] = ia;
+    }
+}
+
+#else
+shared uint s_key[BLOCK];
+shared uint s_id[BLOCK];
+
+// compare-exchange of thread t's pair at distance j in merge k (block starting at `base`)
+void exchange(uint t, uint k, uint j, uint base) {
+    uint i = 2u * j * (t / j) + (t % j), l = i + j;
+    bool ascending = ((base + i) & k) == 0u;
+    uint ka = s_key[i], kb = s_key[l], ia = s_id[i], ib = s_id[l];
+    if (after(ka, ia, kb, ib) == ascending) {
+        s_key[i] = kb; s_key[l] = ka;
+        s_id[i] = ib; s_id[l] = ia;
+    }
+}
+
+void main() {
+    uint t = gl_LocalInvocationID.x, base = gl_WorkGroupID.x * uint(BLOCK);
+    for (uint e = t; e < uint(BLOCK); e += uint(GROUP)) {
+        s_key[e] = keys[base + e];
+        s_id[e] = ids[base + e];
+    }
+    memoryBarrierShared();
+    barrier();
+#if STAGE == 2
+    for (uint k = 2u; k <= uint(BLOCK); k <<= 1) {
+#else
+    for (uint k = u_k; k == u_k; k = 0u) {  // one merge: its steps below BLOCK
+#endif
+        for (uint j = min(k, uint(BLOCK)) >> 1; j > 0u; j >>= 1) {
+            for (uint p = t; p < uint(BLOCK / 2); p += uint(GROUP)) exchange(p, k, j, base);
+            memoryBarrierShared();
+            barrier();
+        }
+    }
+    for (uint e = t; e < uint(BLOCK); e += uint(GROUP)) {
+        keys[base + e] = s_key[e];
+        ids[base + e] = s_id[e];
+    }
+}
+#endif

@@ -1,0 +1,192 @@
+"""Compositing's GPU-driven draws (issue 43): the back-to-front order sorted on the GPU
+(order_gpu.GpuOrder) held against composite.back_to_front, and the GPU-driven composite
+(R left on the GPU: a GpuRecords) held against the CPU branch's from the same capture."""
+
+from __future__ import annotations
+
+import types
+
+import numpy as np
+import pytest
+
+from rtta.atlas.records import RECORD_DTYPE, GpuRecords
+from rtta.gl.targets import CompositeTarget
+from rtta.passes import composite as composite_module
+from rtta.passes import composite_gpu
+from rtta.passes.composite import CompositePass, back_to_front
+from rtta.passes.order_gpu import GpuOrder
+from rtta.passes.style import Style, style_params
+from rtta.renderer.placing import Staging, restage
+from rtta.renderer.settings import Settings
+from rtta.scene.camera import Camera, ortho_near, outline_eye
+from rtta.scene.generators.assembly import write_assembly
+from rtta.scene.loader import load_scene
+
+VP = (200, 150)
+TOLERANCE = 2  # /255 per channel, on all pixels but SHARE_OFF
+SHARE_OFF = 0.002  # near-ties of bounds centres: float32 on the GPU, float64 on the CPU
+
+
+@pytest.fixture
+def order(gl):
+    o = GpuOrder(gl)
+    yield o
+    o.release()
+
+
+def sorted_on_gpu(gl, order, z, visible, excluded=None, offsets=None):
+    """GpuOrder's ids for bounds centres at depth -z (view = identity), R's visibility and
+    the objects flagged focus in a style buffer (excluded)."""
+    n = len(z)
+    bounds = np.zeros((n, 2, 4), np.float32)
+    bounds[:, :, 2] = z[:, None]
+    bounds[:, :, 0] = np.arange(n)[:, None] % 7  # x, y do not move view depth
+    records = np.zeros(n, RECORD_DTYPE)
+    records["info"][:, 1] = visible
+    styles = None
+    made = [gl.buffer(records.tobytes()), gl.buffer(bounds.tobytes())]
+    if excluded is not None:
+        params = np.zeros((n, 4), np.float32)
+        params[excluded, 1] = 1.0
+        styles = gl.buffer(params.tobytes())
+        made.append(styles)
+    order.sort(count=n, records=made[0], bounds=made[1], view=np.eye(4), styles=styles, offsets=offsets)
+    got = order.read()
+    for buf in made:
+        buf.release()
+    return got
+
+
+@pytest.mark.parametrize("n", [1, 2, 1000, 5000, 70000])
+def test_gpu_order_is_back_to_front(gl, order, n):
+    rng = np.random.default_rng(n)
+    z = rng.integers(-40, 40, n).astype(np.float32)  # many ties: ordered by id
+    z[::3] = rng.normal(size=len(z[::3])).astype(np.float32)
+    z[: min(n, 4)] = [0.0, -0.0, 0.0, -0.0][: min(n, 4)]  # -0 ties with 0, as numpy's keys do
+    visible = rng.random(n) > 0.15
+    excluded = rng.choice(n, size=min(n, 17), replace=False)
+    records = types.SimpleNamespace(visible=visible)
+    depth = -z.astype(np.float64)
+    np.testing.assert_array_equal(sorted_on_gpu(gl, order, z, visible), back_to_front(records, depth, np.arange(n)))
+    kept = np.ones(n, bool)
+    kept[excluded] = False
+    want = back_to_front(records, depth, np.arange(n)[kept])
+    np.testing.assert_array_equal(sorted_on_gpu(gl, order, z, visible, excluded), want)
+
+
+def test_gpu_order_adds_offsets(gl, order):
+    rng = np.random.default_rng(3)
+    n = 3000
+    z = rng.normal(size=n).astype(np.float32)
+    offsets = np.zeros((n, 3), np.float32)
+    offsets[:, 2] = rng.integers(-3, 3, n)
+    got = sorted_on_gpu(gl, order, z, np.ones(n, bool), offsets=offsets)
+    want = back_to_front(
+        types.SimpleNamespace(visible=np.ones(n, bool)), -(z + offsets[:, 2]).astype(np.float64), np.arange(n)
+    )
+    np.testing.assert_array_equal(got, want)
+
+
+@pytest.fixture(scope="module")
+def assembly(tmp_path_factory):
+    path = write_assembly(tmp_path_factory.mktemp("asm") / "asm.glb", 300, seed=4)
+    return load_scene(path)
+
+
+def composite_both(gl, r, mode, style):
+    """The CPU branch's and the GPU-driven branch's composite of `r`'s last capture (rgba)."""
+    records, view, proj = r.last
+    post = r.post_process(style) if mode == "ghosted-ao" else None
+    kw = dict(atlas=r.atlas, gpu=r.gpu, style=style, mode=mode, post=post, view_proj=proj @ view)
+    kw.update(eye=outline_eye(view, proj, r.scene.radius), ortho_near=ortho_near(proj))
+    out = []
+    for on_gpu in (False, True):
+        cp, target = CompositePass(gl), CompositeTarget(gl)
+        try:
+            if on_gpu:
+                r.gpu.records.write(records.packed())
+                n = len(records.visible)
+                gpu_records = GpuRecords(n, records.viewport, records.atlas_size, records.border, lambda: records)
+                cp.render(records=gpu_records, view=view, target=target, **kw)
+                assert cp.gpu_driven and not gpu_records.is_read
+            else:
+                cp.render(
+                    records=records, view_depth=cp.view_depth(r.gpu, view, r.staging.offsets), target=target, **kw
+                )
+                assert not cp.gpu_driven
+            out.append(target.read()[0].astype(int))
+        finally:
+            cp.release()
+            target.release()
+    return out
+
+
+def assert_close(cpu, gpu):
+    diff = np.abs(cpu - gpu).max(-1)
+    off = (diff > TOLERANCE).mean()
+    assert off <= SHARE_OFF, f"{off:.4%} of pixels over {TOLERANCE}/255 (max {diff.max()})"
+
+
+STYLES = {
+    "plain": lambda ids: Style(order="object"),
+    "focus": lambda ids: Style(order="object", focus=set(ids[:3].tolist())),
+    "halo": lambda ids: Style(order="object", focus=set(ids[:2].tolist()), halo=4, outline_width=2),
+}
+
+
+@pytest.mark.parametrize("mode", ["ghosted", "ghosted-ao", "sprites", "transparent"])
+@pytest.mark.parametrize("styled", list(STYLES))
+@pytest.mark.parametrize("scene_name", ["demo", "assembly"])
+def test_gpu_composite_equals_cpu(gl, make_renderer, demo_scene, assembly, scene_name, styled, mode):
+    scene = demo_scene if scene_name == "demo" else assembly
+    focus = np.arange(scene.count)[:: max(1, scene.count // 5)]
+    style = STYLES[styled](focus)
+    r = make_renderer(scene, Settings(context_scale=0.5 if styled == "focus" else 1.0))
+    cam = Camera.orbit(scene.center, scene.radius, 35, 25, 1.6)
+    r.capture(cam, VP, focus=style.focus)
+    assert_close(*composite_both(gl, r, mode, style))
+
+
+def test_gpu_composite_exploded(gl, make_renderer, demo_scene):
+    r = make_renderer(demo_scene)
+    restage(r, Staging(explode=0.6))
+    cam = Camera.orbit(demo_scene.center, demo_scene.radius, 200, -20, 1.8)
+    style = Style(order="object", focus={1, 4})
+    r.capture(cam, VP, focus=style.focus)
+    assert r.staging.offsets is not None
+    for mode in ("ghosted", "transparent"):
+        assert_close(*composite_both(gl, r, mode, style))
+
+
+def test_gpu_branch_does_no_work_over_objects(gl, make_renderer, demo_scene, monkeypatch):
+    """Per frame, the GPU branch reads nothing of R and sorts nothing on the CPU; the style
+    parameters are built again only when the style changes."""
+    r = make_renderer(demo_scene)
+    cam = Camera.orbit(demo_scene.center, demo_scene.radius, 35, 25, 1.6)
+    style = Style(order="object", focus={2}, halo=3)
+    records, view, proj = r.capture(cam, VP, focus=style.focus), *r.last[1:]
+    r.gpu.records.write(records.packed())
+
+    def unread():
+        raise AssertionError("R read back")
+
+    gpu_records = GpuRecords(len(records.visible), records.viewport, records.atlas_size, records.border, unread)
+    cp, target = CompositePass(gl), CompositeTarget(gl)
+    kw = dict(atlas=r.atlas, records=gpu_records, gpu=r.gpu, view=view, target=target, view_proj=proj @ view)
+    kw["eye"] = outline_eye(view, proj, demo_scene.radius)
+    built = []
+    monkeypatch.setattr(composite_gpu, "style_params", lambda *a, **k: built.append(a[1]) or style_params(*a, **k))
+    monkeypatch.setattr(composite_module, "back_to_front", lambda *a: pytest.fail("sorted on the CPU"))
+    try:
+        for mode in ("ghosted", "transparent", "sprites"):
+            for _ in range(3):
+                cp.render(style=style, mode=mode, **kw)
+                assert cp.gpu_driven
+        assert built == ["ghosted", "transparent", "sprites"]  # once per mode: the style did not change
+        style.focus = {2, 3}
+        cp.render(style=style, mode="sprites", **kw)
+        assert len(built) == 4
+        assert not gpu_records.is_read
+    finally:
+        cp.release()
+        target.release()

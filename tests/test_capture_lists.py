@@ -289,3 +289,28 @@ def test_gpu_frame_does_no_per_object_work_on_the_cpu(gl, rig, monkeypatch):
     view, proj, rec = frame(gpus["demo"], "close")
     passes["vs"].render(gpu=gpus["demo"], records=rec, view=view, proj=proj, atlas=atlas)  # the CPU path counts
     assert calls["beyond_near"] > 0
+
+
+@pytest.mark.parametrize("path", PATHS)
+def test_the_order_of_commands_does_not_show(gl, rig, monkeypatch, path):
+    """The lists' order comes from the GPU's atomics (another on NVIDIA than on llvmpipe): each
+    list reversed after it is built, the atlas stays texel-equal to the CPU path's."""
+    from rtta.gl.indirect import COMMAND_BYTES
+    from rtta.passes.draw_lists import CaptureLists
+
+    build = CaptureLists.build
+    reversed_lists = []
+
+    def build_reversed(self, *args, **kw):
+        build(self, *args, **kw)
+        for k in range(4):
+            commands = self.commands_of(k)
+            if len(commands) > 1:
+                self.commands.write(commands[::-1].copy().tobytes(), offset=k * self.capacity * COMMAND_BYTES)
+                reversed_lists.append(k)
+
+    monkeypatch.setattr(CaptureLists, "build", build_reversed)
+    for view_name in ("close", "inside"):
+        expected, got, _, _ = capture_both(rig, "assembly", path, view_name)
+        assert_same_atlas(expected, got)
+    assert reversed_lists, "no list had two commands"

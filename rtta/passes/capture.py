@@ -28,7 +28,7 @@ from ..gl.gpu import GpuScene
 from ..gl.targets import LayeredTarget
 from ..scene.closure import beyond_near
 from . import sections
-from .draw_lists import CaptureLists, capture_from_lists, capture_from_records, draws_from_lists
+from .draw_lists import CaptureLists, capture_from_records, draw_from_lists, draws_from_lists
 
 DIRECT_RUNS = 1  # more runs of visible objects than this: one indirect multi-draw
 
@@ -275,22 +275,22 @@ class CapturePass(ScenePass):
         and reads normals only for AO, edges and the projector; picking reads depths."""
         tw, th, td = records.atlas_size
         self.frames += 1
+        self.gpu_lists_used = lists = td > 0 and draws_from_lists(records, gpu)
+        if lists:  # before the clear: llvmpipe's memory barrier waits for all queued work
+            self.lists = self.lists or CaptureLists(self.ctx)
+            self.lists.build(gpu, view, proj, records.viewport, clip_all=self.path is CapturePath.GS)
         atlas.ensure((tw, th), td)
         atlas.clear()
         atlas.normals_written, atlas.ids_written = normals and atlas.normals, ids
-        self.gpu_lists_used = False
         if td == 0:
             return
-        on_gpu = getattr(records, "on_gpu", False)
-        if not on_gpu:  # GpuRecords: R is in the buffer already
+        if not getattr(records, "on_gpu", False):  # GpuRecords: R is in the buffer already
             gpu.upload_records(records)
         atlas.bind((0, 0, tw, th))
         atlas.write_mask(normals, ids)
         try:
-            if on_gpu and draws_from_lists(records, gpu):
-                self.lists = self.lists or CaptureLists(self.ctx)
-                capture_from_lists(self, self.lists, gpu, view, proj, atlas, records.viewport)
-                self.gpu_lists_used = True
+            if lists:
+                draw_from_lists(self, self.lists, gpu, view, proj, atlas)
             else:
                 capture_from_records(self, gpu, view, proj, atlas, records)
         finally:

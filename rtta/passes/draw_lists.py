@@ -190,13 +190,12 @@ class CaptureLists:
         self.program.release()
 
 
-def capture_from_lists(capture, lists: CaptureLists, gpu: GpuScene, view, proj, atlas: LayeredTarget, viewport):
-    """Draw the frame's objects into `atlas` from the lists on the GPU (`capture`: a
+def draw_from_lists(capture, lists: CaptureLists, gpu: GpuScene, view, proj, atlas: LayeredTarget) -> None:
+    """Draw the frame's objects into `atlas` from the lists `lists.build` wrote (`capture`: a
     CapturePass, its program and state prepared by `capture.prepare`): per clip variant one
     setup and, culled and double-sided, one indirect-count draw each. The geometry-shader path
     clips every object (one variant)."""
     clip_all = capture.path == "gs"
-    lists.build(gpu, view, proj, viewport, clip_all=clip_all)
     for clip in (True,) if clip_all else (False, True):
         vao = capture.prepare(gpu, view, proj, atlas, REGION_CLIP=clip and not clip_all)
         glraw.set_clip_distances(4, clip)

@@ -1,5 +1,5 @@
 #version 430
-// defines: MODE_COLLECT MODE_HALO UPSAMPLE_DYNAMIC
+// defines: MODE_COLLECT MODE_HALO HULL_PER_SPRITE
 // Point-sprite expansion: a screen-aligned quad over the object's B_viewport (its atlas
 // bounds mapped back through T^-1). What the fragments need of the record and the style
 // goes as flat values: no fragment reads the buffers (per-fragment loads cost on llvmpipe).
@@ -8,7 +8,7 @@
 // covers a quarter to a third fewer pixels than B_viewport (fragments outside B_viewport are
 // discarded by the fragment shader, which reads nothing outside B_atlas). A uniform, not a
 // define: one program draws with and without it (the choice is made per draw).
-// UPSAMPLE_DYNAMIC (draws from a GPU list, whose objects the CPU does not know): the outline
+// HULL_PER_SPRITE (draws from a GPU list, whose objects the CPU does not know): the outline
 // per sprite, where u_hull and its own B_viewport covers u_hull_min_area pixels and is not
 // upsampled, grown by the margin of its own scale (outlines.hull_margin's rule).
 #include "composite.glsl"
@@ -39,7 +39,7 @@ uniform bool u_hull;
 uniform mat4 u_view_proj;
 uniform vec3 u_eye;        // the camera's position, scene origin at 0
 uniform float u_hull_margin;   // pixels: float32 and sub-pixel snapping, and the reach of a texel (CompositePass)
-#ifdef UPSAMPLE_DYNAMIC
+#ifdef HULL_PER_SPRITE
 uniform float u_upsample_below;   // sprites.UPSAMPLE_BELOW
 uniform float u_hull_min_area;    // outlines.HULL_MIN_AREA
 #endif
@@ -113,7 +113,7 @@ void main() {
     int count = 4;
     bool outlined = u_hull;
     float margin = u_hull_margin;
-#ifdef UPSAMPLE_DYNAMIC
+#ifdef HULL_PER_SPRITE
     float scale = intBitsToFloat(r.info.w);
     vec2 size = r.viewport.zw - r.viewport.xy;
     outlined = outlined && scale >= u_upsample_below && size.x * size.y >= u_hull_min_area;

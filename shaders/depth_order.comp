@@ -6,16 +6,22 @@
 // order is one and the same on every driver. One stage per dispatch:
 //   STAGE 1 (per element): the key of each object, an order-preserving uint of its view z
 //            (ascending: farthest first); objects not drawn (invisible in R, or a focus object
-//            where u_exclude_focus) and the padding keyed last; the drawn ones counted into
-//            the indirect DrawArrays command (count, 1, 0, 0)
+//            where u_exclude_focus) and the padding keyed last; the drawn ones counted, and
+//            those of them captured below u_upsample_below texels per pixel
 //   STAGE 2 (per BLOCK elements): the whole bitonic sort of each block, in shared memory
 //   STAGE 3 (per element pair): one compare-exchange step (u_k, u_j) with j >= BLOCK
 //   STAGE 4 (per BLOCK elements): the steps j < BLOCK of merge u_k, in shared memory
+//   STAGE 5 (one invocation): three indirect DrawArrays commands (count, 1, 0, 0), 5 uints
+//            apart (moderngl's stride), of which one draws and the others draw none: the
+//            list's count where no drawn region is upsampled, where all are, where some are
+//            (u_total: that count instead of the drawn one, for a list of every id)
 // OFFSETS: per-object offsets (x, y, z float triples) added to the bounds centres.
 #include "records.glsl"
 
 #if STAGE == 1 || STAGE == 3
 layout(local_size_x = 256) in;
+#elif STAGE == 5
+layout(local_size_x = 1) in;
 #else
 layout(local_size_x = GROUP) in;  // each invocation compares BLOCK / 2 / GROUP pairs a step
 #endif
@@ -27,19 +33,24 @@ uniform uint u_k;       // the bitonic merge's size (stages 3, 4)
 uniform uint u_j;       // the compare distance (stage 3)
 uniform uint u_length;  // elements (a power of two >= u_count; stages 1, 3)
 
+// commands at 0, 5, 10; then the drawn objects' count and the upsampled ones'
+#define DRAWN 15
+#define UPSAMPLED 16
+layout(std430, binding = BINDING_COMPOSITE_COMMAND) buffer CommandBuffer { uint command[20]; };
+
 bool after(uint ka, uint ia, uint kb, uint ib) { return ka > kb || (ka == kb && ia > ib); }
 
 #if STAGE == 1
 struct Style { vec4 params; };  // composite.glsl's: (opacity, focus, uses AO, uses edges)
 layout(std430, binding = BINDING_STYLES) readonly buffer StyleBuffer { Style styles[]; };
 layout(std430, binding = BINDING_BOUNDS) readonly buffer BoundsBuffer { vec4 bounds[]; };
-layout(std430, binding = BINDING_COMPOSITE_COMMAND) buffer CommandBuffer { uint command[4]; };
 #ifdef OFFSETS
 layout(std430, binding = BINDING_SORT_OFFSETS) readonly buffer OffsetBuffer { float offsets[]; };
 #endif
 uniform uint u_count;          // objects
 uniform vec4 u_depth_row;      // the view matrix's third row: view z = dot(row.xyz, p) + row.w
 uniform bool u_exclude_focus;  // objects with the style's focus flag are not drawn
+uniform float u_upsample_below;  // sprites.UPSAMPLE_BELOW
 
 // float -> uint with the same order (-0 as +0, so that they tie as numpy's keys do)
 uint ordered(float f) {
@@ -60,11 +71,26 @@ void main() {
 #endif
             precise float z = dot(u_depth_row.xyz, c) + u_depth_row.w;
             key = min(ordered(z), 0xFFFFFFFEu);  // a drawn key stays before every undrawn one
-            atomicAdd(command[0], 1u);
+            atomicAdd(command[DRAWN], 1u);
+            if (intBitsToFloat(records[i].info.w) < u_upsample_below) atomicAdd(command[UPSAMPLED], 1u);
         }
     }
     keys[i] = key;
     ids[i] = i;  // the padding's ids (>= u_count) stay after every object's
+}
+
+#elif STAGE == 5
+uniform uint u_total;   // 0: the drawn count
+void main() {
+    uint drawn = command[DRAWN], up = command[UPSAMPLED];
+    uint count = u_total > 0u ? u_total : drawn;
+    bool classes[3] = bool[](drawn > 0u && up == 0u, drawn > 0u && up == drawn, up > 0u && up < drawn);
+    for (int c = 0; c < 3; ++c) {
+        command[5 * c] = classes[c] ? count : 0u;
+        command[5 * c + 1] = 1u;
+        command[5 * c + 2] = 0u;
+        command[5 * c + 3] = 0u;
+    }
 }
 
 #elif STAGE == 3

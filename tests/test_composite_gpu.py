@@ -87,6 +87,36 @@ def test_gpu_order_adds_offsets(gl, order):
     np.testing.assert_array_equal(got, want)
 
 
+@pytest.mark.parametrize("scales", ["full", "upsampled", "mixed", "none drawn"])
+def test_gpu_order_gives_one_variant_the_list(gl, order, scales):
+    """Of the three indirect commands, the one of the regions' scale class draws the list."""
+    n = 900
+    records = np.zeros(n, RECORD_DTYPE)
+    records["info"][:, 1] = scales != "none drawn"
+    scale = np.full(n, 0.5 if scales == "upsampled" else 1.0, np.float32)
+    if scales == "mixed":
+        scale[::50] = 0.5
+    records["info"][:, 3] = scale.view(np.int32)
+    made = [gl.buffer(records.tobytes()), gl.buffer(np.zeros((n, 2, 4), np.float32).tobytes())]
+    try:
+        for sort in (True, False):
+            if sort:
+                order.sort(count=n, records=made[0], bounds=made[1], view=np.eye(4))
+            else:
+                order.every(count=n, records=made[0], bounds=made[1])
+            words = np.frombuffer(order.command.read(60), np.uint32).reshape(3, 5)
+            want = np.zeros(3, np.uint32)
+            if scales != "none drawn":
+                want[["full", "upsampled", "mixed"].index(scales)] = n
+            np.testing.assert_array_equal(words[:, 0], want)
+            np.testing.assert_array_equal(words[:, 1], 1)
+            ids = np.frombuffer(order.ids.read(4 * n), np.int32)
+            np.testing.assert_array_equal(ids, np.arange(n))  # every key ties (one depth): id order
+    finally:
+        for buf in made:
+            buf.release()
+
+
 @pytest.fixture(scope="module")
 def assembly(tmp_path_factory):
     path = write_assembly(tmp_path_factory.mktemp("asm") / "asm.glb", 300, seed=4)

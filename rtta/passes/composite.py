@@ -214,8 +214,9 @@ class CompositePass:
         draw = self.sprites.draw
         outlined = style.outline_width >= 1 and focused is not None
         if mode is Mode.SPRITES:
+            every = self._gpu.everyone(n=n, gpu=gpu)
             self._bind(atlas, gpu, target, records)
-            draw(self._gpu.everyone(n), SpriteDraw.opaque(), style, records)
+            draw(every, SpriteDraw.opaque(), style, records)
         elif mode is Mode.TRANSPARENT:
             ordered = self._gpu.sorted(n=n, gpu=gpu, view=view, styles=None)
             self._bind(atlas, gpu, target, records)

@@ -12,7 +12,6 @@ projector read R on the CPU (the other branch).
 from __future__ import annotations
 
 import moderngl
-import numpy as np
 
 from .oit import resolved_order
 from .order_gpu import GpuOrder
@@ -42,8 +41,6 @@ class GpuDraws:
     def __init__(self, ctx: moderngl.Context) -> None:
         self.ctx = ctx
         self.order = GpuOrder(ctx)
-        self.every = ctx.buffer(reserve=4)
-        self._every_count = -1
         self.styles_key: tuple | None = None  # what the style buffer holds (None: unknown)
 
     def styles(self, buf: moderngl.Buffer, style: Style, mode: Mode, n: int) -> None:
@@ -55,12 +52,10 @@ class GpuDraws:
             upload(buf, style_params(style, mode, n, faded=ghosted))
             self.styles_key = key
 
-    def everyone(self, n: int) -> Listed:
-        """Every id in ascending order (made when `n` changes): `sprites`' draw order."""
-        if n != self._every_count:
-            upload(self.every, np.arange(max(n, 1), dtype=np.int32))
-            self._every_count = n
-        return Listed(self.every, n)
+    def everyone(self, *, n: int, gpu) -> Listed:
+        """Every id in ascending order (`sprites`' draw order; the invisible ones draw nothing)."""
+        self.order.every(count=n, records=gpu.records, bounds=gpu.bounds)
+        return Listed(self.order.ids, command=self.order.command)
 
     def sorted(self, *, n: int, gpu, view, styles: moderngl.Buffer | None) -> Listed:
         """The visible objects back to front (with `styles`: the focus left out), sorted on the GPU."""
@@ -69,4 +64,3 @@ class GpuDraws:
 
     def release(self) -> None:
         self.order.release()
-        self.every.release()

@@ -17,8 +17,11 @@ import numpy as np
 
 from ..gl import glsl
 from ..gl.bindings import Storage
+from .sprites import UPSAMPLE_BELOW
 
-KEYS, BLOCK_SORT, STEP, BLOCK_MERGE = 1, 2, 3, 4  # depth_order.comp's stages
+KEYS, BLOCK_SORT, STEP, BLOCK_MERGE, COMMANDS = 1, 2, 3, 4, 5  # depth_order.comp's stages
+COMMAND_WORDS = 20  # three DrawArrays commands 5 uints apart, the drawn and upsampled counts
+DRAWN = 15  # the command buffer's word of the drawn count
 BLOCK = 1024  # elements sorted in shared memory by one work group
 GROUP = 64  # invocations of that work group (each compares BLOCK / 2 / GROUP pairs a step)
 STEP_GROUP = 256  # invocations per work group of the key and global step stages
@@ -31,7 +34,7 @@ def sort_length(count: int) -> int:
 
 class GpuOrder:
     """Sorts a frame's objects back to front on the GPU into `ids` (the draw list) and counts
-    the ones to draw into `command` (an indirect DrawArrays command).
+    the ones to draw into `command` (indirect DrawArrays commands, one per sprite variant).
 
     Parameters
     ----------
@@ -43,8 +46,10 @@ class GpuOrder:
     ids : moderngl.Buffer
         After `sort`: int32 ids, the objects to draw first (farthest first), then the others.
     command : moderngl.Buffer
-        After `sort`: (count, 1, 0, 0) uint32, count the objects to draw; for
-        `VertexArray.render_indirect(command, moderngl.POINTS, count=1)`.
+        After `sort`: three DrawArrays commands (count, 1, 0, 0) uint32 at 20-byte steps
+        (moderngl's `render_indirect(command, moderngl.POINTS, count=1, first=k)`), of which
+        one draws the list and the others nothing: k = 0 where no region drawn is upsampled
+        (sprites.UPSAMPLE_BELOW), 1 where all are, 2 where some are (sprites.Listed).
     """
 
     def __init__(self, ctx: moderngl.Context) -> None:
@@ -52,7 +57,7 @@ class GpuOrder:
         self.programs: dict[tuple[int, bool], moderngl.ComputeShader] = {}
         self.keys = ctx.buffer(reserve=4 * BLOCK)
         self.ids = ctx.buffer(reserve=4 * BLOCK)
-        self.command = ctx.buffer(reserve=16)
+        self.command = ctx.buffer(reserve=4 * COMMAND_WORDS)
         self.offsets = ctx.buffer(reserve=12)
         self._offsets_of: np.ndarray | None = None  # the offsets uploaded (compared by identity)
         self.dispatches = 0  # of the last sort
@@ -111,24 +116,8 @@ class GpuOrder:
         offsets : numpy.ndarray, optional
             [count, 3] added to the bounds centres (uploaded when the array object changes).
         """
-        length = sort_length(count)
-        self._ensure(length)
-        self.command.write(np.array([0, 1, 0, 0], np.uint32))
-        self.keys.bind_to_storage_buffer(Storage.SORT_KEYS)
-        self.ids.bind_to_storage_buffer(Storage.DRAW_LIST)
-        self.command.bind_to_storage_buffer(Storage.COMPOSITE_COMMAND)
-        records.bind_to_storage_buffer(Storage.RECORDS)
-        bounds.bind_to_storage_buffer(Storage.BOUNDS)
-        if styles is not None:
-            styles.bind_to_storage_buffer(Storage.STYLES)
-        moved = self._upload_offsets(offsets)
-        prog = self._program(KEYS, moved)
-        glsl.uniform(prog, "u_count").value = count
-        glsl.uniform(prog, "u_length").value = length
-        glsl.uniform(prog, "u_depth_row").value = tuple(float(v) for v in np.asarray(view, np.float64)[2])
-        glsl.uniform(prog, "u_exclude_focus").value = styles is not None
         self.dispatches = 0
-        self._run(prog, length // STEP_GROUP)
+        length = self._keys(count, records, bounds, view, styles, offsets)
         self._run(self._program(BLOCK_SORT), length // BLOCK)
         k = 2 * BLOCK
         while k <= length:
@@ -144,7 +133,42 @@ class GpuOrder:
             glsl.uniform(merge, "u_k").value = k
             self._run(merge, length // BLOCK)
             k *= 2
+        self._commands(0)
+
+    def every(self, *, count: int, records: moderngl.Buffer, bounds: moderngl.Buffer) -> None:
+        """Every id in ascending order into `ids` (drawn in that order: the invisible ones draw
+        nothing), `command` as `sort` makes it (the draw of `count` points in one variant)."""
+        self.dispatches = 0
+        self._keys(count, records, bounds, np.eye(4), None, None)
+        self._commands(count)
+
+    def _commands(self, total: int) -> None:
+        prog = self._program(COMMANDS)
+        glsl.uniform(prog, "u_total").value = total
+        self._run(prog, 1)
         self.ctx.memory_barrier(moderngl.COMMAND_BARRIER_BIT | moderngl.SHADER_STORAGE_BARRIER_BIT)
+
+    def _keys(self, count, records, bounds, view, styles, offsets) -> int:
+        """Stage 1: keys, ids and counts; returns the sort's length."""
+        length = sort_length(count)
+        self._ensure(length)
+        self.command.write(np.zeros(COMMAND_WORDS, np.uint32))
+        self.keys.bind_to_storage_buffer(Storage.SORT_KEYS)
+        self.ids.bind_to_storage_buffer(Storage.DRAW_LIST)
+        self.command.bind_to_storage_buffer(Storage.COMPOSITE_COMMAND)
+        records.bind_to_storage_buffer(Storage.RECORDS)
+        bounds.bind_to_storage_buffer(Storage.BOUNDS)
+        if styles is not None:
+            styles.bind_to_storage_buffer(Storage.STYLES)
+        moved = self._upload_offsets(offsets)
+        prog = self._program(KEYS, moved)
+        glsl.uniform(prog, "u_count").value = count
+        glsl.uniform(prog, "u_length").value = length
+        glsl.uniform(prog, "u_depth_row").value = tuple(float(v) for v in np.asarray(view, np.float64)[2])
+        glsl.uniform(prog, "u_exclude_focus").value = styles is not None
+        glsl.uniform(prog, "u_upsample_below").value = UPSAMPLE_BELOW
+        self._run(prog, length // STEP_GROUP)
+        return length
 
     def _run(self, prog: moderngl.ComputeShader, groups: int) -> None:
         if self.dispatches:
@@ -154,7 +178,7 @@ class GpuOrder:
 
     def read(self) -> np.ndarray:
         """The ids to draw, in order (reads back and waits: for tests and inspection)."""
-        count = int(np.frombuffer(self.command.read(4), np.uint32)[0])
+        count = int(np.frombuffer(self.command.read(4, offset=4 * DRAWN), np.uint32)[0])
         return np.frombuffer(self.ids.read(4 * count), np.int32).copy() if count else np.zeros(0, np.int32)
 
     def release(self) -> None:

@@ -130,8 +130,8 @@ class SpriteDraw:
 @dataclass(frozen=True)
 class Listed:
     """Ids to draw from a buffer on the GPU, in its order: the first `count`, or as many as the
-    indirect DrawArrays `command` says (order_gpu.GpuOrder's). Objects not visible in R draw
-    nothing (composite.geom), so a list may hold them.
+    indirect DrawArrays commands in `command` say (order_gpu.GpuOrder's: one per variant).
+    Objects not visible in R draw nothing (composite.geom), so a list may hold them.
 
     Attributes
     ----------
@@ -140,7 +140,8 @@ class Listed:
     count : int
         How many to draw, where `command` is None.
     command : moderngl.Buffer or None
-        (count, 1, 0, 0) uint32, written on the GPU.
+        Three (count, 1, 0, 0) uint32 commands 20 bytes apart, written on the GPU: for regions
+        not upsampled, upsampled, and mixed (SpritePass.draw_listed).
     """
 
     ids: moderngl.Buffer
@@ -214,22 +215,28 @@ class SpritePass:
             self._run(run, dataclasses.replace(draw, upsample=upsample), style, records)
 
     def draw_listed(self, listed: Listed, draw: SpriteDraw, style: Style, records) -> None:
-        """Draw a GPU list with one draw call: each sprite upsampled where its own scale asks
-        for it, and over its projected outline where its own B_viewport is large enough
-        (composite.geom/frag's UPSAMPLE_DYNAMIC); the general outline variant (OUTLINE_QUAD
-        needs every scale). `records` need only `viewport` (a GpuRecords is not read)."""
+        """Draw a GPU list: each sprite over its projected outline where its own B_viewport is
+        large enough (composite.geom's HULL_PER_SPRITE); with a `command` (order_gpu.GpuOrder's
+        three), one draw call per variant, of which the GPU gave one the list and the others
+        nothing: regions upsampled none, all (UPSAMPLE), or some (UPSAMPLE_DYNAMIC: each sprite
+        chooses; on llvmpipe a branch costs both sides); a CPU-made list draws UPSAMPLE_DYNAMIC.
+        The general outline variant (OUTLINE_QUAD needs every scale). `records` need only
+        `viewport` (a GpuRecords is not read)."""
         if listed.command is None and listed.count == 0:
             return
         listed.ids.bind_to_storage_buffer(Storage.DRAW_LIST)
-        defines = self._defines(None, draw, style, records)
-        defines["UPSAMPLE_DYNAMIC"] = draw.kind not in (Kind.OUTLINES, Kind.HALOS)
+        sampled = draw.kind not in (Kind.OUTLINES, Kind.HALOS)
+        variants = [(None, {"UPSAMPLE_DYNAMIC": sampled})]
+        if listed.command is not None:
+            variants = [(0, {}), (1, {"UPSAMPLE": sampled}), (2, {"UPSAMPLE_DYNAMIC": sampled})]
         hull = None if draw.kind is Kind.HALOS else self._hull
-        prog, vao = self._setup(defines, draw, style, records, hull)
-        if "u_upsample_below" in prog:
-            glsl.uniform(prog, "u_upsample_below").value = UPSAMPLE_BELOW
-        if "u_hull_min_area" in prog:
-            glsl.uniform(prog, "u_hull_min_area").value = float(HULL_MIN_AREA)
-        self._render(vao, listed, draw)
+        for first, variant in variants:
+            defines = {**self._defines(None, draw, style, records), "HULL_PER_SPRITE": True, **variant}
+            prog, vao = self._setup(defines, draw, style, records, hull)
+            for name, value in (("u_upsample_below", UPSAMPLE_BELOW), ("u_hull_min_area", float(HULL_MIN_AREA))):
+                if name in prog:
+                    glsl.uniform(prog, name).value = value
+            self._render(vao, listed if first is None else (listed.command, first), draw)
 
     def _defines(self, ids, draw: SpriteDraw, style: Style, records: Records) -> dict[str, bool]:
         """The draw's variant; `ids` None: a GPU list (no OUTLINE_QUAD: it needs their scales)."""
@@ -311,8 +318,9 @@ class SpritePass:
                 glsl.uniform(prog, name).value = value
         return prog, vao
 
-    def _render(self, vao: moderngl.VertexArray, count: int | Listed, draw: SpriteDraw) -> None:
-        """The draw's GL state around one draw call (of `count` points, or a Listed's), then the defaults back."""
+    def _render(self, vao: moderngl.VertexArray, count, draw: SpriteDraw) -> None:
+        """The draw's GL state around one draw call, then the defaults back: `count` points, a
+        Listed's count, or (command buffer, k): its k-th indirect command."""
         flags = moderngl.NOTHING
         if draw.depth is not Depth.OFF:
             flags |= moderngl.DEPTH_TEST
@@ -327,12 +335,12 @@ class SpritePass:
         if masked:
             fbo.color_mask = (False, False, False, False)
         fbo.use()
-        if not isinstance(count, Listed):
-            vao.render(moderngl.POINTS, vertices=count)
-        elif count.command is None:
+        if isinstance(count, Listed):
             vao.render(moderngl.POINTS, vertices=count.count)
+        elif isinstance(count, tuple):
+            vao.render_indirect(count[0], moderngl.POINTS, count=1, first=count[1])
         else:
-            vao.render_indirect(count.command, moderngl.POINTS, count=1)
+            vao.render(moderngl.POINTS, vertices=count)
         fbo.depth_mask = True
         self.ctx.depth_func = "<"
         if masked:

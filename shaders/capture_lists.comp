@@ -58,7 +58,8 @@ bool continues(uint k) {  // object k of the block continues the run of object k
 }
 
 void main() {
-    uint k = gl_LocalInvocationID.x, i = gl_GlobalInvocationID.x;
+    uint block = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;  // 2-D past 65,535 blocks
+    uint k = gl_LocalInvocationID.x, i = block * uint(LOCAL_SIZE) + k;
     int kind = kind_of(i);
     s_kind[k] = kind;
     s_range[k] = i < u_count ? ranges[i] : uvec2(0u);

@@ -25,7 +25,7 @@ VIEWPORT = (200, 150)
 PATHS = ("vs", "gs")
 # (az, el, dist): an outside view; close (objects culled and on the viewport's edge); inside
 # the scene (the near plane cuts objects, those behind the eye are culled)
-VIEWS = {"outside": (30, 25, 2.2), "close": (120, -30, 0.9), "inside": (250, 10, 0.25)}
+VIEWS = {"outside": (30, 25, 2.2), "close": (120, -30, 0.9), "inside": (250, 10, 0.25), "ortho": (200, 35, 0.7)}
 
 
 @pytest.fixture(scope="module")
@@ -80,7 +80,8 @@ def place(ctx, gpu: GpuScene, offsets=None, removed=None) -> None:
 def frame(gpu: GpuScene, view_name: str, hidden=None, offsets=None):
     """The view's matrices and R (Algorithm 1 on the CPU), B_world moved by `offsets`."""
     scene = gpu.scene
-    cam = Camera.orbit(scene.center, scene.radius, *VIEWS[view_name])
+    projection = "ortho" if view_name == "ortho" else "perspective"
+    cam = Camera.orbit(scene.center, scene.radius, *VIEWS[view_name], projection=projection)
     view, proj = cam.view(scene.origin), cam.projection(VIEWPORT[0] / VIEWPORT[1])
     corners = scene.box_corners()
     if offsets is not None:
@@ -164,6 +165,7 @@ CASES = [
     ("assembly", "outside", {}),
     ("assembly", "close", {}),
     ("assembly", "inside", {}),
+    ("assembly", "ortho", {}),
     ("assembly", "outside", {"hidden": 3}),
     ("assembly", "close", {"explode": 0.6}),
     ("demo", "outside", {"explode": 1.0}),
@@ -314,3 +316,51 @@ def test_the_order_of_commands_does_not_show(gl, rig, monkeypatch, path):
         expected, got, _, _ = capture_both(rig, "assembly", path, view_name)
         assert_same_atlas(expected, got)
     assert reversed_lists, "no list had two commands"
+
+
+def test_blocks_past_one_row_of_workgroups(gl, rig, monkeypatch):
+    """More blocks than a dispatch takes along x (65,535; here 2): a 2-D dispatch, the same atlas."""
+    from rtta.passes import draw_lists
+
+    monkeypatch.setattr(draw_lists, "MAX_GROUPS", 2)
+    for path in PATHS:
+        expected, got, _, _ = capture_both(rig, "assembly", path, "close")
+        assert_same_atlas(expected, got)
+
+
+def python_calls(fn) -> int:
+    """The Python and C functions `fn()` calls (sys.setprofile)."""
+    import sys
+
+    calls = 0
+
+    def count(frame, event, arg):
+        nonlocal calls
+        calls += event in ("call", "c_call")
+
+    sys.setprofile(count)
+    try:
+        fn()
+    finally:
+        sys.setprofile(None)
+    return calls
+
+
+@pytest.mark.parametrize("path", PATHS)
+def test_gpu_frame_makes_as_many_calls_at_any_size(gl, rig, path):
+    """A frame from the lists makes the same Python and C calls for 24 objects as for 300:
+    nothing in it loops over the objects."""
+    gpus, passes, (_, atlas) = rig
+    counted = []
+    for name in ("demo", "assembly"):
+        gpu = gpus[name]
+        place(gpu.ctx, gpu)
+        view, proj, rec = frame(gpu, "close")
+        records = on_gpu(gpu, rec)
+
+        def render(gpu=gpu, records=records, view=view, proj=proj):
+            passes[path].render(gpu=gpu, records=records, view=view, proj=proj, atlas=atlas)
+
+        render()  # the lists' buffers for this scene, the atlas's size
+        counted.append(python_calls(render))
+    assert counted[0] == counted[1] and counted[0] > 50, counted

@@ -32,6 +32,7 @@ from ..gl.targets import LayeredTarget
 from ..scene.camera import view_depth
 
 LOCAL_SIZE = 64  # objects per workgroup: a command covers at most this many
+MAX_GROUPS = 65535  # workgroups along x that every GL 4.3 driver takes
 KINDS = 4  # kind = 2 * clipped + double-sided (shaders/capture_lists.comp)
 GL_SHADER_STORAGE_BARRIER_BIT = 0x2000
 GL_COMMAND_BARRIER_BIT = 0x40  # indirect commands and the parameter buffer
@@ -120,7 +121,9 @@ class CaptureLists:
             if name in self.program:
                 glsl.uniform(self.program, name).value = value
         self.ctx.memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT)  # R written by Algorithm 1's shaders
-        self.program.run(-(-n // LOCAL_SIZE))
+        blocks = -(-n // LOCAL_SIZE)
+        wide = min(blocks, MAX_GROUPS)
+        self.program.run(wide, -(-blocks // wide))
         self.ctx.memory_barrier(GL_COMMAND_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT)
 
     def draw(self, vao: moderngl.VertexArray, program: moderngl.Program, which: int) -> None:

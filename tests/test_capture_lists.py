@@ -72,9 +72,9 @@ def place(ctx, gpu: GpuScene, offsets=None, removed=None) -> None:
     if offsets is not None:
         data[:, :3] = offsets
     none = np.zeros(n, bool)
-    gpu.placement = Placement(
-        offsets, removed, none, none, np.zeros((0, 4), np.float32), 0, 1.0, ctx.buffer(data.tobytes())
-    )
+    planes = np.zeros((0, 4), np.float32)
+    placement = Placement(offsets, removed, none, none, planes, 0, 1.0, ctx.buffer(data.tobytes()))
+    gpu.placement = placement  # pyright: ignore[reportAttributeAccessIssue]  (GpuScene declares it None)
 
 
 def frame(gpu: GpuScene, view_name: str, hidden=None, offsets=None):

@@ -269,16 +269,16 @@ class CapturePass(ScenePass):
         """Upload R, then draw the whole batch once into `atlas` (sized to records.atlas_size):
         one draw call, two on the vertex-shader path when some regions meet the viewport's edge
         (those alone are clipped); objects without a region (culled, hidden) are left out. R on
-        the GPU (GpuRecords) and no sections: lists built there, a constant number of calls
-        (rtta.passes.draw_lists; `gpu_lists_used`). normals=False
-        or ids=False: that image is not written (a colour mask). Compositing never reads ids
-        and reads normals only for AO, edges and the projector; picking reads depths."""
+        the GPU (GpuRecords), no sections: lists built there (draw_lists; `gpu_lists_used`).
+        normals=False or ids=False: that image is not written (a colour mask). Compositing never
+        reads ids and reads normals only for AO, edges and the projector; picking reads depths."""
         tw, th, td = records.atlas_size
         self.frames += 1
-        self.gpu_lists_used = lists = td > 0 and draws_from_lists(records, gpu)
-        if lists:  # before the clear: llvmpipe's memory barrier waits for all queued work
-            self.lists = self.lists or CaptureLists(self.ctx)
-            self.lists.build(gpu, view, proj, records.viewport, clip_all=self.path is CapturePath.GS)
+        self.gpu_lists_used = td > 0 and draws_from_lists(records, gpu)
+        lists = None
+        if self.gpu_lists_used:  # built before the clear: llvmpipe's memory barrier waits for all queued work
+            lists = self.lists = self.lists or CaptureLists(self.ctx)
+            lists.build(gpu, view, proj, records.viewport, clip_all=self.path is CapturePath.GS)
         atlas.ensure((tw, th), td)
         atlas.clear()
         atlas.normals_written, atlas.ids_written = normals and atlas.normals, ids
@@ -289,8 +289,8 @@ class CapturePass(ScenePass):
         atlas.bind((0, 0, tw, th))
         atlas.write_mask(normals, ids)
         try:
-            if lists:
-                draw_from_lists(self, self.lists, gpu, view, proj, atlas)
+            if lists is not None:
+                draw_from_lists(self, lists, gpu, view, proj, atlas)
             else:
                 capture_from_records(self, gpu, view, proj, atlas, records)
         finally:

@@ -75,6 +75,7 @@ class CaptureLists:
         self.flags: moderngl.Buffer | None = None
         self._ranges_for: GpuScene | None = None
         self._flags_for: tuple | None = None
+        self._lengths: np.ndarray | None = None  # the counts as read (lengths())
         self._count_draw = IndirectCountDraw(ctx.version_code, set(ctx.extensions))
         self.count_draw = self._count_draw.available  # False: the lengths are read back (tests set it)
 
@@ -98,6 +99,7 @@ class CaptureLists:
         self._upload(gpu)
         n = gpu.scene.count
         self.counts.write(ZERO_COUNTS)
+        self._lengths = None
         if n == 0:
             return
         gpu.records.bind_to_storage_buffer(Storage.RECORDS)
@@ -146,8 +148,10 @@ class CaptureLists:
             vao.render_indirect(self.commands, moderngl.TRIANGLES, count=count, first=which * self.capacity)
 
     def lengths(self) -> np.ndarray:
-        """uint32 [4]: the commands in each list (reads the GPU's counts: waits for it)."""
-        return np.frombuffer(self.counts.read(), np.uint32).copy()
+        """uint32 [4]: the commands in each list (the GPU's counts read once per build: waits for it)."""
+        if self._lengths is None:
+            self._lengths = np.frombuffer(self.counts.read(), np.uint32).copy()
+        return self._lengths
 
     def commands_of(self, which: int) -> np.ndarray:
         """uint32 [k, 5]: list `which`'s commands (count, 1, first index, 0, 0), as written (tests)."""

@@ -15,10 +15,25 @@
 //            apart (moderngl's stride), of which one draws and the others draw none: the
 //            list's count where no drawn region is upsampled, where all are, where some are
 //            (u_total: that count instead of the drawn one, for a list of every id)
+// Or a stable LSD radix sort of the keys (ids in ascending order to start: ties stay by id),
+// RADIX_BITS a pass, over tiles of TILE = 256 * PER elements (u_tiles of them):
+//   STAGE 6 (per tile): each digit's count in the tile, into counts[digit * u_tiles + tile]
+//   STAGE 7 (one work group): counts -> their exclusive prefix sums (digit-major: each
+//            tile's first place for each digit)
+//   STAGE 8 (per tile): the tile sorted by digit in shared memory (each invocation's PER
+//            elements in order, its places from a scan of the per-invocation counts), each
+//            element written at its tile's place for its digit plus its rank there
+// Counts come from shared atomics (their sums do not depend on the order) and places from
+// scans: the result is the same on every driver.
 // OFFSETS: per-object offsets (x, y, z float triples) added to the bounds centres.
 #include "records.glsl"
 
-#if STAGE == 1 || STAGE == 3
+#define RADIX_BITS 4
+#define DIGITS 16
+#define PER 8
+#define TILE (256 * PER)
+
+#if STAGE == 1 || STAGE == 3 || STAGE >= 6
 layout(local_size_x = 256) in;
 #elif STAGE == 5
 layout(local_size_x = 1) in;
@@ -31,7 +46,9 @@ layout(std430, binding = BINDING_DRAW_LIST) buffer IdBuffer { uint ids[]; };
 
 uniform uint u_k;       // the bitonic merge's size (stages 3, 4)
 uniform uint u_j;       // the compare distance (stage 3)
-uniform uint u_length;  // elements (a power of two >= u_count; stages 1, 3)
+uniform uint u_length;  // elements (>= u_count: a power of two, or a multiple of TILE; stages 1, 3)
+uniform uint u_shift;   // the radix pass's digit: bits u_shift .. u_shift + RADIX_BITS - 1
+uniform uint u_tiles;   // the radix passes' tiles
 
 // commands at 0, 5, 10; then the drawn objects' count and the upsampled ones'
 #define DRAWN 15
@@ -92,6 +109,98 @@ void main() {
         command[5 * c + 3] = 0u;
     }
 }
+
+#elif STAGE >= 6
+layout(std430, binding = BINDING_SORT_COUNTS) buffer CountBuffer { uint counts[]; };
+layout(std430, binding = BINDING_SORT_KEYS_OUT) writeonly buffer KeyOutBuffer { uint keys_out[]; };
+layout(std430, binding = BINDING_SORT_IDS_OUT) writeonly buffer IdOutBuffer { uint ids_out[]; };
+shared uint s_part[256];
+
+uint digit(uint key) { return (key >> u_shift) & uint(DIGITS - 1); }
+
+// s_part's inclusive prefix sums (256 invocations, each its own entry)
+void scan_parts(uint t) {
+    for (uint off = 1u; off < 256u; off <<= 1) {
+        uint v = t >= off ? s_part[t - off] : 0u;
+        barrier();
+        s_part[t] += v;
+        memoryBarrierShared();
+        barrier();
+    }
+}
+
+#if STAGE == 6
+shared uint s_count[DIGITS];
+void main() {
+    uint t = gl_LocalInvocationID.x, tile = gl_WorkGroupID.x;
+    if (t < uint(DIGITS)) s_count[t] = 0u;
+    memoryBarrierShared();
+    barrier();
+    for (uint e = 0u; e < uint(PER); ++e) atomicAdd(s_count[digit(keys[tile * uint(TILE) + e * 256u + t])], 1u);
+    memoryBarrierShared();
+    barrier();
+    if (t < uint(DIGITS)) counts[t * u_tiles + tile] = s_count[t];
+}
+
+#elif STAGE == 7
+void main() {
+    uint t = gl_LocalInvocationID.x, total = uint(DIGITS) * u_tiles;
+    uint per = (total + 255u) / 256u, first = min(t * per, total), last = min(first + per, total);
+    uint sum = 0u;
+    for (uint i = first; i < last; ++i) sum += counts[i];
+    s_part[t] = sum;
+    memoryBarrierShared();
+    barrier();
+    scan_parts(t);
+    uint at = s_part[t] - sum;  // exclusive
+    for (uint i = first; i < last; ++i) {
+        uint c = counts[i];
+        counts[i] = at;
+        at += c;
+    }
+}
+
+#else
+shared uint s_place[DIGITS * 256];  // digit-major: [digit][invocation]
+void main() {
+    uint t = gl_LocalInvocationID.x, tile = gl_WorkGroupID.x, base = tile * uint(TILE) + t * uint(PER);
+    uint k[PER], id[PER], n[DIGITS];
+    for (uint d = 0u; d < uint(DIGITS); ++d) n[d] = 0u;
+    for (uint e = 0u; e < uint(PER); ++e) {
+        k[e] = keys[base + e];
+        id[e] = ids[base + e];
+        n[digit(k[e])] += 1u;
+    }
+    // the invocation's counts at [digit][t]; a scan over them in that order gives, for each
+    // digit and invocation, the place of its first element in the tile sorted by digit
+    for (uint d = 0u; d < uint(DIGITS); ++d) s_place[d * 256u + t] = n[d];
+    memoryBarrierShared();
+    barrier();
+    uint sum = 0u;  // invocation t scans the DIGITS entries from t * DIGITS
+    for (uint i = 0u; i < uint(DIGITS); ++i) sum += s_place[t * uint(DIGITS) + i];
+    s_part[t] = sum;
+    memoryBarrierShared();
+    barrier();
+    scan_parts(t);
+    uint at = s_part[t] - sum;
+    for (uint i = 0u; i < uint(DIGITS); ++i) {
+        uint c = s_place[t * uint(DIGITS) + i];
+        s_place[t * uint(DIGITS) + i] = at;
+        at += c;
+    }
+    memoryBarrierShared();
+    barrier();
+    for (uint d = 0u; d < uint(DIGITS); ++d) n[d] = 0u;
+    for (uint e = 0u; e < uint(PER); ++e) {
+        uint d = digit(k[e]);
+        // the tile's place for the digit, plus the element's rank among the tile's of that digit
+        uint place = counts[d * u_tiles + tile] + s_place[d * 256u + t] - s_place[d * 256u] + n[d];
+        n[d] += 1u;
+        keys_out[place] = k[e];
+        ids_out[place] = id[e];
+    }
+}
+#endif
 
 #elif STAGE == 3
 void main() {

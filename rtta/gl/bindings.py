@@ -67,6 +67,9 @@ class Storage:
     SORT_KEYS: Final = 16  # depth_order.comp: the sort's keys (ids sorted with them in DRAW_LIST)
     COMPOSITE_COMMAND: Final = 17  # depth_order.comp: compositing's indirect DrawArrays command (the count drawn)
     SORT_OFFSETS: Final = 18  # depth_order.comp: per object, an offset of its bounds centre (floats)
+    SORT_KEYS_OUT: Final = 19  # depth_order.comp: a radix pass's keys out (SORT_KEYS: in)
+    SORT_IDS_OUT: Final = 20  # depth_order.comp: a radix pass's ids out (DRAW_LIST: in)
+    SORT_COUNTS: Final = 21  # depth_order.comp: a radix pass's digit counts per tile, then their offsets
     DRAW_FLAGS: Final = 2  # capture_lists.comp: per object, closed and cut away whole
     DRAW_RANGES: Final = 3  # capture_lists.comp: per object, its (first, count) in the index buffer
     DRAW_COMMANDS: Final = 5  # capture_lists.comp: the capture's indirect draw commands, a list per kind

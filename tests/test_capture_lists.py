@@ -77,8 +77,9 @@ def place(ctx, gpu: GpuScene, offsets=None, removed=None) -> None:
     gpu.placement = placement  # pyright: ignore[reportAttributeAccessIssue]  (GpuScene declares it None)
 
 
-def frame(gpu: GpuScene, view_name: str, hidden=None, offsets=None):
-    """The view's matrices and R (Algorithm 1 on the CPU), B_world moved by `offsets`."""
+def frame(gpu: GpuScene, view_name: str, hidden=None, offsets=None, **packing):
+    """The view's matrices and R (Algorithm 1 on the CPU, `packing`: its border, region
+    scale...), B_world moved by `offsets`."""
     scene = gpu.scene
     projection = "ortho" if view_name == "ortho" else "perspective"
     cam = Camera.orbit(scene.center, scene.radius, *VIEWS[view_name], projection=projection)
@@ -86,7 +87,7 @@ def frame(gpu: GpuScene, view_name: str, hidden=None, offsets=None):
     corners = scene.box_corners()
     if offsets is not None:
         corners = corners + offsets[:, None, :]
-    return view, proj, parameterize(corners, proj @ view, VIEWPORT, hidden=hidden)
+    return view, proj, parameterize(corners, proj @ view, VIEWPORT, hidden=hidden, **packing)
 
 
 def on_gpu(gpu: GpuScene, rec) -> GpuRecords:
@@ -95,12 +96,12 @@ def on_gpu(gpu: GpuScene, rec) -> GpuRecords:
     return GpuRecords(gpu.scene.count, rec.viewport, rec.atlas_size, rec.border, lambda: rec)
 
 
-def capture_both(rig, scene_name, path, view_name, hidden=None, offsets=None, removed=None):
+def capture_both(rig, scene_name, path, view_name, hidden=None, offsets=None, removed=None, **packing):
     """The atlas images from the CPU path and from the GPU lists, and R."""
     gpus, passes, (cpu_atlas, gpu_atlas) = rig
     gpu, cap = gpus[scene_name], passes[path]
     place(gpu.ctx, gpu, offsets, removed)
-    view, proj, rec = frame(gpu, view_name, hidden, offsets)
+    view, proj, rec = frame(gpu, view_name, hidden, offsets, **packing)
     cap.render(gpu=gpu, records=rec, view=view, proj=proj, atlas=cpu_atlas)
     assert not cap.gpu_lists_used
     expected = cpu_atlas.read()
@@ -312,8 +313,13 @@ def test_the_order_of_commands_does_not_show(gl, rig, monkeypatch, path):
                 reversed_lists.append(k)
 
     monkeypatch.setattr(CaptureLists, "build", build_reversed)
-    for view_name in ("close", "inside"):
-        expected, got, _, _ = capture_both(rig, "assembly", path, view_name)
+    for view_name, packing in (
+        ("close", {}),
+        ("inside", {}),
+        ("close", {"border": 0, "region_scale": 0.37}),  # regions touching, edges between texels
+        ("outside", {"border": 0, "region_scale": 1.7}),
+    ):
+        expected, got, _, _ = capture_both(rig, "assembly", path, view_name, **packing)
         assert_same_atlas(expected, got)
     assert reversed_lists, "no list had two commands"
 

@@ -242,7 +242,18 @@ void main() {
     bool outlined = outline_here(atlas_texel(g_map, g_scale, g_layer, gl_FragCoord.xy));
 #endif
     Sample o;
-    if (!sampled(gl_FragCoord.xy, o)) discard;
+    if (!sampled(gl_FragCoord.xy, o)) {
+#ifdef SPRITE_OUTLINE
+        // an upsampled region's silhouette texel where its bilinear coverage falls short (at
+        // one texel per pixel or more a silhouette texel is always sampled): as MODE_OUTLINE draws it
+        if (outlined) {
+            gl_FragDepth = 0.0;
+            out_color = vec4(u_outline_color.rgb, 1.0);
+            return;
+        }
+#endif
+        discard;
+    }
     float depth = o.depth;
     vec3 rgb = o.rgb;
 #if defined(PROJECTOR) || defined(LENS)

@@ -126,7 +126,7 @@ def assembly(tmp_path_factory):
 
 
 def composite_both(gl, r, mode, style):
-    """The CPU branch's and the GPU-driven branch's composite of `r`'s last capture (rgba)."""
+    """The CPU branch's and the GPU-driven branch's composite of `r`'s last capture ((rgba, depth) each)."""
     records, view, proj = r.last
     post = r.post_process(style) if mode == "ghosted-ao" else None
     kw = dict(atlas=r.atlas, gpu=r.gpu, style=style, mode=mode, post=post, view_proj=proj @ view)
@@ -146,7 +146,8 @@ def composite_both(gl, r, mode, style):
                     records=records, view_depth=cp.view_depth(r.gpu, view, r.staging.offsets), target=target, **kw
                 )
                 assert not cp.gpu_driven
-            out.append(target.read()[0].astype(int))
+            rgba, depth = target.read()
+            out.append((rgba.astype(int), depth.copy()))
         finally:
             cp.release()
             target.release()
@@ -154,9 +155,12 @@ def composite_both(gl, r, mode, style):
 
 
 def assert_close(cpu, gpu):
-    diff = np.abs(cpu - gpu).max(-1)
+    """Colours within TOLERANCE on all but SHARE_OFF of the pixels, depths equal there too."""
+    diff = np.abs(cpu[0] - gpu[0]).max(-1)
     off = (diff > TOLERANCE).mean()
     assert off <= SHARE_OFF, f"{off:.4%} of pixels over {TOLERANCE}/255 (max {diff.max()})"
+    depth_off = (cpu[1] != gpu[1]).mean()
+    assert depth_off <= SHARE_OFF, f"{depth_off:.4%} of pixels of another depth"
 
 
 STYLES = {
@@ -177,6 +181,22 @@ def test_gpu_composite_equals_cpu(gl, make_renderer, demo_scene, assembly, scene
     cam = Camera.orbit(scene.center, scene.radius, 35, 25, 1.6)
     r.capture(cam, VP, focus=style.focus)
     assert_close(*composite_both(gl, r, mode, style))
+
+
+@pytest.mark.parametrize("mode", ["ghosted", "ghosted-ao"])
+def test_gpu_composite_upsampled_focus(gl, make_renderer, demo_scene, mode):
+    """Focus regions upsampled (region_scale 0.5): the CPU branch draws their outlines in a pass
+    of their own, the GPU branch with the focus sprites (at depth 0): the same colours, and
+    the same depths but under the outlines."""
+    r = make_renderer(demo_scene, Settings(region_scale=0.5))
+    cam = Camera.orbit(demo_scene.center, demo_scene.radius, 35, 25, 1.6)
+    style = Style(order="object", focus={1, 4, 7}, halo=3)
+    records = r.capture(cam, VP, focus=style.focus)
+    assert (records.scale[[1, 4, 7]] < 1).all()
+    (cpu, cpu_depth), (gpu, gpu_depth) = composite_both(gl, r, mode, style)
+    outline = np.abs(gpu[..., :3] - np.round(np.array(style.outline_color[:3]) * 255)).max(-1) <= 1
+    assert outline.sum() > 100
+    assert_close((cpu, np.where(outline, 0.0, cpu_depth)), (gpu, gpu_depth))
 
 
 def test_gpu_composite_exploded(gl, make_renderer, demo_scene):

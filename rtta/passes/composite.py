@@ -203,8 +203,9 @@ class CompositePass:
 
     def _render_gpu(self, atlas, records, gpu: GpuScene, style: Style, mode: Mode, view, target, post) -> None:
         """The GPU-driven branch (composite_gpu.py): the same draws as the CPU branch's, from
-        GPU lists; the focus outlines in a pass of their own (the general variant: whether a
-        focus region is upsampled is not known here)."""
+        GPU lists; the ghosted focus draws its outlines in its own pass (fused) whether its
+        regions are upsampled or not (composite.frag draws a silhouette texel that the
+        upsampling leaves uncovered, as the outline pass would)."""
         if self._gpu is None:
             self._gpu = GpuDraws(self.ctx)
         n = records.count
@@ -229,12 +230,12 @@ class CompositePass:
                 post.texture.use(Texture.ATLAS_POST)
             context = self._gpu.sorted(n=n, gpu=gpu, view=view, styles=self.styles)
             self._bind(atlas, gpu, target, records)
-            if focused is not None:
-                draw(focused, SpriteDraw.opaque(shaded=with_ao), style, records)
+            if focused is not None:  # with their outlines (at depth 0: nothing drawn after covers them)
+                draw(focused, SpriteDraw.opaque(shaded=with_ao, outlined=outlined), style, records)
             draw(context, SpriteDraw.context(desaturate=style.desaturate, shaded=with_ao), style, records)
             if style.halo > 0 and focused is not None:
                 self._halo(focused, context, style, records, target)
-        if outlined:
+        if outlined and mode in (Mode.SPRITES, Mode.TRANSPARENT):
             draw(focused, SpriteDraw.outlines(), style, records)
 
     def _halo(self, focus, context, style: Style, records: Records, target: CompositeTarget) -> None:

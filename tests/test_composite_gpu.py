@@ -13,7 +13,7 @@ from rtta.atlas.records import RECORD_DTYPE, GpuRecords
 from rtta.gl.targets import CompositeTarget
 from rtta.passes import composite as composite_module
 from rtta.passes import composite_gpu
-from rtta.passes.composite import CompositePass, back_to_front
+from rtta.passes.composite import BACKGROUND, CompositePass, back_to_front
 from rtta.passes.order_gpu import GpuOrder
 from rtta.passes.style import Style, style_params
 from rtta.renderer.placing import Staging, restage
@@ -208,6 +208,38 @@ def test_gpu_composite_exploded(gl, make_renderer, demo_scene):
     assert r.staging.offsets is not None
     for mode in ("ghosted", "transparent"):
         assert_close(*composite_both(gl, r, mode, style))
+
+
+@pytest.mark.parametrize("mode", ["ghosted", "sprites", "transparent"])
+def test_gpu_composite_from_gpu_parameterize(gl, make_renderer, assembly, mode):
+    """R as Algorithm 1 on the GPU leaves it (Settings(parameterize="gpu")): composited from
+    the record buffer as it is, as the CPU branch composites it read back."""
+    r = make_renderer(assembly, Settings(parameterize="gpu", context_scale=0.5))
+    cam = Camera.orbit(assembly.center, assembly.radius, 120, 30, 1.5)
+    style = Style(order="object", focus={3, 30, 90}, halo=2)
+    records = r.capture(cam, VP, focus=style.focus)
+    assert isinstance(records, GpuRecords) and not records.is_read
+    _, view, proj = r.last
+    kw = dict(atlas=r.atlas, gpu=r.gpu, style=style, mode=mode, view_proj=proj @ view)
+    kw["eye"] = outline_eye(view, proj, assembly.radius)
+    out = []
+    for on_gpu in (True, False):  # the GPU branch first: nothing read before
+        cp, target = CompositePass(gl), CompositeTarget(gl)
+        try:
+            if on_gpu:
+                cp.render(records=records, view=view, target=target, **kw)
+                assert cp.gpu_driven and not records.is_read
+            else:
+                depth = cp.view_depth(r.gpu, view)
+                cp.render(records=records.read(), view_depth=depth, target=target, **kw)
+            rgba, depth = target.read()
+            out.append((rgba.astype(int), depth.copy()))
+        finally:
+            cp.release()
+            target.release()
+    background = np.round(np.array(BACKGROUND[:3]) * 255)
+    assert (np.abs(out[0][0][..., :3] - background).max(-1) > 8).mean() > 0.2  # a picture, not a blank
+    assert_close(out[1], out[0])
 
 
 def test_gpu_branch_does_no_work_over_objects(gl, make_renderer, demo_scene, monkeypatch):

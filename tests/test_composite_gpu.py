@@ -14,8 +14,9 @@ from rtta.gl.targets import CompositeTarget
 from rtta.passes import composite as composite_module
 from rtta.passes import composite_gpu
 from rtta.passes.composite import BACKGROUND, CompositePass, back_to_front
+from rtta.passes.composite_gpu import gpu_driven
 from rtta.passes.order_gpu import GpuOrder
-from rtta.passes.style import Style, style_params
+from rtta.passes.style import Mode, Style, style_params
 from rtta.renderer.placing import Staging, restage
 from rtta.renderer.settings import Settings
 from rtta.scene.camera import Camera, ortho_near, outline_eye
@@ -117,6 +118,39 @@ def test_gpu_order_gives_one_variant_the_list(gl, order, scales):
     finally:
         for buf in made:
             buf.release()
+
+
+def test_which_branch():
+    """GPU-driven: R on the GPU, a view given, no projector or lens, object order where the mode blends."""
+    on_gpu, on_cpu, view = types.SimpleNamespace(on_gpu=True), types.SimpleNamespace(), np.eye(4)
+    obj, auto, pixel = Style(order="object"), Style(), Style(order="pixel")
+    assert gpu_driven(on_gpu, Mode.GHOSTED, auto, view, None, None)
+    assert gpu_driven(on_gpu, Mode.GHOSTED_AO, obj, view, None, None)
+    assert gpu_driven(on_gpu, Mode.SPRITES, pixel, view, None, None)
+    assert gpu_driven(on_gpu, Mode.TRANSPARENT, obj, view, None, None)
+    assert not gpu_driven(on_gpu, Mode.TRANSPARENT, auto, view, None, None)  # auto: pixel order there
+    assert not gpu_driven(on_gpu, Mode.GHOSTED, pixel, view, None, None)
+    assert not gpu_driven(on_cpu, Mode.GHOSTED, auto, view, None, None)
+    assert not gpu_driven(on_gpu, Mode.GHOSTED, auto, None, None, None)
+    assert not gpu_driven(on_gpu, Mode.GHOSTED, auto, view, "projection", None)
+    assert not gpu_driven(on_gpu, Mode.GHOSTED, auto, view, None, "lens")
+
+
+def test_pixel_order_reads_r_back(gl, make_renderer, demo_scene):
+    """transparent in pixel order (Style's default 'auto') takes the CPU branch: R is read back."""
+    r = make_renderer(demo_scene, Settings(parameterize="gpu"))
+    cam = Camera.orbit(demo_scene.center, demo_scene.radius, 35, 25, 1.6)
+    records = r.capture(cam, VP)
+    _, view, proj = r.last
+    cp, target = CompositePass(gl), CompositeTarget(gl)
+    try:
+        cp.render(
+            atlas=r.atlas, records=records, gpu=r.gpu, style=Style(), mode="transparent", view=view, target=target
+        )
+        assert not cp.gpu_driven and records.is_read and "resolve" in cp.passes
+    finally:
+        cp.release()
+        target.release()
 
 
 @pytest.fixture(scope="module")

@@ -230,6 +230,7 @@ class SpritePass:
         if listed.command is not None:
             variants = [(0, {}), (1, {"UPSAMPLE": sampled}), (2, {"UPSAMPLE_DYNAMIC": sampled})]
         hull = None if draw.kind is Kind.HALOS else self._hull
+        hull_draws = self.hull_draws + (hull is not None)  # one list: one draw, whichever variant
         for first, variant in variants:
             defines = {**self._defines(None, draw, style, records), "HULL_PER_SPRITE": True, **variant}
             prog, vao = self._setup(defines, draw, style, records, hull)
@@ -237,6 +238,7 @@ class SpritePass:
                 if name in prog:
                     glsl.uniform(prog, name).value = value
             self._render(vao, listed if first is None else (listed.command, first), draw)
+        self.hull_draws = hull_draws
 
     def _defines(self, ids, draw: SpriteDraw, style: Style, records: Records) -> dict[str, bool]:
         """The draw's variant; `ids` None: a GPU list (no OUTLINE_QUAD: it needs their scales)."""

@@ -160,7 +160,8 @@ def assembly(tmp_path_factory):
 
 
 def composite_both(gl, r, mode, style):
-    """The CPU branch's and the GPU-driven branch's composite of `r`'s last capture ((rgba, depth) each)."""
+    """The CPU branch's and the GPU-driven branch's composite of `r`'s last capture ((rgba, depth) each),
+    R made on the CPU (Settings(parameterize="cpu")) and written into the record buffer for the GPU branch."""
     records, view, proj = r.last
     post = r.post_process(style) if mode == "ghosted-ao" else None
     kw = dict(atlas=r.atlas, gpu=r.gpu, style=style, mode=mode, post=post, view_proj=proj @ view)
@@ -211,7 +212,7 @@ def test_gpu_composite_equals_cpu(gl, make_renderer, demo_scene, assembly, scene
     scene = demo_scene if scene_name == "demo" else assembly
     focus = np.arange(scene.count)[:: max(1, scene.count // 5)]
     style = STYLES[styled](focus)
-    r = make_renderer(scene, Settings(context_scale=0.5 if styled == "focus" else 1.0))
+    r = make_renderer(scene, Settings(parameterize="cpu", context_scale=0.5 if styled == "focus" else 1.0))
     cam = Camera.orbit(scene.center, scene.radius, 35, 25, 1.6)
     r.capture(cam, VP, focus=style.focus)
     assert_close(*composite_both(gl, r, mode, style))
@@ -222,7 +223,7 @@ def test_gpu_composite_upsampled_focus(gl, make_renderer, demo_scene, mode):
     """Focus regions upsampled (region_scale 0.5): the CPU branch draws their outlines in a pass
     of their own, the GPU branch with the focus sprites (at depth 0): the same colours, and
     the same depths but under the outlines."""
-    r = make_renderer(demo_scene, Settings(region_scale=0.5))
+    r = make_renderer(demo_scene, Settings(parameterize="cpu", region_scale=0.5))
     cam = Camera.orbit(demo_scene.center, demo_scene.radius, 35, 25, 1.6)
     style = Style(order="object", focus={1, 4, 7}, halo=3)
     records = r.capture(cam, VP, focus=style.focus)
@@ -234,7 +235,7 @@ def test_gpu_composite_upsampled_focus(gl, make_renderer, demo_scene, mode):
 
 
 def test_gpu_composite_exploded(gl, make_renderer, demo_scene):
-    r = make_renderer(demo_scene)
+    r = make_renderer(demo_scene, Settings(parameterize="cpu"))
     restage(r, Staging(explode=0.6))
     cam = Camera.orbit(demo_scene.center, demo_scene.radius, 200, -20, 1.8)
     style = Style(order="object", focus={1, 4})
@@ -279,7 +280,7 @@ def test_gpu_composite_from_gpu_parameterize(gl, make_renderer, assembly, mode):
 def test_gpu_branch_does_no_work_over_objects(gl, make_renderer, demo_scene, monkeypatch):
     """Per frame, the GPU branch reads nothing of R and sorts nothing on the CPU; the style
     parameters are built again only when the style changes."""
-    r = make_renderer(demo_scene)
+    r = make_renderer(demo_scene, Settings(parameterize="cpu"))
     cam = Camera.orbit(demo_scene.center, demo_scene.radius, 35, 25, 1.6)
     style = Style(order="object", focus={2}, halo=3)
     records, view, proj = r.capture(cam, VP, focus=style.focus), *r.last[1:]

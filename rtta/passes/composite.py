@@ -51,9 +51,10 @@ def back_to_front(records: Records, view_depth: np.ndarray, ids: np.ndarray) -> 
 
 
 class CompositePass:
-    """The atlas composited into a target: `render(*, atlas, records, gpu, style, mode, view_depth,
-    target)` draws every sprite draw of the mode (SpritePass), blending in object or pixel order
-    (oit.PixelOrderPass); needs `post` (AtlasPostPass) for ghosted-ao."""
+    """The atlas composited into a target: `render(*, atlas, records, gpu, style, mode, view_depth
+    or view, target)` draws every sprite draw of the mode (SpritePass), blending in object or
+    pixel order (oit.PixelOrderPass); needs `post` (AtlasPostPass) for ghosted-ao. With R on the
+    GPU (a GpuRecords) and `view`, most frames draw from GPU lists (`gpu_driven`; composite_gpu.py)."""
 
     def __init__(self, ctx: moderngl.Context) -> None:
         self.ctx = ctx

@@ -136,4 +136,9 @@ def test_scale_bench_quick(gl, tmp_path, capsys):
         assert math.isfinite(row[key]) and row[key] > 0
     for which in ("rtta", "trimesh"):
         assert row["load"][which]["s"] > 0 and row["load"][which]["peak_rss"] > 10 * 2**20
-    assert "| assembly-300 | 300 |" in capsys.readouterr().out
+    cost = row["cost"]  # per path: Python outside GL, wall and GPU ms per ghosted frame
+    for path in ("cpu", "gpu"):
+        for key in ("python_ms", "wall_ms", "gpu_capture_ms", "gpu_composite_ms"):
+            assert math.isfinite(cost[f"{path}_{key}"]) and cost[f"{path}_{key}"] > 0
+    printed = capsys.readouterr().out
+    assert "| assembly-300 | 300 |" in printed and "Frame cost per path" in printed

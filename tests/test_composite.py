@@ -8,6 +8,7 @@ import trimesh
 from checks import assert_depth_close
 
 from rtta.passes.composite import BACKGROUND, MODES, Style
+from rtta.renderer.settings import Settings
 from rtta.renderer.snapshot import over_background
 from rtta.scene.camera import DEFAULT_ORBIT, Camera
 from rtta.scene.generators.generate import random_scene
@@ -141,8 +142,19 @@ def test_style_changes_recomposite_only(make_renderer, demo_scene):
     assert r.capture_pass().frames == frames and not np.array_equal(a, b)
 
 
-def test_only_needed_passes_run(make_renderer, demo_scene):
-    r = make_renderer(demo_scene)
+def draws(passes: list[str]) -> list[str]:
+    """The draws of a frame by what they do: a GPU-listed draw is issued once per scale class
+    (upsample variants, the count on the GPU: rtta.passes.composite_gpu), drawn as one."""
+    kinds = ["+".join(t for t in p.split("+") if t not in GPU_VARIANTS) for p in passes]
+    return [k for i, k in enumerate(kinds) if i == 0 or k != kinds[i - 1]]
+
+
+GPU_VARIANTS = {"hull_per_sprite", "upsample", "upsample_dynamic"}
+
+
+@pytest.mark.parametrize("where", ["cpu", "gpu"])
+def test_only_needed_passes_run(make_renderer, demo_scene, where):
+    r = make_renderer(demo_scene, Settings(parameterize=where))
     cam = Camera.orbit(demo_scene.center, demo_scene.radius, *DEFAULT_ORBIT)
     r.capture(cam, VP)
     expected = {
@@ -153,14 +165,15 @@ def test_only_needed_passes_run(make_renderer, demo_scene):
     for mode, passes in expected.items():
         r.composite(mode, Style(focus={1}))
         highlight = ["outline"] if mode != "ghosted" else []  # sprites/transparent: highlight outlines
-        assert r._composite.passes == passes + highlight and r._post is None
+        assert draws(r._composite.passes) == passes + highlight and r._post is None
         if highlight:
             r.composite(mode, Style())
-            assert r._composite.passes == passes
+            assert draws(r._composite.passes) == passes
     r.composite("ghosted", Style(focus={1}, outline_width=0))  # no outline: no outline pass or variant
-    assert r._composite.passes == ["sprite", "blend"]
+    assert draws(r._composite.passes) == ["sprite", "blend"]
     r.composite("ghosted-ao", Style(focus={1}))
-    assert r._composite.passes == ["sprite+outline+with_ao", "blend+with_ao"] and r._post is not None
+    assert draws(r._composite.passes) == ["sprite+outline+with_ao", "blend+with_ao"] and r._post is not None
+    assert r._composite.gpu_driven == (where == "gpu")
 
 
 @pytest.mark.parametrize(

@@ -127,7 +127,7 @@ def test_post_process_matches_numpy(make_renderer, demo_scene, edge_width, borde
     style = Style(edge_width=edge_width, ao_radius=12.0, ao_strength=1.5, ao_objects="all")
     post = r.post_process(style)
     post.texture.write(np.full(post.texture.size[:2] + (post.texture.layers, 4), SENTINEL, np.uint8))
-    r._post_key = None  # run again over the sentinel
+    r._post._shaded_for = None  # run again over the sentinel
     post = r.post_process(style)
     frame = AtlasFrame(r, records, r.last[2])
     tw, th, td = records.atlas_size

@@ -156,19 +156,32 @@ for name in ("animated_open", "animated_closed"):
 result["animated"] = {"seen": seen, "end": c.explode}
 
 
+def tied(x: float, y: float) -> bool:
+    """Whether the two nearest surfaces under window point (x, y) lie at one depth (coplanar
+    caps of two parts cut by one plane): either may be the front one, in STD as in the atlas."""
+    from rtta.passes.picking import objects_at
+
+    cx, cy, _, ch = app.layout.composite
+    hits = objects_at(app.renderer.atlas, app.records, int(round(x) - cx), int(cy + ch - 1 - round(y)))
+    return len(hits) > 1 and hits[1][1] - hits[0][1] < 1e-5
+
+
 def click_on(flags: np.ndarray) -> dict | None:
-    """Click the first of these parts (bool [n]) whose box centre shows it in front; what it selected."""
+    """Click the first of these parts (bool [n]) that a point of its box shows in front, on
+    a 5 x 5 grid over its bounds, centre first; what it selected."""
     rec = app.records
     app.state.select("none")
     frames()
+    grid = sorted(((i, j) for i in range(1, 6) for j in range(1, 6)), key=lambda p: abs(p[0] - 3) + abs(p[1] - 3))
     for oid in np.flatnonzero(flags):
         x0, y0, x1, y1 = rec.viewport_rect[oid]
         if x1 <= x0 or y1 <= y0:
             continue
-        px, py = cx + (x0 + x1) / 2, cy + ch - 1 - (y0 + y1) / 2
-        if front_id(px, py) == oid:
-            click(px, py)
-            return {"part": int(oid), "focus": sorted(app.state.highlighted)}
+        for i, j in grid:
+            px, py = cx + x0 + (x1 - x0) * i / 6, cy + ch - 1 - (y0 + (y1 - y0) * j / 6)
+            if front_id(px, py) == oid and not tied(px, py):
+                click(px, py)
+                return {"part": int(oid), "focus": sorted(app.state.highlighted)}
     return None
 
 

@@ -93,6 +93,7 @@ class Viewer(Pictures, Loading, Painting):
         self.state = state
         self.renderer = Renderer(self.ctx, scene, state.settings)
         self.renderer.measure = state.measure
+        self.renderer.atlas_sizing = "ahead"  # no frame waits for the GPU to size the atlas (rtta.passes.atlas_gpu)
         self.renderer.python_warnings = False  # what it degrades is said in the panel (frame())
         projection = self.orbit.projection if old is not None else "perspective"
         self.orbit = Orbit.default(scene.center, scene.radius, up_axis=scene.up_axis)

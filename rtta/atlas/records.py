@@ -89,13 +89,18 @@ class Records:
         return float((r[:, 2] * r[:, 3]).sum() / area) if area else 0.0
 
 
-class GpuRecords:
+def _read_back(name: str) -> property:
+    """A planar array of GpuRecords: read back with the others on first use."""
+    return property(lambda self: getattr(self.read(), name), doc=f"`Records.{name}`, read back on first use.")
+
+
+class GpuRecords(Records):
     """R of a frame that the GPU wrote into the record buffer (`Settings(parameterize="gpu")`):
     what the CPU knows without waiting for the GPU, and the planar arrays read back on first use.
 
     The GPU-driven passes (the capture's draw lists, compositing's sort and sprite draws) take
     the record buffer as it is and read none of the arrays; picking, the export, pixel-order
-    blending and the dataset read them (`read()`, or any `Records` attribute), which waits for
+    blending and the dataset read them (`read()`, or any array of `Records`), which waits for
     the GPU once per frame.
 
     Parameters
@@ -105,8 +110,8 @@ class GpuRecords:
     viewport : tuple of int
         (W, H) in pixels.
     atlas_size : tuple of int
-        (T_w, T_h, T_d): the atlas extent the transforms T map to (the allocation, not the
-        extent used: that is known on the GPU alone until read).
+        (T_w, T_h, T_d): the atlas extent the transforms T map to (with sizing "ahead" the
+        allocation, not the extent used: that is known on the GPU alone until read).
     border : int
         Empty texels around each region.
     reader : callable
@@ -114,8 +119,15 @@ class GpuRecords:
     """
 
     on_gpu = True
+    visible = _read_back("visible")  # type: ignore[assignment]
+    viewport_rect = _read_back("viewport_rect")  # type: ignore[assignment]
+    atlas_rect = _read_back("atlas_rect")  # type: ignore[assignment]
+    layer = _read_back("layer")  # type: ignore[assignment]
+    scale = _read_back("scale")  # type: ignore[assignment]
+    transform = _read_back("transform")  # type: ignore[assignment]
+    clip_ndc = _read_back("clip_ndc")  # type: ignore[assignment]
 
-    def __init__(
+    def __init__(  # no Records.__init__: the arrays are read back on first use
         self, count: int, viewport: tuple[int, int], atlas_size: tuple[int, int, int], border: int, reader
     ) -> None:
         self.count = count
@@ -132,11 +144,11 @@ class GpuRecords:
 
     def read(self) -> Records:
         """The frame's records as planar arrays (read back once; waits for the GPU)."""
-        if self._read is None:
-            self._read = self._reader()
-        return self._read
+        read = self._read
+        if read is None:
+            read = self._read = self._reader()
+        return read
 
-    def __getattr__(self, name: str):
-        if name.startswith("_"):
-            raise AttributeError(name)
-        return getattr(self.read(), name)
+    def __repr__(self) -> str:
+        size, read = self.atlas_size, self.is_read
+        return f"GpuRecords(count={self.count}, viewport={self.viewport}, atlas_size={size}, read={read})"

@@ -4,8 +4,10 @@ For generated assemblies of 1k, 10k and 100k parts (rtta.scene.generators.assemb
 by the bench) and the real engine when ../shared/data has it: rtta's load time against
 `trimesh.load` of the same file and their peak RSS (each in a fresh process, so the peaks
 are the loads' own), parameterize + pack ms, STD, capture and ghosted frame ms (in turns
-within rounds, so ratios cancel a slow phase of the machine), and the viewer's frames per
-second in `ghosted` (`rtta-view --bench`, in a headless window where there is no display).
+within rounds, so ratios cancel a slow phase of the machine), the viewer's frames per
+second in `ghosted` (`rtta-view --bench`, in a headless window where there is no display),
+and per path of Algorithm 1 (CPU, GPU) a ghosted frame's Python time outside GL calls, its
+wall time and its GPU time per stage (rtta.bench.frame_cost).
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ from ..renderer.renderer import Renderer
 from ..scene.camera import Camera
 from ..scene.generators.assembly import write_assembly
 from ..scene.loader import load_scene
+from .frame_cost import frame_costs, print_costs
 from .render import _gl_timed, _interleaved_ms, _median_ms, shared_data
 
 SIZES = (1_000, 10_000, 100_000)
@@ -73,6 +76,7 @@ def frame_figures(ctx, path: Path, viewport: tuple[int, int], rounds: int) -> di
 
     scene = load_scene(path)
     r = Renderer(ctx, scene)
+    r.atlas_sizing = "ahead"  # as the viewer: no frame waits for the GPU to size the atlas
     cam = Camera.orbit(scene.center, scene.radius, 30.0, 20.0, 2.2)
     view, proj = r.matrices(cam, viewport)
     corners, vpm = scene.box_corners(), proj @ view
@@ -103,6 +107,7 @@ def frame_figures(ctx, path: Path, viewport: tuple[int, int], rounds: int) -> di
         row[f"{k}_ms"] = float(np.median(times[k]))
         row[f"{k}_ratio"] = float(np.median(np.array(times[k]) / std))
     r.release()
+    row["cost"] = frame_costs(ctx, scene, viewport, frames=3 if rounds < 5 else 5)
     return row
 
 
@@ -167,6 +172,7 @@ def run_scale(
             row["viewer_fps_exact"] = viewer_fps(path, frames, navigation_fps=0) if viewer else None
             rows.append(row)
             _print_row(row, len(rows) == 1, renderer, viewport)
+    print_costs([r["cost"] for r in rows], renderer, viewport)
     if json_path:
         Path(json_path).write_text(
             json.dumps({"renderer": renderer, "viewport": list(viewport), "scenes": rows}, indent=1)

@@ -122,6 +122,18 @@ class GpuParameterize:
             self.scales.write(wanted)
             self._wanted = wanted
 
+    @classmethod
+    def attempt(cls, ctx: moderngl.Context, sizing: Sizing, where: str, warn) -> GpuParameterize | bool:
+        """A GpuParameterize, or False where its shaders do not build and `where` is "auto"
+        (`warn` says so once; where it is "gpu" the RttaError goes on)."""
+        try:
+            return cls(ctx, sizing)
+        except RttaError as exc:
+            if where == "gpu":
+                raise
+            warn(f"{exc}: Algorithm 1 runs on the CPU")
+            return False
+
     def knows(self, key: object, n: int) -> bool:
         """Whether the scales wanted uploaded are those of `key` (run's `key`) for n objects."""
         return key is not None and key == self._wanted_key and len(self._wanted) == n
@@ -130,7 +142,7 @@ class GpuParameterize:
         """The scales wanted [n] (0: hidden), or None when `key` says they are as uploaded."""
         if self.knows(key, n):
             return None
-        wanted = np.broadcast_to(np.asarray(region_scale, np.float64), (n,)).copy()
+        wanted = np.broadcast_to(np.asarray(1.0 if region_scale is None else region_scale, np.float64), (n,)).copy()
         if not (np.isfinite(wanted).all() and (wanted > 0).all() and (wanted <= 16).all()):
             raise ValueError("region scale must be in (0, 16]")
         if hidden is not None:
@@ -148,7 +160,7 @@ class GpuParameterize:
         border: int,
         atlas_max: tuple[int, int],
         max_layers: int,
-        region_scale: float | np.ndarray = 1.0,
+        region_scale: float | np.ndarray | None = 1.0,
         hidden: np.ndarray | None = None,
         offsets: np.ndarray | None = None,
         key: object = None,
@@ -173,7 +185,7 @@ class GpuParameterize:
         max_layers : int
             The most layers; regions are scaled down rather than dropped.
         region_scale : float or numpy.ndarray, default 1
-            Atlas texels per viewport pixel, for all or per object [n].
+            Atlas texels per viewport pixel, for all or per object [n] (None: 1).
         hidden : numpy.ndarray, optional
             bool [n]: objects given no region.
         offsets : numpy.ndarray, optional
@@ -220,7 +232,7 @@ class GpuParameterize:
             "u_border": border,
             "u_atlas_max": atlas_max,
             "u_max_layers": ahead or int(max_layers),
-            "u_extent": atlas_max if ahead else (0, 0),
+            "u_extent": atlas_max if self.sizing == "ahead" else (0, 0),  # the first frame's T as the next ones
         }
         self._bind(gpu, uniforms)
         groups = max(1, -(-n // LOCAL_SIZE))
@@ -236,6 +248,7 @@ class GpuParameterize:
             if self.sizing == "ahead":  # the first frame: allocate what it used, and an eighth more
                 self.layers = min(int(max_layers), layers + max(1, layers // 8))
                 self._ahead_of = ((W, H), atlas_max, int(max_layers))
+                size = (*atlas_max, self.layers)
         t1 = time.perf_counter()
         wanted_now = self._wanted
         records = GpuRecords(

@@ -325,3 +325,18 @@ class OrderMarks:
         self.stencil = self.fbo = self.collect_fbo = None
         self.first = []
         self._key = None
+
+
+def fallback_message(refusal: Refusal | None, viewport: tuple[int, int]) -> str:
+    """What a frame that asked for per-pixel order and was blended in object order says."""
+    if refusal == "target":
+        w, h = viewport
+        need = w * h * LIST_BYTES_PER_PIXEL / 2**20
+        return (
+            f"per-pixel order would need {need:,.0f} MiB of per-pixel targets for this {w}x{h} "
+            "view: blended in object order (a smaller viewport keeps it per pixel)"
+        )
+    return (
+        f"per-pixel order would need more than {MAX_NODES:,} surfaces in this view: "
+        "blended in object order (a smaller viewport or fewer objects keep it per pixel)"
+    )

@@ -73,6 +73,8 @@ class AtlasPostPass:
         self._variants: dict[tuple[str, ...], tuple] = {}  # defines -> (program, vao)
         self._out = _LayerTarget(ctx, 4, "f1")  # (ao, edge)
         self._list = ctx.buffer(reserve=16)  # the ids to shade
+        self._shaded_for: tuple | None = None  # (capture, AO and edge parameters) of `_done`
+        self._done = np.zeros(0, np.int8)  # per object: 0 nothing, 1 edges, 2 AO + edges
 
     @property
     def texture(self):
@@ -88,6 +90,25 @@ class AtlasPostPass:
             prog = glsl.program(self.ctx, **glsl.stage_sources(STAGES, **{d: True for d in defines}))
             self._variants[defines] = (prog, self.ctx.vertex_array(prog, []))
         return self._variants[defines]
+
+    def shade(self, *, atlas: LayeredTarget, records, gpu: GpuScene, proj: np.ndarray, style, capture: int) -> bool:
+        """AO and edges cached per object: they depend on the capture (`capture` counts them)
+        and the AO/edge parameters, not on focus or opacity, so a focus change shades only the
+        objects whose role now asks for more (--ao-objects focus). Whether it rendered."""
+        key = (capture, style.ao_radius, style.ao_strength, style.edge_width)
+        n = gpu.scene.count
+        if key != self._shaded_for or len(self._done) != n:
+            self._done = np.zeros(n, np.int8)
+            self._shaded_for = key
+        ao, edges = style.shaded(n)
+        need = np.where(ao, 2, np.where(edges, 1, 0)).astype(np.int8)
+        full = np.flatnonzero((need == 2) & (self._done < 2))
+        edge_only = np.flatnonzero((need == 1) & (self._done < 1))
+        if not (len(full) or len(edge_only) or self.texture is None):
+            return False
+        self.render(atlas=atlas, records=records, gpu=gpu, proj=proj, style=style, full=full, edges=edge_only)
+        self._done = np.maximum(self._done, need)
+        return True
 
     def render(
         self, *, atlas: LayeredTarget, records: Records, gpu: GpuScene, proj: np.ndarray, style, full=None, edges=()

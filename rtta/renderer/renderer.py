@@ -16,7 +16,6 @@ import numpy as np
 from ..atlas import scratch
 from ..atlas.parameterize import Records, Thinning, default_atlas_max, parameterize
 from ..atlas.records import GpuRecords
-from ..errors import RttaError
 from ..gl import glraw
 from ..gl.context import Capabilities, CapturePath, CapturePathName
 from ..gl.gpu import GpuScene
@@ -67,8 +66,6 @@ class Renderer:
         self._single: LayeredTarget | None = None
         self._composite: CompositePass | None = None
         self._post: AtlasPostPass | None = None
-        self._post_key: tuple | None = None
-        self._post_done = np.zeros(0, np.int8)  # per object: 0 nothing, 1 edges, 2 AO + edges
         self._view: tuple | None = None  # (camera, viewport, path) of the last capture
         self.captured_focus: frozenset[int] = frozenset()  # the focus the last capture was scaled for
         self._captures = 0
@@ -148,15 +145,10 @@ class Renderer:
         if self.settings.parameterize == "cpu" or self._gpu_atlas is False:
             return False
         if self._gpu_atlas is None:
-            try:
-                self._gpu_atlas = GpuParameterize(self.ctx, self.atlas_sizing)
-            except RttaError as exc:
-                if self.settings.parameterize == "gpu":
-                    raise
-                self._gpu_atlas = False
-                self._warn(f"{exc}: Algorithm 1 runs on the CPU")
-                return False
-        return True
+            self._gpu_atlas = GpuParameterize.attempt(
+                self.ctx, self.atlas_sizing, self.settings.parameterize, self._warn
+            )
+        return bool(self._gpu_atlas)
 
     def _parameterize_gpu(self, vpm, viewport, atlas_max, max_layers, focus) -> GpuRecords:
         """Algorithm 1 on the GPU (rtta.passes.atlas_gpu); the objects not packed and the scales
@@ -253,8 +245,6 @@ class Renderer:
         records, view, proj = self.last
         if self._composite is None:
             self._composite = CompositePass(self.ctx)
-        centers = (self.scene.aabb_min + self.scene.aabb_max) / 2 - self.scene.origin + self.staging.shift
-        view_depth = -(centers @ view[2, :3] + view[2, 3])
         post = self.post_process(style) if mode == Mode.GHOSTED_AO else None
         origin = self.scene.origin
         projection = self._projection()
@@ -275,7 +265,8 @@ class Renderer:
                 gpu=self.gpu,
                 style=style,
                 mode=mode,
-                view_depth=view_depth,
+                view=view,
+                offsets=self.staging.offsets,
                 target=self.target,
                 post=post,
                 view_proj=proj @ view,
@@ -286,18 +277,7 @@ class Renderer:
             )
             self._throttle.flush()
         if self._composite.fallbacks > fallbacks:
-            if self._composite.pixel_order_refusal == "target":
-                w, h = records.viewport
-                need = w * h * oit.LIST_BYTES_PER_PIXEL / 2**20
-                self._warn(
-                    f"per-pixel order would need {need:,.0f} MiB of per-pixel targets for this {w}x{h} "
-                    "view: blended in object order (a smaller viewport keeps it per pixel)"
-                )
-            else:
-                self._warn(
-                    f"per-pixel order would need more than {oit.MAX_NODES:,} surfaces in this view: "
-                    "blended in object order (a smaller viewport or fewer objects keep it per pixel)"
-                )
+            self._warn(oit.fallback_message(self._composite.pixel_order_refusal, records.viewport))
         return self.target
 
     def needs_normals(self, mode: str) -> bool:  # also "std"
@@ -316,28 +296,16 @@ class Renderer:
         return self._projector_pass, self.projector
 
     def post_process(self, style: Style) -> AtlasPostPass:
-        """Ambient occlusion and edges on the atlas (ghosted-ao only), cached per object: they
-        depend on the capture and the AO/edge parameters, not on focus or opacity, so a focus
-        change shades only the objects whose role now asks for more (--ao-objects focus)."""
+        """Ambient occlusion and edges on the atlas (ghosted-ao only), per object as the
+        style asks and once per capture (AtlasPostPass.shade)."""
         if self.last is None:
             raise RuntimeError("post_process() needs a capture() first")
         records, _, proj = self.last
-        if self._post is None:
-            self._post = AtlasPostPass(self.ctx)
-        key = (self._captures, style.ao_radius, style.ao_strength, style.edge_width)
-        if key != self._post_key:
-            self._post_done = np.zeros(len(records.visible), np.int8)
-            self._post_key = key
-        ao, edges = style.shaded(len(records.visible))
-        need = np.where(ao, 2, np.where(edges, 1, 0)).astype(np.int8)
-        full = np.flatnonzero((need == 2) & (self._post_done < 2))
-        edge_only = np.flatnonzero((need == 1) & (self._post_done < 1))
-        if len(full) or len(edge_only) or self._post.texture is None:
-            with self._timed("post"):
-                self._post.render(
-                    atlas=self.atlas, records=records, gpu=self.gpu, proj=proj, style=style, full=full, edges=edge_only
-                )
-            self._post_done = np.maximum(self._post_done, need)
+        self._post = self._post or AtlasPostPass(self.ctx)
+        with self._timed("post"):
+            self._post.shade(
+                atlas=self.atlas, records=records, gpu=self.gpu, proj=proj, style=style, capture=self._captures
+            )
         return self._post
 
     @property
@@ -391,10 +359,11 @@ class Renderer:
         wants memory back after a huge window."""
         if self.last is None:
             return
-        records = self.last[0]
-        tw, th, td = records.atlas_size
+        tw, th, td = self.last[0].atlas_size
         self.atlas.trim((tw, th), td)
         self.target.trim()
+        if isinstance(self._gpu_atlas, GpuParameterize):
+            self._gpu_atlas.layers = 0  # the next frame sizes the atlas anew (sizing "ahead")
 
     @property
     def target_bytes(self) -> int:

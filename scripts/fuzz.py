@@ -85,7 +85,7 @@ def _run(target: str, seconds: int, work: Path) -> int:
     elapsed = time.monotonic() - start
     print(
         f"{target}: {runs:,} executions in {elapsed:.0f} s, coverage {cov[0]} edges / {cov[1]} features, "
-        f"corpus {len(list(found.iterdir()))} found + {len(list((fuzz_targets.CORPUS / target).iterdir()))} seeds, "
+        f"corpus {len(list(found.iterdir()))} found + {len(fuzz_targets.seeds(target))} seeds, "
         f"unconfirmed timeouts {len(list(unconfirmed.iterdir()))}, findings: {', '.join(findings) or 'none'} "
         f"(log: {work / 'last.log'})"
     )

@@ -164,6 +164,44 @@ def views_seeds() -> dict[str, bytes]:
     return {name: json.dumps(doc, indent=1).encode() for name, doc in docs.items()}
 
 
+def cache_sources() -> dict[str, bytes]:
+    """The small files whose cache entries the cache target mutates (tests/fuzz_cache.py): a
+    triangle, OBJ parts with their materials file, a glTF tree of groups, a textured GLB and a
+    .gltf whose buffer is a file of its own."""
+    from bad_gltf import _textured, png
+
+    quad = "v 0 0 {z}\nv 1 0 {z}\nv 1 1 {z}\nv 0 1 {z}\n"
+    parts = "mtllib parts.mtl\no first\n" + quad.format(z=0) + "usemtl red\nf 1 2 3\nf 1 3 4\n"
+    parts += "o second\n" + quad.format(z=1) + "usemtl blue\nf 5 6 7\nf 5 7 8\n"
+    nodes = [
+        {"name": "frame", "children": [1, 2, 3]},
+        {"name": "bolt", "mesh": 0},
+        {"name": "bolt", "mesh": 0, "translation": [2, 0, 0]},
+        {"name": "cover plate", "mesh": 0, "translation": [0, 2, 0]},
+    ]
+    doc, binary = box_doc([{"mesh": 0, "name": "box"}])
+    doc["buffers"] = [{"byteLength": len(binary), "uri": "box.bin"}]
+    return {
+        "triangle.obj": b"o tri\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+        "parts.obj": parts.encode(),
+        "parts.mtl": b"newmtl red\nKd 0.8 0.1 0.1\nnewmtl blue\nKd 0.1 0.2 0.9\n",
+        "tree.glb": glb(*box_doc(nodes)),
+        "textured.glb": _textured(png((4, 4))),
+        "box.gltf": json.dumps(doc).encode(),
+        "box.bin": binary,
+    }
+
+
+def cache_seeds(where: Path) -> dict[str, bytes]:
+    """The cache target's sources into where/sources/, and the entries the cache writes for them."""
+    from fuzz_cache import seeds
+
+    (where / "sources").mkdir(parents=True, exist_ok=True)
+    for name, data in cache_sources().items():
+        (where / "sources" / name).write_bytes(data)
+    return seeds(where)
+
+
 def write_corpus(folder: Path, targets: list[str] | None = None) -> dict[str, int]:
     """The seeds of `targets` (default: all) into folder/<target>/, replacing what was there
     but the inputs fuzzing found (found_*); {target: count written}."""
@@ -174,6 +212,7 @@ def write_corpus(folder: Path, targets: list[str] | None = None) -> dict[str, in
         "ifc": ifc_seeds,
         "specs": specs_seeds,
         "views": views_seeds,
+        "cache": lambda: cache_seeds(folder / "cache"),
     }
     counts = {}
     for target in targets or list(makers):
@@ -181,7 +220,7 @@ def write_corpus(folder: Path, targets: list[str] | None = None) -> dict[str, in
         where = folder / target
         where.mkdir(parents=True, exist_ok=True)
         for old in where.iterdir():  # the inputs fuzzing found (found_*) stay: regression seeds
-            if not old.name.startswith("found_"):
+            if old.is_file() and not old.name.startswith("found_"):
                 old.unlink()
         kept = {name: data for name, data in seeds.items() if len(data) <= (4 if target == "step" else 1) * MAX_SEED}
         for name, data in kept.items():

@@ -10,7 +10,8 @@ graph walk, the direct read and the rewrite for trimesh), step (the STEP text sc
 external references, length unit, product names), ifc (the spatial tree walk and its memo,
 on element graphs built from the input), specs (the camera, size, colour, opacity, lens and
 name specs of rtta.renderer and the CLI, section planes), views (a saved view file and a
-dataset's cameras file).
+dataset's cameras file), cache (a scene cache entry and its side file, read back by the
+loader: tests/fuzz_cache.py).
 """
 
 from __future__ import annotations
@@ -183,6 +184,13 @@ def fuzz_views(data: bytes) -> None:
             pass
 
 
+def fuzz_cache(data: bytes) -> None:
+    """The input as a scene cache entry of a small source file (tests/fuzz_cache.py)."""
+    import fuzz_cache
+
+    fuzz_cache.fuzz_cache(data, CORPUS / "cache")
+
+
 TARGETS: dict[str, Callable[[bytes], None]] = {
     "obj": fuzz_obj,
     "gltf": fuzz_gltf,
@@ -190,6 +198,7 @@ TARGETS: dict[str, Callable[[bytes], None]] = {
     "ifc": fuzz_ifc,
     "specs": fuzz_specs,
     "views": fuzz_views,
+    "cache": fuzz_cache,
 }
 
 
@@ -205,7 +214,7 @@ def run_one(target: str, data: bytes) -> None:
 def warm(target: str) -> None:
     """What a target imports and caches on first use (trimesh, the scene of the specs), done
     before inputs are timed."""
-    if target in ("obj", "gltf"):
+    if target in ("obj", "gltf", "cache"):
         import trimesh  # noqa: F401  (the loader's fallback reader)
     run_one(target, seeds(target)[0])
 

@@ -191,25 +191,31 @@ def test_a_file_changed_during_its_load_is_not_cached(folder, tmp_path, monkeypa
     assert not _entries(folder)
 
 
-def _rewritten(entry: Path, change) -> None:
-    """The entry with its metadata changed by `change` and its checksum made to match."""
+def _rewritten(entry: Path, change, values: tuple[str, list] | None = None) -> None:
+    """The entry with its metadata changed by `change` (and the first values of one array
+    replaced: (name, values)) and its checksum made to match."""
     data = bytearray(entry.read_bytes())
     n = int.from_bytes(data[len(cache.MAGIC) : len(cache.MAGIC) + 8], "little")
     start = len(cache.MAGIC) + 8
     head = json.loads(bytes(data[start : start + n]))
     body = start + n + (-(start + n) % cache.ALIGN)
     meta = json.loads(bytes(data[body : body + head["meta"]]))
+    payload = bytearray(data[body + head["meta"] + (-head["meta"] % cache.ALIGN) :])
+    if values is not None:
+        _, dtype, _, offset = next(r for r in meta["arrays"] if r[0] == values[0])
+        raw = np.asarray(values[1], dtype).tobytes()
+        payload[offset : offset + len(raw)] = raw
     change(meta)
     text = json.dumps(meta).encode()
-    rest = (
-        bytes(text)
-        + bytes(-len(text) % cache.ALIGN)
-        + bytes(data[body + head["meta"] + (-head["meta"] % cache.ALIGN) :])
-    )
+    rest = bytes(text) + bytes(-len(text) % cache.ALIGN) + bytes(payload)
     head.update(meta=len(text), checksum=zlib.crc32(rest))
     top = json.dumps(head).encode()
     top = cache.MAGIC + len(top).to_bytes(8, "little") + top
     entry.write_bytes(top + bytes(-len(top) % cache.ALIGN) + rest)
+
+
+def _values(name: str, values: list):
+    return lambda e: _rewritten(e, lambda m: None, (name, values))
 
 
 FORMAT = b'"format": %d' % cache.FORMAT
@@ -236,6 +242,19 @@ DAMAGE = {
     "fewer names": lambda e: _rewritten(e, lambda m: m["names"].pop()),
     "other version": lambda e: _rewritten(e, lambda m: m["key"].__setitem__("version", "0.0.1")),
     "foreign array": lambda e: _rewritten(e, lambda m: m["arrays"].append(["evil", "uint8", [1], 0])),
+    # found by the cache fuzz target (tests/fuzz_cache.py): entries of whole CRC-32 that were trusted
+    "NaN position": _values("positions", [np.nan] * 3),
+    "infinite normal": _values("normals", [np.inf] * 3),
+    "NaN origin": _values("origin", [np.nan] * 3),
+    "NaN texture coordinate": _values("uvs", [np.nan] * 2),
+    "NaN colour": _values("colors", [np.nan] * 4),
+    "colour above 1": _values("colors", [2.0] * 4),
+    "box inside out": _values("aabb_min", [10.0] * 3),
+    "range past the indices": _values("index_ranges", [2**62, 2**62]),  # first + count overflowed int64
+    "texture id below -1": _values("texture_ids", [-5]),
+    "empty texture": lambda e: _rewritten(e, lambda m: _shape(m, "texture_0", [0, 0, 4])),
+    "names a string": lambda e: _rewritten(e, lambda m: m.__setitem__("names", "ab")),  # read as ['a', 'b']
+    "up axis x": lambda e: _rewritten(e, lambda m: m.__setitem__("up_axis", "x")),
 }
 
 

@@ -13,7 +13,15 @@ import pytest
 from fuzz_corpus_make import STEP_HEAD, STEP_TAIL
 from fuzz_targets import INPUT_MB, LIMIT_S, LOADER_LIMIT_MB, TARGETS, mutants, run_one, seeds, warm
 
-MUTANTS = {"obj": 60, "gltf": 60, "step": 200, "ifc": 60, "specs": 150, "views": 200}  # a few seconds each
+MUTANTS = {
+    "obj": 60,
+    "gltf": 60,
+    "step": 200,
+    "ifc": 60,
+    "specs": 150,
+    "views": 200,
+    "cache": 200,
+}  # a few seconds each
 
 
 @pytest.fixture(autouse=True)

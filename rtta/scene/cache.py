@@ -14,7 +14,8 @@ it finds damage at 1.3 GB/s, blake2b 0.3-0.8; a deceiving entry still meets the 
 the scene's JSON metadata (names, tree paths, warnings, inputs, unit, up axis, the arrays'
 dtypes, shapes and offsets) and the arrays' raw bytes. Nothing in it is
 unpickled; an entry that is damaged, truncated, of another format or version, or whose
-arrays do not fit together is ignored (and replaced by the next load), never trusted.
+arrays do not fit together (rtta.scene.cache_fits: indices, object ids, index ranges and
+texture ids in range, finite numbers) is ignored (and replaced by the next load), never trusted.
 Entries are written to a temporary file in the folder and renamed into place (processes
 loading a file at once each write a whole entry; the last stays) and never changed in place,
 so a scene's arrays map it (copy-on-write: no copy of a 300 MB entry, 1.7 s of 2.4 here).
@@ -40,6 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import RttaError
+from .cache_fits import ARRAYS, DTYPES, fits
 from .files import memory_limit
 from .model import Scene
 
@@ -51,20 +53,6 @@ DEFAULT_MAX_BYTES = 2 << 30
 RACY_NS = 2_000_000_000
 STALE_TEMP_S = 3600  # a temporary file this old was left by a process that died while writing
 ALIGN = 64
-DTYPES = {  # the Scene's arrays (and texture_0, texture_1 ... uint8): nothing else is read
-    "positions": "float32",
-    "normals": "float32",
-    "object_ids": "uint32",
-    "indices": "uint32",
-    "index_ranges": "int64",
-    "colors": "float32",
-    "aabb_min": "float64",
-    "aabb_max": "float64",
-    "origin": "float64",
-    "uvs": "float32",
-    "texture_ids": "int32",
-}
-ARRAYS = tuple(DTYPES)[:9]  # those every scene has
 
 
 def folder() -> Path:
@@ -351,46 +339,15 @@ def _inputs_unchanged(inputs: list) -> bool:
 
 
 def _scene(a: dict, meta: dict, source: str) -> Scene | None:
-    """The Scene of an entry's arrays and metadata when their shapes fit together."""
-    names, paths, warnings = meta["names"], meta["paths"], meta["warnings"]
-    if any(name not in a for name in ARRAYS):
+    """The Scene of an entry's arrays and metadata when they fit together (cache_fits)."""
+    textures = [a.pop(f"texture_{i}") for i in range(int(meta["textures"]))]  # KeyError: a miss
+    if not fits(a, meta, textures):
         return None
-    n, v = len(names), len(a["positions"])
-    shapes = {
-        "positions": (v, 3),
-        "normals": (v, 3),
-        "object_ids": (v,),
-        "index_ranges": (n, 2),
-        "colors": (n, 4),
-        "aabb_min": (n, 3),
-        "aabb_max": (n, 3),
-        "origin": (3,),
-        "uvs": (v, 2),
-        "texture_ids": (n,),
-    }
-    if any(name in a and a[name].shape != shape for name, shape in shapes.items()):
-        return None
-    indices, ranges = a["indices"], a["index_ranges"]
-    textures = [a.pop(f"texture_{i}") for i in range(int(meta["textures"]))]
-    if (
-        n == 0
-        or indices.ndim != 1
-        or len(indices) % 3
-        or not all(isinstance(s, str) for s in [*names, *warnings, meta["unit"], meta["up_axis"]])
-        or (paths is not None and (len(paths) != n or not all(isinstance(s, str) for p in paths for s in p)))
-        or (len(indices) and int(indices.max()) >= v)
-        or (v and int(a["object_ids"].max()) >= n)
-        or ranges.min() < 0
-        or int((ranges[:, 0] + ranges[:, 1]).max()) > len(indices)
-        or set(a) - set(DTYPES)
-        or any(t.ndim != 3 or t.shape[2] != 4 for t in textures)
-        or ("texture_ids" in a and int(a["texture_ids"].max()) >= len(textures))
-    ):
-        return None
+    paths = meta["paths"]
     return Scene(
-        names=list(names),
+        names=list(meta["names"]),
         source=source,
-        warnings=list(warnings),
+        warnings=list(meta["warnings"]),
         inputs=[p for p, _, _ in meta["inputs"]],
         textures=textures,
         paths=None if paths is None else [tuple(p) for p in paths],

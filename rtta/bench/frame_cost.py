@@ -1,7 +1,9 @@
 """What a frame costs the CPU and the GPU, per path of Algorithm 1 (issue 43's measure).
 
 "Python" is the time a frame spends in Python and numpy outside calls into moderngl and
-raw GL (cProfile's own time of every function but those), as the issue measures it; "wall"
+raw GL (cProfile's own time of every function but those), as the issue measures it; on a
+machine of two cores a moment the driver's threads take the CPU from Python counts as
+Python's. "GL calls" is the time inside those calls (llvmpipe does vertex work there); "wall"
 is the frame with the GPU finished; the GPU's time per stage comes from GL_TIME_ELAPSED
 queries around the parameterize + capture calls and the composite call (queries of one kind
 cannot nest, so the stages are timed one after the other, in frames of their own). The CPU
@@ -22,11 +24,12 @@ from ..renderer.settings import Settings
 from ..scene.camera import Camera
 
 PATHS = ("cpu", "gpu")
+RAW_GL = ("glraw.py", "indirect.py")  # rtta.gl's ctypes calls (cProfile counts a ctypes call as its caller's time)
 
 
 def is_gl(file: str, name: str) -> bool:
-    """Whether a profiled function is a call into GL (moderngl's C methods, glraw's ctypes)."""
-    return "mgl." in name or "moderngl" in file or file.endswith("glraw.py") or "CFuncPtr" in name
+    """Whether a profiled function is a call into GL (moderngl's C methods, rtta.gl's ctypes wrappers)."""
+    return "mgl." in name or "moderngl" in file or file.endswith(RAW_GL) or "CFuncPtr" in name
 
 
 def _python_ms(stats: pstats.Stats, frames: int) -> tuple[float, float]:
@@ -61,21 +64,24 @@ class FrameLoop:
         r.composite(self.mode, self.style)
 
     def profiled(self, frames: int) -> dict:
-        """Python and GL ms per frame under cProfile, and the wall ms without it."""
+        """Python and GL ms of each frame under cProfile (their medians: a frame in which the
+        driver's threads took the CPU from Python is an outlier), and the wall ms without it."""
         self.ctx.finish()
         t0 = time.perf_counter()
         for _ in range(frames):
             self.frame()
         self.ctx.finish()
         wall = (time.perf_counter() - t0) / frames * 1e3
-        prof = cProfile.Profile()
-        prof.enable()
+        each = []
         for _ in range(frames):
+            prof = cProfile.Profile()
+            prof.enable()
             self.frame()
-        prof.disable()
+            prof.disable()
+            each.append(_python_ms(pstats.Stats(prof), 1))
         self.ctx.finish()
-        python, gl = _python_ms(pstats.Stats(prof), frames)
-        return {"python_ms": python, "gl_call_ms": gl, "wall_ms": wall}
+        python, gl = np.median(np.array(each), axis=0)
+        return {"python_ms": float(python), "gl_call_ms": float(gl), "wall_ms": wall}
 
     def gpu_ms(self, frames: int) -> dict:
         """GPU ms per frame of parameterize + capture, and of compositing (timer queries)."""

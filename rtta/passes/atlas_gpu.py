@@ -98,6 +98,7 @@ class GpuParameterize:
         self._offsets_of: np.ndarray | None = None  # likewise
         self._wanted = np.zeros(0)
         self._wanted_key: object = None
+        self._uniforms: dict[str, object] = {}  # as the programs hold them
         self.layers = 0  # "ahead": the layers allocated (0: none yet, the next frame is exact)
         self._ahead_of: tuple | None = None  # (viewport, atlas_max, max_layers) the allocation is for
         self._late_pending = False  # a state was copied aside and not read yet
@@ -276,8 +277,13 @@ class GpuParameterize:
         return self.layers
 
     def _bind(self, gpu: GpuScene, uniforms: dict) -> None:
-        for prog in self.programs.values():
-            for name, value in uniforms.items():
+        """The uniforms that changed (most stay from frame to frame: the matrix alone moves),
+        the state reset and the buffers bound."""
+        for name, value in uniforms.items():
+            if self._uniforms.get(name) == value:
+                continue
+            self._uniforms[name] = value
+            for prog in self.programs.values():
                 if name in prog:
                     if isinstance(value, bytes):
                         glsl.uniform(prog, name).write(value)

@@ -142,3 +142,23 @@ def test_scale_bench_quick(gl, tmp_path, capsys):
             assert math.isfinite(cost[f"{path}_{key}"]) and cost[f"{path}_{key}"] > 0
     printed = capsys.readouterr().out
     assert "| assembly-300 | 300 |" in printed and "Frame cost per path" in printed
+
+
+def test_frame_bench(gl, tmp_path, capsys):
+    """rtta bench frame: per path, Python, GL-call, wall and GPU ms of a frame (no timing
+    asserted: a shared machine), for a generated assembly and a scene file."""
+    from rtta.cli.main import main
+    from rtta.scene.generators.demo import demo_path
+
+    out = tmp_path / "frame.json"
+    argv = ["bench", "frame", "--parts", "200", "--scene", str(demo_path()), "--frames", "1", "--size", "160x120"]
+    assert main([*argv, "--json", str(out)]) == 0
+    rows = json.loads(out.read_text())["rows"]
+    assert [r["objects"] for r in rows][0] == 200 and rows[1]["scene"] == demo_path().name
+    for row in rows:
+        for path in ("cpu", "gpu"):
+            for key in ("python_ms", "gl_call_ms", "wall_ms", "gpu_capture_ms", "gpu_composite_ms"):
+                assert math.isfinite(row[f"{path}_{key}"]) and row[f"{path}_{key}"] >= 0
+    printed = capsys.readouterr().out
+    assert printed.count("Frame cost per path") == 1 and printed.count(" gpu ") == 2
+    assert main(["bench", "frame", "--frames", "0"]) == 2

@@ -116,3 +116,58 @@ def test_ahead_pictures_equal_the_cpu_path(make_renderer, demo_scene, mode):
             images.append(r.composite(mode, style).read()[0].astype(int))
         differ = np.abs(images[0] - images[1]).max(axis=-1)
         assert differ.max() <= 8 and (differ > 0).mean() < 0.002, f"{(differ > 0).sum()} px at {az}"
+
+
+def calls_per_frame(make_renderer, scene, mode: str) -> tuple[int, int, int]:
+    """(Python calls, C calls) of one steady `mode` frame (capture + composite), counted with
+    sys.setprofile after three frames have warmed the renderer up, and the peak of the next
+    frame's allocations (tracemalloc: numpy's arrays included)."""
+    import sys
+    import tracemalloc
+
+    r = make_renderer(scene, Settings(parameterize="gpu"))
+    r.atlas_sizing = "ahead"
+    style = Style(focus=frozenset({0, scene.count // 2}))
+
+    def frame(az):
+        r.capture(Camera.orbit(scene.center, scene.radius, az, 20, 2.2), (320, 240), normals=False, ids=False)
+        r.composite(mode, style)
+
+    for az in (30, 31, 32):
+        frame(az)
+    seen = {"py": 0, "c": 0}
+
+    def count(_frame, event, arg):
+        if event == "call":
+            seen["py"] += 1
+        elif event == "c_call":
+            seen["c"] += 1
+
+    sys.setprofile(count)
+    try:
+        frame(33)
+    finally:
+        sys.setprofile(None)
+    tracemalloc.start()
+    try:
+        frame(34)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert r._composite.gpu_driven and r.capture_pass().gpu_lists_used and not r.last[0].is_read
+    return seen["py"], seen["c"], peak
+
+
+@pytest.mark.parametrize("mode", ["ghosted", "sprites"])
+def test_a_frame_costs_the_cpu_as_many_calls_at_any_size(make_renderer, tmp_path, mode):
+    """The GPU-driven frame: as many Python and C calls at 3,000 parts as at 300 (nothing
+    loops over objects on the CPU), no array that grows with them (a numpy pass over n
+    objects allocates n elements at least: 3,000 bytes for a mask), and R never read back."""
+    from rtta.scene.generators.assembly import write_assembly
+    from rtta.scene.loader import load_scene
+
+    small, large = (load_scene(write_assembly(tmp_path / f"a{n}.glb", n), cache=False) for n in (300, 3000))
+    *calls_small, peak_small = calls_per_frame(make_renderer, small, mode)
+    *calls_large, peak_large = calls_per_frame(make_renderer, large, mode)
+    assert calls_small == calls_large
+    assert peak_large < 2048 + peak_small, (peak_small, peak_large)

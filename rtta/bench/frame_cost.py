@@ -127,11 +127,12 @@ def frame_costs(
             loop.release()
 
 
-def print_costs(rows: list[dict], renderer: str, viewport: tuple[int, int]) -> None:
+def print_costs(rows: list[dict], renderer: str, viewport: tuple[int, int], header: bool = True) -> None:
     """The table: per scene and path, Python / GL calls / wall / GPU capture / GPU composite ms."""
-    print(f"\nFrame cost per path ({renderer}, {viewport[0]}x{viewport[1]}, medians; Python = outside GL calls)")
-    heads = (("objects", 8), ("mode", 10), ("path", 4), ("Python", 8), ("GL calls", 9), ("wall", 8))
-    print(" ".join(f"{name:>{w}}" for name, w in heads) + f" {'GPU cap':>8} {'GPU comp':>9}")
+    if header:
+        print(f"\nFrame cost per path ({renderer}, {viewport[0]}x{viewport[1]}, medians; Python = outside GL calls)")
+        heads = (("objects", 8), ("mode", 10), ("path", 4), ("Python", 8), ("GL calls", 9), ("wall", 8))
+        print(" ".join(f"{name:>{w}}" for name, w in heads) + f" {'GPU cap':>8} {'GPU comp':>9}")
     for r in rows:
         for path in PATHS:
             print(
@@ -139,3 +140,31 @@ def print_costs(rows: list[dict], renderer: str, viewport: tuple[int, int]) -> N
                 f"{r[f'{path}_gl_call_ms']:>9.2f} {r[f'{path}_wall_ms']:>8.2f} "
                 f"{r[f'{path}_gpu_capture_ms']:>8.2f} {r[f'{path}_gpu_composite_ms']:>9.2f}"
             )
+
+
+def run_frame(
+    viewport: tuple[int, int], parts: list[int], files, mode: ModeName, frames: int, json_path: str | None
+) -> int:
+    """`rtta bench frame`: the cost table for generated assemblies of `parts` and `files`."""
+    import json
+    import tempfile
+    from pathlib import Path
+
+    from ..gl.context import shared_context
+    from ..scene.generators.assembly import write_assembly
+    from ..scene.loader import load_scene
+
+    ctx = shared_context()
+    renderer = str(ctx.info["GL_RENDERER"])
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="rtta-frame-") as tmp:
+        paths = [write_assembly(Path(tmp) / f"assembly_{n}.glb", n) for n in parts] + [Path(f) for f in files]
+        for path in paths:
+            row = frame_costs(ctx, load_scene(path, cache=False), viewport, mode, frames)
+            rows.append({"scene": path.name, **row})
+            print_costs(rows[-1:], renderer, viewport, header=len(rows) == 1)
+    if json_path:
+        Path(json_path).write_text(
+            json.dumps({"renderer": renderer, "viewport": list(viewport), "rows": rows}, indent=1)
+        )
+    return 0

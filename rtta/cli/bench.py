@@ -47,6 +47,16 @@ def add_parsers(sub):
     b.add_argument("--no-viewer", action="store_true", help="skip the viewer's frames per second")
     b.add_argument("--normals", action="store_true", help="assemblies with a NORMAL attribute (no smoothing)")
     b.add_argument("--json", default=None)
+    b = bsub.add_parser(
+        "frame",
+        help="per path of Algorithm 1 (cpu, gpu): a frame's Python ms outside GL calls, wall ms and GPU ms per stage",
+    )
+    b.add_argument("--size", default="1280x720")
+    b.add_argument("--parts", default="1000,10000,100000", metavar="N,...", help="generated assembly sizes")
+    b.add_argument("--scene", nargs="*", default=(), metavar="FILE", help="scene files besides (e.g. the engine)")
+    b.add_argument("--mode", default="ghosted", choices=("sprites", "transparent", "ghosted", "ghosted-ao"))
+    b.add_argument("--frames", type=int, default=7, help="frames per figure")
+    b.add_argument("--json", default=None)
     b = bsub.add_parser("packing", help="our packer against rectpack and rectangle-packer")
     b.add_argument("--quick", action="store_true")
     b.add_argument("--json", default=None)
@@ -139,6 +149,13 @@ def cmd_bench(args) -> int:
             viewer=not args.no_viewer,
             normals=args.normals,
         )
+    if args.bench == "frame":
+        from ..bench.frame_cost import run_frame
+
+        if args.frames < 1:
+            raise RttaError("--frames must be at least 1")
+        parts = [int(p) for p in args.parts.split(",") if p.strip()] if args.parts else []
+        return run_frame(parse_size(args.size), parts, args.scene, args.mode, args.frames, args.json)
     if args.bench == "report":
         from ..bench.report import run_report
 

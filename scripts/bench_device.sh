@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The benchmarks and the GL tests on a machine with a GPU, through EGL, in one command that
 # ends well inside a lease: scripts/bench_device.sh [--local] [STEP ...]
-# STEPs (default: all, in this order): snapshots capture composite tests tiny profile viewer
+# STEPs (default: all, in this order): snapshots capture composite frame tests tiny profile viewer
 # viewer_tests scale; on request also profile100k (a 100,000-part frame under cProfile) and
 # timers (GPU time per stage from timer queries, 10,000 and 100,000 parts).
 #
@@ -38,7 +38,7 @@ else
     shift
     XDIST=
 fi
-STEPS=${*:-snapshots capture composite tests tiny profile viewer viewer_tests scale}
+STEPS=${*:-snapshots capture composite frame tests tiny profile viewer viewer_tests scale}
 ROOT=$PWD DATA=$PWD/.gpudata TESTS=$PWD/tests
 cd /tmp        # import the installed rtta (with its shaders and assets), not the checkout's
 
@@ -75,6 +75,9 @@ wanted composite && step 90 composite python3 -m rtta bench composite --scene de
     "$DATA/cycloidal.glb" table1-580 --json "$OUT/composite.json"
 GL_TESTS="api batch bounds capture capture_outputs closure composite export extremes gl_features glsl importance
     ldi material outline_sprites pixel_order post projector references targets wrong_pictures"
+# The GPU-driven frame against the CPU path: Python, wall and GPU ms per stage (issue 43).
+wanted frame && step 150 frame python3 -m rtta bench frame --parts 1000,10000,100000 --scene "$DATA/engine_2cyl.glb" \
+    --json "$OUT/frame.json"
 wanted tests && step 200 tests python3 -m pytest -q --tb=short -p no:cacheprovider $XDIST --maxfail=30 \
     $(for t in $GL_TESTS; do echo "$TESTS/test_$t.py"; done)
 wanted tiny && step 60 tiny python3 "$ROOT/scripts/probe_tiny.py"

@@ -16,7 +16,7 @@ from imgui_bundle import imgui, implot
 
 from rtta.errors import RttaError, printable
 from rtta.passes.style import Mode
-from rtta.renderer.navigation import FrameBudget, left_out
+from rtta.renderer.navigation import FULL, MIN_OBJECTS, FrameBudget, left_out
 from rtta.renderer.placing import restage
 from rtta.renderer.renderer import Renderer
 from rtta.scene.model import Scene
@@ -246,6 +246,8 @@ class Viewer(Pictures, Loading, Painting):
             return None
         self.budget.target_ms = 1e3 / fps
         keep, focus = self.budget.keep, self.state.focus_mask()
+        if keep >= FULL or self.renderer.scene.count < MIN_OBJECTS:  # none left out: the GPU-driven frame
+            return None
 
         def thin(visible, viewport_rect):
             out = left_out(visible, viewport_rect, self._triangles, keep, focus)

@@ -1,10 +1,8 @@
 """Render passes, one class each, with explicit inputs and outputs.
 
-- `CapturePass` (RTTA): the whole batch in ONE pass into the layered atlas; each vertex
-  displaced by its object's T and routed to its layer (vertex- or geometry-shader path). On the
-  vertex-shader path the objects whose region meets the viewport's edge, the only ones that
-  must be clipped to their regions, take a second draw call. R on the GPU alone
-  (GpuRecords): the draw lists are built there too (rtta.passes.draw_lists).
+- `CapturePass` (RTTA): the whole batch in ONE pass into the layered atlas, each vertex displaced
+  by its object's T to its layer (vertex- or geometry-shader path); regions on the viewport's
+  edge alone are clipped. With R on the GPU, so are the draw lists (rtta.passes.draw_lists).
 - `StdPass`: the scene drawn normally into one target (baseline STD).
 - `RttPass`: each object drawn alone into its own full-viewport target (baseline RTT).
 

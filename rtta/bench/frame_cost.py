@@ -106,7 +106,8 @@ def frame_costs(
     ctx, scene, viewport: tuple[int, int], mode: ModeName = "ghosted", frames: int = 5, rounds: int = 2
 ) -> dict:
     """Per path: Python (outside GL), GL-call and wall ms per frame, medians over `rounds`
-    rounds in which the paths take turns, and the GPU ms per stage."""
+    rounds in which the paths take turns (and the GPU path's wall over the CPU path's, paired
+    within a round), and the GPU ms per stage."""
     loops = {path: FrameLoop(ctx, scene, viewport, path, mode) for path in PATHS}
     try:
         for loop in loops.values():  # warm up: programs built, buffers and the atlas grown
@@ -117,6 +118,8 @@ def frame_costs(
             for path, loop in loops.items():
                 runs[path].append(loop.profiled(frames))
         row: dict = {"objects": scene.count, "mode": mode}
+        paired = [g["wall_ms"] / c["wall_ms"] for g, c in zip(runs["gpu"], runs["cpu"], strict=True)]
+        row["gpu_over_cpu"] = float(np.median(paired))  # wall, paired within each round
         for path, loop in loops.items():
             for key in ("python_ms", "gl_call_ms", "wall_ms"):
                 row[f"{path}_{key}"] = float(np.median([run[key] for run in runs[path]]))
@@ -132,18 +135,19 @@ def print_costs(rows: list[dict], renderer: str, viewport: tuple[int, int], head
     if header:
         print(f"\nFrame cost per path ({renderer}, {viewport[0]}x{viewport[1]}, medians; Python = outside GL calls)")
         heads = (("objects", 8), ("mode", 10), ("path", 4), ("Python", 8), ("GL calls", 9), ("wall", 8))
-        print(" ".join(f"{name:>{w}}" for name, w in heads) + f" {'GPU cap':>8} {'GPU comp':>9}")
+        print(" ".join(f"{name:>{w}}" for name, w in heads) + f" {'GPU cap':>8} {'GPU comp':>9} {'gpu/cpu':>8}")
     for r in rows:
         for path in PATHS:
             print(
                 f"{r['objects']:>8} {r['mode']:>10} {path:>4} {r[f'{path}_python_ms']:>8.2f} "
                 f"{r[f'{path}_gl_call_ms']:>9.2f} {r[f'{path}_wall_ms']:>8.2f} "
                 f"{r[f'{path}_gpu_capture_ms']:>8.2f} {r[f'{path}_gpu_composite_ms']:>9.2f}"
+                + (f" {r['gpu_over_cpu']:>7.2f}x" if path == "gpu" else "")
             )
 
 
 def run_frame(
-    viewport: tuple[int, int], parts: list[int], files, mode: ModeName, frames: int, json_path: str | None
+    viewport: tuple[int, int], parts: list[int], files, modes: list[ModeName], frames: int, json_path: str | None
 ) -> int:
     """`rtta bench frame`: the cost table for generated assemblies of `parts` and `files`."""
     import json
@@ -160,9 +164,10 @@ def run_frame(
     with tempfile.TemporaryDirectory(prefix="rtta-frame-") as tmp:
         paths = [write_assembly(Path(tmp) / f"assembly_{n}.glb", n) for n in parts] + [Path(f) for f in files]
         for path in paths:
-            row = frame_costs(ctx, load_scene(path, cache=False), viewport, mode, frames)
-            rows.append({"scene": path.name, **row})
-            print_costs(rows[-1:], renderer, viewport, header=len(rows) == 1)
+            scene = load_scene(path, cache=False)
+            for mode in modes:
+                rows.append({"scene": path.name, **frame_costs(ctx, scene, viewport, mode, frames, rounds=3)})
+                print_costs(rows[-1:], renderer, viewport, header=len(rows) == 1)
     if json_path:
         Path(json_path).write_text(
             json.dumps({"renderer": renderer, "viewport": list(viewport), "rows": rows}, indent=1)

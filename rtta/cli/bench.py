@@ -54,7 +54,9 @@ def add_parsers(sub):
     b.add_argument("--size", default="1280x720")
     b.add_argument("--parts", default="1000,10000,100000", metavar="N,...", help="generated assembly sizes")
     b.add_argument("--scene", nargs="*", default=(), metavar="FILE", help="scene files besides (e.g. the engine)")
-    b.add_argument("--mode", default="ghosted", choices=("sprites", "transparent", "ghosted", "ghosted-ao"))
+    b.add_argument(
+        "--mode", nargs="+", default=["ghosted"], choices=("sprites", "transparent", "ghosted", "ghosted-ao")
+    )
     b.add_argument("--frames", type=int, default=7, help="frames per figure")
     b.add_argument("--json", default=None)
     b = bsub.add_parser("packing", help="our packer against rectpack and rectangle-packer")

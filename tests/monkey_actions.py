@@ -7,6 +7,7 @@ import random
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+import numpy as np
 from pyglet.window import key, mouse
 
 from rtta.errors import RttaError
@@ -14,7 +15,7 @@ from rtta.passes.composite import ROLES
 from rtta.passes.oit import ORDERS
 from rtta.scene.cutaway import CAPS, SECTION_SCOPES
 from rtta.scene.explode import EXPLODE_MAX, EXPLODE_SCOPES
-from viewer import gizmo, panel_view
+from viewer import cutaway, gizmo, panel_view
 from viewer.cutaway import AXES
 from viewer.state import VIEW_MODES
 
@@ -23,9 +24,9 @@ if TYPE_CHECKING:
 
 KEYS = [  # every key viewer/controls.py binds (Ctrl+Q, which quits, aside)
     *(key.LEFT, key.RIGHT, key.UP, key.DOWN, key.EQUAL, key.MINUS, key.PAGEUP, key.PAGEDOWN),
-    *(key.F, key.A, key.M, key.L, key.P, key.C, key.SPACE, key.F12, key.O, key.R, key.ESCAPE),
+    *(key.F, key.A, key.M, key.L, key.P, key.C, key.SPACE, key.F12, key.O, key.R, key.ESCAPE, key.X, key.E),
     *(key._5, key.NUM_5, key._1, key._3, key._7, key._0, key.NUM_1, key.NUM_3, key.NUM_7, key.NUM_0),
-    *(key.TAB, key.ENTER, key.BACKSPACE, key.DELETE, key.W, key.X),  # unbound: ignored, or imgui's
+    *(key.TAB, key.ENTER, key.BACKSPACE, key.DELETE, key.W),  # unbound: ignored, or imgui's
 ]
 MODIFIERS = [0, 0, 0, key.MOD_CTRL, key.MOD_SHIFT]
 
@@ -153,12 +154,77 @@ class Actions:
         c.explode, c.explode_scope = r.choice((0.0, 0.0, r.uniform(0, EXPLODE_MAX))), r.choice(EXPLODE_SCOPES)
         self.frames(2)
 
-    def a_cube(self) -> None:
+    def a_cube(self) -> None:  # a face, edge or corner of the view cube, or the projection switch below it
         cells = gizmo.cells(self.app.layout.composite, self.app.orbit) if self.app.state.show_cube else []
-        if cells:
+        if cells and self.rng.random() < 0.2:
+            x0, y0, x1, y1 = gizmo.projection_rect(self.app.layout.composite)
+            self.click((x0 + x1) / 2, (y0 + y1) / 2)
+        elif cells:
             quad = self.rng.choice(cells)[2]
             self.click(*quad.mean(axis=0))
             self.frames(self.rng.randint(0, 6))  # sometimes a drag or a key meets the turn
+
+    def a_section_surface(self) -> None:  # the panel's 'on a surface', then a click (or a second press)
+        c = self.app.state.cutaway
+        c.picking = not c.picking if self.rng.random() < 0.15 else True
+        self.frames()
+        r, scene = self.rng.random(), self.app.renderer.scene
+        x, y = self.point(self.app.layout.composite) if r < 0.9 else self.anywhere()
+        if r < 0.6:  # a part's box centre: the part, what is in front of it, or the background
+            oid = self.rng.randrange(scene.count)
+            xy, front = cutaway._screen(self.app, [(scene.aabb_min[oid] + scene.aabb_max[oid]) / 2])
+            if front and np.isfinite(xy).all():
+                w, h = self.wnd.size
+                x, y = int(np.clip(xy[0, 0], 0, w - 1)), int(np.clip(xy[0, 1], 0, h - 1))
+        self.click(x, y, modifiers=self.rng.choice(MODIFIERS))
+
+    def a_section_handle(self) -> None:  # the plane's handle dragged along its normal (a plane first)
+        c, r = self.app.state.cutaway, self.rng
+        if not c.has_plane or not c.enabled or not c.show_quad or r.random() < 0.1:
+            c.axis, c.normal, c.enabled, c.show_quad = r.choice(AXES[1:]), None, True, True
+            self.frames()
+        found = cutaway.handle(self.app)
+        if found is None:
+            return
+        (x, y), _ = found
+        x, y = int(x + r.randint(-3, 3)), int(y + r.randint(-3, 3))
+        dx, dy, steps = r.randint(-250, 250), r.randint(-250, 250), r.randint(1, 6)
+        self.send("on_mouse_motion", x, self.h() - y, 0, 0)
+        self.frames()
+        self.send("on_mouse_press", x, self.h() - y, mouse.LEFT, 0)
+        for i in range(1, steps + 1):
+            self.send(
+                "on_mouse_drag",
+                x + dx * i // steps,
+                self.h() - (y + dy * i // steps),
+                dx // steps,
+                -dy // steps,
+                mouse.LEFT,
+                0,
+            )
+            self.frames()
+        self.send("on_mouse_release", x + dx, self.h() - (y + dy), mouse.LEFT, 0)
+        self.frames()
+
+    def a_section_panel(self) -> None:  # the plane's buttons: flip, on, show the plane, offset, reset, animate
+        app, c, r = self.app, self.app.state.cutaway, self.rng
+        choice = r.randrange(7)
+        if choice == 0:
+            c.flip()
+        elif choice == 1:
+            c.enabled = not c.enabled
+        elif choice == 2:
+            c.show_quad = not c.show_quad
+        elif choice == 3 and c.normal is not None:
+            c.offset += r.uniform(-1, 1) * float(app.renderer.scene.radius)
+        elif choice == 4:
+            cutaway.reset(app)
+        elif choice == 5:
+            c.animate_explode()
+            self.frames(r.randint(1, 8))  # sometimes closed again before it is open
+        else:
+            c.axis, c.normal, c.enabled = r.choice(AXES), None, True  # the combo: a plane along an axis again
+        self.frames(2)
 
     def a_views(self) -> None:
         app, r = self.app, self.rng
@@ -174,11 +240,19 @@ class Actions:
                 app.say(str(exc), error=True)
         self.frames(2)
 
-    def a_measure(self) -> None:
-        if not self.app.ruler.on:
+    def a_measure(self) -> None:  # R, one to three clicks; sometimes Esc, 'clear' or a measurement's 'x'
+        ruler, r = self.app.ruler, self.rng
+        if not ruler.on:
             self.press(key.R)
-        for _ in range(self.rng.randint(1, 3)):
+        for _ in range(r.randint(1, 3)):
             self.click(*self.point(self.app.layout.composite))
+        k = r.random()
+        if k < 0.15:
+            self.press(key.ESCAPE)
+        elif k < 0.25:
+            ruler.clear()
+        elif k < 0.35 and ruler.done:
+            del ruler.done[r.randrange(len(ruler.done))]
 
     def a_idle(self) -> None:
         self.frames(self.rng.randint(1, 5))
@@ -192,5 +266,5 @@ class Actions:
         "orbit": 12, "pan": 5, "wheel": 8, "key": 16, "click_composite": 9, "double_click": 3,
         "click_atlas": 3, "click_panel": 12, "drag_panel": 5, "tree": 6, "filter": 3, "open": 2,
         "drop": 2, "resize": 3, "splitter": 1, "mode_style": 4, "cutaway": 5, "cube": 3, "views": 3,
-        "measure": 3, "idle": 2, "home": 1,
+        "measure": 3, "idle": 2, "home": 1, "section_surface": 3, "section_handle": 3, "section_panel": 3,
     }  # fmt: skip

@@ -7,12 +7,16 @@ browser and screenshots write there). Events go through the pyglet window's own 
 as in tests/viewer_driver.py: drags (orbit, pan), the wheel, every key the viewer binds,
 clicks in the composite, the atlas, the panel and the view cube, tree rows (left and right
 click), filter typing, files opened through the browser and dropped (good and bad ones),
-resizes, the splitter, modes, style, sections and explode, saved views, the measure tool.
+resizes, the splitter, modes, style, sections and explode (keys X and E, the plane placed on a
+clicked surface, its handle dragged, flipped, toggled, shown, reset, the explode animated),
+saved views, the measure tool (Esc, clear, a measurement removed), the view cube and its
+projection switch.
 
 Fails (exit 1, the findings in `result.json` and on stderr) on an exception (in an event
 handler, a frame or a worker thread), a GL error, a camera that is not finite, a frame over
-MAX_FRAME_S, or GL objects or RSS grown more than GROWTH after the warm-up (both counted in
-the same settled state: the main scene set again, the first window size). Prints a summary.
+MAX_FRAME_S, or GL objects or RSS grown more than GROWTH (RSS: --rss-growth) after the warm-up
+(both counted in the same settled state: the main scene set again, the first window size).
+Prints a summary.
 """
 
 from __future__ import annotations
@@ -20,6 +24,7 @@ from __future__ import annotations
 import argparse
 import ctypes
 import gc
+import itertools
 import json
 import math
 import os
@@ -44,10 +49,11 @@ from rtta.bench.reliability import gl_census  # noqa: E402
 from rtta.errors import printable  # noqa: E402
 from rtta.memory import rss_bytes, steady_heap  # noqa: E402
 from rtta.renderer.renderer import Settings  # noqa: E402
+from rtta.scene.cutaway import CAPS, SECTION_SCOPES  # noqa: E402
 from rtta.scene.generators.assembly import write_assembly  # noqa: E402
 from rtta.scene.generators.demo import demo_path  # noqa: E402
 from rtta.scene.loader import load_scene, load_scene_or_demo  # noqa: E402
-from viewer import controls  # noqa: E402
+from viewer import controls, cutaway  # noqa: E402
 from viewer.app import Viewer  # noqa: E402
 from viewer.run import create_window  # noqa: E402
 from viewer.state import VIEW_MODES  # noqa: E402
@@ -195,6 +201,12 @@ class Monkey(Actions):
             self.app.state.choose_mode(mode)
             self.app.state.toggle(self.rng.randrange(self.app.renderer.scene.count))
             self.frames(2)
+        c = self.app.state.cutaway  # every kind of cap and scope of a section, and an explode, once
+        for caps, scope in itertools.product(CAPS, SECTION_SCOPES):
+            c.axis, c.caps, c.scope, c.explode = "y", caps, scope, 0.5
+            self.frames(2)
+        cutaway.reset(self.app)
+        self.frames()
 
     # ---- the settled state where growth is counted -------------------------------------------
     def settle(self) -> dict:
@@ -223,7 +235,7 @@ class Monkey(Actions):
         return {"gl": gl_census(app.ctx), "rss_mb": rss_bytes() / 2**20, "size": list(self.wnd.buffer_size)}
 
 
-def grown(settled: list[dict]) -> list[str]:
+def grown(settled: list[dict], rss_growth: float = GROWTH) -> list[str]:
     """Growth over the settled samples (the first after the warm-up): GL objects, the last
     against the first; RSS, the lower of the last two against the higher of the first two, so
     the heap's ups and downs (some 10% on llvmpipe) are not taken for growth, but a leak is."""
@@ -232,7 +244,7 @@ def grown(settled: list[dict]) -> list[str]:
     if total[1] > total[0] * (1 + GROWTH):
         out.append(f"GL objects grew {total[0]} -> {total[1]}: {first['gl']} -> {last['gl']}")
     rss = (max(r["rss_mb"] for r in settled[:2]), min(r["rss_mb"] for r in settled[-2:]))
-    if len(settled) > 2 and rss[1] > rss[0] * (1 + GROWTH):
+    if len(settled) > 2 and rss[1] > rss[0] * (1 + rss_growth):
         out.append(f"RSS grew {rss[0]:.0f} -> {rss[1]:.0f} MB (settled: {[round(r['rss_mb']) for r in settled]})")
     return out
 
@@ -247,6 +259,7 @@ def main() -> int:
     p.add_argument("--warmup", type=float, default=0.2, help="part of the run before the growth baseline")
     p.add_argument("--settles", type=int, default=4, help="settled samples of GL objects and RSS (>= 2)")
     p.add_argument("--parts", type=int, default=20_000, help="parts of the large scene")
+    p.add_argument("--rss-growth", type=float, default=GROWTH, help="RSS growth that is a finding (GL objects: GROWTH)")
     a = p.parse_args()
     a.out.mkdir(parents=True, exist_ok=True)
     steady_heap()  # as rtta-view does (viewer/__init__.py)
@@ -272,7 +285,7 @@ def main() -> int:
             if m.findings:
                 break
         settled.append({"actions": done, "s": round(time.perf_counter() - t0, 1), **m.settle()})
-        m.findings += grown(settled) if len(settled) > 1 else []
+        m.findings += grown(settled, a.rss_growth) if len(settled) > 1 else []
     except Exception:
         m.findings.append(f"exception in {m.last}: {traceback.format_exc()}")
     result["settled"] = settled

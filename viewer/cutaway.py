@@ -135,6 +135,7 @@ class CutawayState:
         self.at = float(np.clip(self.at + sign * distance / max(float(hi[k] - lo[k]), 1e-30), 0.0, 1.0))
 
 
+NO_SURFACE = "section: no surface there"
 HANDLE_PX = 9.0  # the handle's radius on screen (a press within it drags the plane)
 QUAD_FILL, QUAD_EDGE, HANDLE = 0x28E0A040, 0xC0E0A040, 0xF040C0F0  # ABGR: translucent amber, cyan
 
@@ -262,8 +263,10 @@ def place_at(app, x: float, y: float) -> bool:
     c: CutawayState = app.state.cutaway
     c.picking = False
     if found is None:
-        app.say("section: no surface there", error=True)
+        app.say(NO_SURFACE, error=True)
         return False
+    if app.message == NO_SURFACE:  # a miss before: no longer so
+        app.say("")
     c.set_plane(*found)
     return True
 

@@ -225,6 +225,7 @@ class Viewer(Pictures, Loading, Painting):
             self.renderer.hidden = self.state.hidden
             self.left_out = 0
             # no id image: compositing never reads it, picking reads depths (rtta.passes.picking)
+            self.records = None  # else R of the last frame, still held, is read back first (GpuScene.keep_held)
             self.records = self.renderer.capture(
                 camera,
                 vp,
@@ -296,6 +297,7 @@ class Viewer(Pictures, Loading, Painting):
         key = (self._capture_key, s.style_key(), painted)
         if key != self._composite_key:
             r.composite(Mode(mode), s.style)  # (not std here)
+            self.records = r.last[0] if r.last is not None else self.records  # a re-capture (focus, normals)
             self._composite_key = key
             self._rendered = True
         self.view_pass.render(

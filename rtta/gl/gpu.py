@@ -4,6 +4,8 @@ object ID) and, for a textured scene, the material atlas and its per-object buff
 
 from __future__ import annotations
 
+import weakref
+
 import moderngl
 import numpy as np
 
@@ -39,7 +41,8 @@ class GpuScene:
         self.ibo = ctx.buffer(scene.indices.astype(np.uint32).tobytes())
         self.objects = ctx.buffer(np.ascontiguousarray(scene.colors, np.float32).tobytes())
         self.records = ctx.buffer(reserve=max(1, scene.count) * RECORD_DTYPE.itemsize)
-        self.written: Records | None = None  # R the GPU wrote into records (Settings.parameterize 'gpu')
+        self._written: weakref.ref | None = None  # the GpuRecords of the R in `records`, while one is held
+        self.serial = 0  # frames of R written into `records`
         self._vaos: dict[int, moderngl.VertexArray] = {}
         # B_world per object as two vec4 (min, max), the scene origin at 0 as for the vertex
         # positions: compositing draws sprites over their projected outlines (composite.geom)
@@ -97,8 +100,28 @@ class GpuScene:
         """Write R for this frame (same size every frame: no reallocation)."""
         if records is self.written:  # there already: rtta.passes.atlas_gpu wrote it
             return
-        self.written = None
+        self.keep_held()
+        self.serial += 1
         self.records.write(records.packed(reuse=True))  # no copy to bytes: 8 MB a frame at 10^5 objects
+
+    @property
+    def written(self) -> Records | None:
+        """The GpuRecords of the R in `records` (rtta.passes.atlas_gpu), while someone holds them."""
+        return None if self._written is None else self._written()
+
+    def hand(self, records: Records) -> int:
+        """`records` (a GpuRecords, R just written by the GPU) now describe the buffer; their frame number."""
+        self.serial += 1
+        self._written = weakref.ref(records)
+        return self.serial
+
+    def keep_held(self) -> None:
+        """Before R is written over or freed: a GpuRecords of it that a caller still holds is read
+        back now, so records stay what their frame made them (one wait, only when held)."""
+        held = self.written
+        self._written = None
+        if held is not None and not getattr(held, "is_read", True):
+            held.read()
 
     def bind_storage(self) -> None:
         self.records.bind_to_storage_buffer(Storage.RECORDS)
@@ -107,6 +130,7 @@ class GpuScene:
             self.materials.bind_to_storage_buffer(Storage.MATERIALS)
 
     def release(self) -> None:
+        self.keep_held()
         for vao in self._vaos.values():
             vao.release()
         self._vaos.clear()

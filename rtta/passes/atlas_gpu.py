@@ -2,13 +2,11 @@
 `rtta.atlas.parameterize`: the same culling, near-plane clipping, viewport rectangles, border
 and region scales, in doubles, and a parallel shelf packing (shaders/parameterize.comp).
 
-Per object data live on the GPU: B_world's corners (uploaded when the array changes: once
-per scene), the explode offsets (when they change) and the scale wanted per object, 0 for the
-hidden (uploaded when its key changes: the focus, hiding). Per frame the CPU issues a constant
-number of calls: a small state write, rounds of dispatches, two dispatches that write T and
-the records straight into the record buffer the capture, post-processing and compositing read
-(shaders/records.glsl). It returns a `GpuRecords`: nothing of R is read back unless a caller
-asks for its arrays (picking, the export, the dataset).
+Per object data live on the GPU: B_world's corners (once per scene), the explode offsets and
+the scale wanted per object (0: hidden), each uploaded when it changes. Per frame the CPU
+issues a constant number of calls, the last ones writing T and the records straight into the
+record buffer (shaders/records.glsl). It returns a `GpuRecords`: nothing of R is read back
+unless a caller asks for its arrays (picking, the export, the dataset).
 
 Sizing the atlas, two policies (`GpuParameterize.sizing`):
 
@@ -211,6 +209,7 @@ class GpuParameterize:
         if atlas_max[0] < 1 + 2 * border or atlas_max[1] < 1 + 2 * border:
             raise ValueError(f"atlas maximum {atlas_max} cannot hold a 1-pixel region with border {border}")
         atlas_max = (int(atlas_max[0]), int(atlas_max[1]))
+        gpu.keep_held()  # R held by a caller is read before the GPU writes over it
         wanted = self._wanted_scales(n, region_scale, hidden, key)
         ahead = self._ahead_layers((W, H), atlas_max, int(max_layers))
         outside = time.perf_counter() - t0
@@ -251,11 +250,11 @@ class GpuParameterize:
                 self._ahead_of = ((W, H), atlas_max, int(max_layers))
                 size = (*atlas_max, self.layers)
         t1 = time.perf_counter()
-        wanted_now = self._wanted
+        frame, wanted_now = gpu.serial + 1, self._wanted
         records = GpuRecords(
-            n, (W, H), size, border, lambda: self._read_records(gpu, n, (W, H), size, border, wanted_now, atlas_max)
+            n, (W, H), size, border, lambda: self._read_records(gpu, frame, (W, H), size, border, wanted_now, atlas_max)
         )
-        gpu.written = records
+        gpu.hand(records)
         self.cpu_seconds = outside + time.perf_counter() - t1
         return records
 
@@ -335,8 +334,15 @@ class GpuParameterize:
         self.reads += 1
         return np.frombuffer(self.state.read(), STATE_DTYPE)[0]
 
-    def _read_records(self, gpu, n, viewport, size, border, wanted, atlas_max) -> Records:
-        """The frame's records read back (GpuRecords.read): waits for the GPU."""
+    def _read_records(self, gpu, frame: int, viewport, size, border, wanted, atlas_max) -> Records:
+        """The records of `frame` read back (GpuRecords.read), waiting for the GPU; held ones are
+        read before a later frame writes over R (GpuScene.keep_held), a missed one is an error."""
+        if gpu.serial != frame or not self.programs:
+            raise RuntimeError(
+                "these records belong to an earlier capture, whose R the GPU no longer holds: "
+                "read them (records.read()) before capturing again or releasing the renderer"
+            )
+        n = len(wanted)
         self.reads += 1
         state = np.frombuffer(self.state.read(), STATE_DTYPE)[0]
         records = _records(_read_packed(gpu.records, n), viewport, border, size)

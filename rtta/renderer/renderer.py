@@ -217,6 +217,7 @@ class Renderer:
         `thin`: picks objects left out of this capture as if hidden (fast navigation)."""
         view, proj = self.matrices(camera, viewport)
         self.place(focus)
+        self.last = None  # R of the last frame is read back before the GPU writes over it only if a caller holds it
         self.captured_focus = self.scaled_for(focus)
         self._view = (camera, viewport, path)
         with self._timed("parameterize"):
@@ -373,6 +374,8 @@ class Renderer:
         return sum(p.nbytes for p in parts if p is not None)
 
     def release(self) -> None:
+        self.last = None
+        self.gpu.keep_held()  # records a caller holds are read back while R is there
         self._throttle.release()
         for p in [
             *self._capture.values(),

@@ -1,8 +1,7 @@
-"""Scenes: every scene-graph node with geometry is one object; all objects are batched
-into ONE vertex/index buffer carrying a per-vertex object id.
-
-Positions are stored in float32 relative to `origin` (the bounds centre, float64), so a
-scene far from the world origin keeps full precision on the GPU.
+"""Scenes: every scene-graph node with geometry is one object; all objects are batched into
+ONE vertex/index buffer carrying a per-vertex object id. Positions are stored in float32
+relative to `origin` (the bounds centre, float64): a scene far from the world origin keeps
+full precision on the GPU.
 """
 
 from __future__ import annotations
@@ -84,16 +83,10 @@ class Scene:
 
     @property
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        """The scene's box (lo, hi), made once for these box arrays (a frame asks for it; at
-        10^5 objects each reduction took a millisecond)."""
-        made = self._corners.get("bounds")
-        if made is None or made[0] is not self.aabb_min or made[1] is not self.aabb_max:
-            made = self._corners["bounds"] = (
-                self.aabb_min,
-                self.aabb_max,
-                self.aabb_min.min(axis=0),
-                self.aabb_max.max(axis=0),
-            )
+        """The scene's box (lo, hi), reduced once per box arrays (frames ask for it often)."""
+        made, lo, hi = self._corners.get("bounds"), self.aabb_min, self.aabb_max
+        if made is None or made[0] is not lo or made[1] is not hi:
+            made = self._corners["bounds"] = (lo, hi, lo.min(axis=0), hi.max(axis=0))
         return made[2].copy(), made[3].copy()
 
     @property

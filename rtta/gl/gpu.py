@@ -9,7 +9,7 @@ import weakref
 import moderngl
 import numpy as np
 
-from ..atlas.records import RECORD_DTYPE, Records
+from ..atlas.records import RECORD_DTYPE, GpuRecords, Records
 from ..scene.model import Scene
 from .bindings import Storage, Texture
 
@@ -120,7 +120,7 @@ class GpuScene:
         back now, so records stay what their frame made them (one wait, only when held)."""
         held = self.written
         self._written = None
-        if held is not None and not getattr(held, "is_read", True):
+        if isinstance(held, GpuRecords) and not held.is_read:
             held.read()
 
     def bind_storage(self) -> None:

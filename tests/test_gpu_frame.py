@@ -143,19 +143,23 @@ def calls_per_frame(make_renderer, scene, mode: str) -> tuple[int, int, int]:
         elif event == "c_call":
             seen["c"] += 1
 
-    sys.setprofile(count)
-    try:
-        frame(33)
-    finally:
-        sys.setprofile(None)
+    counts = []
+    for az in (33, 34, 35):  # the least of three: a frame that grows a buffer or the atlas once calls more
+        seen["py"] = seen["c"] = 0
+        sys.setprofile(count)
+        try:
+            frame(az)
+        finally:
+            sys.setprofile(None)
+        counts.append((seen["py"], seen["c"]))
     tracemalloc.start()
     try:
-        frame(34)
+        frame(36)
         peak = tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
     assert r._composite.gpu_driven and r.capture_pass().gpu_lists_used and not r.last[0].is_read
-    return seen["py"], seen["c"], peak
+    return *min(counts), peak
 
 
 @pytest.mark.parametrize("mode", ["ghosted", "sprites"])

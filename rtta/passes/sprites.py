@@ -12,6 +12,7 @@ CPU's per-draw choices made per sprite in the shaders (UPSAMPLE_DYNAMIC) and no 
 from __future__ import annotations
 
 import dataclasses
+import functools
 from dataclasses import dataclass
 from enum import Enum
 
@@ -149,6 +150,13 @@ class Listed:
     command: moderngl.Buffer | None = None
 
 
+@functools.lru_cache(maxsize=256)
+def _pass_name(on: tuple[str, ...]) -> str:
+    """A draw's name in `SpritePass.passes`, from the defines it turned on."""
+    skip = ("OUTLINE_QUAD", "FIRST_FETCHED")
+    return "+".join(k.removeprefix("MODE_").removeprefix("SPRITE_").lower() for k in on if k not in skip)
+
+
 def upload(buf: moderngl.Buffer, data) -> None:
     """`data`: bytes or a contiguous array (written as it is: no copy to bytes)."""
     size = memoryview(data).nbytes
@@ -236,7 +244,7 @@ class SpritePass:
             prog, vao = self._setup(defines, draw, style, records, hull)
             for name, value in (("u_upsample_below", UPSAMPLE_BELOW), ("u_hull_min_area", float(HULL_MIN_AREA))):
                 if name in prog:
-                    glsl.uniform(prog, name).value = value
+                    glsl.set_uniform(prog, name, value)
             self._render(vao, listed if first is None else (listed.command, first), draw)
         self.hull_draws = hull_draws
 
@@ -281,26 +289,20 @@ class SpritePass:
         its growth in pixels); returns (program, vertex array)."""
         projection = self._projection if defines["PROJECTOR"] else None
         lens = self._lens if defines["LENS"] else None
-        on = [k for k, v in defines.items() if v]
-        self.passes.append(
-            "+".join(
-                k.removeprefix("MODE_").removeprefix("SPRITE_").lower()
-                for k in on
-                if k not in ("OUTLINE_QUAD", "FIRST_FETCHED")
-            )
-        )
-        prog, vao = self._program(**{k: True for k in on})
-        glsl.uniform(prog, "u_viewport").value = tuple(float(v) for v in records.viewport)
+        on = tuple(k for k, v in defines.items() if v)
+        self.passes.append(_pass_name(on))
+        prog, vao = self._program(**dict.fromkeys(on, True))
+        glsl.set_uniform(prog, "u_viewport", tuple(float(v) for v in records.viewport))
         if projection is not None or lens is not None:
-            glsl.uniform(prog, "u_inv_view_proj").write(self._inv_view_proj)
-        glsl.uniform(prog, "u_hull").value = hull is not None
+            glsl.set_uniform(prog, "u_inv_view_proj", self._inv_view_proj)
+        glsl.set_uniform(prog, "u_hull", hull is not None)
         if hull is not None:
             self.hull_draws += 1
             view_proj, eye = hull
-            glsl.uniform(prog, "u_view_proj").write(view_proj)
-            glsl.uniform(prog, "u_eye").value = eye
+            glsl.set_uniform(prog, "u_view_proj", view_proj)
+            glsl.set_uniform(prog, "u_eye", eye)
             if "u_hull_margin" in prog:  # UPSAMPLE_DYNAMIC: each sprite's own
-                glsl.uniform(prog, "u_hull_margin").value = margin
+                glsl.set_uniform(prog, "u_hull_margin", margin)
         if projection is not None:
             pass_, projector, origin = projection
             pass_.bind(prog, projector, origin)
@@ -317,7 +319,7 @@ class SpritePass:
             ("u_ortho_depth", (0.0, 0.0) if self._ortho_near is None else (1.0, self._ortho_near)),
         ):
             if name in prog:  # the compiler drops what a variant does not use
-                glsl.uniform(prog, name).value = value
+                glsl.set_uniform(prog, name, value)
         return prog, vao
 
     def _render(self, vao: moderngl.VertexArray, count, draw: SpriteDraw) -> None:

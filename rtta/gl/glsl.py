@@ -121,11 +121,9 @@ def set_uniform(prog: moderngl.Program | moderngl.ComputeShader, name: str, valu
         The program holding the uniform.
     name : str
         The uniform's name in the shader.
-    value : bytes, bool, int, float, tuple or numpy.ndarray
-        What to set (an array as the tuple of its values).
+    value : bytes, bool, int, float or tuple
+        What to set (not an array: values are compared with ==).
     """
-    if isinstance(value, np.ndarray):
-        value = tuple(value.tolist())
     held = prog.extra
     if held is None:
         held = prog.extra = {}

@@ -157,9 +157,9 @@ class GpuOrder:
             ids_out.bind_to_storage_buffer(Storage.SORT_IDS_OUT)
             for stage, groups in ((COUNT, tiles), (SCAN, 1), (SCATTER, tiles)):
                 prog = self._program(stage)
-                glsl.set_uniform(prog, "u_tiles", tiles)
+                glsl.uniform(prog, "u_tiles").value = tiles
                 if stage != SCAN:
-                    glsl.set_uniform(prog, "u_shift", shift)
+                    glsl.uniform(prog, "u_shift").value = shift
                 self._run(prog, groups)
         self.keys.bind_to_storage_buffer(Storage.SORT_KEYS)
         self.ids.bind_to_storage_buffer(Storage.DRAW_LIST)
@@ -172,13 +172,13 @@ class GpuOrder:
             j = k // 2
             while j >= BLOCK:
                 step = self._program(STEP)
-                glsl.set_uniform(step, "u_k", k)
-                glsl.set_uniform(step, "u_j", j)
-                glsl.set_uniform(step, "u_length", length)
+                glsl.uniform(step, "u_k").value = k
+                glsl.uniform(step, "u_j").value = j
+                glsl.uniform(step, "u_length").value = length
                 self._run(step, length // 2 // STEP_GROUP)
                 j //= 2
             merge = self._program(BLOCK_MERGE)
-            glsl.set_uniform(merge, "u_k", k)
+            glsl.uniform(merge, "u_k").value = k
             self._run(merge, length // BLOCK)
             k *= 2
 
@@ -191,7 +191,7 @@ class GpuOrder:
 
     def _commands(self, total: int) -> None:
         prog = self._program(COMMANDS)
-        glsl.set_uniform(prog, "u_total", total)
+        glsl.uniform(prog, "u_total").value = total
         self._run(prog, 1)
         self.ctx.memory_barrier(moderngl.COMMAND_BARRIER_BIT | moderngl.SHADER_STORAGE_BARRIER_BIT)
 
@@ -209,11 +209,11 @@ class GpuOrder:
             styles.bind_to_storage_buffer(Storage.STYLES)
         moved = self._upload_offsets(offsets)
         prog = self._program(KEYS, moved)
-        glsl.set_uniform(prog, "u_count", count)
-        glsl.set_uniform(prog, "u_length", length)
-        glsl.set_uniform(prog, "u_depth_row", tuple(float(v) for v in np.asarray(view, np.float64)[2]))
-        glsl.set_uniform(prog, "u_exclude_focus", styles is not None)
-        glsl.set_uniform(prog, "u_upsample_below", UPSAMPLE_BELOW)
+        glsl.uniform(prog, "u_count").value = count
+        glsl.uniform(prog, "u_length").value = length
+        glsl.uniform(prog, "u_depth_row").value = tuple(float(v) for v in np.asarray(view, np.float64)[2])
+        glsl.uniform(prog, "u_exclude_focus").value = styles is not None
+        glsl.uniform(prog, "u_upsample_below").value = UPSAMPLE_BELOW
         self._run(prog, length // STEP_GROUP)
         return length
 

@@ -74,6 +74,10 @@ layout(std430, binding = BINDING_PARAM_STATE) coherent buffer State {
     double area;     // the regions' area, each as tall as its class (for the scale-down)
 };
 
+// the next round's dispatch sizes (glDispatchComputeIndirect): per object, then one invocation;
+// 0 groups once the regions fit, so the rounds dispatched ahead cost nothing
+layout(std430, binding = BINDING_PARAM_DISPATCH) buffer Dispatch { uint next_round[8]; };
+
 uniform dmat4 u_vpm;          // world to clip
 uniform int u_count;
 uniform int u_boxes;          // enclosing boxes per object (1: AABB, 2: with the OBB)
@@ -268,6 +272,8 @@ void layout_second() {
     uint count = some ? layer + 1u : 0u;
     if (rounds == 0u) demand = count;
     if (count <= uint(u_max_layers)) {
+        next_round[0] = 0u;  // the rounds after this one: none
+        next_round[4] = 0u;
         done = 1u;
         layers = count;
         used_h = top;

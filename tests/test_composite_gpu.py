@@ -28,7 +28,7 @@ TOLERANCE = 2  # /255 per channel, on all pixels but SHARE_OFF
 SHARE_OFF = 0.002  # near-ties of bounds centres: float32 on the GPU, float64 on the CPU
 
 
-@pytest.fixture(params=["radix", "bitonic"])
+@pytest.fixture(params=["radix", "bitonic", "auto"])
 def order(gl, request):
     o = GpuOrder(gl, request.param)
     yield o

@@ -72,6 +72,26 @@ class Records:
         np.copyto(out, rows.T)
         return out.view(RECORD_DTYPE).reshape(n)
 
+    @classmethod
+    def from_packed(
+        cls, packed: np.ndarray, viewport: tuple[int, int], atlas_size: tuple[int, int, int], border: int
+    ) -> Records:
+        """Records from the record buffer's contents ([n] of RECORD_DTYPE, as `packed` makes
+        them and the GPU writes them: float32 where the buffer holds floats)."""
+        info = packed["info"]
+        return cls(
+            visible=info[:, 1] != 0,
+            viewport_rect=packed["viewport"].astype(np.int64),
+            atlas_rect=packed["atlas"].astype(np.int64),
+            layer=info[:, 0].astype(np.int64),
+            scale=np.ascontiguousarray(info[:, 3]).view(np.float32).astype(np.float64),
+            transform=packed["transform"].astype(np.float64),
+            clip_ndc=packed["clip"].astype(np.float64),
+            viewport=viewport,
+            atlas_size=atlas_size,
+            border=border,
+        )
+
     @property
     def meets_edge(self) -> np.ndarray:
         """bool [n]: the inner B_viewport lies on an edge of the viewport, so the object may

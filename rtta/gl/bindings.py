@@ -64,6 +64,7 @@ class Storage:
     PARAM_STATE: Final = 13  # parameterize.comp: layers, used size, the scale-down factor
     PARAM_SHELVES: Final = 14  # parameterize.comp: per shelf, its layer and height
     PARAM_OFFSETS: Final = 15  # parameterize.comp: per object, its explode offset (doubles)
+    PARAM_DISPATCH: Final = 22  # parameterize.comp: the next round's indirect dispatch sizes (0 once done)
     SORT_KEYS: Final = 16  # depth_order.comp: the sort's keys (ids sorted with them in DRAW_LIST)
     COMPOSITE_COMMAND: Final = 17  # depth_order.comp: compositing's indirect DrawArrays command (the count drawn)
     SORT_OFFSETS: Final = 18  # depth_order.comp: per object, an offset of its bounds centre (floats)

@@ -38,7 +38,7 @@ import numpy as np
 
 from ..atlas.records import RECORD_DTYPE, GpuRecords, Records
 from ..errors import RttaError
-from ..gl import glsl
+from ..gl import glsl, sync
 from ..gl.bindings import Storage
 from ..gl.gpu import GpuScene
 
@@ -85,6 +85,7 @@ class GpuParameterize:
         self.classes = ctx.buffer(reserve=CLASSES * CLASS_BYTES)
         self.state = ctx.buffer(reserve=STATE_DTYPE.itemsize)
         self.late = ctx.buffer(reserve=STATE_DTYPE.itemsize)  # the state of the frame before ("ahead")
+        self.next_round = ctx.buffer(reserve=32)  # indirect dispatch sizes of the rounds after the first
         self._start = np.zeros(1, STATE_DTYPE)
         self._start["factor"] = 1.0
         self.corners: moderngl.Buffer | None = None
@@ -318,15 +319,22 @@ class GpuParameterize:
         return state
 
     def _dispatch(self, groups: int, rounds: int) -> None:
-        """`rounds` rounds of projection and layout (no-ops once the regions fit), then placing
-        and the records (the records of no region unless they fit)."""
-        for _ in range(rounds):
+        """`rounds` rounds of projection and layout, then placing and the records (the records
+        of no region unless they fit). The rounds after the first are dispatched indirectly,
+        with the sizes the layout stage leaves: 0 groups once the regions fit."""
+        self.next_round.write(np.array([groups, 1, 1, 0, 1, 1, 1, 0], np.uint32))
+        self.next_round.bind_to_storage_buffer(Storage.PARAM_DISPATCH)
+        for r in range(rounds):
             for stage in ROUND:
-                self.programs[stage].run(1 if stage in (LAYOUT, LAYOUT_SECOND) else groups)
-                self.ctx.memory_barrier(moderngl.SHADER_STORAGE_BARRIER_BIT)
+                single = stage in (LAYOUT, LAYOUT_SECOND)
+                if r == 0:
+                    self.programs[stage].run(1 if single else groups)
+                else:
+                    self.programs[stage].run_indirect(self.next_round, 16 if single else 0)
+                sync.barrier(self.ctx, moderngl.SHADER_STORAGE_BARRIER_BIT | moderngl.COMMAND_BARRIER_BIT)
         for stage in (PLACE_SECOND, RECORD):
             self.programs[stage].run(groups)
-            self.ctx.memory_barrier(moderngl.SHADER_STORAGE_BARRIER_BIT | moderngl.BUFFER_UPDATE_BARRIER_BIT)
+            sync.barrier(self.ctx, moderngl.SHADER_STORAGE_BARRIER_BIT | moderngl.BUFFER_UPDATE_BARRIER_BIT)
 
     def _rounds(self, groups: int) -> np.void:
         """ROUNDS rounds, placing and the records; the state, a read that waits for the GPU."""
@@ -345,7 +353,7 @@ class GpuParameterize:
         n = len(wanted)
         self.reads += 1
         state = np.frombuffer(self.state.read(), STATE_DTYPE)[0]
-        records = _records(_read_packed(gpu.records, n), viewport, border, size)
+        records = Records.from_packed(_read_packed(gpu.records, n), viewport, size, border)
         records.scale[:] = _scales(records, wanted, atlas_max, float(state["factor"]))
         return records
 
@@ -354,9 +362,8 @@ class GpuParameterize:
         for prog in self.programs.values():
             prog.release()
         self.programs.clear()
-        for buf in (
-            self.classes, self.state, self.late, self.corners, self.scales, self.items, self.shelves, self.offsets
-        ):  # fmt: skip
+        buffers = (self.classes, self.state, self.late, self.next_round, self.corners, self.scales, self.items)
+        for buf in (*buffers, self.shelves, self.offsets):
             if buf is not None:
                 buf.release()
         self.corners = self.scales = self.items = self.shelves = None
@@ -381,20 +388,3 @@ def _scales(records: Records, wanted: np.ndarray, atlas_max: tuple[int, int], fa
     room = np.asarray(atlas_max, np.float64) - 2 * records.border
     fit = np.minimum(room[0] / inner[:, 0], room[1] / inner[:, 1])
     return np.where(records.visible, np.minimum(wanted, fit) * factor, 0.0)
-
-
-def _records(packed: np.ndarray, viewport: tuple[int, int], border: int, size: tuple[int, int, int]) -> Records:
-    """Records from the packed entries read back; `size`: the atlas extent T maps to."""
-    info = packed["info"]
-    return Records(
-        visible=info[:, 1] != 0,
-        viewport_rect=packed["viewport"].astype(np.int64),
-        atlas_rect=packed["atlas"].astype(np.int64),
-        layer=info[:, 0].astype(np.int64),
-        scale=np.ascontiguousarray(info[:, 3]).view(np.float32).astype(np.float64),
-        transform=packed["transform"].astype(np.float64),
-        clip_ndc=packed["clip"].astype(np.float64),
-        viewport=viewport,
-        atlas_size=size,
-        border=border,
-    )

@@ -24,7 +24,7 @@ from __future__ import annotations
 import moderngl
 import numpy as np
 
-from ..gl import glraw, glsl
+from ..gl import glraw, glsl, sync
 from ..gl.bindings import Storage
 from ..gl.gpu import GpuScene
 from ..gl.indirect import COMMAND_BYTES, IndirectCountDraw
@@ -122,11 +122,11 @@ class CaptureLists:
         for name, value in values.items():
             if name in self.program:
                 glsl.uniform(self.program, name).value = value
-        self.ctx.memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT)  # R written by Algorithm 1's shaders
+        sync.barrier(self.ctx, GL_SHADER_STORAGE_BARRIER_BIT)  # R written by Algorithm 1's shaders
         blocks = -(-n // LOCAL_SIZE)
         wide = min(blocks, MAX_GROUPS)
         self.program.run(wide, -(-blocks // wide))
-        self.ctx.memory_barrier(GL_COMMAND_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT)
+        sync.barrier(self.ctx, GL_COMMAND_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT)
 
     def draw(self, vao: moderngl.VertexArray, program: moderngl.Program, which: int) -> None:
         """Draw list `which` (`kind()`) with `program` and `vao` in one call, its length as

@@ -1,0 +1,31 @@
+"""Memory barriers between the GPU-driven frame's compute dispatches, and a driver that needs none.
+
+Between a compute dispatch that writes a buffer and a later dispatch or draw that reads it,
+OpenGL asks for glMemoryBarrier. llvmpipe (Mesa's CPU driver) runs a dispatch to its end before
+the call returns and reads what a draw's vertex and geometry stages read (R, the draw lists,
+the indirect commands) at the draw call, so those barriers order nothing there; and its
+glMemoryBarrier is a full glFinish: it waits for every queued draw to be rasterized. Issued
+between the sort of compositing and the capture's draws, it kept the capture's rasterization
+from overlapping anything (a 24-part frame 30-40% slower than the CPU path). `barrier` skips it
+on llvmpipe alone; fragment shaders' writes (per-pixel lists, rtta.passes.oit) keep theirs.
+"""
+
+from __future__ import annotations
+
+import moderngl
+
+
+def synchronous(ctx: moderngl.Context) -> bool:
+    """Whether the driver finishes a dispatch within the call (llvmpipe); asked once per context."""
+    known = getattr(ctx, "_rtta_synchronous", None)
+    if known is None:
+        known = "llvmpipe" in str(ctx.info["GL_RENDERER"])
+        ctx._rtta_synchronous = known  # type: ignore[attr-defined]
+    return known
+
+
+def barrier(ctx: moderngl.Context, bits: int) -> None:
+    """glMemoryBarrier(bits) after compute writes that a later dispatch or draw's vertex,
+    geometry or indirect stage reads; nothing on a synchronous driver (the module's docstring)."""
+    if not synchronous(ctx):
+        ctx.memory_barrier(bits)

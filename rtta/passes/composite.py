@@ -159,11 +159,7 @@ class CompositePass:
             if outlined:
                 draw(focus, SpriteDraw.outlines(), style, records)
         else:
-            with_ao = mode is Mode.GHOSTED_AO
-            if with_ao:
-                if post is None or post.texture is None:
-                    raise ValueError("ghosted-ao needs the post-processed atlas (post, AtlasPostPass)")
-                post.texture.use(Texture.ATLAS_POST)
+            with_ao = _use_post(mode, post)
             in_context = np.ones(n, bool)
             in_context[focus] = False
             context = everyone[in_context]  # (a mask: setdiff1d's sort took 1.6 ms at 10^4 objects)
@@ -224,11 +220,7 @@ class CompositePass:
             self._bind(atlas, gpu, target, records)
             draw(ordered, SpriteDraw.transparent(), style, records)
         else:
-            with_ao = mode is Mode.GHOSTED_AO
-            if with_ao:
-                if post is None or post.texture is None:
-                    raise ValueError("ghosted-ao needs the post-processed atlas (post, AtlasPostPass)")
-                post.texture.use(Texture.ATLAS_POST)
+            with_ao = _use_post(mode, post)
             context = self._gpu.sorted(n=n, gpu=gpu, view=view, styles=self.styles)
             self._bind(atlas, gpu, target, records)
             if focused is not None:  # with their outlines (at depth 0: nothing drawn after covers them)
@@ -341,3 +333,14 @@ class CompositePass:
             self._gpu.release()
         self.sprites.release()
         self.styles.release()
+
+
+def _use_post(mode: Mode, post) -> bool:
+    """Whether the mode shades with AO and edges (ghosted-ao); then the post-processed atlas
+    is bound (`post`: AtlasPostPass, rendered)."""
+    if mode is not Mode.GHOSTED_AO:
+        return False
+    if post is None or post.texture is None:
+        raise ValueError("ghosted-ao needs the post-processed atlas (post, AtlasPostPass)")
+    post.texture.use(Texture.ATLAS_POST)
+    return True

@@ -14,7 +14,9 @@
 //   STAGE 5 (one invocation): three indirect DrawArrays commands (count, 1, 0, 0), 5 uints
 //            apart (moderngl's stride), of which one draws and the others draw none: the
 //            list's count where no drawn region is upsampled, where all are, where some are
-//            (u_total: that count instead of the drawn one, for a list of every id)
+//            (u_total: that count instead of the drawn one, for a list of every id); and two
+//            for a focus list of u_focus ids: its count where no visible focus region is
+//            upsampled, else in the second (each sprite choosing)
 // Or a stable LSD radix sort of the keys (ids in ascending order to start: ties stay by id),
 // RADIX_BITS a pass, over tiles of TILE = 256 * PER elements (u_tiles of them):
 //   STAGE 6 (per tile): each digit's count in the tile, into counts[digit * u_tiles + tile]
@@ -50,10 +52,12 @@ uniform uint u_length;  // elements (>= u_count: a power of two, or a multiple o
 uniform uint u_shift;   // the radix pass's digit: bits u_shift .. u_shift + RADIX_BITS - 1
 uniform uint u_tiles;   // the radix passes' tiles
 
-// commands at 0, 5, 10; then the drawn objects' count and the upsampled ones'
+// commands at 0, 5, 10; then the drawn objects' count, the upsampled ones' and the upsampled
+// focus objects'; then the focus list's commands at 20 (none upsampled) and 25 (some)
 #define DRAWN 15
 #define UPSAMPLED 16
-layout(std430, binding = BINDING_COMPOSITE_COMMAND) buffer CommandBuffer { uint command[20]; };
+#define FOCUS_UPSAMPLED 17
+layout(std430, binding = BINDING_COMPOSITE_COMMAND) buffer CommandBuffer { uint command[30]; };
 
 bool after(uint ka, uint ia, uint kb, uint ib) { return ka > kb || (ka == kb && ia > ib); }
 
@@ -80,7 +84,10 @@ void main() {
     if (i >= u_length) return;
     uint key = 0xFFFFFFFFu;
     if (i < u_count) {
-        bool drawn = records[i].info.y != 0 && !(u_exclude_focus && styles[i].params.y > 0.5);
+        bool focus = u_exclude_focus && styles[i].params.y > 0.5;
+        bool upsampled = intBitsToFloat(records[i].info.w) < u_upsample_below;
+        if (focus && records[i].info.y != 0 && upsampled) atomicAdd(command[FOCUS_UPSAMPLED], 1u);
+        bool drawn = records[i].info.y != 0 && !focus;
         if (drawn) {
             vec3 c = (bounds[2 * i].xyz + bounds[2 * i + 1].xyz) * 0.5;
 #ifdef OFFSETS
@@ -89,7 +96,7 @@ void main() {
             precise float z = dot(u_depth_row.xyz, c) + u_depth_row.w;
             key = min(ordered(z), 0xFFFFFFFEu);  // a drawn key stays before every undrawn one
             atomicAdd(command[DRAWN], 1u);
-            if (intBitsToFloat(records[i].info.w) < u_upsample_below) atomicAdd(command[UPSAMPLED], 1u);
+            if (upsampled) atomicAdd(command[UPSAMPLED], 1u);
         }
     }
     keys[i] = key;
@@ -98,15 +105,19 @@ void main() {
 
 #elif STAGE == 5
 uniform uint u_total;   // 0: the drawn count
+uniform uint u_focus;   // the focus list's length (a list of the CPU's: composite's focus draw)
 void main() {
-    uint drawn = command[DRAWN], up = command[UPSAMPLED];
+    uint drawn = command[DRAWN], up = command[UPSAMPLED], focus_up = command[FOCUS_UPSAMPLED];
     uint count = u_total > 0u ? u_total : drawn;
     bool classes[3] = bool[](drawn > 0u && up == 0u, drawn > 0u && up == drawn, up > 0u && up < drawn);
-    for (int c = 0; c < 3; ++c) {
-        command[5 * c] = classes[c] ? count : 0u;
-        command[5 * c + 1] = 1u;
-        command[5 * c + 2] = 0u;
-        command[5 * c + 3] = 0u;
+    uint counts[5] = uint[](classes[0] ? count : 0u, classes[1] ? count : 0u, classes[2] ? count : 0u,
+                            focus_up == 0u ? u_focus : 0u, focus_up > 0u ? u_focus : 0u);
+    for (int c = 0; c < 5; ++c) {
+        uint at = c < 3 ? uint(5 * c) : uint(20 + 5 * (c - 3));
+        command[at] = counts[c];
+        command[at + 1u] = 1u;
+        command[at + 2u] = 0u;
+        command[at + 3u] = 0u;
     }
 }
 

@@ -221,10 +221,11 @@ class CompositePass:
             draw(ordered, SpriteDraw.transparent(), style, records)
         else:
             with_ao = _use_post(mode, post)
-            context = self._gpu.sorted(n=n, gpu=gpu, view=view, styles=self.styles)
+            context = self._gpu.sorted(n=n, gpu=gpu, view=view, styles=self.styles, focus=focused)
             self._bind(atlas, gpu, target, records)
             if focused is not None:  # with their outlines (at depth 0: nothing drawn after covers them)
-                draw(focused, SpriteDraw.opaque(shaded=with_ao, outlined=outlined), style, records)
+                opaque = SpriteDraw.opaque(shaded=with_ao, outlined=outlined)
+                draw(self._gpu.focus_drawn(focused), opaque, style, records)
             draw(context, SpriteDraw.context(desaturate=style.desaturate, shaded=with_ao), style, records)
             if style.halo > 0 and focused is not None:
                 self._halo(focused, context, style, records, target)

@@ -14,7 +14,7 @@ from __future__ import annotations
 import moderngl
 
 from .oit import resolved_order
-from .order_gpu import GpuOrder
+from .order_gpu import FOCUS_COMMANDS, GpuOrder
 from .sprites import Listed, upload
 from .style import Mode, Order, Style, style_key, style_params
 
@@ -57,10 +57,17 @@ class GpuDraws:
         self.order.every(count=n, records=gpu.records, bounds=gpu.bounds)
         return Listed(self.order.ids, command=self.order.command)
 
-    def sorted(self, *, n: int, gpu, view, styles: moderngl.Buffer | None) -> Listed:
-        """The visible objects back to front (with `styles`: the focus left out), sorted on the GPU."""
-        self.order.sort(count=n, records=gpu.records, bounds=gpu.bounds, view=view, styles=styles)
+    def sorted(self, *, n: int, gpu, view, styles: moderngl.Buffer | None, focus: Listed | None = None) -> Listed:
+        """The visible objects back to front (with `styles`: the focus left out), sorted on the
+        GPU; `focus` (a CPU list): its commands are written too (`focus_drawn`)."""
+        listed = 0 if focus is None else focus.count
+        self.order.sort(count=n, records=gpu.records, bounds=gpu.bounds, view=view, styles=styles, focus=listed)
         return Listed(self.order.ids, command=self.order.command)
+
+    def focus_drawn(self, focus: Listed) -> Listed:
+        """The focus list drawn by the two commands the last `sorted` wrote for it: the GPU
+        picks the variant (no region upsampled, or each sprite choosing) without a read."""
+        return Listed(focus.ids, focus.count, self.order.command, firsts=FOCUS_COMMANDS)
 
     def release(self) -> None:
         self.order.release()

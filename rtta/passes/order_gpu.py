@@ -23,7 +23,8 @@ from ..gl.bindings import Storage
 from .sprites import UPSAMPLE_BELOW
 
 KEYS, BLOCK_SORT, STEP, BLOCK_MERGE, COMMANDS, COUNT, SCAN, SCATTER = 1, 2, 3, 4, 5, 6, 7, 8  # the shader's stages
-COMMAND_WORDS = 20  # three DrawArrays commands 5 uints apart, the drawn and upsampled counts
+COMMAND_WORDS = 30  # three DrawArrays commands 5 uints apart, three counts, the focus list's two commands
+FOCUS_COMMANDS = (4, 5)  # the focus list's commands (20-byte steps): no focus region upsampled, some
 DRAWN = 15  # the command buffer's word of the drawn count
 BLOCK = 1024  # elements sorted in shared memory by one work group
 GROUP = 64  # invocations of that work group (each compares BLOCK / 2 / GROUP pairs a step)
@@ -125,6 +126,7 @@ class GpuOrder:
         view: np.ndarray,
         styles: moderngl.Buffer | None = None,
         offsets: np.ndarray | None = None,
+        focus: int = 0,
     ) -> None:
         """Order `count` objects back to front for `view` into `ids`, their count in `command`.
 
@@ -143,6 +145,10 @@ class GpuOrder:
             flagged focus are not drawn (the ghosted context). None: every visible object is.
         offsets : numpy.ndarray, optional
             [count, 3] added to the bounds centres (uploaded when the array object changes).
+        focus : int, default 0
+            The length of a list of the focus objects (with `styles`): `command` gets two more
+            commands for it (FOCUS_COMMANDS), its length in the first where no visible focus
+            region is upsampled, else in the second.
         """
         self.dispatches = 0
         length = self._keys(count, records, bounds, view, styles, offsets)
@@ -150,7 +156,7 @@ class GpuOrder:
             self._radix(length)
         else:
             self._bitonic(length)
-        self._commands(0)
+        self._commands(0, focus if styles is not None else 0)
 
     def _radix(self, length: int) -> None:
         """The keys and ids sorted by key, stably, RADIX_BITS a pass (an even number of passes:
@@ -198,9 +204,10 @@ class GpuOrder:
         self._keys(count, records, bounds, np.eye(4), None, None)
         self._commands(count)
 
-    def _commands(self, total: int) -> None:
+    def _commands(self, total: int, focus: int = 0) -> None:
         prog = self._program(COMMANDS)
         glsl.uniform(prog, "u_total").value = total
+        glsl.uniform(prog, "u_focus").value = focus
         self._run(prog, 1)
         sync.barrier(self.ctx, moderngl.COMMAND_BARRIER_BIT | moderngl.SHADER_STORAGE_BARRIER_BIT)
 

@@ -148,6 +148,7 @@ class Listed:
     ids: moderngl.Buffer
     count: int = 0
     command: moderngl.Buffer | None = None
+    firsts: tuple[int, ...] = (0, 1, 2)  # the commands of `command` to draw: order_gpu's three, or a focus list's two
 
 
 @functools.lru_cache(maxsize=256)
@@ -235,8 +236,10 @@ class SpritePass:
         listed.ids.bind_to_storage_buffer(Storage.DRAW_LIST)
         sampled = draw.kind not in (Kind.OUTLINES, Kind.HALOS)
         variants = [(None, {"UPSAMPLE_DYNAMIC": sampled})]
-        if listed.command is not None:
+        if listed.command is not None and len(listed.firsts) == 3:
             variants = [(0, {}), (1, {"UPSAMPLE": sampled}), (2, {"UPSAMPLE_DYNAMIC": sampled})]
+        elif listed.command is not None:  # a focus list: none upsampled, or each sprite choosing
+            variants = [(listed.firsts[0], {}), (listed.firsts[1], {"UPSAMPLE_DYNAMIC": sampled})]
         hull = None if draw.kind is Kind.HALOS else self._hull
         hull_draws = self.hull_draws + (hull is not None)  # one list: one draw, whichever variant
         for first, variant in variants:

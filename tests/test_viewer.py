@@ -174,12 +174,22 @@ def _env(display: str | None, headless: bool = True) -> dict:
     return env
 
 
-def run_driver(display: str | None, out: Path, script: str, *args: str, timeout: int = 300) -> tuple[dict, dict]:
-    """Run a viewer driver script (tests/viewer_*driver.py) into `out` under the Xvfb display;
-    its result.json and its screenshots (name -> RGB array)."""
+def run_driver(
+    display: str | None,
+    out: Path,
+    script: str,
+    *args: str,
+    timeout: int = 300,
+    cwd: Path | None = None,
+    env: dict | None = None,
+) -> tuple[dict, dict]:
+    """Run a viewer driver script (tests/viewer_*driver.py) into `out` under the Xvfb display
+    (from `cwd`, with `env` added to the environment); its result.json and its screenshots
+    (name -> RGB array)."""
     proc = subprocess.run(
         [sys.executable, str(HERE / script), str(out), *args],
-        env=_env(display),
+        env={**_env(display), **(env or {})},
+        cwd=cwd,
         capture_output=True,
         text=True,
         timeout=timeout,

@@ -6,14 +6,11 @@ tests/viewer_cad_driver.py; the parts without a window are tested directly."""
 
 from __future__ import annotations
 
-import json
 import subprocess
-import sys
 
 import numpy as np
 import pytest
-from PIL import Image
-from test_viewer import HERE, _env, _region, display  # noqa: F401  (the Xvfb fixture)
+from test_viewer import _env, _region, display, run_driver  # noqa: F401  (the Xvfb fixture)
 
 from viewer import gizmo, pictures, saved
 from viewer.files import Stats
@@ -27,19 +24,8 @@ from viewer.views import PANEL_MIN, Layout
 def cad(display, tmp_path_factory):  # noqa: F811
     """The driver's result and screenshots; run from an empty folder, pictures in their own."""
     out, cwd, pics = (tmp_path_factory.mktemp(k) for k in ("cad", "cwd", "pictures"))
-    env = {**_env(display), "XDG_PICTURES_DIR": str(pics)}
-    proc = subprocess.run(
-        [sys.executable, str(HERE / "viewer_cad_driver.py"), str(out)],
-        env=env,
-        cwd=cwd,
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    result = json.loads((out / "result.json").read_text())
+    result, shots = run_driver(display, out, "viewer_cad_driver.py", cwd=cwd, env={"XDG_PICTURES_DIR": str(pics)})
     result["pictures_dir"], result["cwd"] = str(pics), str(cwd)
-    shots = {p.stem: np.asarray(Image.open(p).convert("RGB")) for p in out.glob("*.png")}
     return result, shots
 
 

@@ -4,14 +4,9 @@ part. The real window under Xvfb is driven by tests/viewer_cutaway_driver.py."""
 
 from __future__ import annotations
 
-import json
-import subprocess
-import sys
-
 import numpy as np
 import pytest
-from PIL import Image
-from test_viewer import HERE, _env, _region, display  # noqa: F401  (the Xvfb fixture)
+from test_viewer import _region, display, run_driver  # noqa: F401  (the Xvfb fixture)
 
 from viewer.cutaway import CutawayState
 
@@ -21,17 +16,7 @@ pytestmark = pytest.mark.viewer
 @pytest.fixture(scope="module")
 def cut(display, tmp_path_factory):  # noqa: F811
     out, cwd = tmp_path_factory.mktemp("cutaway"), tmp_path_factory.mktemp("cwd")
-    proc = subprocess.run(
-        [sys.executable, str(HERE / "viewer_cutaway_driver.py"), str(out)],
-        env=_env(display),
-        cwd=cwd,
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    result = json.loads((out / "result.json").read_text())
-    shots = {p.stem: np.asarray(Image.open(p).convert("RGB")) for p in out.glob("*.png")}
+    result, shots = run_driver(display, out, "viewer_cutaway_driver.py", cwd=cwd)
     return result, shots
 
 

@@ -17,9 +17,8 @@ from pathlib import Path
 
 import numpy as np
 from pyglet.window import key, mouse
+from window_frames import Frames  # tests/ is this script's folder
 
-from rtta.gl import glraw
-from rtta.outputs import save_png
 from rtta.scene.generators.shapes import box
 from rtta.scene.loader import load_scene_or_demo
 from rtta.scene.model import from_meshes
@@ -32,23 +31,9 @@ OUT = Path(sys.argv[1])
 wnd = create_window((1280, 720))
 demo = load_scene_or_demo(None)
 app = Viewer(wnd, demo, views_dir=OUT / "views")  # screenshots: the default folder
-pw = wnd._window
-errors: list[str] = []
+frames = Frames(app, wnd, OUT)
+send, errors = frames.send, frames.errors
 result: dict = {"screenshot_dir": str(app.screenshot_dir)}
-
-
-def frames(n: int = 1, shot: str | None = None) -> None:
-    for i in range(n):
-        app.frame()
-        if shot and i == n - 1:
-            save_png(OUT / f"{shot}.png", glraw.read_window(*wnd.buffer_size))
-        wnd.swap_buffers()
-        if app.ctx.error != "GL_NO_ERROR":
-            errors.append(f"after {shot or 'frame'}")
-
-
-def send(event: str, *args) -> None:
-    pw.dispatch_event(event, *args)
 
 
 def click(x: float, y: float, between: bool = True) -> None:

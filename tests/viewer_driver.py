@@ -14,9 +14,8 @@ import sys
 from pathlib import Path
 
 from pyglet.window import key, mouse
+from window_frames import Frames  # tests/ is this script's folder
 
-from rtta.gl import glraw
-from rtta.outputs import save_png
 from rtta.scene.loader import load_scene_or_demo
 from viewer.app import Viewer
 from viewer.run import create_window
@@ -25,21 +24,8 @@ OUT = Path(sys.argv[1])
 wnd = create_window((1280, 720))
 app = Viewer(wnd, load_scene_or_demo(None), screenshot_dir=OUT)
 pw = wnd._window  # the pyglet window
-errors: list[str] = []
-
-
-def frames(n: int = 1, shot: str | None = None) -> None:
-    for i in range(n):
-        app.frame()
-        if shot and i == n - 1:
-            save_png(OUT / f"{shot}.png", glraw.read_window(*wnd.buffer_size))
-        wnd.swap_buffers()
-        if app.ctx.error != "GL_NO_ERROR":
-            errors.append(f"after {shot or 'frame'}")
-
-
-def send(event: str, *args) -> None:
-    pw.dispatch_event(event, *args)
+frames = Frames(app, wnd, OUT)
+send, errors = frames.send, frames.errors
 
 
 def click(x: int, y: int, button: int = mouse.LEFT, modifiers: int = 0) -> None:

@@ -91,9 +91,12 @@ def frame(gpu: GpuScene, view_name: str, hidden=None, offsets=None, **packing):
 
 
 def on_gpu(gpu: GpuScene, rec) -> GpuRecords:
-    """R written into the record buffer, as Algorithm 1's shaders leave it."""
+    """R written into the record buffer and handed to the scene, as Algorithm 1's shaders
+    leave it (GpuParameterize.run)."""
     gpu.records.write(rec.packed())
-    return GpuRecords(gpu.scene.count, rec.viewport, rec.atlas_size, rec.border, lambda: rec)
+    records = GpuRecords(gpu.scene.count, rec.viewport, rec.atlas_size, rec.border, lambda: rec)
+    gpu.hand(records)
+    return records
 
 
 def capture_both(rig, scene_name, path, view_name, hidden=None, offsets=None, removed=None, **packing):

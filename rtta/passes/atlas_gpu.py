@@ -105,15 +105,17 @@ class GpuParameterize:
         self.reads = 0  # reads that waited for the GPU (the state, the records)
         self.cpu_seconds = 0.0  # of the last run, in Python and numpy outside GL calls (rtta bench capture)
 
-    def _upload(self, corners: np.ndarray, wanted: np.ndarray, boxes: int) -> None:
-        """Corners [k, n, 8, 3] and the scales wanted [n], each when it changed."""
-        n = len(wanted)
+    def _upload(self, corners: np.ndarray, wanted: np.ndarray | None, boxes: int) -> None:
+        """Corners [k, n, 8, 3] and the scales wanted [n] (None: as uploaded), each when it changed."""
+        n = corners.shape[-3]
         if corners is not self._corners_of:
             data = np.ascontiguousarray(corners, np.float64).reshape(boxes, n, 8, 3)
             if self.corners is None or self.corners.size != max(data.nbytes, 8):
                 self.corners = _replace(self.ctx, self.corners, max(data.nbytes, 8))
             self.corners.write(data)
             self._corners_of = corners
+        if wanted is None:
+            return
         if self.scales is None or self.scales.size != max(n, 1) * 8 or not np.array_equal(wanted, self._wanted):
             if self.scales is None or self.scales.size != max(n, 1) * 8:
                 self.scales = _replace(self.ctx, self.scales, max(n, 1) * 8)
@@ -214,10 +216,7 @@ class GpuParameterize:
         wanted = self._wanted_scales(n, region_scale, hidden, key)
         ahead = self._ahead_layers((W, H), atlas_max, int(max_layers))
         outside = time.perf_counter() - t0
-        if wanted is not None:
-            self._upload(corners, wanted, boxes)
-        elif corners is not self._corners_of:
-            self._upload(corners, self._wanted, boxes)
+        self._upload(corners, wanted, boxes)
         if offsets is not None and offsets is not self._offsets_of:
             data = np.ascontiguousarray(offsets, np.float64).reshape(n * 3)
             if self.offsets.size < max(data.nbytes, 8):

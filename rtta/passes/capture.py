@@ -282,8 +282,7 @@ class CapturePass(ScenePass):
         atlas.normals_written, atlas.ids_written = normals and atlas.normals, ids
         if td == 0:
             return
-        if not getattr(records, "on_gpu", False):  # GpuRecords: R is in the buffer already
-            gpu.upload_records(records)
+        gpu.upload_records(records)  # nothing to write where the GPU wrote R itself
         atlas.bind((0, 0, tw, th))
         atlas.write_mask(normals, ids)
         try:

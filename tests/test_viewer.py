@@ -183,9 +183,8 @@ def run_driver(
     cwd: Path | None = None,
     env: dict | None = None,
 ) -> tuple[dict, dict]:
-    """Run a viewer driver script (tests/viewer_*driver.py) into `out` under the Xvfb display
-    (from `cwd`, with `env` added to the environment); its result.json and its screenshots
-    (name -> RGB array)."""
+    """Run a viewer driver script (tests/viewer_*driver.py) into `out` under the Xvfb display, from
+    `cwd`, `env` added; its result.json and its screenshots (name -> RGB array)."""
     proc = subprocess.run(
         [sys.executable, str(HERE / script), str(out), *args],
         env={**_env(display), **(env or {})},

@@ -3,7 +3,8 @@
 # ends well inside a lease: scripts/bench_device.sh [--local] [STEP ...]
 # STEPs (default: all, in this order): snapshots capture composite frame tests tiny profile viewer
 # viewer_tests scale; on request also profile100k (a 100,000-part frame under cProfile) and
-# timers (GPU time per stage from timer queries, 10,000 and 100,000 parts).
+# timers (GPU time per stage from timer queries, 10,000 and 100,000 parts), stages (per dispatch)
+# and blends (the compute blend against sprites).
 #
 # Made for this workplace's `device` tool, whose machines have an NVIDIA driver and Python
 # 3.12 with numpy, scipy, pillow, pytest and pytest-xdist but no GL loader and no rtta: it
@@ -73,8 +74,9 @@ m.save('$OUT/modes.png')\""
 wanted capture && step 60 capture python3 -m rtta bench capture --json "$OUT/capture.json"
 wanted composite && step 90 composite python3 -m rtta bench composite --scene demo "$DATA/engine_2cyl.glb" \
     "$DATA/cycloidal.glb" table1-580 --json "$OUT/composite.json"
-GL_TESTS="api batch bounds capture capture_outputs closure composite export extremes gl_features glsl importance
-    ldi material outline_sprites pixel_order post projector references targets wrong_pictures"
+GL_TESTS="api batch bounds capture capture_lists capture_outputs closure composite composite_gpu explode export extremes
+    gl_features glsl gpu_frame gpu_parameterize importance ldi lens material outline_sprites pixel_order post projector
+    references sections targets wrong_pictures"
 # The GPU-driven frame against the CPU path: Python, wall and GPU ms per stage (issue 43).
 wanted frame && step 150 frame python3 -m rtta bench frame --parts 1000,10000,100000 --scene "$DATA/engine_2cyl.glb" \
     --json "$OUT/frame.json"
@@ -91,6 +93,16 @@ wanted timers && step 150 timers bash -c "
     python3 -c \"from rtta.scene.generators.assembly import write_assembly as w; w('/tmp/asm10k.glb', 10000); w('/tmp/asm100k.glb', 100000)\" &&
     for f in /tmp/asm10k.glb /tmp/asm100k.glb; do for opt in '' --sync '--sync --no-hull'; do
         python3 '$ROOT/scripts/gpu_timers.py' \$f \$opt; done; done"
+# GPU time per compute dispatch and per draw, GPU path (and 10,000 parts on the CPU path).
+wanted stages && step 150 stages bash -c "
+    python3 -c \"from rtta.scene.generators.assembly import write_assembly as w; w('/tmp/asm1k.glb', 1000); w('/tmp/asm10k.glb', 10000); w('/tmp/asm100k.glb', 100000)\" &&
+    for f in /tmp/asm1k.glb /tmp/asm10k.glb /tmp/asm100k.glb '$DATA/engine_2cyl.glb'; do python3 '$ROOT/scripts/gpu_timers.py' \$f --stages; done &&
+    python3 '$ROOT/scripts/gpu_timers.py' /tmp/asm10k.glb --stages --parameterize cpu"
+# The compute blend against the sprites it replaces (Settings.blend), GPU ms per stage, SPAN 1, 2, 4.
+wanted blends && step 120 blends bash -c "
+    python3 -c \"from rtta.scene.generators.assembly import write_assembly as w; w('/tmp/asm1k.glb', 1000); w('/tmp/asm10k.glb', 10000); w('/tmp/asm100k.glb', 100000)\" &&
+    for f in /tmp/asm1k.glb /tmp/asm10k.glb /tmp/asm100k.glb; do python3 '$ROOT/scripts/gpu_timers.py' \$f \
+        --blends raster,compute:1,compute:2,compute:4; done"
 # The viewer in pyglet's headless window: the demo, then 10,000 parts with and without fast navigation.
 wanted viewer && step 150 viewer bash -c "rtta-view --bench 20 --bench-modes ghosted,ghosted-ao &&
     python3 -m rtta bench scale --parts 10000 --json '$OUT/scale_viewer.json'"

@@ -1,7 +1,8 @@
-"""Where a frame's GPU time goes: GL_TIME_ELAPSED queries around STD, the capture and each
-compositing draw (queries of one kind cannot nest, so the stages are timed one by one), over
-FRAMES frames of MODE on SCENE; GPU ms against the CPU's wall ms for the same calls.
-python scripts/gpu_timers.py [SCENE] [--mode ghosted] [--frames 10] [--size 1280x720]"""
+"""Where a frame's GPU time goes: GL_TIMESTAMP queries before and after STD, the capture, each
+compositing draw and (--stages) every compute dispatch by program, over FRAMES frames of MODE on
+SCENE; GPU ms (between the two timestamps, so nested calls are counted in each) against the CPU's
+wall ms for the same calls.
+python scripts/gpu_timers.py [SCENE] [--mode ghosted] [--frames 10] [--size 1280x720] [--stages]"""
 
 from __future__ import annotations
 
@@ -9,16 +10,17 @@ import argparse
 import ctypes
 import time
 
+import moderngl
 import numpy as np
 
-from rtta.gl import glraw
+from rtta.gl import glraw, glsl
 from rtta.gl.context import shared_context
-from rtta.passes import capture, composite, sprites
-from rtta.renderer.renderer import Renderer
+from rtta.passes import blend_tiles, capture, composite, sprites
+from rtta.renderer.renderer import Renderer, Settings
 from rtta.scene.camera import Camera
 from rtta.scene.loader import load_scene_or_demo
 
-GL_TIME_ELAPSED = 0x88BF
+GL_TIMESTAMP = 0x8E28
 GL_QUERY_RESULT = 0x8866
 
 
@@ -36,29 +38,56 @@ class Timers:
             if self.sync is not None:
                 self.sync()
             gl = glraw._lib()
-            q = ctypes.c_uint(0)
-            gl.glGenQueries(1, ctypes.byref(q))
-            gl.glBeginQuery(GL_TIME_ELAPSED, q)
+            q = (ctypes.c_uint * 2)()
+            gl.glGenQueries(2, q)
+            gl.glQueryCounter(q[0], GL_TIMESTAMP)
             t0 = time.perf_counter()
             try:
                 return fn(*args, **kwargs)
             finally:
                 wall = time.perf_counter() - t0
-                gl.glEndQuery(GL_TIME_ELAPSED)
+                gl.glQueryCounter(q[1], GL_TIMESTAMP)
                 key = name(args, kwargs) if callable(name) else name
-                self.pending.append((key, q.value, wall))
+                self.pending.append((key, (q[0], q[1]), wall))
 
         return run
 
     def collect(self) -> None:
         gl = glraw._lib()
-        for key, q, wall in self.pending:
-            ns = ctypes.c_uint64(0)
-            gl.glGetQueryObjectui64v(q, GL_QUERY_RESULT, ctypes.byref(ns))
-            gl.glDeleteQueries(1, ctypes.byref(ctypes.c_uint(q)))
-            self.gpu.setdefault(key, []).append(ns.value / 1e6)
+        for key, qs, wall in self.pending:
+            ns = [ctypes.c_uint64(0), ctypes.c_uint64(0)]
+            for q, t in zip(qs, ns, strict=True):
+                gl.glGetQueryObjectui64v(q, GL_QUERY_RESULT, ctypes.byref(t))
+            gl.glDeleteQueries(2, (ctypes.c_uint * 2)(*qs))
+            self.gpu.setdefault(key, []).append((ns[1].value - ns[0].value) / 1e6)
             self.wall.setdefault(key, []).append(wall * 1e3)
         self.pending.clear()
+
+
+def wrap_dispatches(timers: Timers) -> None:
+    """Every compute dispatch timed under its program's file and defines."""
+    names: dict[str, str] = {}
+    load = glsl.load
+
+    def named_load(name: str, **defines):
+        source = load(name, **defines)
+        shown = " ".join(f"{k}={v}" for k, v in defines.items() if k in ("STAGE", "OFFSETS"))
+        names[source] = f"compute {name.split('.')[0]} {shown}".strip()
+        return source
+
+    glsl.load = named_load
+    programs: dict[int, str] = {}
+    make = moderngl.Context.compute_shader
+
+    def compute_shader(self, source, *args, **kwargs):
+        program = make(self, source, *args, **kwargs)
+        programs[id(program)] = names.get(source, "compute ?")
+        return program
+
+    moderngl.Context.compute_shader = compute_shader
+    name = lambda args, kw: programs.get(id(args[0]), "compute ?")  # noqa: E731
+    moderngl.ComputeShader.run = timers.wrap(name, moderngl.ComputeShader.run)
+    moderngl.ComputeShader.run_indirect = timers.wrap(name, moderngl.ComputeShader.run_indirect)
 
 
 def main() -> None:
@@ -69,11 +98,17 @@ def main() -> None:
     p.add_argument("--size", default="1280x720")
     p.add_argument("--sync", action="store_true", help="finish the GPU's queue before each timed call")
     p.add_argument("--no-hull", action="store_true", help="sprites over B_viewport's rectangle only")
+    p.add_argument("--stages", action="store_true", help="also every compute dispatch, by program")
+    p.add_argument("--parameterize", default="auto", choices=("auto", "cpu", "gpu"))
+    p.add_argument(
+        "--blends", default="auto", help="comma-separated Settings.blend values, one table each; compute:N: SPAN N"
+    )
     a = p.parse_args()
     ctx = shared_context()
     scene = load_scene_or_demo(a.scene)
     viewport = tuple(int(v) for v in a.size.split("x"))
-    r = Renderer(ctx, scene)
+    r = Renderer(ctx, scene, Settings(parameterize=a.parameterize))
+    r.atlas_sizing = "ahead"  # as the viewer and the benches draw
     style = composite.Style(focus={0, scene.count // 2})
     timers = Timers(ctx.finish if a.sync else None)
     if a.no_hull:
@@ -82,6 +117,26 @@ def main() -> None:
     capture.StdPass.render = timers.wrap("std", capture.StdPass.render)
     kind = lambda args, kw: f"composite {args[2].kind.value}" + ("+upsample" if args[2].upsample else "")  # noqa: E731
     sprites.SpritePass._run = timers.wrap(kind, sprites.SpritePass._run)
+    listed = lambda args, kw: f"composite listed {args[2].kind.value}"  # noqa: E731
+    sprites.SpritePass.draw_listed = timers.wrap(listed, sprites.SpritePass.draw_listed)
+    Renderer.parameterize = timers.wrap("parameterize", Renderer.parameterize)
+    Renderer.composite = timers.wrap("composite (all)", Renderer.composite)
+    blend_tiles.TileBlend.draw = timers.wrap("composite blend_tiles", blend_tiles.TileBlend.draw)
+    if a.stages:
+        wrap_dispatches(timers)
+    for blend in a.blends.split(","):
+        r.settings.blend, _, span = blend.partition(":")  # type: ignore[assignment]
+        blend_tiles.SPAN = int(span or blend_tiles.SPAN)
+        if r._composite is not None and r._composite._gpu is not None:
+            r._composite._gpu._tiles = None  # made again with this SPAN
+        frames(a, ctx, r, scene, style, timers, viewport, f"blend {blend}")
+    r.release()
+
+
+def frames(a, ctx, r, scene, style, timers: Timers, viewport, label: str) -> None:
+    """Frames of the mode, then a table of GPU and wall ms per timed call."""
+    timers.gpu.clear()
+    timers.wall.clear()
     for i in range(a.frames + 2):
         cam = Camera.orbit(scene.center, scene.radius, 30.0 + i * 0.5, 20.0, 2.2)
         t0 = time.perf_counter()
@@ -101,6 +156,7 @@ def main() -> None:
         f"{ctx.info['GL_RENDERER']}: {a.mode}, {scene.count} objects, {a.size}, medians of {a.frames} frames"
         + (", synced" if a.sync else "")
         + (", no outline sprites" if a.no_hull else "")
+        + f", {label}"
     )
     print(f"{'call':40s} {'GPU ms':>8s} {'wall ms':>8s} {'calls':>6s}")
     for key in sorted(timers.wall, key=lambda k: -np.sum(timers.wall[k])):
@@ -108,7 +164,6 @@ def main() -> None:
         n = len(timers.wall[key]) / a.frames
         gpu = f"{np.median(g) * n:8.2f}" if g else f"{'':8s}"
         print(f"{key:40s} {gpu} {np.median(timers.wall[key]) * n:8.2f} {n:6.0f}")
-    r.release()
 
 
 if __name__ == "__main__":

@@ -152,15 +152,17 @@ def draws(passes: list[str]) -> list[str]:
 GPU_VARIANTS = {"hull_per_sprite", "upsample", "upsample_dynamic"}
 
 
-@pytest.mark.parametrize("where", ["cpu", "gpu"])
+@pytest.mark.parametrize("where", ["cpu", "gpu", "gpu+compute"])
 def test_only_needed_passes_run(make_renderer, demo_scene, where):
-    r = make_renderer(demo_scene, Settings(parameterize=where))
+    parameterize, _, blend = where.partition("+")
+    r = make_renderer(demo_scene, Settings(parameterize=parameterize, blend=blend or "raster"))  # type: ignore[arg-type]
     cam = Camera.orbit(demo_scene.center, demo_scene.radius, *DEFAULT_ORBIT)
     r.capture(cam, VP)
+    context = "blend_tiles" if blend else "blend"  # the ghosted context in a compute pass (blend_tiles.py)
     expected = {
         "sprites": ["sprite"],
         "transparent": ["blend+collect", "resolve"],
-        "ghosted": ["sprite+outline", "blend"],
+        "ghosted": ["sprite+outline", context],
     }
     for mode, passes in expected.items():
         r.composite(mode, Style(focus={1}))
@@ -170,10 +172,11 @@ def test_only_needed_passes_run(make_renderer, demo_scene, where):
             r.composite(mode, Style())
             assert draws(r._composite.passes) == passes
     r.composite("ghosted", Style(focus={1}, outline_width=0))  # no outline: no outline pass or variant
-    assert draws(r._composite.passes) == ["sprite", "blend"]
+    assert draws(r._composite.passes) == ["sprite", context]
     r.composite("ghosted-ao", Style(focus={1}))
-    assert draws(r._composite.passes) == ["sprite+outline+with_ao", "blend+with_ao"] and r._post is not None
-    assert r._composite.gpu_driven == (where == "gpu")
+    shaded = "blend_tiles+ao" if blend else "blend+with_ao"
+    assert draws(r._composite.passes) == ["sprite+outline+with_ao", shaded] and r._post is not None
+    assert r._composite.gpu_driven == (parameterize == "gpu")
 
 
 @pytest.mark.parametrize(

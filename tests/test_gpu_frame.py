@@ -106,7 +106,7 @@ def test_ahead_pictures_equal_the_cpu_path(make_renderer, demo_scene, mode):
     picture (frames that jump in demand excepted: they are scaled down, and said to be)."""
     style = Style(focus=frozenset({2}))
     cpu = make_renderer(demo_scene, Settings(parameterize="cpu"))
-    gpu = make_renderer(demo_scene, Settings(parameterize="gpu"))
+    gpu = make_renderer(demo_scene, Settings(parameterize="gpu", blend="raster"))  # the blends: test_blend_tiles
     gpu.atlas_sizing = "ahead"
     for az, dist in ((30, 2.5), (40, 2.4), (50, 2.2), (60, 2.2)):
         cam = Camera.orbit(demo_scene.center, demo_scene.radius, az, 20, dist)

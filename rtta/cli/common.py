@@ -95,6 +95,13 @@ def view_args(p: argparse.ArgumentParser) -> None:
         "(gpu; auto: where they build) or numpy (cpu, the reference)",
     )
     p.add_argument(
+        "--blend",
+        choices=("auto", "raster", "compute"),
+        default="auto",
+        help="how a GPU-driven frame blends the ghosted context: sprites (raster) or a compute pass "
+        "(compute; auto: on GPUs with few raster units, such as NVIDIA's H100)",
+    )
+    p.add_argument(
         "--context-scale",
         type=float,
         default=None,
@@ -133,6 +140,7 @@ def settings_of(args):
         args.bounds,
         getattr(args, "context_scale", None),
         getattr(args, "parameterize", "auto"),
+        getattr(args, "blend", "auto"),
     )
 
 

@@ -28,6 +28,7 @@ class Texture:
     PROJECTOR_DEPTH: Final = 6  # projector.glsl: the projector's shadow map
     FOCUS_DEPTH: Final = 7  # composite.frag: nearest focus sprite depth per pixel (MODE_COLLECT)
     CONTEXT_DEPTH: Final = 8  # composite.frag: farthest context sprite depth per pixel (MODE_HALO)
+    TARGET_DEPTH: Final = 9  # blend_tiles.comp: the composite's depth (the focus sprites'), tested against
     MATERIAL_ATLAS: Final = 15  # material.glsl: the scene's material atlas (textured scenes)
     SCENE_TEXTURE: Final = 0  # scene.frag (SEPARATE): the one object's own texture
     VIEW_TEXTURE: Final = 0  # view.frag: the texture shown (a composite, or an atlas colour layer)
@@ -42,6 +43,7 @@ class Image:
 
     LDI_LAYERS: Final = 0  # ldi.glsl: an LDI's layers (r32f)
     LDI_INSIDE: Final = 1  # ldi_classify.comp: the result per point (r8ui)
+    TARGET_COLOR: Final = 2  # blend_tiles.comp: the composite's colour, blended into (rgba8)
 
 
 class Storage:

@@ -28,6 +28,7 @@ from ..gl.bindings import Storage, Texture
 from ..gl.glsl import mat_bytes
 from ..gl.gpu import GpuScene
 from ..gl.targets import CompositeTarget, LayeredTarget, release_framebuffer
+from .blend_tiles import BlendOn
 from .composite_gpu import GpuDraws, gpu_driven
 from .oit import PixelOrderPass, Refusal, blended_in_place, resolved_order
 from .sprites import UPSAMPLE_BELOW, Depth, SpriteDraw, SpritePass, upload
@@ -67,6 +68,7 @@ class CompositePass:
         self._opacity = np.zeros(0, np.float32)  # per object, as the last render draws them
         self._gpu: GpuDraws | None = None  # the GPU-driven branch's state, made on first use
         self.gpu_driven = False  # whether the last render drew from GPU lists (composite_gpu)
+        self.blend: BlendOn = "raster"  # how the GPU-driven branch blends in object order (Settings.blend)
 
     @property
     def passes(self) -> list[str]:
@@ -218,7 +220,7 @@ class CompositePass:
         elif mode is Mode.TRANSPARENT:
             ordered = self._gpu.sorted(n=n, gpu=gpu, view=view, styles=None)
             self._bind(atlas, gpu, target, records)
-            draw(ordered, SpriteDraw.transparent(), style, records)
+            self._blend_listed(ordered, SpriteDraw.transparent(), style, records, target)
         else:
             with_ao = _use_post(mode, post)
             context = self._gpu.sorted(n=n, gpu=gpu, view=view, styles=self.styles, focus=focused)
@@ -226,11 +228,20 @@ class CompositePass:
             if focused is not None:  # with their outlines (at depth 0: nothing drawn after covers them)
                 opaque = SpriteDraw.opaque(shaded=with_ao, outlined=outlined)
                 draw(self._gpu.focus_drawn(focused), opaque, style, records)
-            draw(context, SpriteDraw.context(desaturate=style.desaturate, shaded=with_ao), style, records)
+            faded = SpriteDraw.context(desaturate=style.desaturate, shaded=with_ao)
+            self._blend_listed(context, faded, style, records, target)
             if style.halo > 0 and focused is not None:
                 self._halo(focused, context, style, records, target)
         if outlined and mode in (Mode.SPRITES, Mode.TRANSPARENT):
             draw(focused, SpriteDraw.outlines(), style, records)
+
+    def _blend_listed(self, listed, draw: SpriteDraw, style: Style, records, target: CompositeTarget) -> None:
+        """A GPU list blended in its order: as sprites, or in a compute pass (`blend`)."""
+        if self.blend == "raster":
+            return self.sprites.draw(listed, draw, style, records)
+        assert self._gpu is not None
+        self._gpu.tiles.draw(listed, draw, style, target, self.sprites.ortho_near)
+        self.sprites.passes.append("blend_tiles" + ("+ao" if draw.shaded else ""))
 
     def _halo(self, focus, context, style: Style, records: Records, target: CompositeTarget) -> None:
         """Halos around the focus objects where context lies behind them: the farthest

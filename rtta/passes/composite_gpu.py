@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import moderngl
 
+from .blend_tiles import TileBlend
 from .oit import resolved_order
 from .order_gpu import FOCUS_COMMANDS, GpuOrder
 from .sprites import Listed, upload
@@ -41,6 +42,7 @@ class GpuDraws:
     def __init__(self, ctx: moderngl.Context) -> None:
         self.ctx = ctx
         self.order = GpuOrder(ctx)
+        self._tiles: TileBlend | None = None
         self.styles_key: tuple | None = None  # what the style buffer holds (None: unknown)
 
     def styles(self, buf: moderngl.Buffer, style: Style, mode: Mode, n: int) -> None:
@@ -69,5 +71,14 @@ class GpuDraws:
         picks the variant (no region upsampled, or each sprite choosing) without a read."""
         return Listed(focus.ids, focus.count, self.order.command, firsts=FOCUS_COMMANDS)
 
+    @property
+    def tiles(self) -> TileBlend:
+        """The compute blend (blend_tiles.py), made on first use."""
+        if self._tiles is None:
+            self._tiles = TileBlend(self.ctx)
+        return self._tiles
+
     def release(self) -> None:
         self.order.release()
+        if self._tiles is not None:
+            self._tiles.release()

@@ -177,7 +177,7 @@ class SpritePass:
         self.passes: list[str] = []  # the draws of the last frame, for inspection
         self.hull_draws = 0  # draws of the last frame whose sprites covered projected outlines
         self._projection = self._lens = self._inv_view_proj = self._hull = None
-        self._ortho_near: float | None = None
+        self.ortho_near: float | None = None
 
     def frame(
         self, *, projection=None, lens=None, inv_view_proj: bytes | None = None, hull=None, ortho_near=None
@@ -186,7 +186,7 @@ class SpritePass:
         Lens, origin) with `inv_view_proj` ((P V)^-1 bytes) to rebuild world positions; `hull`
         (P V bytes, eye): sprites over the projected outlines of B_world, else B_viewport."""
         self._projection, self._lens, self._inv_view_proj, self._hull = projection, lens, inv_view_proj, hull
-        self._ortho_near = ortho_near  # an orthographic view: near / (far - near); None: perspective
+        self.ortho_near = ortho_near  # an orthographic view: near / (far - near); None: perspective
         self.passes = []
         self.hull_draws = 0
 
@@ -319,7 +319,7 @@ class SpritePass:
             ("u_outline_width", style.outline_width),
             ("u_halo_width", int(style.halo)),
             ("u_halo_color", tuple(style.halo_color)),
-            ("u_ortho_depth", (0.0, 0.0) if self._ortho_near is None else (1.0, self._ortho_near)),
+            ("u_ortho_depth", (0.0, 0.0) if self.ortho_near is None else (1.0, self.ortho_near)),
         ):
             if name in prog:  # the compiler drops what a variant does not use
                 glsl.set_uniform(prog, name, value)

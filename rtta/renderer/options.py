@@ -19,7 +19,7 @@ from ..scene.camera import Camera, Projection
 from ..scene.framing import StandardView, scene_orbit
 from ..scene.model import Scene
 from .renderer import Settings
-from .settings import PARAMETERIZE_ON, ParameterizeName, ParameterizeOn
+from .settings import BLEND_ON, PARAMETERIZE_ON, BlendName, ParameterizeName, ParameterizeOn
 from .snapshot import resolve_names
 
 CORE_STYLE = (
@@ -44,6 +44,7 @@ def make_settings(
     bounds: BoundsName | Bounds = "aabb",
     context_scale: float | None = None,
     parameterize: ParameterizeName | ParameterizeOn = "auto",
+    blend: BlendName = "auto",
 ) -> Settings:
     """Checked Settings (the messages name the CLI flags, as `rtta snapshot` says them)."""
     if border < 0 or border > 64:
@@ -59,6 +60,7 @@ def make_settings(
     check_choice("--capture-path", capture_path, CAPTURE_PATHS)
     check_choice("--bounds", bounds, BOUNDS)
     check_choice("--parameterize", parameterize, PARAMETERIZE_ON)
+    check_choice("--blend", blend, BLEND_ON)
     return Settings(
         border=border,
         atlas_max=atlas_max,
@@ -68,6 +70,7 @@ def make_settings(
         bounds=bounds,
         context_scale=context_scale,
         parameterize=parameterize,
+        blend=blend,
     )
 
 

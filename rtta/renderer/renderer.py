@@ -1,5 +1,4 @@
-"""One frame of RTTA for a scene: parameterize (CPU), capture (GPU), plus the baselines.
-
+"""One frame of RTTA for a scene: parameterize (GPU or CPU), capture, composite, plus the baselines.
 The renderer owns the GPU resources of a scene and reuses them across frames; `release()`
 frees them. It never creates a context: it takes a moderngl.Context.
 """
@@ -31,7 +30,7 @@ from ..passes.style import Mode, ModeName
 from ..scene.camera import Camera, ortho_near, outline_eye
 from ..scene.model import Scene
 from .placing import Staging
-from .settings import Settings
+from .settings import Settings, blend_on
 
 
 class Renderer:
@@ -246,6 +245,7 @@ class Renderer:
         records, view, proj = self.last
         if self._composite is None:
             self._composite = CompositePass(self.ctx)
+        self._composite.blend = blend_on(self.settings.blend, self.ctx.info["GL_RENDERER"])
         post = self.post_process(style) if mode == Mode.GHOSTED_AO else None
         origin = self.scene.origin
         projection = self._projection()

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from enum import StrEnum
 from typing import Literal
@@ -20,6 +21,11 @@ class ParameterizeOn(StrEnum):
 
 ParameterizeName = Literal["auto", "cpu", "gpu"]
 PARAMETERIZE_ON: tuple[str, ...] = tuple(p.value for p in ParameterizeOn)
+BlendName = Literal["auto", "raster", "compute"]
+BLEND_ON: tuple[str, ...] = ("auto", "raster", "compute")
+# GPUs with little raster hardware for their compute (NVIDIA's data-centre parts: the H100 has 8
+# ROPs), where blending sprites through the raster pipeline is the frame's bottleneck
+FEW_ROPS = ("A100", "A800", "H100", "H200", "H800", "H20", "GH200", "B100", "B200", "GB200")
 
 
 @dataclass
@@ -54,6 +60,11 @@ class Settings:
         number of parts), numpy ("cpu": the reference) or "auto" (the GPU where its shaders
         build). The GPU's shelf packing differs from the CPU's; a frame that thins objects for
         fast navigation runs on the CPU.
+    blend : {"auto", "raster", "compute"}, default "auto"
+        How a GPU-driven frame blends in object order (the ghosted context, `transparent` in
+        object order): as sprites through the raster pipeline, or in a compute pass
+        (`rtta.passes.blend_tiles`; the same pixels within 3/255). "auto": compute on GPUs with
+        little raster hardware (NVIDIA's data-centre parts, `FEW_ROPS`), else raster.
 
     Examples
     --------
@@ -70,3 +81,11 @@ class Settings:
     bounds: BoundsName | Bounds = "aabb"
     cull_closed: bool = True
     parameterize: ParameterizeName | ParameterizeOn = "auto"
+    blend: BlendName = "auto"
+
+
+def blend_on(blend: BlendName, renderer: str) -> Literal["raster", "compute"]:
+    """`Settings.blend` resolved for the GL_RENDERER string `renderer`."""
+    if blend == "auto":
+        return "compute" if re.search(rf"\b({'|'.join(FEW_ROPS)})\b", renderer) else "raster"
+    return blend

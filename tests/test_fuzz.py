@@ -6,6 +6,7 @@ the fuzzing found is below, each as a regression test (docs/reliability.md)."""
 
 from __future__ import annotations
 
+import json
 import time
 import tracemalloc
 
@@ -156,6 +157,30 @@ def test_view_and_cameras_files_of_deep_json_or_huge_integers(tmp_path, text):
     for read in (read_view, parse_cameras):
         with pytest.raises(RttaError, match="view.json: "):
             read(path)
+
+
+@pytest.mark.parametrize(
+    "style, says",
+    [
+        ({"ao_radius": "context"}, "style.ao_radius must be a number"),
+        ({"edge_width": None}, "style.edge_width must be an integer"),
+        ({"halo": 2.5}, "style.halo must be an integer"),
+        ({"order": 3}, "style.order must be a name or null"),
+        ({"context_opacity": "x"}, "style.context_opacity must be a number or null"),
+    ],
+)
+def test_view_file_style_values_of_the_wrong_kind(tmp_path, style, says):
+    """Found by the views target: a name where a number belongs (ao_radius "context") reached
+    make_style's comparisons and left as a TypeError."""
+    from rtta.errors import RttaError
+    from rtta.renderer.view_file import read_view
+
+    path = tmp_path / "view.json"
+    path.write_text(json.dumps({"rtta_view": 1, "style": style}))
+    with pytest.raises(RttaError, match=f"view.json: {says}"):
+        read_view(path)
+    path.write_text(json.dumps({"rtta_view": 1, "style": {"ao_radius": 3, "order": None, "halo": 2}}))
+    assert read_view(path).style["halo"] == 2
 
 
 def test_a_name_pattern_of_thousands_of_brackets_is_refused_quickly():

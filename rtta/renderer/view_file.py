@@ -132,8 +132,7 @@ def parse_view(doc: Any) -> SavedView:
     for key, value in style.items():
         if key not in CORE_STYLE:
             raise ValueError(f"unknown style key {key!r} (style has {', '.join(CORE_STYLE)})")
-        if value is not None and not isinstance(value, str) and not _number(value):
-            raise ValueError(f"style.{key} must be a number, a name or null, got {value!r}")
+        _style_value(key, value)
     view.style = dict(style)
     view.sections = _slot(doc.get("sections"), "sections", {"planes": list, "caps": str, "scope": str})
     view.explode = _slot(doc.get("explode"), "explode", {"factor": (int, float), "scope": str})
@@ -207,6 +206,32 @@ def _choice(value: Any, choices, what: str) -> str:
     if value not in choices:
         raise ValueError(f"{what} must be one of {', '.join(choices)}, got {value!r}")
     return value
+
+
+STYLE_KINDS = {  # what each style key holds (options.make_style's keyword arguments)
+    "context_opacity": "a number or null",
+    "edge_width": "an integer",
+    "ao_radius": "a number",
+    "ao_strength": "a number",
+    "ao_objects": "a name or null",
+    "edge_objects": "a name or null",
+    "order": "a name or null",
+    "halo": "an integer",
+}
+
+
+def _style_value(key: str, value: Any) -> None:
+    """ValueError unless `value` is what style key `key` holds (found by the views target:
+    a name where a number belongs reached make_style's comparisons as a TypeError)."""
+    kind = STYLE_KINDS[key]
+    if value is None:
+        ok = kind.endswith("or null")
+    elif kind.startswith("a name"):
+        ok = isinstance(value, str)
+    else:
+        ok = _number(value) and (kind != "an integer" or isinstance(value, int))
+    if not ok:
+        raise ValueError(f"style.{key} must be {kind}, got {json.dumps(value)[:40]}")
 
 
 def _number(v: Any) -> bool:

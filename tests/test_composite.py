@@ -318,3 +318,21 @@ def test_back_to_front_is_farthest_first_ties_by_id():
     area = (r[:, 2] - r[:, 0]) * (r[:, 3] - r[:, 1])
     for ids in (np.arange(10), np.arange(n), rng.permutation(n)[:4000]):  # rows gathered; areas of all
         assert worth_outlines(records, ids) == (area[ids].mean() >= HULL_MIN_AREA)
+
+
+def test_per_pixel_lists_are_released_when_unused(make_renderer, demo_scene):
+    """The per-pixel lists of `transparent` (tens of MB at 1280x720) are not held for a mode
+    no longer shown: released after SHRINK_AFTER_FRAMES renders without them, made again
+    when needed, with the same picture."""
+    from rtta.gl.targets import SHRINK_AFTER_FRAMES
+
+    r = make_renderer(demo_scene)
+    r.capture(Camera.orbit(demo_scene.center, demo_scene.radius, *DEFAULT_ORBIT), VP)
+    first = r.composite("transparent", Style()).read()[0].copy()
+    assert r._composite._pixel_order is not None
+    for _ in range(SHRINK_AFTER_FRAMES):
+        r.composite("ghosted", Style(focus={1}))
+    assert r._composite._pixel_order is not None  # a mode switched back and forth keeps them
+    r.composite("ghosted", Style(focus={1}))
+    assert r._composite._pixel_order is None
+    assert np.array_equal(r.composite("transparent", Style()).read()[0], first)

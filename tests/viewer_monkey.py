@@ -201,8 +201,9 @@ class Monkey(Actions):
             self.app.state.choose_mode(mode)
             self.app.state.toggle(self.rng.randrange(self.app.renderer.scene.count))
             self.frames(2)
-        c = self.app.state.cutaway  # every kind of cap and scope of a section, and an explode, once
-        for caps, scope in itertools.product(CAPS, SECTION_SCOPES):
+        c = self.app.state.cutaway  # every mode under every kind of cap and scope of a section and an explode
+        for mode, caps, scope in itertools.product(VIEW_MODES, CAPS, SECTION_SCOPES):
+            self.app.state.choose_mode(mode)
             c.axis, c.caps, c.scope, c.explode = "y", caps, scope, 0.5
             self.frames(2)
         cutaway.reset(self.app)

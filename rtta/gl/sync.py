@@ -15,13 +15,18 @@ from __future__ import annotations
 import moderngl
 
 
-def synchronous(ctx: moderngl.Context) -> bool:
-    """Whether the driver finishes a dispatch within the call (llvmpipe); asked once per context."""
-    known = getattr(ctx, "_rtta_synchronous", None)
+def renderer(ctx: moderngl.Context) -> str:
+    """GL_RENDERER, asked once per context (moderngl's `ctx.info` makes every glGet each time)."""
+    known = getattr(ctx, "_rtta_renderer", None)
     if known is None:
-        known = "llvmpipe" in str(ctx.info["GL_RENDERER"])
-        ctx._rtta_synchronous = known  # type: ignore[attr-defined]
+        known = str(ctx.info["GL_RENDERER"])
+        ctx._rtta_renderer = known  # type: ignore[attr-defined]
     return known
+
+
+def synchronous(ctx: moderngl.Context) -> bool:
+    """Whether the driver finishes a dispatch within the call (llvmpipe)."""
+    return "llvmpipe" in renderer(ctx)
 
 
 def barrier(ctx: moderngl.Context, bits: int) -> None:

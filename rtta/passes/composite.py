@@ -27,7 +27,7 @@ from ..gl import glraw
 from ..gl.bindings import Storage, Texture
 from ..gl.glsl import mat_bytes
 from ..gl.gpu import GpuScene
-from ..gl.targets import CompositeTarget, LayeredTarget, release_framebuffer
+from ..gl.targets import SHRINK_AFTER_FRAMES, CompositeTarget, LayeredTarget, release_framebuffer
 from .blend_tiles import BlendOn
 from .composite_gpu import GpuDraws, gpu_driven
 from .oit import PixelOrderPass, Refusal, blended_in_place, resolved_order
@@ -61,7 +61,8 @@ class CompositePass:
         self.ctx = ctx
         self.sprites = SpritePass(ctx)
         self.styles = ctx.buffer(reserve=16)
-        self._pixel_order = None  # PixelOrderPass, made on first use
+        self._pixel_order = None  # PixelOrderPass, made on first use, released after SHRINK_AFTER_FRAMES unused
+        self._pixel_order_idle = 0  # renders since the per-pixel lists were last used
         self._context_depth: moderngl.Texture | None = None  # front-most context depth, for halos
         self._context_fbo: moderngl.Framebuffer | None = None
         self.fallbacks = 0  # frames that asked for pixel order and got object order
@@ -133,6 +134,10 @@ class CompositePass:
             hull=None if eye is None or view_proj is None else (mat_bytes(view_proj), tuple(float(v) for v in eye)),
             ortho_near=ortho_near,
         )
+        self._pixel_order_idle += 1
+        if self._pixel_order is not None and self._pixel_order_idle > SHRINK_AFTER_FRAMES:
+            self._pixel_order.release()  # its lists and nodes: tens of MB held for a mode no longer shown
+            self._pixel_order = None
         self.gpu_driven = gpu_driven(records, mode, style, view, projection, lens)
         if self.gpu_driven:
             return self._render_gpu(atlas, records, gpu, style, mode, view, target, post)
@@ -302,6 +307,7 @@ class CompositePass:
         if resolved_order(style.order, mode) is Order.PIXEL and len(ids):
             if self._pixel_order is None:
                 self._pixel_order = PixelOrderPass(self.ctx)
+            self._pixel_order_idle = 0
             ids = np.asarray(ids, np.int64)
             ids = ids[records.visible[ids]]
             if self._pixel_order.begin(records.viewport, ids, records):

@@ -15,7 +15,7 @@ import numpy as np
 from ..atlas import scratch
 from ..atlas.parameterize import Records, Thinning, default_atlas_max, parameterize
 from ..atlas.records import GpuRecords
-from ..gl import glraw
+from ..gl import glraw, sync
 from ..gl.context import Capabilities, CapturePath, CapturePathName
 from ..gl.gpu import GpuScene
 from ..gl.targets import LayeredTarget
@@ -245,7 +245,7 @@ class Renderer:
         records, view, proj = self.last
         if self._composite is None:
             self._composite = CompositePass(self.ctx)
-        self._composite.blend = blend_on(self.settings.blend, self.ctx.info["GL_RENDERER"])
+        self._composite.blend = blend_on(self.settings.blend, sync.renderer(self.ctx))
         post = self.post_process(style) if mode == Mode.GHOSTED_AO else None
         origin = self.scene.origin
         projection = self._projection()

@@ -162,7 +162,7 @@ def calls_per_frame(make_renderer, scene, mode: str) -> tuple[int, int, int]:
     return *min(counts), peak
 
 
-@pytest.mark.parametrize("mode", ["ghosted", "sprites"])
+@pytest.mark.parametrize("mode", ["ghosted", "sprites", "ghosted-ao"])
 def test_a_frame_costs_the_cpu_as_many_calls_at_any_size(make_renderer, tmp_path, mode):
     """The GPU-driven frame: as many Python and C calls at 10,000 parts as at 2,000 (nothing
     loops over objects on the CPU), no array that grows with them (a numpy pass over n

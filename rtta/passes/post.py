@@ -13,6 +13,8 @@ from derivatives too."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import moderngl
 import numpy as np
 
@@ -21,7 +23,9 @@ from ..gl import glraw, glsl
 from ..gl.bindings import Storage, Texture
 from ..gl.gpu import GpuScene
 from ..gl.targets import LayeredTarget, release_framebuffer
+from .style import Role, Style, choice
 
+EVERY = "every"  # a list of every object (post.geom skips those with no region)
 STAGES = {"vertex_shader": "post.vert", "geometry_shader": "post.geom", "fragment_shader": "post.frag"}
 
 
@@ -73,8 +77,13 @@ class AtlasPostPass:
         self._variants: dict[tuple[str, ...], tuple] = {}  # defines -> (program, vao)
         self._out = _LayerTarget(ctx, 4, "f1")  # (ao, edge)
         self._list = ctx.buffer(reserve=16)  # the ids to shade
+        self._every = ctx.buffer(reserve=4)  # ids 0..n-1 (EVERY)
+        self._every_n = -1
         self._shaded_for: tuple | None = None  # (capture, AO and edge parameters) of `_done`
-        self._done = np.zeros(0, np.int8)  # per object: 0 nothing, 1 edges, 2 AO + edges
+        self._roles_done: tuple | None = None  # (focus, AO role, edge role) shaded for this capture
+        self._style_done: Style | None = None  # the Style they came from
+        self._n = -1  # objects of the capture shaded
+        self._done: np.ndarray | None = None  # per object: 0 nothing, 1 edges, 2 AO + edges (made on a focus change)
 
     @property
     def texture(self):
@@ -94,30 +103,45 @@ class AtlasPostPass:
     def shade(self, *, atlas: LayeredTarget, records, gpu: GpuScene, proj: np.ndarray, style, capture: int) -> bool:
         """AO and edges cached per object: they depend on the capture (`capture` counts them)
         and the AO/edge parameters, not on focus or opacity, so a focus change shades only the
-        objects whose role now asks for more (--ao-objects focus). Whether it rendered."""
+        objects whose role now asks for more (--ao-objects focus). A new capture is shaded from
+        the roles alone (every object through a list kept on the GPU, or the focus), with no
+        work over the objects on the CPU and no read of R. Whether it rendered."""
         key = (capture, style.ao_radius, style.ao_strength, style.edge_width)
         n = gpu.scene.count
-        if key != self._shaded_for or len(self._done) != n:
-            self._done = np.zeros(n, np.int8)
-            self._shaded_for = key
-        ao, edges = style.shaded(n)
-        need = np.where(ao, 2, np.where(edges, 1, 0)).astype(np.int8)
+        roles = (tuple(sorted(style.focus)), str(style.ao_objects), str(style.edge_objects))
+        kw = {"atlas": atlas, "records": records, "gpu": gpu, "proj": proj, "style": style}
+        if key != self._shaded_for or self._n != n:  # a new capture
+            self._shaded_for, self._n, self._done, self._roles_done = key, n, None, roles
+            self._style_done = dataclasses.replace(style, focus=frozenset(style.focus))
+            self.render(**kw, **_first_lists(style, n))
+            return True
+        if roles == self._roles_done and self.texture is not None:
+            return False
+        if self._done is None and self._style_done is not None:  # what the capture's first shading did
+            self._done = _need(self._style_done, n)
+        assert self._done is not None
+        need = _need(style, n)
         full = np.flatnonzero((need == 2) & (self._done < 2))
         edge_only = np.flatnonzero((need == 1) & (self._done < 1))
+        self._roles_done = roles
+        self._style_done = dataclasses.replace(style, focus=frozenset(style.focus))
         if not (len(full) or len(edge_only) or self.texture is None):
             return False
-        self.render(atlas=atlas, records=records, gpu=gpu, proj=proj, style=style, full=full, edges=edge_only)
+        self.render(**kw, full=full, edges=edge_only)
         self._done = np.maximum(self._done, need)
         return True
 
     def render(
         self, *, atlas: LayeredTarget, records: Records, gpu: GpuScene, proj: np.ndarray, style, full=None, edges=()
     ) -> None:
+        """Shade `full` (AO and edges; None: every object) and `edges` (edges only), each an
+        array of ids or EVERY. Edges are drawn first, so EVERY's edges and the focus's AO make
+        the focus shaded in full."""
         w, h = atlas.size
         self._out.ensure((w, h, atlas.layers), atlas)
         tw, th, td = records.atlas_size
-        n = len(records.visible)
-        full = np.arange(n) if full is None else np.asarray(full, np.int64)
+        n = gpu.scene.count
+        full = EVERY if full is None else full
         if td == 0 or n == 0:
             return
         gpu.bind_storage()
@@ -126,18 +150,35 @@ class AtlasPostPass:
             raise ValueError("AO and edges read the atlas normals: an atlas made with normals=False has none")
         atlas.normal.use(Texture.ATLAS_NORMAL)
         quad = ("EDGE_QUAD",) if int(style.edge_width) == 1 else ()
-        for ids, defines in ((full, quad), (np.asarray(edges, np.int64), (*quad, "EDGES_ONLY"))):
-            ids = ids[records.visible[ids]] if len(ids) else ids
+        # post.geom skips the objects with no region: R left on the GPU is not read to list them
+        listed = not getattr(records, "on_gpu", False) or getattr(records, "is_read", True)
+        for ids, defines in ((edges, (*quad, "EDGES_ONLY")), (full, quad)):
+            if isinstance(ids, str):
+                self._draw(self._every_list(n), n, defines, records, proj, style)
+                continue
+            ids = np.asarray(ids, np.int64)
+            ids = ids[records.visible[ids]] if len(ids) and listed else ids
             if len(ids):
-                self._draw(ids, defines, records, proj, style)
+                self._draw(self._upload(ids), len(ids), defines, records, proj, style)
 
-    def _draw(self, ids: np.ndarray, defines: tuple, records: Records, proj: np.ndarray, style) -> None:
-        tw, th, _ = records.atlas_size
+    def _every_list(self, n: int) -> moderngl.Buffer:
+        """Ids 0..n-1 on the GPU, written once per n."""
+        if self._every_n != n:
+            self._every.orphan(4 * max(n, 1))
+            self._every.write(np.arange(n, dtype=np.int32).tobytes())
+            self._every_n = n
+        return self._every
+
+    def _upload(self, ids: np.ndarray) -> moderngl.Buffer:
         data = ids.astype(np.int32).tobytes()
         if self._list.size < len(data):
             self._list.orphan(max(len(data), 2 * self._list.size))
         self._list.write(data)
-        self._list.bind_to_storage_buffer(Storage.DRAW_LIST)
+        return self._list
+
+    def _draw(self, ids: moderngl.Buffer, count: int, defines: tuple, records: Records, proj, style) -> None:
+        tw, th, _ = records.atlas_size
+        ids.bind_to_storage_buffer(Storage.DRAW_LIST)
         prog, vao = self._variant(*defines)
         uniforms = {
             "u_proj": (float(proj[0, 0]), float(proj[1, 1]), float(proj[2, 2]), float(proj[2, 3])),
@@ -160,14 +201,30 @@ class AtlasPostPass:
         fbo.depth_mask = False
         fbo.viewport = (0, 0, tw, th)
         fbo.use()
-        vao.render(moderngl.POINTS, vertices=len(ids))
+        vao.render(moderngl.POINTS, vertices=count)
         self.ctx.depth_func = "<"
         self.ctx.enable_only(moderngl.NOTHING)
 
     def release(self) -> None:
         self._out.release()
         self._list.release()
+        self._every.release()
         for prog, vao in self._variants.values():
             vao.release()
             prog.release()
         self._variants.clear()
+
+
+def _need(style: Style, n: int) -> np.ndarray:
+    """Per object what `style` asks of the post-process: 0 nothing, 1 edges, 2 AO and edges."""
+    ao, edges = style.shaded(n)
+    return np.where(ao, 2, np.where(edges, 1, 0)).astype(np.int8)
+
+
+def _first_lists(style: Style, n: int) -> dict:
+    """`render`'s lists for a capture shaded for the first time: EVERY or the focus ids."""
+    ao, edges = (choice(Role, getattr(style, name), name) for name in ("ao_objects", "edge_objects"))
+    if ao is Role.ALL:
+        return {"full": EVERY, "edges": ()}
+    focus = np.array(sorted(o for o in style.focus if 0 <= o < n), np.int64)
+    return {"full": focus, "edges": EVERY if edges is Role.ALL else ()}

@@ -55,6 +55,13 @@ def main() -> int:
     return _run(args.target, args.seconds, args.work or Path("/tmp/rtta-fuzz") / args.target)
 
 
+# Targets whose worker is restarted from the corpus every so many executions: ifcopenshell
+# keeps about 5 KB of every file and entity made (a loop of 20,000 files and removed entities
+# alone grew 93 MB), which over a million executions reached -rss_limit_mb with no input at
+# fault (the "oom" of 2026-11-27, 18 bytes that take 78 MB alone).
+RESTART_EVERY = {"ifc": 150_000}
+
+
 def _run(target: str, seconds: int, work: Path) -> int:
     """Fuzz until `seconds` have passed. libFuzzer stops at its first finding: a timeout that
     does not come back when its input is run again alone (a loaded machine, a first import)
@@ -68,17 +75,18 @@ def _run(target: str, seconds: int, work: Path) -> int:
     start, runs, cov, findings, logs = time.monotonic(), 0, ("?", "?"), [], []
     while not findings and (left := int(seconds - (time.monotonic() - start))) >= 5:
         before = {p.name for p in work.iterdir()}
-        log = _libfuzzer(target, found, work, left)
+        log = _libfuzzer(target, found, work, left, RESTART_EVERY.get(target))
         logs.append(log)
         runs += sum(int(n) for n in re.findall(r"stat::number_of_executed_units:\s*(\d+)", log)[-1:])
         cov = (re.findall(r"cov: (\d+) ft: (\d+)", log) or [cov])[-1]
         for name in sorted(p.name for p in work.iterdir() if p.name not in before):
             if not re.match(r"(crash|timeout|oom|slow)", name):
                 continue
-            took = _replay(target, work / name) if name.startswith(("timeout", "slow")) else None
-            if took is not None and took < fuzz_targets.LIMIT_S:
+            took = _replay(target, work / name) if name.startswith(("timeout", "slow", "oom")) else None
+            if took is not None and took[0] < fuzz_targets.LIMIT_S and took[1] < fuzz_targets.MEMORY_MB:
                 (work / name).rename(unconfirmed / name)
-                print(f"{target}: {name} not reproduced ({took:.2f} s alone): set aside, fuzzing on", flush=True)
+                alone = f"{took[0]:.2f} s, {took[1]:.0f} MB alone"
+                print(f"{target}: {name} not reproduced ({alone}): set aside, fuzzing on", flush=True)
             else:
                 findings.append(name)
     (work / "last.log").write_text("\n".join(logs))
@@ -95,11 +103,12 @@ def _run(target: str, seconds: int, work: Path) -> int:
     return 1 if findings else 0
 
 
-def _libfuzzer(target: str, found: Path, work: Path, seconds: int) -> str:
-    """One atheris run in a subprocess; its output."""
+def _libfuzzer(target: str, found: Path, work: Path, seconds: int, runs: int | None = None) -> str:
+    """One atheris run in a subprocess (of at most `runs` executions); its output."""
     import fuzz_targets
 
     command = [
+        sys.executable,
         sys.executable,
         __file__,
         "--worker",
@@ -112,26 +121,29 @@ def _libfuzzer(target: str, found: Path, work: Path, seconds: int) -> str:
         f"-max_len={fuzz_targets.MAX_LEN}",
         f"-artifact_prefix={work}/",
         "-print_final_stats=1",
+        *([f"-runs={runs}"] if runs else []),
     ]
     proc = subprocess.run(command, capture_output=True, text=True, errors="replace", check=False)
     return proc.stdout + proc.stderr
 
 
-def _replay(target: str, path: Path) -> float:
-    """Seconds the input takes alone, in a fresh process, once the target is warm (the best of 3)."""
+def _replay(target: str, path: Path) -> tuple[float, float]:
+    """(seconds, peak resident MB) of the input alone, in a fresh process, once the target is
+    warm (the best of 3 times)."""
     code = (
-        "import sys, time; sys.path.insert(0, sys.argv[1]); import fuzz_targets as f; f.warm(sys.argv[2]); "
+        "import resource, sys, time; sys.path.insert(0, sys.argv[1]); import fuzz_targets as f; f.warm(sys.argv[2]); "
         "d = open(sys.argv[3], 'rb').read(); t = []\n"
         "for _ in range(3):\n s = time.perf_counter(); f.run_one(sys.argv[2], d); t.append(time.perf_counter() - s)\n"
-        "print(min(t))"
+        "print(min(t), resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)"
     )
     try:
         proc = subprocess.run(
             [sys.executable, "-c", code, str(TESTS), target, str(path)], capture_output=True, text=True, timeout=120
         )
-        return float(proc.stdout.strip().splitlines()[-1])
+        took, mb = proc.stdout.strip().splitlines()[-1].split()
+        return float(took), float(mb)
     except (ValueError, IndexError, subprocess.TimeoutExpired):
-        return float("inf")  # it failed or hung alone: a finding
+        return float("inf"), float("inf")  # it failed or hung alone: a finding
 
 
 def _worker(target: str, libfuzzer_args: list[str]) -> int:

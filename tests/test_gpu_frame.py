@@ -199,3 +199,23 @@ def test_records_held_across_frames_stay_their_frames(make_renderer, demo_scene)
     last = r.capture(cams[1], (200, 150))
     r.release()
     assert last.is_read and np.array_equal(last.viewport_rect, second.viewport_rect)
+
+
+def test_the_viewer_reads_r_only_at_rest(make_renderer, demo_scene):
+    """The viewer's atlas view and panel (viewer.commands.records_to_read): R left on the GPU
+    is not read back while the camera moves, read once it rests, and free once read."""
+    import types
+
+    from viewer.commands import records_to_read
+
+    r = make_renderer(demo_scene, Settings(parameterize="gpu"))
+    r.atlas_sizing = "ahead"
+    rec = r.capture(Camera.orbit(demo_scene.center, demo_scene.radius, 30, 20, 2.2), (320, 240))
+    host = types.SimpleNamespace(records=rec, camera_still=False)
+    assert records_to_read(host) is None and not rec.is_read
+    host.camera_still = True
+    assert records_to_read(host) is rec and rec.visible.any() and rec.is_read
+    host.camera_still = False
+    assert records_to_read(host) is rec  # read already: nothing more to wait for
+    host.records = None
+    assert records_to_read(host) is None

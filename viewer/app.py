@@ -75,6 +75,7 @@ class Viewer(Pictures, Loading, Painting):
         self.renderer: Renderer  # set_scene makes it (and the state), and makes it again per scene
         self.layout = Layout.of(wnd.buffer_size, True)
         self._camera_key: tuple | None = None  # the last frame's camera: did the view move
+        self.camera_still = False  # it did not, in the last frame
         self.set_scene(scene, mode=mode)
         notes = [*self.renderer.caps.notes, *scene.warnings]
         if notes:
@@ -179,6 +180,7 @@ class Viewer(Pictures, Loading, Painting):
         cam = self.orbit.camera()
         key = (tuple(cam.eye), tuple(cam.target), cam.kind, size)
         moving, self._camera_key = key != self._camera_key, key
+        self.camera_still = not moving
         frame_ms = (time.perf_counter() - t_frame) * 1e3
         self.stats.done(moving, frame_ms, dict(self.stats.stage_ms) if self._rendered else None)
 

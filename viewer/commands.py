@@ -36,6 +36,7 @@ class Host(Protocol):
     records: Records | None
     orbit: Orbit
     ruler: Ruler  # the measure tool's points and measurements
+    camera_still: bool  # the camera did not move in the last frame (R on the GPU may be read)
 
     def turn_to(self, az: float, el: float) -> None: ...
 
@@ -101,3 +102,14 @@ class PanelsHost(Host, Protocol):
     def frame_objects(self, ids=None) -> None: ...
 
     def screenshot(self) -> list[Path]: ...
+
+
+def records_to_read(host: Host) -> Records | None:
+    """The last capture's records where reading them costs no frame: on the CPU already, or
+    the camera at rest. While it moves, R stays on the GPU (a GpuRecords read back would make
+    every frame wait for the GPU and copy R: 8 MB at 100,000 parts), so the atlas view's
+    region outlines, its tooltip and the panel's counts wait for the view to rest."""
+    rec = host.records
+    if rec is None or (getattr(rec, "on_gpu", False) and not getattr(rec, "is_read", True) and not host.camera_still):
+        return None
+    return rec

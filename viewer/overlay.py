@@ -10,6 +10,7 @@ import numpy as np
 from imgui_bundle import imgui
 
 from . import cutaway, gizmo, ruler
+from .commands import records_to_read
 from .views import atlas_rects_on_screen, contains
 
 if TYPE_CHECKING:
@@ -31,7 +32,7 @@ def _col(rgba) -> int:
 
 def regions(app: OverlayHost):
     """(object ids, screen boxes x0, y0, x1, y1) of every atlas region shown, per tile."""
-    rec = app.records
+    rec = records_to_read(app)
     if rec is None:
         return
     for layer, rect in app.atlas_tiles():
@@ -52,7 +53,7 @@ def region_under(app: OverlayHost, x: float, y: float) -> int | None:
 
 def hovered(app: OverlayHost) -> np.ndarray:
     """Object ids of the tree row under the mouse that have a region now (at most HOVER_MAX)."""
-    s, rec = app.state, app.records
+    s, rec = app.state, records_to_read(app)
     if s.hover is None or rec is None:
         return np.zeros(0, np.int64)
     ids = s.tree.members(s.hover)
@@ -61,7 +62,7 @@ def hovered(app: OverlayHost) -> np.ndarray:
 
 def _hover(app: OverlayHost, dl) -> None:
     """Outline the hovered row's objects: their projected bounds in the composite."""
-    ids, rec = hovered(app), app.records
+    ids, rec = hovered(app), records_to_read(app)
     if not ids.size or rec is None:
         return
     cx, cy, _, ch = app.layout.composite
@@ -124,11 +125,14 @@ def draw(app: OverlayHost) -> None:
         dl.add_rect(imgui.ImVec2(x0, y0), imgui.ImVec2(x1, y1), col, 0.0, 0, 2.0 if lit or col == HOVER else 1.0)
     tw, th, td = rec.atlas_size
     shown = "all layers" if app.state.atlas_layer < 0 else f"layer {app.state.atlas_layer}"
-    label = f"atlas {tw}x{th}, {td} layers ({shown})  utilization {100 * rec.utilization:.0f}%"
+    read = records_to_read(app)  # while the camera moves: no outlines, no utilization (R stays on the GPU)
+    used = f"  utilization {100 * read.utilization:.0f}%" if read is not None else ""
+    label = f"atlas {tw}x{th}, {td} layers ({shown}){used}"
     ax, ay, _, _ = app.layout.atlas
     dl.add_text(imgui.ImVec2(ax + 6, ay + 4), TEXT, label)
     oid = region_under(app, *app.mouse)
-    if oid is not None and not imgui.get_io().want_capture_mouse:
+    if oid is not None and read is not None and not imgui.get_io().want_capture_mouse:
+        rec = read
         x, y, w, h = rec.atlas_rect[oid]
         imgui.set_tooltip(
             f"{app.renderer.scene.names[oid]}\nregion {w}x{h} at ({x}, {y}), layer "

@@ -24,6 +24,7 @@ from rtta.scene.bounds import Bounds
 from rtta.scene.model import BOUNDS
 
 from . import cutaway, panel_view, tree
+from .commands import records_to_read
 from .state import ATLAS_MAX_CHOICES, GHOSTED, NAVIGATION_FPS, VIEW_MODES
 
 if TYPE_CHECKING:
@@ -236,13 +237,17 @@ def _stats(app: PanelsHost) -> None:
             if k in stages:
                 imgui.text(f"  {k:<13}{stages[k]:7.1f} ms")
         imgui.text_disabled(f"  {'other':<13}{max(0.0, total - sum(stages.values())):7.1f} ms")
-    r = app.records
+    r = records_to_read(app)
     if r is not None:
         n, vis = len(r.visible), int(r.visible.sum())
         left = app.left_out
         imgui.text(f"visible {vis}  culled {n - vis - left}" + (f"  left out {left}" if left else ""))
         imgui.text(f"atlas {r.atlas_size[0]}x{r.atlas_size[1]} x {r.atlas_size[2]} layers")
         imgui.text(f"utilization {100 * r.utilization:.0f}%")
+    elif app.records is not None:  # moving: R stays on the GPU (commands.records_to_read)
+        size = app.records.atlas_size
+        imgui.text(f"atlas {size[0]}x{size[1]} x {size[2]} layers")
+        imgui.text_disabled("parts and utilization counted when the view rests")
     history = np.asarray(st.history, np.float32)
     if len(history) and implot.begin_plot("##frametime", imgui.ImVec2(-1, 110), implot.Flags_.no_legend.value):
         implot.setup_axes("frame", "ms")

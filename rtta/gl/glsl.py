@@ -136,6 +136,19 @@ def set_uniform(prog: moderngl.Program | moderngl.ComputeShader, name: str, valu
         prog[name].value = value  # type: ignore[union-attr]
 
 
+def has(prog: moderngl.Program | moderngl.ComputeShader, name: str) -> bool:
+    """Whether `prog` holds a member `name` (the compiler drops what a variant does not use).
+    `name in prog` walks every member; the names are kept in `prog.extra` (as set_uniform's
+    values are: "__members__" is no GLSL name) after the first question."""
+    held = prog.extra
+    if held is None:
+        held = prog.extra = {}
+    names = held.get("__members__")
+    if names is None:
+        names = held["__members__"] = frozenset(prog)
+    return name in names
+
+
 F32_MAX = float(np.finfo(np.float32).max)
 
 

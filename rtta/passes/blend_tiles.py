@@ -66,7 +66,7 @@ class TileBlend:
             ("u_upsample_below", UPSAMPLE_BELOW),
             ("u_ortho_depth", (0.0, 0.0) if ortho_near is None else (1.0, ortho_near)),
         ):
-            if name in prog:
+            if glsl.has(prog, name):
                 glsl.set_uniform(prog, name, value)
         listed.ids.bind_to_storage_buffer(Storage.DRAW_LIST)
         listed.command.bind_to_storage_buffer(Storage.COMPOSITE_COMMAND)

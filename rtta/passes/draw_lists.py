@@ -120,8 +120,8 @@ class CaptureLists:
             "u_clip_all": bool(clip_all),
         }
         for name, value in values.items():
-            if name in self.program:
-                glsl.uniform(self.program, name).value = value
+            if glsl.has(self.program, name):
+                glsl.set_uniform(self.program, name, value)
         sync.barrier(self.ctx, GL_SHADER_STORAGE_BARRIER_BIT)  # R written by Algorithm 1's shaders
         blocks = -(-n // LOCAL_SIZE)
         wide = min(blocks, MAX_GROUPS)

@@ -172,9 +172,9 @@ class GpuOrder:
             ids_out.bind_to_storage_buffer(Storage.SORT_IDS_OUT)
             for stage, groups in ((COUNT, tiles), (SCAN, 1), (SCATTER, tiles)):
                 prog = self._program(stage)
-                glsl.uniform(prog, "u_tiles").value = tiles
+                glsl.set_uniform(prog, "u_tiles", tiles)
                 if stage != SCAN:
-                    glsl.uniform(prog, "u_shift").value = shift
+                    glsl.set_uniform(prog, "u_shift", shift)
                 self._run(prog, groups)
         self.keys.bind_to_storage_buffer(Storage.SORT_KEYS)
         self.ids.bind_to_storage_buffer(Storage.DRAW_LIST)
@@ -187,13 +187,13 @@ class GpuOrder:
             j = k // 2
             while j >= BLOCK:
                 step = self._program(STEP)
-                glsl.uniform(step, "u_k").value = k
-                glsl.uniform(step, "u_j").value = j
-                glsl.uniform(step, "u_length").value = length
+                glsl.set_uniform(step, "u_k", k)
+                glsl.set_uniform(step, "u_j", j)
+                glsl.set_uniform(step, "u_length", length)
                 self._run(step, length // 2 // STEP_GROUP)
                 j //= 2
             merge = self._program(BLOCK_MERGE)
-            glsl.uniform(merge, "u_k").value = k
+            glsl.set_uniform(merge, "u_k", k)
             self._run(merge, length // BLOCK)
             k *= 2
 
@@ -206,8 +206,8 @@ class GpuOrder:
 
     def _commands(self, total: int, focus: int = 0) -> None:
         prog = self._program(COMMANDS)
-        glsl.uniform(prog, "u_total").value = total
-        glsl.uniform(prog, "u_focus").value = focus
+        glsl.set_uniform(prog, "u_total", total)
+        glsl.set_uniform(prog, "u_focus", focus)
         self._run(prog, 1)
         sync.barrier(self.ctx, moderngl.COMMAND_BARRIER_BIT | moderngl.SHADER_STORAGE_BARRIER_BIT)
 
@@ -226,11 +226,11 @@ class GpuOrder:
             styles.bind_to_storage_buffer(Storage.STYLES)
         moved = self._upload_offsets(offsets)
         prog = self._program(KEYS, moved)
-        glsl.uniform(prog, "u_count").value = count
-        glsl.uniform(prog, "u_length").value = length
-        glsl.uniform(prog, "u_depth_row").value = tuple(float(v) for v in np.asarray(view, np.float64)[2])
-        glsl.uniform(prog, "u_exclude_focus").value = styles is not None
-        glsl.uniform(prog, "u_upsample_below").value = UPSAMPLE_BELOW
+        glsl.set_uniform(prog, "u_count", count)
+        glsl.set_uniform(prog, "u_length", length)
+        glsl.set_uniform(prog, "u_depth_row", tuple(float(v) for v in np.asarray(view, np.float64)[2]))
+        glsl.set_uniform(prog, "u_exclude_focus", styles is not None)
+        glsl.set_uniform(prog, "u_upsample_below", UPSAMPLE_BELOW)
         self._run(prog, length // STEP_GROUP)
         return length
 

@@ -190,7 +190,7 @@ class AtlasPostPass:
             "u_edge_width": int(style.edge_width),
         }
         for name, value in uniforms.items():
-            if name in prog:  # the compiler drops what a variant does not use
+            if glsl.has(prog, name):  # the compiler drops what a variant does not use
                 prog[name].value = value
         # quads at depth 1 pass only where the capture wrote the object (depth < 1):
         # empty texels of the rectangles are never shaded nor written

@@ -246,7 +246,7 @@ class SpritePass:
             defines = {**self._defines(None, draw, style, records), "HULL_PER_SPRITE": True, **variant}
             prog, vao = self._setup(defines, draw, style, records, hull)
             for name, value in (("u_upsample_below", UPSAMPLE_BELOW), ("u_hull_min_area", float(HULL_MIN_AREA))):
-                if name in prog:
+                if glsl.has(prog, name):
                     glsl.set_uniform(prog, name, value)
             self._render(vao, listed if first is None else (listed.command, first), draw)
         self.hull_draws = hull_draws
@@ -304,7 +304,7 @@ class SpritePass:
             view_proj, eye = hull
             glsl.set_uniform(prog, "u_view_proj", view_proj)
             glsl.set_uniform(prog, "u_eye", eye)
-            if "u_hull_margin" in prog:  # UPSAMPLE_DYNAMIC: each sprite's own
+            if glsl.has(prog, "u_hull_margin"):  # UPSAMPLE_DYNAMIC: each sprite's own
                 glsl.set_uniform(prog, "u_hull_margin", margin)
         if projection is not None:
             pass_, projector, origin = projection
@@ -321,7 +321,7 @@ class SpritePass:
             ("u_halo_color", tuple(style.halo_color)),
             ("u_ortho_depth", (0.0, 0.0) if self.ortho_near is None else (1.0, self.ortho_near)),
         ):
-            if name in prog:  # the compiler drops what a variant does not use
+            if glsl.has(prog, name):  # the compiler drops what a variant does not use
                 glsl.set_uniform(prog, name, value)
         return prog, vao
 

@@ -25,8 +25,11 @@ def renderer(ctx: moderngl.Context) -> str:
 
 
 def synchronous(ctx: moderngl.Context) -> bool:
-    """Whether the driver finishes a dispatch within the call (llvmpipe)."""
-    return "llvmpipe" in renderer(ctx)
+    """Whether the driver finishes a dispatch within the call (llvmpipe); asked once per context."""
+    known = getattr(ctx, "_rtta_synchronous", None)
+    if known is None:
+        known = ctx._rtta_synchronous = "llvmpipe" in renderer(ctx)  # type: ignore[attr-defined]
+    return known
 
 
 def barrier(ctx: moderngl.Context, bits: int) -> None:

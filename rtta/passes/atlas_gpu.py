@@ -283,7 +283,7 @@ class GpuParameterize:
                 continue
             self._uniforms[name] = value
             for prog in self.programs.values():
-                if name in prog:
+                if glsl.has(prog, name):
                     if isinstance(value, bytes):
                         glsl.uniform(prog, name).write(value)
                     else:

@@ -15,6 +15,7 @@
 //            scale for the next round
 //   STAGE 5 (per object): the second strip's and the wide regions placed; the used width
 //   STAGE 6 (per object): T and the record (records.glsl), written where capture reads it
+//   STAGES 7, 8 (before the rounds, fast navigation only): the smallest objects left out
 // This is next-fit decreasing height (the CPU path's packing) with the strips' order in a
 // class given by atomics and the regions that cross a shelf's end moved to the second strip.
 // Narrow: w <= max_w / 2; a wide region gets a shelf of its own. Height classes: exact below
@@ -78,6 +79,22 @@ layout(std430, binding = BINDING_PARAM_STATE) coherent buffer State {
 // 0 groups once the regions fit, so the rounds dispatched ahead cost nothing
 layout(std430, binding = BINDING_PARAM_DISPATCH) buffer Dispatch { uint next_round[8]; };
 
+// fast navigation's thinning (rtta.passes.thin_gpu): per object its area class, the classes'
+// triangles and objects, the class below which objects are left out, and how many are
+#define THIN_BINS 128
+#define NOT_RANKED 0xFFFFFFFFu
+#define PROTECT 0x80000000u
+layout(std430, binding = BINDING_PARAM_THIN) coherent buffer Thin {
+    uint thin_hist[2 * THIN_BINS];  // triangles per class, then objects per class
+    uint thin_cut;
+    uint thin_left;
+    uint thin_pad[2];
+    uint thin_bin[];  // per object: floor(4 log2(area)) of B_viewport, THIN_BINS - 1 protected
+};
+layout(std430, binding = BINDING_PARAM_WEIGHTS) readonly buffer Weights { uint weight[]; };  // triangles | PROTECT
+uniform bool u_thin;          // thin_cut leaves objects out (stages 7 and 8 ran)
+uniform float u_keep;         // the share of the visible triangles kept
+
 uniform dmat4 u_vpm;          // world to clip
 uniform int u_count;
 uniform int u_boxes;          // enclosing boxes per object (1: AABB, 2: with the OBB)
@@ -88,72 +105,15 @@ uniform ivec2 u_atlas_max;
 uniform int u_max_layers;
 uniform ivec2 u_extent;       // the atlas extent T maps to; (0, 0): the extent used
 
-const ivec2 EDGES[12] = ivec2[12](ivec2(0, 1), ivec2(2, 3), ivec2(4, 5), ivec2(6, 7), ivec2(0, 2), ivec2(1, 3),
-                                  ivec2(4, 6), ivec2(5, 7), ivec2(0, 4), ivec2(1, 5), ivec2(2, 6), ivec2(3, 7));
-
-// NDC bounds of box `b` of object i: (lo.xyz, hi.xyz) and whether it is in the frustum
-bool project_box(int b, int i, out dvec3 lo, out dvec3 hi) {
-    dvec4 c[8];
-    bool all_front = true, some_front = false;
-    int base = (b * u_count + i) * 24;
-    dvec3 moved = u_offsets ? dvec3(offsets[3 * i], offsets[3 * i + 1], offsets[3 * i + 2]) : dvec3(0.0);
-    for (int k = 0; k < 8; k++) {
-        dvec3 p = dvec3(corners[base + 3 * k], corners[base + 3 * k + 1], corners[base + 3 * k + 2]) + moved;
-        c[k] = u_vpm * dvec4(p, 1.0);
-        bool front = c[k].z + c[k].w >= 0.0;
-        all_front = all_front && front;
-        some_front = some_front || front;
-    }
-    lo = dvec3(1.0e300LF);
-    hi = dvec3(-1.0e300LF);
-    if (!some_front) {
-        lo = hi = dvec3(0.0);
-        return false;
-    }
-    for (int k = 0; k < 8; k++) {
-        if (all_front || c[k].z + c[k].w >= 0.0) {
-            dvec3 q = c[k].xyz / (all_front ? c[k].w : max(c[k].w, TINY));
-            lo = min(lo, q);
-            hi = max(hi, q);
-        }
-    }
-    if (!all_front) {  // crossing the near plane: the edges' intersections with it
-        for (int e = 0; e < 12; e++) {
-            dvec4 a = c[EDGES[e].x], d = c[EDGES[e].y];
-            double da = a.z + a.w, db = d.z + d.w;
-            if (da * db < 0.0) {
-                dvec4 h = a + (da / (da - db)) * (d - a);
-                dvec3 q = h.xyz / max(h.w, TINY);
-                lo = min(lo, q);
-                hi = max(hi, q);
-            }
-        }
-    }
-    return lo.x <= 1.0 && hi.x >= -1.0 && lo.y <= 1.0 && hi.y >= -1.0 && lo.z <= 1.0;
-}
+#include "project_box.glsl"
 
 int height_class(int h) {
     return h <= 16 ? h : min(CLASSES - 1, 16 + int(floor(8.0 * log2(float(h) / 16.0))));
 }
 
 void project(int i) {
-    bool vis = wanted[i] > 0.0;
-    dvec2 lo = dvec2(-1.0e300LF), hi = dvec2(1.0e300LF);
-    for (int b = 0; b < u_boxes && vis; b++) {
-        dvec3 l, h;
-        vis = project_box(b, i, l, h);
-        lo = max(lo, l.xy);
-        hi = min(hi, h.xy);
-    }
-    vis = vis && all(lessThanEqual(lo, hi));
-    dvec2 wh = dvec2(u_viewport);
-    dvec2 p0 = (clamp(lo, -1.0, 1.0) + 1.0) * (0.5 * wh), p1 = (clamp(hi, -1.0, 1.0) + 1.0) * (0.5 * wh);
-    p0 = clamp(floor(p0 - EPS_PX), dvec2(0.0), wh);
-    p1 = clamp(ceil(p1 + EPS_PX), dvec2(0.0), wh);
-    p1 = max(p1, min(p0 + 1.0, wh));
-    p0 = min(p0, p1 - 1.0);
-    ivec4 rect = ivec4(p0, p1);
-    vis = vis && rect.z > rect.x && rect.w > rect.y;
+    ivec4 rect;
+    bool vis = wanted[i] > 0.0 && !(u_thin && thin_bin[i] < thin_cut) && viewport_rect(i, rect);
     Item it;
     it.rect = vis ? rect : ivec4(0);
     it.size = ivec4(0);
@@ -334,9 +294,44 @@ void write_record(int i) {
     records[i] = r;
 }
 
+// STAGE 7 (per object): its area class, counted; rtta.atlas.thinning.left_out ranks by area too
+void thin_rank(int i) {
+    ivec4 rect;
+    uint bin = NOT_RANKED;  // culled or hidden: never left out (they cost nothing)
+    if (wanted[i] > 0.0 && viewport_rect(i, rect)) {
+        uint w = weight[i];
+        float area = float(rect.z - rect.x) * float(rect.w - rect.y);
+        bin = (w & PROTECT) != 0u ? uint(THIN_BINS - 1) : uint(clamp(int(floor(4.0 * log2(area))), 0, THIN_BINS - 2));
+        atomicAdd(thin_hist[bin], w & ~PROTECT);
+        atomicAdd(thin_hist[THIN_BINS + int(bin)], 1u);
+    }
+    thin_bin[i] = bin;
+}
+
+// STAGE 8 (one invocation): from the largest class down, every class that starts within the
+// budget is kept (left_out's rule, a class at a time); the classes below are left out
+void thin_cut_classes() {
+    double total = 0.0, before = 0.0;
+    for (int b = 0; b < THIN_BINS; b++) total += double(thin_hist[b]);
+    double budget = double(u_keep) * total;
+    uint cut = 0u, left = 0u;
+    for (int b = THIN_BINS - 1; b >= 0; b--) {
+        if (before > budget) {
+            cut = uint(b + 1);
+            break;
+        }
+        before += double(thin_hist[b]);
+    }
+    for (uint b = 0u; b < cut; b++) left += thin_hist[THIN_BINS + int(b)];
+    thin_cut = cut;
+    thin_left = left;
+}
+
 void main() {
     int i = int(gl_GlobalInvocationID.x);
-#if STAGE == 2 || STAGE == 4
+#if STAGE == 8
+    if (i == 0) thin_cut_classes();
+#elif STAGE == 2 || STAGE == 4
     if (i != 0 || done != 0u) return;
 #if STAGE == 2
     layout_first();
@@ -351,6 +346,8 @@ void main() {
     if (done == 0u) place_first(i);
 #elif STAGE == 5
     if (done == 1u) place_second(i);
+#elif STAGE == 7
+    thin_rank(i);
 #else
     write_record(i);  // no region while the regions do not fit yet (more rounds follow)
 #endif

@@ -122,6 +122,7 @@ def calls_per_frame(make_renderer, scene, mode: str) -> tuple[int, int, int]:
     """(Python calls, C calls) of one steady `mode` frame (capture + composite), counted with
     sys.setprofile after three frames have warmed the renderer up, and the peak of the next
     frame's allocations (tracemalloc: numpy's arrays included)."""
+    import gc
     import sys
     import tracemalloc
 
@@ -144,6 +145,7 @@ def calls_per_frame(make_renderer, scene, mode: str) -> tuple[int, int, int]:
             seen["c"] += 1
 
     counts = []
+    gc.disable()  # a collection's callbacks (other libraries') are calls too
     for az in (33, 34, 35):  # the least of three: a frame that grows a buffer or the atlas once calls more
         seen["py"] = seen["c"] = 0
         sys.setprofile(count)
@@ -152,6 +154,7 @@ def calls_per_frame(make_renderer, scene, mode: str) -> tuple[int, int, int]:
         finally:
             sys.setprofile(None)
         counts.append((seen["py"], seen["c"]))
+    gc.enable()
     tracemalloc.start()
     try:
         frame(36)
@@ -175,7 +178,9 @@ def test_a_frame_costs_the_cpu_as_many_calls_at_any_size(make_renderer, tmp_path
     small, large = (load_scene(write_assembly(tmp_path / f"a{n}.glb", n), cache=False) for n in (2000, 10_000))
     *calls_small, peak_small = calls_per_frame(make_renderer, small, mode)
     *calls_large, peak_large = calls_per_frame(make_renderer, large, mode)
-    assert calls_small == calls_large
+    # as many calls, but for a uniform or two set only when its value changes with the view
+    # (the near plane moves with the orbit in one scene and not in the other): 3 calls each
+    assert all(abs(a - b) <= 6 for a, b in zip(calls_small, calls_large, strict=True)), (calls_small, calls_large)
     assert peak_large < 8192 + peak_small, (peak_small, peak_large)
 
 

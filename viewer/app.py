@@ -16,7 +16,7 @@ from imgui_bundle import imgui, implot
 
 from rtta.errors import RttaError, printable
 from rtta.passes.style import Mode
-from rtta.renderer.navigation import FULL, MIN_OBJECTS, FrameBudget, left_out
+from rtta.renderer.navigation import FULL, MIN_OBJECTS, FrameBudget, KeepShare
 from rtta.renderer.placing import restage
 from rtta.renderer.renderer import Renderer
 from rtta.scene.model import Scene
@@ -107,7 +107,9 @@ class Viewer(Pictures, Loading, Painting):
         self._capture_key = self._composite_key = self._std_key = None
         self.budget = FrameBudget()  # its target follows state.navigation_fps when used
         self._triangles = scene.index_ranges[:, 1] // 3  # per object
-        self.left_out = 0  # parts left out of the last capture (fast navigation)
+        self._thinning: KeepShare | None = None  # fast navigation's, kept while the focus is
+        self.left_out = 0  # parts left out of the last capture (fast navigation; a frame late on the GPU)
+        self._thinned = False  # the last capture was asked to leave parts out
         self._moved = False  # the last frame captured while the camera moved
         self.frame_objects()
 
@@ -222,20 +224,14 @@ class Viewer(Pictures, Loading, Painting):
         focus = self.renderer.scaled_for(self.state.style.focus)  # empty unless a context scale
         normals = self.renderer.needs_normals(self.state.shown_mode())  # ghosted-ao, the projector
         key = (tuple(camera.eye), tuple(camera.target), vp, camera.kind, self.state.capture_key(), focus, normals)
-        if key != self._capture_key or self.left_out:  # a view at rest is captured whole
+        if key != self._capture_key or self._thinned:  # a view at rest is captured whole
             moving = self._capture_key is not None and key[:2] != self._capture_key[:2]
             self.renderer.hidden = self.state.hidden
-            self.left_out = 0
+            thin = self._navigation_thinning() if moving else None
             # no id image: compositing never reads it, picking reads depths (rtta.passes.picking)
             self.records = None  # else R of the last frame, still held, is read back first (GpuScene.keep_held)
-            self.records = self.renderer.capture(
-                camera,
-                vp,
-                focus=focus,
-                normals=normals,
-                ids=False,
-                thin=self._navigation_thinning() if moving else None,
-            )
+            self.records = self.renderer.capture(camera, vp, focus=focus, normals=normals, ids=False, thin=thin)
+            self._thinned, self.left_out = thin is not None, 0 if thin is None else thin.left
             self._capture_key, self._composite_key = key, None
             self._moved = moving
             self._rendered = True
@@ -248,16 +244,14 @@ class Viewer(Pictures, Loading, Painting):
         if fps <= 0:
             return None
         self.budget.target_ms = 1e3 / fps
-        keep, focus = self.budget.keep, self.state.focus_mask()
-        if keep >= FULL or self.renderer.scene.count < MIN_OBJECTS:  # none left out: the GPU-driven frame
+        keep = self.budget.keep
+        if keep >= FULL or self.renderer.scene.count < MIN_OBJECTS:  # none left out
             return None
-
-        def thin(visible, viewport_rect):
-            out = left_out(visible, viewport_rect, self._triangles, keep, focus)
-            self.left_out = 0 if out is None else int(out.sum())
-            return out
-
-        return thin
+        focus = self.state.focus_mask()  # the same array until the focus changes
+        if self._thinning is None or self._thinning.protect is not focus:  # weights uploaded once per focus
+            self._thinning = KeepShare(keep, self._triangles, focus, key=object())
+        self._thinning.keep = keep  # on the GPU where Algorithm 1 is (rtta.passes.thin_gpu)
+        return self._thinning
 
     def _draw_composite(self) -> None:
         vp, s, r = self.viewport, self.state, self.renderer

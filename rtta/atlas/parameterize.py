@@ -17,6 +17,7 @@ from .corners import CornerClip, axis_aligned, clipped_bounds, points_clip
 from .packing import Packing, pack_shelves
 from .records import Records
 from .scratch import result_block, scratch
+from .thinning import KeepShare as KeepShare  # fast navigation's Thinning, which the GPU path reads too
 
 # (visible [n] bool, inner B_viewport [n, 4]) -> bool [n] of the objects to leave out, or None
 Thinning = Callable[[np.ndarray, np.ndarray], "np.ndarray | None"]

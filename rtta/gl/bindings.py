@@ -67,6 +67,8 @@ class Storage:
     PARAM_SHELVES: Final = 14  # parameterize.comp: per shelf, its layer and height
     PARAM_OFFSETS: Final = 15  # parameterize.comp: per object, its explode offset (doubles)
     PARAM_DISPATCH: Final = 22  # parameterize.comp: the next round's indirect dispatch sizes (0 once done)
+    PARAM_THIN: Final = 23  # parameterize.comp: fast navigation's area classes, their counts and the cut
+    PARAM_WEIGHTS: Final = 24  # parameterize.comp: per object, its triangles and whether it is protected
     SORT_KEYS: Final = 16  # depth_order.comp: the sort's keys (ids sorted with them in DRAW_LIST)
     COMPOSITE_COMMAND: Final = 17  # depth_order.comp: compositing's indirect DrawArrays command (the count drawn)
     SORT_OFFSETS: Final = 18  # depth_order.comp: per object, an offset of its bounds centre (floats)

@@ -8,24 +8,13 @@ issues a constant number of calls, the last ones writing T and the records strai
 record buffer (shaders/records.glsl). It returns a `GpuRecords`: nothing of R is read back
 unless a caller asks for its arrays (picking, the export, the dataset).
 
-Sizing the atlas, two policies (`GpuParameterize.sizing`):
+Sizing the atlas: "exact" (the default; one-shot renders) reads the 64-byte state after the
+rounds and sizes the atlas to the extent used, as the CPU path does; "ahead" (the viewer, the
+benchmarks) reads nothing that waits: the layers are chosen from the state of the frame before,
+read a frame late (docs/performance/frame.md, "Reading back").
 
-- "exact" (the default; one-shot renders, the library): the 64-byte state is read after the
-  rounds (the GPU finishes the frame's packing first); more rounds run while the regions do not
-  fit, and the atlas is sized to the extent used, as on the CPU path.
-- "ahead" (the viewer, the benchmarks): no read waits for the GPU. The atlas is allocated at
-  the largest layer size with a layer count chosen ahead, and T maps into that allocation;
-  the GPU packs into it with a fixed number of rounds. The state is copied aside each frame
-  and read at the next one, when the throttle (glraw.Throttle) has already waited for it: the
-  layers the frame wanted before any scale-down. When they exceed the allocation, the next
-  frame allocates them plus an eighth (so one frame of a sudden jump in demand is scaled down,
-  never dropped); a frame that did not fit in the fixed rounds makes the next frame exact. The
-  first frame, and a frame after the viewport or the largest layer changed, are exact.
-
-Scale-down policy: when the regions need more layers than allowed, the layout stage itself
-lowers every region's scale by min(0.9, 0.95 sqrt(capacity / area)), the CPU loop's rule
-(the area counts each region as tall as its height class), and the next round packs
-again; no visible object is dropped.
+Scale-down: when the regions need more layers than allowed, the layout stage lowers every
+region's scale by the CPU loop's rule and the next round packs again; none is dropped.
 """
 
 from __future__ import annotations
@@ -37,10 +26,12 @@ import moderngl
 import numpy as np
 
 from ..atlas.records import RECORD_DTYPE, GpuRecords, Records
+from ..atlas.thinning import KeepShare
 from ..errors import RttaError
 from ..gl import glsl, sync
 from ..gl.bindings import Storage
 from ..gl.gpu import GpuScene
+from .thin_gpu import CUT, RANK, GpuThinning
 
 LOCAL_SIZE = 64
 CLASSES = 128  # height classes (parameterize.comp)
@@ -103,6 +94,7 @@ class GpuParameterize:
         self._late_pending = False  # a state was copied aside and not read yet
         self.last_state = np.zeros(1, STATE_DTYPE)[0]  # the state read back last ("exact")
         self.reads = 0  # reads that waited for the GPU (the state, the records)
+        self._thinning: GpuThinning | None = None
         self.cpu_seconds = 0.0  # of the last run, in Python and numpy outside GL calls (rtta bench capture)
 
     def _upload(self, corners: np.ndarray, wanted: np.ndarray | None, boxes: int) -> None:
@@ -166,9 +158,9 @@ class GpuParameterize:
         hidden: np.ndarray | None = None,
         offsets: np.ndarray | None = None,
         key: object = None,
+        thin: KeepShare | None = None,
     ) -> GpuRecords:
-        """Algorithm 1 as `rtta.atlas.parameterize` (same arguments but `thin`), its records
-        written into `gpu.records`.
+        """Algorithm 1 as `rtta.atlas.parameterize`, its records written into `gpu.records`.
 
         Parameters
         ----------
@@ -196,6 +188,8 @@ class GpuParameterize:
         key : hashable, optional
             Equal keys promise equal `region_scale` and `hidden` (they are then neither
             checked nor uploaded again: a frame's cost does not grow with n).
+        thin : KeepShare, optional
+            Fast navigation: the smallest objects on screen left out too (thin_gpu.py).
 
         Returns
         -------
@@ -233,9 +227,14 @@ class GpuParameterize:
             "u_atlas_max": atlas_max,
             "u_max_layers": ahead or int(max_layers),
             "u_extent": atlas_max if self.sizing == "ahead" else (0, 0),  # the first frame's T as the next ones
+            "u_thin": thin is not None,
+            "u_keep": 1.0 if thin is None else float(thin.keep),
         }
+        thinning = None if thin is None else self.thinning()
         self._bind(gpu, uniforms)
         groups = max(1, -(-n // LOCAL_SIZE))
+        if thinning is not None and thin is not None:
+            thinning.run(self.programs, thin, n, groups)  # leaves the smallest out of the rounds
         if ahead:
             self._dispatch(groups, AHEAD_ROUNDS)
             self.ctx.copy_buffer(self.late, self.state)
@@ -257,6 +256,16 @@ class GpuParameterize:
         gpu.hand(records)
         self.cpu_seconds = outside + time.perf_counter() - t1
         return records
+
+    def thinning(self) -> GpuThinning:
+        """The thinning stages (thin_gpu.py), built on first use."""
+        if self._thinning is None:
+            for stage in (RANK, CUT):
+                self.programs[stage] = self.ctx.compute_shader(
+                    glsl.load("parameterize.comp", STAGE=stage, LOCAL_SIZE=LOCAL_SIZE)
+                )
+            self._thinning, self._uniforms = GpuThinning(self.ctx), {}  # the new programs' uniforms set
+        return self._thinning
 
     def _ahead_layers(self, viewport: tuple[int, int], atlas_max: tuple[int, int], max_layers: int) -> int:
         """The layers to pack into without reading ("ahead"), from the state of the frame
@@ -365,7 +374,9 @@ class GpuParameterize:
         for buf in (*buffers, self.shelves, self.offsets):
             if buf is not None:
                 buf.release()
-        self.corners = self.scales = self.items = self.shelves = None
+        if self._thinning is not None:
+            self._thinning.release()
+        self.corners = self.scales = self.items = self.shelves = self._thinning = None
         self._corners_of = self._offsets_of = None
 
 

@@ -13,7 +13,7 @@ import moderngl
 import numpy as np
 
 from ..atlas import scratch
-from ..atlas.parameterize import Records, Thinning, default_atlas_max, parameterize
+from ..atlas.parameterize import KeepShare, Records, Thinning, default_atlas_max, parameterize
 from ..atlas.records import GpuRecords
 from ..gl import glraw, sync
 from ..gl.context import Capabilities, CapturePath, CapturePathName
@@ -128,8 +128,8 @@ class Renderer:
         atlas_max = (min(atlas_max[0], self.caps.max_texture), min(atlas_max[1], self.caps.max_texture))
         max_layers = min(s.max_layers or self.caps.max_layers, self.caps.max_layers)
         vpm = proj @ view
-        if thin is None and self.on_gpu:  # thinning stays on the CPU
-            return self._parameterize_gpu(vpm, viewport, atlas_max, max_layers, focus)
+        if (thin is None or isinstance(thin, KeepShare)) and self.on_gpu:  # a KeepShare thins on the GPU too
+            return self._parameterize_gpu(vpm, viewport, atlas_max, max_layers, focus, thin)
         hidden, corners = self.staging.staged(self.hidden_mask(), self.scene.box_corners(s.bounds))
         scales = self.region_scales(focus)
         return parameterize(
@@ -149,7 +149,7 @@ class Renderer:
             )
         return bool(self._gpu_atlas)
 
-    def _parameterize_gpu(self, vpm, viewport, atlas_max, max_layers, focus) -> GpuRecords:
+    def _parameterize_gpu(self, vpm, viewport, atlas_max, max_layers, focus, thin=None) -> GpuRecords:
         """Algorithm 1 on the GPU (rtta.passes.atlas_gpu); the objects not packed and the scales
         wanted are made (over n) only when what they depend on changed."""
         s = self.settings
@@ -161,7 +161,7 @@ class Renderer:
             hidden, scales = self.staging.not_packed(self.hidden_mask()), self.region_scales(focus)
         return self._gpu_atlas.run(
             self.gpu, self.scene.box_corners(s.bounds), vpm, viewport, border=s.border, atlas_max=atlas_max,
-            max_layers=max_layers, hidden=hidden, region_scale=scales, offsets=self.staging.offsets, key=key,
+            max_layers=max_layers, hidden=hidden, region_scale=scales, offsets=self.staging.offsets, key=key, thin=thin,
         )  # fmt: skip
 
     def hidden_mask(self) -> np.ndarray | None:

@@ -58,8 +58,8 @@ class Settings:
         Where Algorithm 1 runs: compute shaders ("gpu": the records, the capture's draw lists
         and compositing's order made on the GPU, so a frame's CPU cost does not grow with the
         number of parts), numpy ("cpu": the reference) or "auto" (the GPU where its shaders
-        build). The GPU's shelf packing differs from the CPU's; a frame that thins objects for
-        fast navigation runs on the CPU.
+        build). The GPU's shelf packing differs from the CPU's, and so does fast navigation's
+        thinning (by classes of area, `rtta.atlas.thinning.KeepShare`).
     blend : {"auto", "raster", "compute"}, default "auto"
         How a GPU-driven frame blends in object order (the ghosted context, `transparent` in
         object order): as sprites through the raster pipeline, or in a compute pass

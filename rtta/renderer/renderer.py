@@ -30,7 +30,7 @@ from ..passes.style import Mode, ModeName
 from ..scene.camera import Camera, ortho_near, outline_eye
 from ..scene.model import Scene
 from .placing import Staging
-from .settings import Settings, blend_on
+from .settings import Settings, blend_on, parameterize_on
 
 
 class Renderer:
@@ -141,7 +141,7 @@ class Renderer:
     def on_gpu(self) -> bool:
         """Whether Algorithm 1 runs on the GPU (Settings.parameterize; "auto" falls back to
         the CPU, saying so once, where the compute shaders do not build)."""
-        if self.settings.parameterize == "cpu" or self._gpu_atlas is False:
+        if parameterize_on(self.settings.parameterize) == "cpu" or self._gpu_atlas is False:
             return False
         if self._gpu_atlas is None:
             self._gpu_atlas = GpuParameterize.attempt(

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import re
 from dataclasses import dataclass
 from enum import StrEnum
@@ -58,8 +59,9 @@ class Settings:
         Where Algorithm 1 runs: compute shaders ("gpu": the records, the capture's draw lists
         and compositing's order made on the GPU, so a frame's CPU cost does not grow with the
         number of parts), numpy ("cpu": the reference) or "auto" (the GPU where its shaders
-        build). The GPU's shelf packing differs from the CPU's, and so does fast navigation's
-        thinning (by classes of area, `rtta.atlas.thinning.KeepShare`).
+        build; RTTA_PARAMETERIZE=cpu in the environment makes it the CPU). The GPU's shelf
+        packing differs from the CPU's, and so does fast navigation's thinning (by classes of
+        area, `rtta.atlas.thinning.KeepShare`).
     blend : {"auto", "raster", "compute"}, default "auto"
         How a GPU-driven frame blends in object order (the ghosted context, `transparent` in
         object order): as sprites through the raster pipeline, or in a compute pass
@@ -82,6 +84,15 @@ class Settings:
     cull_closed: bool = True
     parameterize: ParameterizeName | ParameterizeOn = "auto"
     blend: BlendName = "auto"
+
+
+def parameterize_on(parameterize: ParameterizeName | ParameterizeOn) -> str:
+    """`Settings.parameterize` as a renderer takes it: "auto" is "cpu" where the environment
+    says RTTA_PARAMETERIZE=cpu (a whole program on the reference path: a driver's bug worked
+    around, or the test suite run on both paths)."""
+    if parameterize == "auto" and os.environ.get("RTTA_PARAMETERIZE", "").strip().lower() == "cpu":
+        return "cpu"
+    return str(parameterize)
 
 
 def blend_on(blend: BlendName, renderer: str) -> Literal["raster", "compute"]:

@@ -22,7 +22,7 @@ SHARE_OVER_2 = 0.001  # of the pixels: differences of 3 where several layers rou
 
 def composites(make_renderer, scene, mode, style, viewport, camera=None):
     """(raster, compute) RGBA of one capture composited both ways, and the passes of each."""
-    r = make_renderer(scene, Settings(blend="raster"))
+    r = make_renderer(scene, Settings(blend="raster", parameterize="gpu"))  # the GPU-driven branch blends so
     cam = camera or Camera.orbit(scene.center, scene.radius, 35.0, 25.0, 2.2)
     r.capture(cam, viewport, normals=r.needs_normals(mode), ids=False)
     out, passes = [], []

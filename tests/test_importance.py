@@ -171,8 +171,8 @@ def test_focus_change_shades_only_what_changed(make_renderer, demo_scene):
     r.capture(cam, VP)
     calls = []
     post = r.post_process(Style(ao_objects="focus", focus={1}))
-    real = post._draw
-    post._draw = lambda ids, *a, **k: (calls.append(sorted(ids.tolist())), real(ids, *a, **k))
+    real = post._upload  # the ids of every draw but those of every object (a list kept on the GPU)
+    post._upload = lambda ids: (calls.append(sorted(ids.tolist())), real(ids))[1]
     for focus in ({1, 5}, {5}, {1, 5, 7}):
         style = Style(focus=focus, ao_objects="focus")
         got = r.composite("ghosted-ao", style).read()[0].copy()

@@ -55,7 +55,7 @@ class GpuThinning:
         programs[RANK].run(groups)
         sync.barrier(self.ctx, moderngl.SHADER_STORAGE_BARRIER_BIT)
         programs[CUT].run(1)
-        sync.barrier(self.ctx, moderngl.SHADER_STORAGE_BARRIER_BIT)
+        sync.barrier(self.ctx, moderngl.SHADER_STORAGE_BARRIER_BIT | moderngl.BUFFER_UPDATE_BARRIER_BIT)  # and the copy
         self.ctx.copy_buffer(self.late, self.thin, size=4, read_offset=4 * (2 * BINS + 1))
         self._pending = True
 

@@ -77,6 +77,9 @@ def _run(target: str, seconds: int, work: Path) -> int:
         before = {p.name for p in work.iterdir()}
         log = _libfuzzer(target, found, work, left, RESTART_EVERY.get(target))
         logs.append(log)
+        if "stat::number_of_executed_units" not in log:  # the worker never fuzzed: say why, stop
+            print(f"{target}: the fuzzing worker failed to start:\n{log[-3000:]}", flush=True)
+            return 2
         runs += sum(int(n) for n in re.findall(r"stat::number_of_executed_units:\s*(\d+)", log)[-1:])
         cov = (re.findall(r"cov: (\d+) ft: (\d+)", log) or [cov])[-1]
         for name in sorted(p.name for p in work.iterdir() if p.name not in before):
@@ -108,7 +111,6 @@ def _libfuzzer(target: str, found: Path, work: Path, seconds: int, runs: int | N
     import fuzz_targets
 
     command = [
-        sys.executable,
         sys.executable,
         __file__,
         "--worker",

@@ -37,9 +37,9 @@ class TileBlend:
         An OpenGL 4.3+ context (compute shaders, image load and store).
     """
 
-    def __init__(self, ctx: moderngl.Context, span: int | None = None) -> None:
+    def __init__(self, ctx: moderngl.Context) -> None:
         self.ctx = ctx
-        self.span = span or SPAN
+        self.span = SPAN  # as the module says when made (scripts/gpu_timers.py sets it to compare)
         self._programs: dict[tuple[bool, bool, int], moderngl.ComputeShader] = {}
 
     def _program(self, shaded: bool, tested: bool) -> moderngl.ComputeShader:

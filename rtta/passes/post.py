@@ -80,8 +80,7 @@ class AtlasPostPass:
         self._every = ctx.buffer(reserve=4)  # ids 0..n-1 (EVERY)
         self._every_n = -1
         self._shaded_for: tuple | None = None  # (capture, AO and edge parameters) of `_done`
-        self._roles_done: tuple | None = None  # (focus, AO role, edge role) shaded for this capture
-        self._style_done: Style | None = None  # the Style they came from
+        self._style_done: Style | None = None  # the roles (focus, AO, edges) shaded for this capture
         self._n = -1  # objects of the capture shaded
         self._done: np.ndarray | None = None  # per object: 0 nothing, 1 edges, 2 AO + edges (made on a focus change)
 
@@ -108,23 +107,21 @@ class AtlasPostPass:
         work over the objects on the CPU and no read of R. Whether it rendered."""
         key = (capture, style.ao_radius, style.ao_strength, style.edge_width)
         n = gpu.scene.count
-        roles = (tuple(sorted(style.focus)), str(style.ao_objects), str(style.edge_objects))
         kw = {"atlas": atlas, "records": records, "gpu": gpu, "proj": proj, "style": style}
-        if key != self._shaded_for or self._n != n:  # a new capture
-            self._shaded_for, self._n, self._done, self._roles_done = key, n, None, roles
+        done = self._style_done
+        if key != self._shaded_for or self._n != n or done is None:  # a new capture
+            self._shaded_for, self._n, self._done = key, n, None
             self._style_done = dataclasses.replace(style, focus=frozenset(style.focus))
             self.render(**kw, **_first_lists(style, n))
             return True
-        if roles == self._roles_done and self.texture is not None:
+        if _roles(style) == _roles(done) and self.texture is not None:
             return False
-        if self._done is None and self._style_done is not None:  # what the capture's first shading did
-            self._done = _need(self._style_done, n)
-        assert self._done is not None
+        if self._done is None:  # what the capture's first shading did
+            self._done = _need(done, n)
+        self._style_done = dataclasses.replace(style, focus=frozenset(style.focus))
         need = _need(style, n)
         full = np.flatnonzero((need == 2) & (self._done < 2))
         edge_only = np.flatnonzero((need == 1) & (self._done < 1))
-        self._roles_done = roles
-        self._style_done = dataclasses.replace(style, focus=frozenset(style.focus))
         if not (len(full) or len(edge_only) or self.texture is None):
             return False
         self.render(**kw, full=full, edges=edge_only)
@@ -213,6 +210,11 @@ class AtlasPostPass:
             vao.release()
             prog.release()
         self._variants.clear()
+
+
+def _roles(style: Style) -> tuple:
+    """What of `style` decides which objects get AO and edges."""
+    return frozenset(style.focus), str(style.ao_objects), str(style.edge_objects)
 
 
 def _need(style: Style, n: int) -> np.ndarray:

@@ -27,6 +27,7 @@ BLEND_ON: tuple[str, ...] = ("auto", "raster", "compute")
 # GPUs with little raster hardware for their compute (NVIDIA's data-centre parts: the H100 has 8
 # ROPs), where blending sprites through the raster pipeline is the frame's bottleneck
 FEW_ROPS = ("A100", "A800", "H100", "H200", "H800", "H20", "GH200", "B100", "B200", "GB200")
+_FEW_ROPS = re.compile(rf"\b({'|'.join(FEW_ROPS)})\b")  # asked every frame (Renderer.composite)
 
 
 @dataclass
@@ -98,5 +99,5 @@ def parameterize_on(parameterize: ParameterizeName | ParameterizeOn) -> str:
 def blend_on(blend: BlendName, renderer: str) -> Literal["raster", "compute"]:
     """`Settings.blend` resolved for the GL_RENDERER string `renderer`."""
     if blend == "auto":
-        return "compute" if re.search(rf"\b({'|'.join(FEW_ROPS)})\b", renderer) else "raster"
+        return "compute" if _FEW_ROPS.search(renderer) else "raster"
     return blend

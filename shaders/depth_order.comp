@@ -14,9 +14,10 @@
 //   STAGE 5 (one invocation): three indirect DrawArrays commands (count, 1, 0, 0), 5 uints
 //            apart (moderngl's stride), of which one draws and the others draw none: the
 //            list's count where no drawn region is upsampled, where all are, where some are
-//            (u_total: that count instead of the drawn one, for a list of every id); and two
-//            for a focus list of u_focus ids: its count where no visible focus region is
-//            upsampled, else in the second (each sprite choosing)
+//            (u_total: that count instead of the drawn one, for a list of every id); and three
+//            for a focus list of u_focus ids: its count where every visible focus region is at
+//            one texel per pixel (quad outlines), else where none is upsampled, else in the
+//            third (each sprite choosing)
 // Or a stable LSD radix sort of the keys (ids in ascending order to start: ties stay by id),
 // RADIX_BITS a pass, over tiles of TILE = 256 * PER elements (u_tiles of them):
 //   STAGE 6 (per tile): each digit's count in the tile, into counts[digit * u_tiles + tile]
@@ -52,12 +53,14 @@ uniform uint u_length;  // elements (>= u_count: a power of two, or a multiple o
 uniform uint u_shift;   // the radix pass's digit: bits u_shift .. u_shift + RADIX_BITS - 1
 uniform uint u_tiles;   // the radix passes' tiles
 
-// commands at 0, 5, 10; then the drawn objects' count, the upsampled ones' and the upsampled
-// focus objects'; then the focus list's commands at 20 (none upsampled) and 25 (some)
+// commands at 0, 5, 10; then the drawn objects' count, the upsampled ones', the upsampled
+// focus objects' and the focus objects' not at one texel per pixel; then the focus list's
+// commands at 20 (every one at one texel per pixel), 25 (none upsampled) and 30 (some)
 #define DRAWN 15
 #define UPSAMPLED 16
 #define FOCUS_UPSAMPLED 17
-layout(std430, binding = BINDING_COMPOSITE_COMMAND) buffer CommandBuffer { uint command[30]; };
+#define FOCUS_SCALED 18
+layout(std430, binding = BINDING_COMPOSITE_COMMAND) buffer CommandBuffer { uint command[35]; };
 
 bool after(uint ka, uint ia, uint kb, uint ib) { return ka > kb || (ka == kb && ia > ib); }
 
@@ -70,7 +73,8 @@ layout(std430, binding = BINDING_SORT_OFFSETS) readonly buffer OffsetBuffer { fl
 #endif
 uniform uint u_count;          // objects
 uniform vec4 u_depth_row;      // the view matrix's third row: view z = dot(row.xyz, p) + row.w
-uniform bool u_exclude_focus;  // objects with the style's focus flag are not drawn
+uniform bool u_focus_flags;    // the style buffer is bound: its focus flags name the focus (counted)
+uniform bool u_exclude_focus;  // with u_focus_flags: the focus objects are not drawn
 uniform float u_upsample_below;  // sprites.UPSAMPLE_BELOW
 
 // float -> uint with the same order (-0 as +0, so that they tie as numpy's keys do)
@@ -84,10 +88,14 @@ void main() {
     if (i >= u_length) return;
     uint key = 0xFFFFFFFFu;
     if (i < u_count) {
-        bool focus = u_exclude_focus && styles[i].params.y > 0.5;
-        bool upsampled = intBitsToFloat(records[i].info.w) < u_upsample_below;
-        if (focus && records[i].info.y != 0 && upsampled) atomicAdd(command[FOCUS_UPSAMPLED], 1u);
-        bool drawn = records[i].info.y != 0 && !focus;
+        bool focus = u_focus_flags && styles[i].params.y > 0.5;
+        float scale = intBitsToFloat(records[i].info.w);
+        bool upsampled = scale < u_upsample_below;
+        if (focus && records[i].info.y != 0) {
+            if (upsampled) atomicAdd(command[FOCUS_UPSAMPLED], 1u);
+            if (scale != 1.0) atomicAdd(command[FOCUS_SCALED], 1u);
+        }
+        bool drawn = records[i].info.y != 0 && !(focus && u_exclude_focus);
         if (drawn) {
             vec3 c = (bounds[2 * i].xyz + bounds[2 * i + 1].xyz) * 0.5;
 #ifdef OFFSETS
@@ -107,12 +115,14 @@ void main() {
 uniform uint u_total;   // 0: the drawn count
 uniform uint u_focus;   // the focus list's length (a list of the CPU's: composite's focus draw)
 void main() {
-    uint drawn = command[DRAWN], up = command[UPSAMPLED], focus_up = command[FOCUS_UPSAMPLED];
+    uint drawn = command[DRAWN], up = command[UPSAMPLED];
+    uint focus_up = command[FOCUS_UPSAMPLED], focus_scaled = command[FOCUS_SCALED];
     uint count = u_total > 0u ? u_total : drawn;
     bool classes[3] = bool[](drawn > 0u && up == 0u, drawn > 0u && up == drawn, up > 0u && up < drawn);
-    uint counts[5] = uint[](classes[0] ? count : 0u, classes[1] ? count : 0u, classes[2] ? count : 0u,
-                            focus_up == 0u ? u_focus : 0u, focus_up > 0u ? u_focus : 0u);
-    for (int c = 0; c < 5; ++c) {
+    uint counts[6] = uint[](classes[0] ? count : 0u, classes[1] ? count : 0u, classes[2] ? count : 0u,
+                            focus_scaled == 0u ? u_focus : 0u, focus_scaled > 0u && focus_up == 0u ? u_focus : 0u,
+                            focus_up > 0u ? u_focus : 0u);
+    for (int c = 0; c < 6; ++c) {
         uint at = c < 3 ? uint(5 * c) : uint(20 + 5 * (c - 3));
         command[at] = counts[c];
         command[at + 1u] = 1u;

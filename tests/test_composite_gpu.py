@@ -15,7 +15,7 @@ from rtta.passes import composite as composite_module
 from rtta.passes import composite_gpu
 from rtta.passes.composite import BACKGROUND, CompositePass, back_to_front
 from rtta.passes.composite_gpu import gpu_driven
-from rtta.passes.order_gpu import GpuOrder
+from rtta.passes.order_gpu import COMMAND_WORDS, FOCUS_COMMANDS, GpuOrder
 from rtta.passes.style import Mode, Style, style_params
 from rtta.renderer.placing import Staging, restage
 from rtta.renderer.settings import Settings
@@ -116,6 +116,46 @@ def test_gpu_order_gives_one_variant_the_list(gl, order, scales):
             ids = np.frombuffer(order.ids.read(4 * n), np.int32)
             np.testing.assert_array_equal(ids, np.arange(n))  # every key ties (one depth): id order
     finally:
+        for buf in made:
+            buf.release()
+
+
+@pytest.mark.parametrize("scales", ["one", "scaled", "upsampled", "hidden upsampled"])
+def test_gpu_order_gives_one_focus_variant_the_focus(gl, scales):
+    """Of the focus list's three commands, the one of its visible regions' class draws it:
+    every one at scale 1 (outlines by quads), none upsampled, some upsampled; a focus object
+    not visible does not count. The focus flags count whether or not the focus is drawn."""
+    n, focus = 300, np.array([3, 50, 299])
+    records = np.zeros(n, RECORD_DTYPE)
+    records["info"][:, 1] = 1
+    scale = np.ones(n, np.float32)
+    scale[focus[1]] = {"one": 1.0, "scaled": 0.9995, "upsampled": 0.5, "hidden upsampled": 0.5}[scales]
+    scale[7] = 0.5  # a context object upsampled: not the focus's business
+    if scales == "hidden upsampled":
+        records["info"][focus[1], 1] = 0
+    records["info"][:, 3] = scale.view(np.int32)
+    params = np.zeros((n, 4), np.float32)
+    params[focus, 1] = 1.0
+    bounds = np.zeros((n, 2, 4), np.float32)
+    made = [gl.buffer(records.tobytes()), gl.buffer(bounds.tobytes()), gl.buffer(params.tobytes())]
+    order = GpuOrder(gl)
+    want = np.zeros(3, np.uint32)
+    want[{"one": 0, "scaled": 1, "upsampled": 2, "hidden upsampled": 0}[scales]] = len(focus)
+    visible = records["info"][:, 1] != 0
+    try:
+        for how in ("context", "everyone", "every"):
+            kw = dict(count=n, records=made[0], bounds=made[1], styles=made[2], focus=len(focus))
+            if how == "every":
+                order.every(**kw)
+            else:
+                order.sort(**kw, view=np.eye(4), exclude_focus=how == "context")
+            words = np.frombuffer(order.command.read(4 * COMMAND_WORDS), np.uint32)
+            np.testing.assert_array_equal(words[[5 * k for k in FOCUS_COMMANDS]], want)
+            context = visible & (params[:, 1] == 0)
+            listed = n if how == "every" else int((context if how == "context" else visible).sum())
+            assert words[2 * 5] == listed  # the list itself: some regions upsampled
+    finally:
+        order.release()
         for buf in made:
             buf.release()
 

@@ -219,11 +219,11 @@ class CompositePass:
         draw = self.sprites.draw
         outlined = style.outline_width >= 1 and focused is not None
         if mode is Mode.SPRITES:
-            every = self._gpu.everyone(n=n, gpu=gpu)
+            every = self._gpu.everyone(n=n, gpu=gpu, styles=self.styles, focus=focused)
             self._bind(atlas, gpu, target, records)
             draw(every, SpriteDraw.opaque(), style, records)
         elif mode is Mode.TRANSPARENT:
-            ordered = self._gpu.sorted(n=n, gpu=gpu, view=view, styles=None)
+            ordered = self._gpu.sorted(n=n, gpu=gpu, view=view, styles=self.styles, focus=focused, context=False)
             self._bind(atlas, gpu, target, records)
             self._blend_listed(ordered, SpriteDraw.transparent(), style, records, target)
         else:
@@ -237,8 +237,8 @@ class CompositePass:
             self._blend_listed(context, faded, style, records, target)
             if style.halo > 0 and focused is not None:
                 self._halo(focused, context, style, records, target)
-        if outlined and mode in (Mode.SPRITES, Mode.TRANSPARENT):
-            draw(focused, SpriteDraw.outlines(), style, records)
+        if outlined and focused is not None and mode in (Mode.SPRITES, Mode.TRANSPARENT):
+            draw(self._gpu.focus_drawn(focused), SpriteDraw.outlines(), style, records)
 
     def _blend_listed(self, listed, draw: SpriteDraw, style: Style, records, target: CompositeTarget) -> None:
         """A GPU list blended in its order: as sprites, or in a compute pass (`blend`)."""

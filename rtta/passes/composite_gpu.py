@@ -54,22 +54,35 @@ class GpuDraws:
             upload(buf, style_params(style, mode, n, faded=ghosted))
             self.styles_key = key
 
-    def everyone(self, *, n: int, gpu) -> Listed:
-        """Every id in ascending order (`sprites`' draw order; the invisible ones draw nothing)."""
-        self.order.every(count=n, records=gpu.records, bounds=gpu.bounds)
+    def everyone(self, *, n: int, gpu, styles: moderngl.Buffer, focus: Listed | None = None) -> Listed:
+        """Every id in ascending order (`sprites`' draw order; the invisible ones draw nothing);
+        `focus` (a CPU list, flagged in `styles`): its commands are written too (`focus_drawn`)."""
+        listed = 0 if focus is None else focus.count
+        self.order.every(count=n, records=gpu.records, bounds=gpu.bounds, styles=styles, focus=listed)
         return Listed(self.order.ids, command=self.order.command)
 
-    def sorted(self, *, n: int, gpu, view, styles: moderngl.Buffer | None, focus: Listed | None = None) -> Listed:
-        """The visible objects back to front (with `styles`: the focus left out), sorted on the
-        GPU; `focus` (a CPU list): its commands are written too (`focus_drawn`)."""
+    def sorted(
+        self, *, n: int, gpu, view, styles: moderngl.Buffer, focus: Listed | None = None, context: bool = True
+    ) -> Listed:
+        """The visible objects back to front (`context`: the focus flagged in `styles` left
+        out), sorted on the GPU; `focus` (a CPU list): its commands are written too (`focus_drawn`)."""
         listed = 0 if focus is None else focus.count
-        self.order.sort(count=n, records=gpu.records, bounds=gpu.bounds, view=view, styles=styles, focus=listed)
+        self.order.sort(
+            count=n,
+            records=gpu.records,
+            bounds=gpu.bounds,
+            view=view,
+            styles=styles,
+            exclude_focus=context,
+            focus=listed,
+        )
         return Listed(self.order.ids, command=self.order.command)
 
     def focus_drawn(self, focus: Listed) -> Listed:
-        """The focus list drawn by the two commands the last `sorted` wrote for it: the GPU
-        picks the variant (no region upsampled, or each sprite choosing) without a read."""
-        return Listed(focus.ids, focus.count, self.order.command, firsts=FOCUS_COMMANDS)
+        """The focus list drawn by the three commands the last `sorted` or `everyone` wrote for
+        it: the GPU picks the variant (every region at scale 1, none upsampled, or each sprite
+        choosing) without a read."""
+        return Listed(focus.ids, focus.count, self.order.command, firsts=FOCUS_COMMANDS, variants="focus")
 
     @property
     def tiles(self) -> TileBlend:

@@ -23,8 +23,9 @@ from ..gl.bindings import Storage
 from .sprites import UPSAMPLE_BELOW
 
 KEYS, BLOCK_SORT, STEP, BLOCK_MERGE, COMMANDS, COUNT, SCAN, SCATTER = 1, 2, 3, 4, 5, 6, 7, 8  # the shader's stages
-COMMAND_WORDS = 30  # three DrawArrays commands 5 uints apart, three counts, the focus list's two commands
-FOCUS_COMMANDS = (4, 5)  # the focus list's commands (20-byte steps): no focus region upsampled, some
+COMMAND_WORDS = 35  # three DrawArrays commands 5 uints apart, four counts, the focus list's three commands
+# the focus list's commands (20-byte steps): every focus region at scale 1, none upsampled, some
+FOCUS_COMMANDS = (4, 5, 6)
 DRAWN = 15  # the command buffer's word of the drawn count
 BLOCK = 1024  # elements sorted in shared memory by one work group
 GROUP = 64  # invocations of that work group (each compares BLOCK / 2 / GROUP pairs a step)
@@ -125,6 +126,7 @@ class GpuOrder:
         bounds: moderngl.Buffer,
         view: np.ndarray,
         styles: moderngl.Buffer | None = None,
+        exclude_focus: bool = True,
         offsets: np.ndarray | None = None,
         focus: int = 0,
     ) -> None:
@@ -141,17 +143,21 @@ class GpuOrder:
         view : numpy.ndarray
             The 4x4 view matrix (scene origin at 0): view depth is -(view @ centre).z.
         styles : moderngl.Buffer, optional
-            Compositing's style parameters (opacity, focus, ao, edges) per object: the objects
-            flagged focus are not drawn (the ghosted context). None: every visible object is.
+            Compositing's style parameters (opacity, focus, ao, edges) per object: its focus
+            flags name the focus objects (the focus list's commands are counted from them).
+            None: no focus; every visible object is drawn.
+        exclude_focus : bool, default True
+            With `styles`: the objects flagged focus are not drawn (the ghosted context).
         offsets : numpy.ndarray, optional
             [count, 3] added to the bounds centres (uploaded when the array object changes).
         focus : int, default 0
-            The length of a list of the focus objects (with `styles`): `command` gets two more
-            commands for it (FOCUS_COMMANDS), its length in the first where no visible focus
-            region is upsampled, else in the second.
+            The length of a list of the focus objects (with `styles`): `command` gets three
+            more commands for it (FOCUS_COMMANDS), its length in the first where every visible
+            focus region is at one texel per pixel (scale 1: quad outlines), else in the second
+            where none is upsampled, else in the third.
         """
         self.dispatches = 0
-        length = self._keys(count, records, bounds, view, styles, offsets)
+        length = self._keys(count, records, bounds, view, styles, offsets, exclude_focus)
         if self.method_for(count) == "radix":
             self._radix(length)
         else:
@@ -197,12 +203,21 @@ class GpuOrder:
             self._run(merge, length // BLOCK)
             k *= 2
 
-    def every(self, *, count: int, records: moderngl.Buffer, bounds: moderngl.Buffer) -> None:
+    def every(
+        self,
+        *,
+        count: int,
+        records: moderngl.Buffer,
+        bounds: moderngl.Buffer,
+        styles: moderngl.Buffer | None = None,
+        focus: int = 0,
+    ) -> None:
         """Every id in ascending order into `ids` (drawn in that order: the invisible ones draw
-        nothing), `command` as `sort` makes it (the draw of `count` points in one variant)."""
+        nothing), `command` as `sort` makes it (the draw of `count` points in one variant; with
+        `styles` and `focus`, the focus list's commands as `sort` writes them)."""
         self.dispatches = 0
-        self._keys(count, records, bounds, np.eye(4), None, None)
-        self._commands(count)
+        self._keys(count, records, bounds, np.eye(4), styles, None, exclude_focus=False)
+        self._commands(count, focus if styles is not None else 0)
 
     def _commands(self, total: int, focus: int = 0) -> None:
         prog = self._program(COMMANDS)
@@ -211,7 +226,7 @@ class GpuOrder:
         self._run(prog, 1)
         sync.barrier(self.ctx, moderngl.COMMAND_BARRIER_BIT | moderngl.SHADER_STORAGE_BARRIER_BIT)
 
-    def _keys(self, count, records, bounds, view, styles, offsets) -> int:
+    def _keys(self, count, records, bounds, view, styles, offsets, exclude_focus: bool = True) -> int:
         """Stage 1: keys, ids and counts; returns the sort's length."""
         method = self.method_for(count)
         length = sort_length(count, method)
@@ -229,7 +244,8 @@ class GpuOrder:
         glsl.set_uniform(prog, "u_count", count)
         glsl.set_uniform(prog, "u_length", length)
         glsl.set_uniform(prog, "u_depth_row", tuple(float(v) for v in np.asarray(view, np.float64)[2]))
-        glsl.set_uniform(prog, "u_exclude_focus", styles is not None)
+        glsl.set_uniform(prog, "u_focus_flags", styles is not None)
+        glsl.set_uniform(prog, "u_exclude_focus", styles is not None and exclude_focus)
         glsl.set_uniform(prog, "u_upsample_below", UPSAMPLE_BELOW)
         self._run(prog, length // STEP_GROUP)
         return length

@@ -15,6 +15,7 @@ import dataclasses
 import functools
 from dataclasses import dataclass
 from enum import Enum
+from typing import Literal
 
 import moderngl
 import numpy as np
@@ -141,14 +142,28 @@ class Listed:
     count : int
         How many to draw, where `command` is None.
     command : moderngl.Buffer or None
-        Three (count, 1, 0, 0) uint32 commands 20 bytes apart, written on the GPU: for regions
-        not upsampled, upsampled, and mixed (SpritePass.draw_listed).
+        (count, 1, 0, 0) uint32 commands 20 bytes apart, written on the GPU, of which the three
+        at `firsts` are drawn, one variant each (SpritePass.draw_listed).
+    firsts : tuple of int
+        The commands of `command` to draw.
+    variants : {"regions", "focus"}
+        What those commands choose between. "regions" (order_gpu's first three): the regions
+        drawn upsampled none, all, or some. "focus" (a focus list's, order_gpu.FOCUS_COMMANDS):
+        every region at one texel per pixel (outlines by quads), none upsampled, or some.
     """
 
     ids: moderngl.Buffer
     count: int = 0
     command: moderngl.Buffer | None = None
-    firsts: tuple[int, ...] = (0, 1, 2)  # the commands of `command` to draw: order_gpu's three, or a focus list's two
+    firsts: tuple[int, ...] = (0, 1, 2)
+    variants: Literal["regions", "focus"] = "regions"
+
+
+def quad_outlines(draw: SpriteDraw, style: Style, records) -> bool:
+    """Whether `draw`'s outlines may be found by quads (composite.frag's OUTLINE_QUAD) where
+    its regions are at one texel per pixel: outlines drawn, of width 1, with a border."""
+    outlined = draw.kind is Kind.OUTLINES or draw.outlined
+    return outlined and int(style.outline_width) == 1 and records.border >= 1
 
 
 @functools.lru_cache(maxsize=256)
@@ -236,10 +251,13 @@ class SpritePass:
         listed.ids.bind_to_storage_buffer(Storage.DRAW_LIST)
         sampled = draw.kind not in (Kind.OUTLINES, Kind.HALOS)
         variants = [(None, {"UPSAMPLE_DYNAMIC": sampled})]
-        if listed.command is not None and len(listed.firsts) == 3:
-            variants = [(0, {}), (1, {"UPSAMPLE": sampled}), (2, {"UPSAMPLE_DYNAMIC": sampled})]
-        elif listed.command is not None:  # a focus list: none upsampled, or each sprite choosing
-            variants = [(listed.firsts[0], {}), (listed.firsts[1], {"UPSAMPLE_DYNAMIC": sampled})]
+        if listed.command is not None:
+            f = listed.firsts
+            if listed.variants == "regions":
+                variants = [(f[0], {}), (f[1], {"UPSAMPLE": sampled}), (f[2], {"UPSAMPLE_DYNAMIC": sampled})]
+            else:  # a focus list: its outlines by quads where every region is at scale 1
+                quad = quad_outlines(draw, style, records)
+                variants = [(f[0], {"OUTLINE_QUAD": quad}), (f[1], {}), (f[2], {"UPSAMPLE_DYNAMIC": sampled})]
         hull = None if draw.kind is Kind.HALOS else self._hull
         hull_draws = self.hull_draws + (hull is not None)  # one list: one draw, whichever variant
         for first, variant in variants:
@@ -264,11 +282,7 @@ class SpritePass:
             "FOCUS_CLIP": kind is Kind.COLLECTED,
             "SPRITE_OUTLINE": draw.outlined,
             "OUTLINE_QUAD": (
-                ids is not None
-                and (outline or draw.outlined)
-                and int(style.outline_width) == 1
-                and records.border >= 1
-                and bool((records.scale[ids] == 1.0).all())
+                ids is not None and quad_outlines(draw, style, records) and bool((records.scale[ids] == 1.0).all())
             ),
             "WITH_AO": draw.shaded and not outline,
             "PROJECTOR": self._projection is not None and kind not in (Kind.OUTLINES, Kind.HALOS),

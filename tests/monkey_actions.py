@@ -22,6 +22,8 @@ from viewer.state import VIEW_MODES
 if TYPE_CHECKING:
     from viewer.app import Viewer
 
+LARGEST = (1900, 1050)  # the largest window a resize makes (the warm-up tour shows every mode there)
+
 KEYS = [  # every key viewer/controls.py binds (Ctrl+Q, which quits, aside)
     *(key.LEFT, key.RIGHT, key.UP, key.DOWN, key.EQUAL, key.MINUS, key.PAGEUP, key.PAGEDOWN),
     *(key.F, key.A, key.M, key.L, key.P, key.C, key.SPACE, key.F12, key.O, key.R, key.ESCAPE, key.X, key.E),
@@ -122,7 +124,7 @@ class Actions:
             self.frames(2)
         w, h = (self.rng.randint(1, 40), self.rng.randint(1, 40)) if r < 0.3 else (0, 0)
         if not w:
-            w, h = self.rng.randint(300, 1900), self.rng.randint(200, 1050)
+            w, h = self.rng.randint(300, LARGEST[0]), self.rng.randint(200, LARGEST[1])
         self.pw.set_size(w, h)
         self.pw.dispatch_events()
         self.frames(2)

@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from rtta.bench.gl_memory import gl_bytes
 from rtta.bench.reliability import drift, gl_census, random_camera, random_viewport, soak, sweep
 from rtta.memory import mapped_block_bytes, steady_heap
 from rtta.scene.camera import Camera
@@ -22,6 +23,29 @@ def test_census_sees_a_leak_and_its_release(gl):
     for obj in leaked:
         obj.release()
     assert gl_census(gl) == before
+
+
+def test_gl_bytes_counts_storage_made_and_freed(gl):
+    """GL storage per kind from the driver's answers: a buffer's size, a texture's levels,
+    layers and bits per texel, a renderbuffer's; all of it gone again after release."""
+    before = gl_bytes(gl)
+    made = [
+        gl.buffer(reserve=1000),
+        gl.texture((100, 50), 4),
+        gl.texture_array((64, 32, 3), 4, dtype="f4"),
+        gl.depth_texture((10, 10)),
+        gl.renderbuffer((20, 10), 4),
+    ]
+    grown = {k: v - before[k] for k, v in gl_bytes(gl).items()}
+    assert grown["buffers"] == 1000 and grown["renderbuffers"] == 20 * 10 * 4
+    colour = 100 * 50 * 4 + 64 * 32 * 3 * 16
+    assert grown["textures"] in {colour + 10 * 10 * 3, colour + 10 * 10 * 4}  # a 24- or 32-bit depth
+    made[1].build_mipmaps()
+    levels = sum((100 >> k or 1) * (50 >> k or 1) * 4 for k in range(1, 7))
+    assert gl_bytes(gl)["textures"] - before["textures"] == grown["textures"] + levels
+    for obj in made:
+        obj.release()
+    assert gl_bytes(gl) == before
 
 
 def test_random_cameras_are_finite_and_cover_every_kind(demo_scene):

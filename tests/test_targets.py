@@ -90,3 +90,44 @@ def test_trim_shrinks_to_the_last_capture_at_once(make_renderer, demo_scene, gl)
     r.capture(cam, (120, 90))
     after = over_background(r.composite("sprites").read()[0])
     assert np.abs(after.astype(int) - before.astype(int)).max() <= 1
+
+
+def test_a_refused_allocation_leaves_the_target_usable(gl, monkeypatch):
+    """Found by the monkey (20,000 parts in a 1900x1050 window): an atlas allocation over the
+    memory limit freed the old textures before it refused, and the next capture's clear
+    raised AttributeError. Now the refusal leaves the allocation before in place."""
+    from rtta.errors import RttaError
+    from rtta.gl import targets
+
+    monkeypatch.setattr(targets, "MIN_TARGET_BYTES", 2**20)
+    monkeypatch.setenv("RTTA_MEMORY_LIMIT_MB", "2")  # half of it: 1 MiB of targets
+    t = LayeredTarget(gl, (64, 64), 1)
+    with pytest.raises(RttaError, match="over half the memory limit"):
+        t.ensure((512, 512), 4)
+    assert (t.size, t.layers) == ((64, 64), 1)
+    t.clear()
+    assert t.read(parts=("depth",))["depth"].min() == 1.0
+    assert t.layers_within((64, 64)) == 2**20 // (64 * 64 * t.texel_bytes)
+    t.release()
+
+
+@pytest.mark.parametrize("path", ["cpu", "gpu"])
+def test_layers_are_capped_by_the_memory_limit(make_renderer, demo_scene, monkeypatch, path):
+    """Algorithm 1 packs into the layers the memory limit allows, scaling regions down (the
+    paper's rule) rather than asking for an atlas that cannot be allocated."""
+    from rtta.gl import targets
+    from rtta.renderer.settings import Settings
+
+    cam = Camera.orbit(demo_scene.center, demo_scene.radius, 30, 20, 2.2)
+    free = make_renderer(demo_scene, Settings(parameterize=path)).capture(cam, (256, 256))
+    layers = int(np.asarray(free.layer)[np.asarray(free.visible)].max()) + 1
+    assert layers >= 2 and float(np.asarray(free.scale)[np.asarray(free.visible)].min()) == 1.0
+    monkeypatch.setattr(targets, "MIN_TARGET_BYTES", 2**20)
+    r = make_renderer(demo_scene, Settings(parameterize=path))
+    per_layer = 256 * 256 * r.atlas.texel_bytes
+    monkeypatch.setenv("RTTA_MEMORY_LIMIT_MB", str(2 * per_layer * (layers - 1) / 2**20 + 0.01))
+    records = r.capture(cam, (256, 256))
+    visible = np.asarray(records.visible)
+    assert visible.sum() == np.asarray(free.visible).sum()  # none dropped
+    assert int(np.asarray(records.layer)[visible].max()) + 1 <= layers - 1 and r.atlas.layers <= layers - 1
+    assert float(np.asarray(records.scale)[visible].min()) < 1.0

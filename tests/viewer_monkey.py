@@ -14,8 +14,9 @@ projection switch.
 
 Fails (exit 1, the findings in `result.json` and on stderr) on an exception (in an event
 handler, a frame or a worker thread), a GL error, a camera that is not finite, a frame over
-MAX_FRAME_S, or GL objects or RSS grown more than GROWTH (RSS: --rss-growth) after the warm-up
-(both counted in the same settled state: the main scene set again, the first window size).
+MAX_FRAME_S, or GL objects, their storage (rtta.bench.gl_memory) or RSS grown more than GROWTH
+(RSS: --rss-growth) after the warm-up, all counted in one settled state (the main scene set
+again, the first window size, llvmpipe's idle command scenes handed the current framebuffer).
 Prints a summary.
 """
 
@@ -43,10 +44,12 @@ HERE = Path(__file__).parent
 sys.path.insert(0, str(HERE))  # bad_inputs (run as a script from anywhere)
 
 from bad_inputs import make_corpus  # noqa: E402
-from monkey_actions import Actions  # noqa: E402
+from monkey_actions import LARGEST, Actions  # noqa: E402
 
+from rtta.bench.gl_memory import gl_bytes  # noqa: E402
 from rtta.bench.reliability import gl_census  # noqa: E402
 from rtta.errors import printable  # noqa: E402
+from rtta.gl import glraw  # noqa: E402
 from rtta.memory import rss_bytes, steady_heap  # noqa: E402
 from rtta.renderer.renderer import Settings  # noqa: E402
 from rtta.scene.cutaway import CAPS, SECTION_SCOPES  # noqa: E402
@@ -192,15 +195,22 @@ class Monkey(Actions):
 
     def tour(self) -> None:
         """The warm-up's start: every action once and every mode shown once (with a part in focus),
-        so what is made once on first use (a pass's program, a shader's JIT code) is made."""
+        so what is made once on first use (a pass's program, a shader's JIT code) is made; the
+        modes in the largest window a resize makes, the composite taking all of it, so that
+        the driver's memory reaches the high-water mark of the run's largest frames too
+        (llvmpipe keeps what its first `transparent` frame there took: some 40 MB)."""
         names = list(self.WEIGHTS)
         self.rng.shuffle(names)
         for name in names:
             self.act(name)
+        self.resize_to(LARGEST)
+        shown = self.app.state.show_atlas
+        self.app.state.show_atlas = False
         for mode in VIEW_MODES:
             self.app.state.choose_mode(mode)
             self.app.state.toggle(self.rng.randrange(self.app.renderer.scene.count))
             self.frames(2)
+        self.app.state.show_atlas = shown
         c = self.app.state.cutaway  # every mode under every kind of cap and scope of a section and an explode
         for mode, caps, scope in itertools.product(VIEW_MODES, CAPS, SECTION_SCOPES):
             self.app.state.choose_mode(mode)
@@ -220,20 +230,31 @@ class Monkey(Actions):
         s = app.state  # what set_scene keeps from the last scene: back to the defaults
         s.settings, s.atlas_max, s.show_atlas, s.panel_width, s.show_cube = Settings(), "viewport", True, 0, True
         app.orbit.projection = "perspective"
-        self.pw.set_size(*SIZE)
-        for _ in range(50):  # the window system may take a few rounds to resize the window
-            self.pw.dispatch_events()
-            self.frames()
-            if tuple(self.wnd.buffer_size) == SIZE:
-                break
-            time.sleep(0.05)
+        self.resize_to(SIZE)
         app.set_scene(self.main, mode="ghosted-ao")
         self.frames(3)
+        for _ in range(8):  # llvmpipe's idle scenes keep the framebuffer each drew last, and so
+            app.ctx.screen.use()  # textures rtta deleted (glraw.Throttle): flushed clears, one
+            app.ctx.clear(0.0, 0.0, 0.0, 0.0)  # scene each, hand them all this frame's instead
+            glraw._lib().glFlush()
+        app.ctx.finish()
         gc.collect()
         trim = getattr(ctypes.CDLL(None), "malloc_trim", None)  # glibc: freed heap back, so RSS is what lives
         if trim is not None:
             trim(0)
-        return {"gl": gl_census(app.ctx), "rss_mb": rss_bytes() / 2**20, "size": list(self.wnd.buffer_size)}
+        gl_mb = sum(gl_bytes(app.ctx).values()) / 2**20  # what rtta and the viewer hold through GL
+        size = list(self.wnd.buffer_size)
+        return {"gl": gl_census(app.ctx), "gl_mb": gl_mb, "rss_mb": rss_bytes() / 2**20, "size": size}
+
+    def resize_to(self, size: tuple[int, int]) -> None:
+        """The window at `size`, drawn there."""
+        self.pw.set_size(*size)
+        for _ in range(50):  # the window system may take a few rounds to resize the window
+            self.pw.dispatch_events()
+            self.frames()
+            if tuple(self.wnd.buffer_size) == size:
+                break
+            time.sleep(0.05)
 
 
 def grown(settled: list[dict], rss_growth: float = GROWTH) -> list[str]:
@@ -244,6 +265,8 @@ def grown(settled: list[dict], rss_growth: float = GROWTH) -> list[str]:
     total = (sum(first["gl"].values()), sum(last["gl"].values()))
     if total[1] > total[0] * (1 + GROWTH):
         out.append(f"GL objects grew {total[0]} -> {total[1]}: {first['gl']} -> {last['gl']}")
+    if last["gl_mb"] > first["gl_mb"] * (1 + GROWTH):
+        out.append(f"GL storage grew {first['gl_mb']:.1f} -> {last['gl_mb']:.1f} MB")
     rss = (max(r["rss_mb"] for r in settled[:2]), min(r["rss_mb"] for r in settled[-2:]))
     if len(settled) > 2 and rss[1] > rss[0] * (1 + rss_growth):
         out.append(f"RSS grew {rss[0]:.0f} -> {rss[1]:.0f} MB (settled: {[round(r['rss_mb']) for r in settled]})")
@@ -298,7 +321,8 @@ def main() -> int:
         f"monkey {printable(a.scene)} seed {a.seed}: {done} actions, {m.frames_drawn} frames "
         f"in {result['seconds']:.0f} s, "
         f"max frame {m.max_frame_s:.2f} s; GL objects {sum(w.get('gl', {}).values())} -> "
-        f"{sum(e.get('gl', {}).values())}, RSS {w.get('rss_mb', 0):.0f} -> {e.get('rss_mb', 0):.0f} MB; "
+        f"{sum(e.get('gl', {}).values())} ({w.get('gl_mb', 0):.1f} -> {e.get('gl_mb', 0):.1f} MB), "
+        f"RSS {w.get('rss_mb', 0):.0f} -> {e.get('rss_mb', 0):.0f} MB; "
         f"{m.reached['scenes']} scenes shown, {m.reached['errors_said']} errors said; {len(m.findings)} findings"
     )
     for f in m.findings:

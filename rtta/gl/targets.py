@@ -87,20 +87,35 @@ class LayeredTarget:
         self._textures: list = []
         self._allocate(size, layers)
 
+    @property
+    def texel_bytes(self) -> int:
+        """Bytes per texel of every image: RGBA8 + RGBA8 (with normals) + R32I + D32F (+ S8)."""
+        return 4 + 4 * self.normals + 4 + 4 + 4 * self.stencil
+
+    def layers_within(self, size: tuple[int, int]) -> int:
+        """The most layers of `size` (as `ensure` would allocate it: 64-texel steps, at least the
+        allocation's size) the memory limit allows (half of RTTA_MEMORY_LIMIT_MB, and always
+        MIN_TARGET_BYTES): Algorithm 1 scales regions down to fit in them rather than fail."""
+        w, h = max(self.size[0], round_up(max(1, size[0]), 64)), max(self.size[1], round_up(max(1, size[1]), 64))
+        return max(1, max(memory_limit() // 2, MIN_TARGET_BYTES) // (w * h * self.texel_bytes))
+
     def _allocate(self, size: tuple[int, int], layers: int) -> None:
-        self._free()
+        """Textures of `size` x `layers`; an RttaError leaves the ones before (over the memory
+        limit), or a 1x1 layer where the driver failed: the target stays usable either way."""
         w, h = max(1, int(size[0])), max(1, int(size[1]))
         n = max(1, int(layers))
-        need = w * h * n * (4 + 4 * self.normals + 4 + 4 + 4 * self.stencil)
+        need = w * h * n * self.texel_bytes
         if need > max(memory_limit() // 2, MIN_TARGET_BYTES):
             raise RttaError(
                 f"the render targets would need {w}x{h}x{n} texels ({need / 2**20:,.0f} MiB), over half "
                 "the memory limit (RTTA_MEMORY_LIMIT_MB); use a smaller --size or --region-scale"
             )
+        self._free()
         try:
             self._make(w, h, n)
         except moderngl.Error as exc:  # the driver could not allocate what it allows in principle
             self._free()
+            self._make(1, 1, 1)
             raise RttaError(
                 f"the driver cannot allocate {w}x{h}x{n} render targets ({need / 2**20:,.0f} MiB: "
                 f"{str(exc).splitlines()[0][:80]}); use a smaller --size or --region-scale"
@@ -156,8 +171,8 @@ class LayeredTarget:
 
     @property
     def nbytes(self) -> int:
-        """Texture memory: RGBA8 + RGBA8 (with normals) + R32I + D32F per texel."""
-        return self.size[0] * self.size[1] * self.layers * (4 + 4 * self.normals + 4 + 4 + 4 * self.stencil)
+        """Texture memory: `texel_bytes` per texel."""
+        return self.size[0] * self.size[1] * self.layers * self.texel_bytes
 
     def write_mask(self, normals: bool = True, ids: bool = True) -> None:
         """Whether draws write the normal and id images (colour masks; colour and depth are

@@ -2,19 +2,19 @@
 `rtta.atlas.parameterize`: the same culling, near-plane clipping, viewport rectangles, border
 and region scales, in doubles, and a parallel shelf packing (shaders/parameterize.comp).
 
-Per object data live on the GPU: B_world's corners (once per scene), the explode offsets and
-the scale wanted per object (0: hidden), each uploaded when it changes. Per frame the CPU
-issues a constant number of calls, the last ones writing T and the records straight into the
-record buffer (shaders/records.glsl). It returns a `GpuRecords`: nothing of R is read back
-unless a caller asks for its arrays (picking, the export, the dataset).
+Per object data live on the GPU: B_world's corners (once per scene), the explode offsets and the scale
+wanted per object (0: hidden), each uploaded when it changes. Per frame the CPU issues a constant number
+of calls, the last ones writing T and the records straight into the record buffer (shaders/records.glsl).
+It returns a `GpuRecords`: nothing of R is read back unless a caller asks for its arrays (picking, the
+export, the dataset).
 
 Sizing the atlas: "exact" (the default; one-shot renders) reads the 64-byte state after the
 rounds and sizes the atlas to the extent used, as the CPU path does; "ahead" (the viewer, the
 benchmarks) reads nothing that waits: the layers are chosen from the state of the frame before,
 read a frame late (docs/performance/frame.md, "Reading back").
 
-Scale-down: when the regions need more layers than allowed, the layout stage lowers every
-region's scale by the CPU loop's rule and the next round packs again; none is dropped.
+Scale-down: when the regions need more layers than allowed, the layout stage lowers every region's scale
+by the CPU loop's rule and the next round packs again; none is dropped.
 """
 
 from __future__ import annotations
@@ -41,9 +41,8 @@ ROUNDS = 2  # rounds of projection and layout dispatched before the state is rea
 AHEAD_ROUNDS = 4  # rounds dispatched per frame when nothing is read ("ahead")
 MAX_ROUNDS = 64  # as the CPU path's loop
 STATE_DTYPE = np.dtype(
-    [(name, "<u4") for name in ("done", "layers", "used_w", "used_h", "rounds", "cursor_layer", "cursor_y")]
-    + [("shelves1", "<u4"), ("wide2", "<u4"), ("cap2", "<u4"), ("demand", "<u4"), ("pad", "<u4")]
-    + [("factor", "<f8"), ("area", "<f8")]
+    [(name, "<u4") for name in ("done", "layers", "used_w", "used_h", "rounds", "cursor_layer", "cursor_y", "shelves1")]
+    + [("wide2", "<u4"), ("cap2", "<u4"), ("demand", "<u4"), ("pad", "<u4"), ("factor", "<f8"), ("area", "<f8")]
 )
 Sizing = Literal["exact", "ahead"]
 PROJECT, LAYOUT, PLACE, LAYOUT_SECOND, PLACE_SECOND, RECORD = 1, 2, 3, 4, 5, 6  # the shader's stages
@@ -79,10 +78,9 @@ class GpuParameterize:
         self.next_round = ctx.buffer(reserve=32)  # indirect dispatch sizes of the rounds after the first
         self._start = np.zeros(1, STATE_DTYPE)
         self._start["factor"] = 1.0
-        self.corners: moderngl.Buffer | None = None
+        self.corners: moderngl.Buffer | None = None  # and the scales, items and shelves: made for n objects
         self.scales: moderngl.Buffer | None = None
-        self.items: moderngl.Buffer | None = None
-        self.shelves: moderngl.Buffer | None = None
+        self.items = self.shelves = self.scales
         self._corners_of: np.ndarray | None = None  # the array uploaded (compared by identity)
         self.offsets = ctx.buffer(reserve=8)
         self._offsets_of: np.ndarray | None = None  # likewise
@@ -332,16 +330,18 @@ class GpuParameterize:
         with the sizes the layout stage leaves: 0 groups once the regions fit."""
         self.next_round.write(np.array([groups, 1, 1, 0, 1, 1, 1, 0], np.uint32))
         self.next_round.bind_to_storage_buffer(Storage.PARAM_DISPATCH)
+        programs, wait = self.programs, not sync.synchronous(self.ctx)  # (sync.barrier's test, once)
         for r in range(rounds):
             for stage in ROUND:
                 single = stage in (LAYOUT, LAYOUT_SECOND)
                 if r == 0:
-                    self.programs[stage].run(1 if single else groups)
+                    programs[stage].run(1 if single else groups)
                 else:
-                    self.programs[stage].run_indirect(self.next_round, 16 if single else 0)
-                sync.barrier(self.ctx, moderngl.SHADER_STORAGE_BARRIER_BIT | moderngl.COMMAND_BARRIER_BIT)
+                    programs[stage].run_indirect(self.next_round, 16 if single else 0)
+                if wait:
+                    self.ctx.memory_barrier(moderngl.SHADER_STORAGE_BARRIER_BIT | moderngl.COMMAND_BARRIER_BIT)
         for stage in (PLACE_SECOND, RECORD):
-            self.programs[stage].run(groups)
+            programs[stage].run(groups)
             sync.barrier(self.ctx, moderngl.SHADER_STORAGE_BARRIER_BIT | moderngl.BUFFER_UPDATE_BARRIER_BIT)
 
     def _rounds(self, groups: int) -> np.void:

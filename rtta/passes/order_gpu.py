@@ -81,6 +81,7 @@ class GpuOrder:
         self.offsets = ctx.buffer(reserve=12)
         self._offsets_of: np.ndarray | None = None  # the offsets uploaded (compared by identity)
         self.dispatches = 0  # of the last sort
+        self._wait = not sync.synchronous(ctx)  # barriers between dispatches (sync.barrier)
 
     def _program(self, stage: int, offsets: bool = False) -> moderngl.ComputeShader:
         key = (stage, offsets)
@@ -251,8 +252,8 @@ class GpuOrder:
         return length
 
     def _run(self, prog: moderngl.ComputeShader, groups: int) -> None:
-        if self.dispatches:
-            sync.barrier(self.ctx, moderngl.SHADER_STORAGE_BARRIER_BIT)
+        if self.dispatches and self._wait:
+            self.ctx.memory_barrier(moderngl.SHADER_STORAGE_BARRIER_BIT)
         prog.run(group_x=groups)
         self.dispatches += 1
 

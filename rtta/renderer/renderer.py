@@ -126,7 +126,7 @@ class Renderer:
         largest = max(s.region_scale, s.region_scale * s.context_scale)
         atlas_max = s.atlas_max or default_atlas_max(viewport, s.border, largest)
         atlas_max = (min(atlas_max[0], self.caps.max_texture), min(atlas_max[1], self.caps.max_texture))
-        max_layers = min(s.max_layers or self.caps.max_layers, self.caps.max_layers)
+        max_layers = min(s.max_layers or 2**31, self.caps.max_layers, self.atlas.layers_within(atlas_max))
         vpm = proj @ view
         if (thin is None or isinstance(thin, KeepShare)) and self.on_gpu:  # a KeepShare thins on the GPU too
             return self._parameterize_gpu(vpm, viewport, atlas_max, max_layers, focus, thin)

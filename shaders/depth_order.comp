@@ -19,7 +19,10 @@
 //            one texel per pixel (quad outlines), else where none is upsampled, else in the
 //            third (each sprite choosing)
 // Or a stable LSD radix sort of the keys (ids in ascending order to start: ties stay by id),
-// RADIX_BITS a pass, over tiles of TILE = 256 * PER elements (u_tiles of them):
+// RADIX_BITS a pass, over tiles of TILE = 256 * PER elements (u_tiles of them). The pass is
+// counted on the GPU (command[PASS_NEXT], zeroed with the buffer; stage 7 moves it on), so the
+// CPU sets no uniform and binds no buffer between passes: even passes read keys/ids and write
+// keys_out/ids_out, odd passes the other way round (an even number of passes ends in keys/ids).
 //   STAGE 6 (per tile): each digit's count in the tile, into counts[digit * u_tiles + tile]
 //   STAGE 7 (one work group): counts -> their exclusive prefix sums (digit-major: each
 //            tile's first place for each digit)
@@ -50,7 +53,6 @@ layout(std430, binding = BINDING_DRAW_LIST) buffer IdBuffer { uint ids[]; };
 uniform uint u_k;       // the bitonic merge's size (stages 3, 4)
 uniform uint u_j;       // the compare distance (stage 3)
 uniform uint u_length;  // elements (>= u_count: a power of two, or a multiple of TILE; stages 1, 3)
-uniform uint u_shift;   // the radix pass's digit: bits u_shift .. u_shift + RADIX_BITS - 1
 uniform uint u_tiles;   // the radix passes' tiles
 
 // commands at 0, 5, 10; then the drawn objects' count, the upsampled ones', the upsampled
@@ -60,7 +62,9 @@ uniform uint u_tiles;   // the radix passes' tiles
 #define UPSAMPLED 16
 #define FOCUS_UPSAMPLED 17
 #define FOCUS_SCALED 18
-layout(std430, binding = BINDING_COMPOSITE_COMMAND) buffer CommandBuffer { uint command[35]; };
+#define PASS_NOW 35   // the radix pass stage 8 sorts by (stage 7 writes it)
+#define PASS_NEXT 36  // the radix pass stages 6 and 7 count and scan for
+layout(std430, binding = BINDING_COMPOSITE_COMMAND) buffer CommandBuffer { uint command[37]; };
 
 bool after(uint ka, uint ia, uint kb, uint ib) { return ka > kb || (ka == kb && ia > ib); }
 
@@ -133,11 +137,23 @@ void main() {
 
 #elif STAGE >= 6
 layout(std430, binding = BINDING_SORT_COUNTS) buffer CountBuffer { uint counts[]; };
-layout(std430, binding = BINDING_SORT_KEYS_OUT) writeonly buffer KeyOutBuffer { uint keys_out[]; };
-layout(std430, binding = BINDING_SORT_IDS_OUT) writeonly buffer IdOutBuffer { uint ids_out[]; };
+layout(std430, binding = BINDING_SORT_KEYS_OUT) buffer KeyOutBuffer { uint keys_out[]; };
+layout(std430, binding = BINDING_SORT_IDS_OUT) buffer IdOutBuffer { uint ids_out[]; };
 shared uint s_part[256];
 
-uint digit(uint key) { return (key >> u_shift) & uint(DIGITS - 1); }
+uint pass_index;  // set first in main: the pass this dispatch belongs to
+uint digit(uint key) { return (key >> (uint(RADIX_BITS) * pass_index)) & uint(DIGITS - 1); }
+uint key_in(uint i) { return (pass_index & 1u) == 0u ? keys[i] : keys_out[i]; }
+uint id_in(uint i) { return (pass_index & 1u) == 0u ? ids[i] : ids_out[i]; }
+void put(uint i, uint key, uint id) {
+    if ((pass_index & 1u) == 0u) {
+        keys_out[i] = key;
+        ids_out[i] = id;
+    } else {
+        keys[i] = key;
+        ids[i] = id;
+    }
+}
 
 // s_part's inclusive prefix sums (256 invocations, each its own entry)
 void scan_parts(uint t) {
@@ -154,10 +170,11 @@ void scan_parts(uint t) {
 shared uint s_count[DIGITS];
 void main() {
     uint t = gl_LocalInvocationID.x, tile = gl_WorkGroupID.x;
+    pass_index = command[PASS_NEXT];
     if (t < uint(DIGITS)) s_count[t] = 0u;
     memoryBarrierShared();
     barrier();
-    for (uint e = 0u; e < uint(PER); ++e) atomicAdd(s_count[digit(keys[tile * uint(TILE) + e * 256u + t])], 1u);
+    for (uint e = 0u; e < uint(PER); ++e) atomicAdd(s_count[digit(key_in(tile * uint(TILE) + e * 256u + t))], 1u);
     memoryBarrierShared();
     barrier();
     if (t < uint(DIGITS)) counts[t * u_tiles + tile] = s_count[t];
@@ -179,17 +196,23 @@ void main() {
         counts[i] = at;
         at += c;
     }
+    if (t == 0u) {  // the scatter sorts by this pass; the next count by the next
+        uint p = command[PASS_NEXT];
+        command[PASS_NOW] = p;
+        command[PASS_NEXT] = p + 1u;
+    }
 }
 
 #else
 shared uint s_place[DIGITS * 256];  // digit-major: [digit][invocation]
 void main() {
     uint t = gl_LocalInvocationID.x, tile = gl_WorkGroupID.x, base = tile * uint(TILE) + t * uint(PER);
+    pass_index = command[PASS_NOW];
     uint k[PER], id[PER], n[DIGITS];
     for (uint d = 0u; d < uint(DIGITS); ++d) n[d] = 0u;
     for (uint e = 0u; e < uint(PER); ++e) {
-        k[e] = keys[base + e];
-        id[e] = ids[base + e];
+        k[e] = key_in(base + e);
+        id[e] = id_in(base + e);
         n[digit(k[e])] += 1u;
     }
     // the invocation's counts at [digit][t]; a scan over them in that order gives, for each
@@ -217,8 +240,7 @@ void main() {
         // the tile's place for the digit, plus the element's rank among the tile's of that digit
         uint place = counts[d * u_tiles + tile] + s_place[d * 256u + t] - s_place[d * 256u] + n[d];
         n[d] += 1u;
-        keys_out[place] = k[e];
-        ids_out[place] = id[e];
+        put(place, k[e], id[e]);
     }
 }
 #endif

@@ -136,6 +136,33 @@ def set_uniform(prog: moderngl.Program | moderngl.ComputeShader, name: str, valu
         prog[name].value = value  # type: ignore[union-attr]
 
 
+def set_uniforms(prog: moderngl.Program | moderngl.ComputeShader, values: dict) -> None:
+    """`set_uniform` for each of `values` that `prog` holds (`has`: the compiler drops what a
+    variant does not use), in one call: a draw's dozen uniforms cost one Python call, not two
+    dozen (issue 43: a frame's CPU cost is counted in calls).
+
+    Parameters
+    ----------
+    prog : moderngl.Program or moderngl.ComputeShader
+        The program holding the uniforms.
+    values : dict
+        Uniform name -> value, as `set_uniform` takes it; names the program lacks are skipped.
+    """
+    held = prog.extra
+    if held is None:
+        held = prog.extra = {}
+    names = held.get("__members__")
+    if names is None:
+        names = held["__members__"] = frozenset(prog)
+    for name, value in values.items():
+        if name in names and (name not in held or held[name] != value):
+            held[name] = value
+            if value.__class__ is bytes:
+                prog[name].write(value)  # type: ignore[union-attr]
+            else:
+                prog[name].value = value  # type: ignore[union-attr]
+
+
 def has(prog: moderngl.Program | moderngl.ComputeShader, name: str) -> bool:
     """Whether `prog` holds a member `name` (the compiler drops what a variant does not use).
     `name in prog` walks every member; the names are kept in `prog.extra` (as set_uniform's

@@ -23,7 +23,8 @@ from ..gl.bindings import Storage
 from .sprites import UPSAMPLE_BELOW
 
 KEYS, BLOCK_SORT, STEP, BLOCK_MERGE, COMMANDS, COUNT, SCAN, SCATTER = 1, 2, 3, 4, 5, 6, 7, 8  # the shader's stages
-COMMAND_WORDS = 35  # three DrawArrays commands 5 uints apart, four counts, the focus list's three commands
+# three DrawArrays commands 5 uints apart, four counts, the focus list's three commands, the radix pass (2)
+COMMAND_WORDS = 37
 # the focus list's commands (20-byte steps): every focus region at scale 1, none upsampled, some
 FOCUS_COMMANDS = (4, 5, 6)
 DRAWN = 15  # the command buffer's word of the drawn count
@@ -170,21 +171,14 @@ class GpuOrder:
         the result ends in `keys` and `ids`)."""
         tiles = length // TILE
         self.counts.bind_to_storage_buffer(Storage.SORT_COUNTS)
-        sides = ((self.keys, self.ids), (self.keys_out, self.ids_out))
-        for p, shift in enumerate(range(0, 32, RADIX_BITS)):
-            (keys, ids), (keys_out, ids_out) = sides[p % 2], sides[1 - p % 2]
-            keys.bind_to_storage_buffer(Storage.SORT_KEYS)
-            ids.bind_to_storage_buffer(Storage.DRAW_LIST)
-            keys_out.bind_to_storage_buffer(Storage.SORT_KEYS_OUT)
-            ids_out.bind_to_storage_buffer(Storage.SORT_IDS_OUT)
-            for stage, groups in ((COUNT, tiles), (SCAN, 1), (SCATTER, tiles)):
-                prog = self._program(stage)
-                glsl.set_uniform(prog, "u_tiles", tiles)
-                if stage != SCAN:
-                    glsl.set_uniform(prog, "u_shift", shift)
+        self.keys_out.bind_to_storage_buffer(Storage.SORT_KEYS_OUT)  # both sides bound: the GPU
+        self.ids_out.bind_to_storage_buffer(Storage.SORT_IDS_OUT)  # counts the passes and picks
+        stages = [(self._program(stage), groups) for stage, groups in ((COUNT, tiles), (SCAN, 1), (SCATTER, tiles))]
+        for prog, _ in stages:
+            glsl.set_uniform(prog, "u_tiles", tiles)
+        for _ in range(32 // RADIX_BITS):
+            for prog, groups in stages:
                 self._run(prog, groups)
-        self.keys.bind_to_storage_buffer(Storage.SORT_KEYS)
-        self.ids.bind_to_storage_buffer(Storage.DRAW_LIST)
 
     def _bitonic(self, length: int) -> None:
         """The (key, id) pairs sorted by a bitonic network."""

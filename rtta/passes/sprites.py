@@ -263,9 +263,7 @@ class SpritePass:
         for first, variant in variants:
             defines = {**self._defines(None, draw, style, records), "HULL_PER_SPRITE": True, **variant}
             prog, vao = self._setup(defines, draw, style, records, hull)
-            for name, value in (("u_upsample_below", UPSAMPLE_BELOW), ("u_hull_min_area", float(HULL_MIN_AREA))):
-                if glsl.has(prog, name):
-                    glsl.set_uniform(prog, name, value)
+            glsl.set_uniforms(prog, {"u_upsample_below": UPSAMPLE_BELOW, "u_hull_min_area": float(HULL_MIN_AREA)})
             self._render(vao, listed if first is None else (listed.command, first), draw)
         self.hull_draws = hull_draws
 
@@ -309,34 +307,31 @@ class SpritePass:
         on = tuple(k for k, v in defines.items() if v)
         self.passes.append(_pass_name(on))
         prog, vao = self._program(**dict.fromkeys(on, True))
-        glsl.set_uniform(prog, "u_viewport", tuple(float(v) for v in records.viewport))
+        viewport = records.viewport
+        values = {  # the ones a variant does not use were dropped by the compiler (set_uniforms skips them)
+            "u_viewport": (float(viewport[0]), float(viewport[1])),
+            "u_hull": hull is not None,
+            "u_desaturate": draw.desaturate,
+            "u_edge_color": style.edge_color,
+            "u_outline_color": style.outline_color,
+            "u_outline_width": style.outline_width,
+            "u_halo_width": int(style.halo),
+            "u_halo_color": tuple(style.halo_color),
+            "u_ortho_depth": (0.0, 0.0) if self.ortho_near is None else (1.0, self.ortho_near),
+        }
         if projection is not None or lens is not None:
-            glsl.set_uniform(prog, "u_inv_view_proj", self._inv_view_proj)
-        glsl.set_uniform(prog, "u_hull", hull is not None)
+            values["u_inv_view_proj"] = self._inv_view_proj
         if hull is not None:
             self.hull_draws += 1
-            view_proj, eye = hull
-            glsl.set_uniform(prog, "u_view_proj", view_proj)
-            glsl.set_uniform(prog, "u_eye", eye)
-            if glsl.has(prog, "u_hull_margin"):  # UPSAMPLE_DYNAMIC: each sprite's own
-                glsl.set_uniform(prog, "u_hull_margin", margin)
+            values["u_view_proj"], values["u_eye"] = hull
+            values["u_hull_margin"] = margin  # UPSAMPLE_DYNAMIC: each sprite's own
+        glsl.set_uniforms(prog, values)
         if projection is not None:
             pass_, projector, origin = projection
             pass_.bind(prog, projector, origin)
         if lens is not None:
             lens_pass, lens_, origin = lens
             lens_pass.bind(prog, lens_, origin)
-        for name, value in (
-            ("u_desaturate", draw.desaturate),
-            ("u_edge_color", style.edge_color),
-            ("u_outline_color", style.outline_color),
-            ("u_outline_width", style.outline_width),
-            ("u_halo_width", int(style.halo)),
-            ("u_halo_color", tuple(style.halo_color)),
-            ("u_ortho_depth", (0.0, 0.0) if self.ortho_near is None else (1.0, self.ortho_near)),
-        ):
-            if glsl.has(prog, name):  # the compiler drops what a variant does not use
-                glsl.set_uniform(prog, name, value)
         return prog, vao
 
     def _render(self, vao: moderngl.VertexArray, count, draw: SpriteDraw) -> None:

@@ -97,6 +97,7 @@ wanted timers && step 150 timers bash -c "
 wanted stages && step 150 stages bash -c "
     python3 -c \"from rtta.scene.generators.assembly import write_assembly as w; w('/tmp/asm1k.glb', 1000); w('/tmp/asm10k.glb', 10000); w('/tmp/asm100k.glb', 100000)\" &&
     for f in /tmp/asm1k.glb /tmp/asm10k.glb /tmp/asm100k.glb '$DATA/engine_2cyl.glb'; do python3 '$ROOT/scripts/gpu_timers.py' \$f --stages; done &&
+    for f in /tmp/asm1k.glb '$DATA/engine_2cyl.glb'; do python3 '$ROOT/scripts/gpu_timers.py' \$f --stages --fused-max 0; done &&
     python3 '$ROOT/scripts/gpu_timers.py' /tmp/asm10k.glb --stages --parameterize cpu"
 # The compute blend against the sprites it replaces (Settings.blend), GPU ms per stage, SPAN 1, 2, 4.
 wanted blends && step 120 blends bash -c "

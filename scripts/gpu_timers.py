@@ -100,6 +100,7 @@ def main() -> None:
     p.add_argument("--no-hull", action="store_true", help="sprites over B_viewport's rectangle only")
     p.add_argument("--stages", action="store_true", help="also every compute dispatch, by program")
     p.add_argument("--parameterize", default="auto", choices=("auto", "cpu", "gpu"))
+    p.add_argument("--fused-max", type=int, default=None, help="objects up to which Algorithm 1 runs in one work group")
     p.add_argument(
         "--blends", default="auto", help="comma-separated Settings.blend values, one table each; compute:N: SPAN N"
     )
@@ -109,6 +110,8 @@ def main() -> None:
     viewport = tuple(int(v) for v in a.size.split("x"))
     r = Renderer(ctx, scene, Settings(parameterize=a.parameterize))
     r.atlas_sizing = "ahead"  # as the viewer and the benches draw
+    if a.fused_max is not None and r.on_gpu:
+        r._gpu_atlas.fused_max = a.fused_max  # type: ignore[union-attr]  (on_gpu: a GpuParameterize)
     style = composite.Style(focus={0, scene.count // 2})
     timers = Timers(ctx.finish if a.sync else None)
     if a.no_hull:

@@ -16,6 +16,8 @@
 //   STAGE 5 (per object): the second strip's and the wide regions placed; the used width
 //   STAGE 6 (per object): T and the record (records.glsl), written where capture reads it
 //   STAGES 7, 8 (before the rounds, fast navigation only): the smallest objects left out
+//   STAGE 9 (one work group, few objects): stages 1-6 in turn, u_rounds rounds, barriers between
+//            (each object stays with one invocation: items need no coherence across them)
 // This is next-fit decreasing height (the CPU path's packing) with the strips' order in a
 // class given by atomics and the regions that cross a shelf's end moved to the second strip.
 // Narrow: w <= max_w / 2; a wide region gets a shelf of its own. Height classes: exact below
@@ -327,6 +329,32 @@ void thin_cut_classes() {
     thin_left = left;
 }
 
+#if STAGE == 9
+uniform int u_rounds;
+
+// what the invocations wrote to the coherent buffers (classes, shelves, state) seen by all
+void stage_done() {
+    memoryBarrierBuffer();
+    barrier();
+}
+
+void main() {
+    int t = int(gl_LocalInvocationIndex);
+    for (int r = 0; r < u_rounds; r++) {  // rounds after the fit change nothing (done), as dispatched ones
+        for (int i = t; i < u_count; i += LOCAL_SIZE) if (done == 0u) project(i);
+        stage_done();
+        if (t == 0 && done == 0u) layout_first();
+        stage_done();
+        for (int i = t; i < u_count; i += LOCAL_SIZE) if (done == 0u) place_first(i);
+        stage_done();
+        if (t == 0 && done == 0u) layout_second();
+        stage_done();
+    }
+    for (int i = t; i < u_count; i += LOCAL_SIZE) if (done == 1u) place_second(i);
+    stage_done();
+    for (int i = t; i < u_count; i += LOCAL_SIZE) write_record(i);
+}
+#else
 void main() {
     int i = int(gl_GlobalInvocationID.x);
 #if STAGE == 8
@@ -353,3 +381,4 @@ void main() {
 #endif
 #endif
 }
+#endif

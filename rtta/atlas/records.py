@@ -172,3 +172,12 @@ class GpuRecords(Records):
     def __repr__(self) -> str:
         size, read = self.atlas_size, self.is_read
         return f"GpuRecords(count={self.count}, viewport={self.viewport}, atlas_size={size}, read={read})"
+
+
+def region_scales(records: Records, wanted: np.ndarray, atlas_max: tuple[int, int], factor: float) -> np.ndarray:
+    """The region scales in doubles, as Algorithm 1's shader works them out (the record holds
+    float32): min(wanted, the fit into a layer) x the rounds' factor; 0 for objects without a region."""
+    inner = np.maximum(records.viewport_rect[:, 2:] - records.viewport_rect[:, :2], 1).astype(np.float64)
+    room = np.asarray(atlas_max, np.float64) - 2 * records.border
+    fit = np.minimum(room[0] / inner[:, 0], room[1] / inner[:, 1])
+    return np.where(records.visible, np.minimum(wanted, fit) * factor, 0.0)

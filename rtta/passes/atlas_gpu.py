@@ -25,7 +25,7 @@ from typing import Literal
 import moderngl
 import numpy as np
 
-from ..atlas.records import RECORD_DTYPE, GpuRecords, Records
+from ..atlas.records import RECORD_DTYPE, GpuRecords, Records, region_scales
 from ..atlas.thinning import KeepShare
 from ..errors import RttaError
 from ..gl import glsl, sync
@@ -45,8 +45,9 @@ STATE_DTYPE = np.dtype(
     + [("wide2", "<u4"), ("cap2", "<u4"), ("demand", "<u4"), ("pad", "<u4"), ("factor", "<f8"), ("area", "<f8")]
 )
 Sizing = Literal["exact", "ahead"]
-PROJECT, LAYOUT, PLACE, LAYOUT_SECOND, PLACE_SECOND, RECORD = 1, 2, 3, 4, 5, 6  # the shader's stages
+PROJECT, LAYOUT, PLACE, LAYOUT_SECOND, PLACE_SECOND, RECORD, FUSED = 1, 2, 3, 4, 5, 6, 9  # the shader's stages
 ROUND = (PROJECT, LAYOUT, PLACE, LAYOUT_SECOND)
+FUSED_MAX, FUSED_GROUP = 1024, 256  # up to FUSED_MAX objects one work group of FUSED_GROUP runs every stage
 
 
 class GpuParameterize:
@@ -65,9 +66,10 @@ class GpuParameterize:
         self.ctx = ctx
         self.sizing: Sizing = sizing
         try:
+            sizes = {**dict.fromkeys((*ROUND, PLACE_SECOND, RECORD), LOCAL_SIZE), FUSED: FUSED_GROUP}
             self.programs = {
-                stage: ctx.compute_shader(glsl.load("parameterize.comp", STAGE=stage, LOCAL_SIZE=LOCAL_SIZE))
-                for stage in (*ROUND, PLACE_SECOND, RECORD)
+                stage: ctx.compute_shader(glsl.load("parameterize.comp", STAGE=stage, LOCAL_SIZE=size))
+                for stage, size in sizes.items()
             }
         except moderngl.Error as exc:  # e.g. a driver without doubles in compute shaders
             first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
@@ -76,6 +78,7 @@ class GpuParameterize:
         self.state = ctx.buffer(reserve=STATE_DTYPE.itemsize)
         self.late = ctx.buffer(reserve=STATE_DTYPE.itemsize)  # the state of the frame before ("ahead")
         self.next_round = ctx.buffer(reserve=32)  # indirect dispatch sizes of the rounds after the first
+        self.fused_max = 0 if sync.synchronous(ctx) else FUSED_MAX  # llvmpipe: 2-3x slower in one group
         self._start = np.zeros(1, STATE_DTYPE)
         self._start["factor"] = 1.0
         self.corners: moderngl.Buffer | None = None  # and the scales, items and shelves: made for n objects
@@ -327,7 +330,13 @@ class GpuParameterize:
     def _dispatch(self, groups: int, rounds: int) -> None:
         """`rounds` rounds of projection and layout, then placing and the records (the records
         of no region unless they fit). The rounds after the first are dispatched indirectly,
-        with the sizes the layout stage leaves: 0 groups once the regions fit."""
+        with the sizes the layout stage leaves: 0 groups once the regions fit. Up to `fused_max` objects
+        one work group runs every stage in one dispatch (a GPU: 1 call and no gaps instead of 18;
+        llvmpipe: 0, the work group's barriers cost it more than the calls)."""
+        if groups * LOCAL_SIZE <= self.fused_max:
+            glsl.set_uniform(self.programs[FUSED], "u_rounds", rounds)
+            self.programs[FUSED].run(1)
+            return sync.barrier(self.ctx, moderngl.SHADER_STORAGE_BARRIER_BIT | moderngl.BUFFER_UPDATE_BARRIER_BIT)
         self.next_round.write(np.array([groups, 1, 1, 0, 1, 1, 1, 0], np.uint32))
         self.next_round.bind_to_storage_buffer(Storage.PARAM_DISPATCH)
         programs, wait = self.programs, not sync.synchronous(self.ctx)  # (sync.barrier's test, once)
@@ -362,7 +371,7 @@ class GpuParameterize:
         self.reads += 1
         state = np.frombuffer(self.state.read(), STATE_DTYPE)[0]
         records = Records.from_packed(_read_packed(gpu.records, n), viewport, size, border)
-        records.scale[:] = _scales(records, wanted, atlas_max, float(state["factor"]))
+        records.scale[:] = region_scales(records, wanted, atlas_max, float(state["factor"]))
         return records
 
     def release(self) -> None:
@@ -389,12 +398,3 @@ def _replace(ctx: moderngl.Context, old: moderngl.Buffer | None, size: int) -> m
 def _read_packed(buffer: moderngl.Buffer, n: int) -> np.ndarray:
     """The record buffer's first n entries (std430, RECORD_DTYPE)."""
     return np.frombuffer(buffer.read(size=n * RECORD_DTYPE.itemsize), RECORD_DTYPE) if n else np.zeros(0, RECORD_DTYPE)
-
-
-def _scales(records: Records, wanted: np.ndarray, atlas_max: tuple[int, int], factor: float) -> np.ndarray:
-    """The region scales in doubles, as the shader worked them out (the record holds float32):
-    min(wanted, the fit into a layer) x the rounds' factor; 0 for objects without a region."""
-    inner = np.maximum(records.viewport_rect[:, 2:] - records.viewport_rect[:, :2], 1).astype(np.float64)
-    room = np.asarray(atlas_max, np.float64) - 2 * records.border
-    fit = np.minimum(room[0] / inner[:, 0], room[1] / inner[:, 1])
-    return np.where(records.visible, np.minimum(wanted, fit) * factor, 0.0)

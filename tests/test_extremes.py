@@ -114,3 +114,32 @@ def test_extreme_viewports(make_renderer, demo_scene, path, viewport):
     cam = Camera.orbit(demo_scene.center, demo_scene.radius, 40, 20, 2.2)
     out = check_frame(r, cam, viewport, path)
     assert out["visible"] >= 1
+
+
+@pytest.mark.parametrize("projection", ["perspective", "ortho"])
+def test_view_and_outline_eye_match_numpy(projection):
+    """The view matrix's lengths (without np.linalg.norm) and the outline eye from its rigid
+    inverse (without np.linalg.inv) against numpy's own, over orbits near and far, at a far origin."""
+    from rtta.scene.camera import outline_eye
+
+    rng = np.random.default_rng(5)
+    for _ in range(50):
+        center, radius = rng.normal(size=3) * 10.0 ** rng.uniform(-3, 6), 10.0 ** rng.uniform(-4, 5)
+        cam = Camera.orbit(center, radius, rng.uniform(0, 360), rng.uniform(-89, 89), rng.uniform(0.1, 10))
+        cam.kind = projection
+        origin = center + rng.normal(size=3) * radius
+        view, proj = cam.view(origin), cam.projection(1.5)
+        f = (cam.target - cam.eye) / np.linalg.norm(cam.target - cam.eye)
+        np.testing.assert_allclose(view[2, :3], -f, atol=1e-12)
+        np.testing.assert_allclose(view[:3, :3] @ view[:3, :3].T, np.eye(3), atol=1e-12)
+        inv = np.linalg.inv(view)
+        far = 1e4 * radius if projection == "ortho" else 0.0
+        want = inv[:3, 3] + inv[:3, 2] * far
+        np.testing.assert_allclose(
+            outline_eye(view, proj, radius), want, rtol=1e-9, atol=1e-9 * (1 + np.abs(want).max())
+        )
+        np.testing.assert_allclose(
+            outline_eye(view, proj, radius)[:3] - far * inv[:3, 2],
+            cam.eye - origin,
+            atol=1e-6 * (1 + np.abs(cam.eye - origin).max()),
+        )

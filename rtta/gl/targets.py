@@ -85,6 +85,7 @@ class LayeredTarget:
         self.allocations = 0
         self._small_frames = 0
         self._textures: list = []
+        self._layers_within: tuple = (None, 0)  # (key, layers): layers_within's last answer
         self._allocate(size, layers)
 
     @property
@@ -95,9 +96,13 @@ class LayeredTarget:
     def layers_within(self, size: tuple[int, int]) -> int:
         """The most layers of `size` (as `ensure` would allocate it: 64-texel steps, at least the
         allocation's size) the memory limit allows (half of RTTA_MEMORY_LIMIT_MB, and always
-        MIN_TARGET_BYTES): Algorithm 1 scales regions down to fit in them rather than fail."""
-        w, h = max(self.size[0], round_up(max(1, size[0]), 64)), max(self.size[1], round_up(max(1, size[1]), 64))
-        return max(1, max(memory_limit() // 2, MIN_TARGET_BYTES) // (w * h * self.texel_bytes))
+        MIN_TARGET_BYTES): Algorithm 1 scales regions down to fit in them rather than fail.
+        Asked every frame: worked out again (the limit read again) when `size` or the allocation changes."""
+        key = (size, self.size, self.texel_bytes)
+        if self._layers_within[0] != key:
+            w, h = max(self.size[0], round_up(max(1, size[0]), 64)), max(self.size[1], round_up(max(1, size[1]), 64))
+            self._layers_within = key, max(1, max(memory_limit() // 2, MIN_TARGET_BYTES) // (w * h * self.texel_bytes))
+        return self._layers_within[1]
 
     def _allocate(self, size: tuple[int, int], layers: int) -> None:
         """Textures of `size` x `layers`; an RttaError leaves the ones before (over the memory

@@ -9,6 +9,7 @@ the depth places it a little outside the scene's bounding sphere, whatever the o
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 from typing import Literal, get_args
 
@@ -82,6 +83,12 @@ def fit_distance(
         return float(max(half / np.tan(np.radians(fov_y) / 2.0), extent * 1e-3, 1e-9))
     need = z + np.maximum(np.abs(x) / tan_x, np.abs(y) / tan_y)
     return float(max(need.max() if p.size else 0.0, (z.max() if p.size else 0.0) + extent * 1e-3, 1e-9))
+
+
+def _length(v: np.ndarray) -> float:
+    """|v| of a 3-vector, as np.linalg.norm works it out (sqrt of v.v; NaN stays NaN) in one
+    call instead of six (a frame asks for a few)."""
+    return math.sqrt(float(v @ v))
 
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -200,14 +207,14 @@ class Camera:
         """World-to-eye matrix for positions given relative to `origin`."""
         eye = self.eye - np.asarray(origin, np.float64)
         f = self.target - self.eye
-        n = np.linalg.norm(f)
-        if not np.isfinite(n) or n == 0:
+        n = _length(f)
+        if not math.isfinite(n) or n == 0:
             raise RttaError("camera eye and target coincide")
         f = f / n
         s = _cross(f, np.asarray(self.up, np.float64))
-        if np.linalg.norm(s) < 1e-12:
+        if _length(s) < 1e-12:
             s = _cross(f, np.array([1.0, 0.0, 0.0] if abs(f[0]) < 0.9 else [0.0, 0.0, 1.0]))
-        s /= np.linalg.norm(s)
+        s /= _length(s)
         u = _cross(s, f)
         m = np.identity(4)
         m[0, :3], m[1, :3], m[2, :3] = s, u, -f
@@ -263,6 +270,8 @@ def ortho_near(proj: np.ndarray) -> float | None:
 def outline_eye(view: np.ndarray, proj: np.ndarray, radius: float) -> np.ndarray:
     """Where objects' outlines are seen from (scene origin at 0, as `view` expects): the eye,
     or in an orthographic view a point far back along the view axis (the outline of a box seen
-    along parallel rays is its outline from infinitely far)."""
-    inv = np.linalg.inv(view)
-    return inv[:3, 3] + inv[:3, 2] * (1e4 * max(radius, 1e-9) if is_ortho(proj) else 0.0)
+    along parallel rays is its outline from infinitely far). `view` is rigid (Camera.view): its
+    inverse is the transposed rotation, and the eye -R^T t."""
+    rotation = view[:3, :3]
+    eye = -(rotation.T @ view[:3, 3])
+    return eye + rotation[2] * (1e4 * max(radius, 1e-9) if is_ortho(proj) else 0.0)

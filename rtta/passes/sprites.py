@@ -188,6 +188,7 @@ class SpritePass:
         self.ctx = ctx
         self._programs: dict[tuple, moderngl.Program] = {}
         self._vaos: dict[tuple, moderngl.VertexArray] = {}
+        self._listed: dict[tuple, list] = {}  # draw_listed's variants per kind of draw
         self.order = ctx.buffer(reserve=16)
         self.passes: list[str] = []  # the draws of the last frame, for inspection
         self.hull_draws = 0  # draws of the last frame whose sprites covered projected outlines
@@ -249,23 +250,30 @@ class SpritePass:
         if listed.command is None and listed.count == 0:
             return
         listed.ids.bind_to_storage_buffer(Storage.DRAW_LIST)
-        sampled = draw.kind not in (Kind.OUTLINES, Kind.HALOS)
-        variants = [(None, {"UPSAMPLE_DYNAMIC": sampled})]
-        if listed.command is not None:
-            f = listed.firsts
-            if listed.variants == "regions":
-                variants = [(f[0], {}), (f[1], {"UPSAMPLE": sampled}), (f[2], {"UPSAMPLE_DYNAMIC": sampled})]
-            else:  # a focus list: its outlines by quads where every region is at scale 1
-                quad = quad_outlines(draw, style, records)
-                variants = [(f[0], {"OUTLINE_QUAD": quad}), (f[1], {}), (f[2], {"UPSAMPLE_DYNAMIC": sampled})]
+        quad = listed.variants == "focus" and quad_outlines(draw, style, records)
+        on = (self._projection is not None, self._lens is not None)
+        key = (draw, listed.command is None, listed.variants, quad, on)
+        variants = self._listed.get(key)
+        if variants is None:  # the variants' programs: made once per kind of draw, not every frame
+            variants = self._listed[key] = self._listed_variants(listed, draw, style, records, quad)
         hull = None if draw.kind is Kind.HALOS else self._hull
         hull_draws = self.hull_draws + (hull is not None)  # one list: one draw, whichever variant
-        for first, variant in variants:
-            defines = {**self._defines(None, draw, style, records), "HULL_PER_SPRITE": True, **variant}
-            prog, vao = self._setup(defines, draw, style, records, hull)
-            glsl.set_uniforms(prog, {"u_upsample_below": UPSAMPLE_BELOW, "u_hull_min_area": float(HULL_MIN_AREA)})
-            self._render(vao, listed if first is None else (listed.command, first), draw)
+        extra = {"u_upsample_below": UPSAMPLE_BELOW, "u_hull_min_area": float(HULL_MIN_AREA)}
+        for i, variant in variants:
+            vao = self._use(variant, draw, style, records, hull, extra=extra)
+            self._render(vao, listed if i is None else (listed.command, listed.firsts[i]), draw)
         self.hull_draws = hull_draws
+
+    def _listed_variants(self, listed: Listed, draw: SpriteDraw, style: Style, records, quad: bool) -> list:
+        """(which of `listed.firsts`, or None for a CPU list's count; `_variant`) per draw call."""
+        sampled = draw.kind not in (Kind.OUTLINES, Kind.HALOS)
+        chosen: list[tuple[int | None, dict]] = [(None, {"UPSAMPLE_DYNAMIC": sampled})]
+        if listed.command is not None and listed.variants == "regions":
+            chosen = [(0, {}), (1, {"UPSAMPLE": sampled}), (2, {"UPSAMPLE_DYNAMIC": sampled})]
+        elif listed.command is not None:  # a focus list: its outlines by quads where every region is at scale 1
+            chosen = [(0, {"OUTLINE_QUAD": quad}), (1, {}), (2, {"UPSAMPLE_DYNAMIC": sampled})]
+        base = {**self._defines(None, draw, style, records), "HULL_PER_SPRITE": True}
+        return [(i, self._variant({**base, **extra})) for i, extra in chosen]
 
     def _defines(self, ids, draw: SpriteDraw, style: Style, records: Records) -> dict[str, bool]:
         """The draw's variant; `ids` None: a GPU list (no OUTLINE_QUAD: it needs their scales)."""
@@ -296,17 +304,26 @@ class SpritePass:
         halo = draw.kind is Kind.HALOS
         hull = None if halo or draw.upsample or self._hull is None or not worth_outlines(records, ids) else self._hull
         margin = hull_margin(records.scale[ids]) if hull is not None else 0.0
-        _, vao = self._setup(defines, draw, style, records, hull, margin)
+        vao = self._setup(defines, draw, style, records, hull, margin)
         self._render(vao, len(ids), draw)
 
     def _setup(self, defines, draw: SpriteDraw, style: Style, records, hull, margin: float = 0.0):
         """The draw's program with its uniforms set (`hull`: (P V bytes, eye) or None, `margin`
-        its growth in pixels); returns (program, vertex array)."""
-        projection = self._projection if defines["PROJECTOR"] else None
-        lens = self._lens if defines["LENS"] else None
+        its growth in pixels); returns its vertex array."""
+        return self._use(self._variant(defines), draw, style, records, hull, margin)
+
+    def _variant(self, defines: dict[str, bool]) -> tuple:
+        """(program, vertex array, pass name, projector on, lens on) of a draw's defines."""
         on = tuple(k for k, v in defines.items() if v)
-        self.passes.append(_pass_name(on))
         prog, vao = self._program(**dict.fromkeys(on, True))
+        return prog, vao, _pass_name(on), defines["PROJECTOR"], defines["LENS"]
+
+    def _use(self, variant: tuple, draw: SpriteDraw, style: Style, records, hull, margin=0.0, extra=None):
+        """A `_variant`'s uniforms set for this draw (and `extra` ones); returns its vertex array."""
+        prog, vao, name, projector, lens_on = variant
+        projection = self._projection if projector else None
+        lens = self._lens if lens_on else None
+        self.passes.append(name)
         viewport = records.viewport
         values = {  # the ones a variant does not use were dropped by the compiler (set_uniforms skips them)
             "u_viewport": (float(viewport[0]), float(viewport[1])),
@@ -325,14 +342,14 @@ class SpritePass:
             self.hull_draws += 1
             values["u_view_proj"], values["u_eye"] = hull
             values["u_hull_margin"] = margin  # UPSAMPLE_DYNAMIC: each sprite's own
-        glsl.set_uniforms(prog, values)
+        glsl.set_uniforms(prog, values if extra is None else {**values, **extra})
         if projection is not None:
             pass_, projector, origin = projection
             pass_.bind(prog, projector, origin)
         if lens is not None:
             lens_pass, lens_, origin = lens
             lens_pass.bind(prog, lens_, origin)
-        return prog, vao
+        return vao
 
     def _render(self, vao: moderngl.VertexArray, count, draw: SpriteDraw) -> None:
         """The draw's GL state around one draw call, then the defaults back: `count` points, a
@@ -367,3 +384,4 @@ class SpritePass:
             obj.release()
         self._vaos.clear()
         self._programs.clear()
+        self._listed.clear()

@@ -333,12 +333,12 @@ class GpuParameterize:
         with the sizes the layout stage leaves: 0 groups once the regions fit. Up to `fused_max` objects
         one work group runs every stage in one dispatch (a GPU: 1 call and no gaps instead of 18;
         llvmpipe: 0, the work group's barriers cost it more than the calls)."""
+        self.next_round.write(np.array([groups, 1, 1, 0, 1, 1, 1, 0], np.uint32))
+        self.next_round.bind_to_storage_buffer(Storage.PARAM_DISPATCH)  # the layout stage writes it
         if groups * LOCAL_SIZE <= self.fused_max:
             glsl.set_uniform(self.programs[FUSED], "u_rounds", rounds)
             self.programs[FUSED].run(1)
             return sync.barrier(self.ctx, moderngl.SHADER_STORAGE_BARRIER_BIT | moderngl.BUFFER_UPDATE_BARRIER_BIT)
-        self.next_round.write(np.array([groups, 1, 1, 0, 1, 1, 1, 0], np.uint32))
-        self.next_round.bind_to_storage_buffer(Storage.PARAM_DISPATCH)
         programs, wait = self.programs, not sync.synchronous(self.ctx)  # (sync.barrier's test, once)
         for r in range(rounds):
             for stage in ROUND:

@@ -120,7 +120,7 @@ def test_extreme_viewports(make_renderer, demo_scene, path, viewport):
 def test_view_and_outline_eye_match_numpy(projection):
     """The view matrix's lengths (without np.linalg.norm) and the outline eye from its rigid
     inverse (without np.linalg.inv) against numpy's own, over orbits near and far, at a far origin."""
-    from rtta.scene.camera import outline_eye
+    from rtta.scene.camera import near_distance, outline_eye, view_depth
 
     rng = np.random.default_rng(5)
     for _ in range(50):
@@ -129,6 +129,7 @@ def test_view_and_outline_eye_match_numpy(projection):
         cam.kind = projection
         origin = center + rng.normal(size=3) * radius
         view, proj = cam.view(origin), cam.projection(1.5)
+        assert near_distance(proj) == pytest.approx(float(view_depth(0.0, proj)), rel=1e-12)
         f = (cam.target - cam.eye) / np.linalg.norm(cam.target - cam.eye)
         np.testing.assert_allclose(view[2, :3], -f, atol=1e-12)
         np.testing.assert_allclose(view[:3, :3] @ view[:3, :3].T, np.eye(3), atol=1e-12)

@@ -29,7 +29,7 @@ from ..gl.bindings import Storage
 from ..gl.gpu import GpuScene
 from ..gl.indirect import COMMAND_BYTES, IndirectCountDraw
 from ..gl.targets import LayeredTarget
-from ..scene.camera import view_depth
+from ..scene.camera import near_distance
 
 LOCAL_SIZE = 64  # objects per workgroup: a command covers at most this many
 MAX_GROUPS = 65535  # workgroups along x that every GL 4.3 driver takes
@@ -110,18 +110,17 @@ class CaptureLists:
         self.ranges.bind_to_storage_buffer(Storage.DRAW_RANGES)
         self.commands.bind_to_storage_buffer(Storage.DRAW_COMMANDS)
         self.counts.bind_to_storage_buffer(Storage.DRAW_COUNTS)
+        row = np.asarray(view, np.float64)[2]
         values = {
             "u_count": n,
             "u_capacity": self.capacity,
-            "u_viewport": tuple(float(v) for v in viewport),
-            "u_view_z": tuple(float(v) for v in np.asarray(view, np.float64)[2]),
-            "u_near": float(view_depth(0.0, proj)),
+            "u_viewport": (float(viewport[0]), float(viewport[1])),
+            "u_view_z": (float(row[0]), float(row[1]), float(row[2]), float(row[3])),
+            "u_near": near_distance(proj),
             "u_cull_closed": bool(gpu.cull_closed),
             "u_clip_all": bool(clip_all),
         }
-        for name, value in values.items():
-            if glsl.has(self.program, name):
-                glsl.set_uniform(self.program, name, value)
+        glsl.set_uniforms(self.program, values)
         sync.barrier(self.ctx, GL_SHADER_STORAGE_BARRIER_BIT)  # R written by Algorithm 1's shaders
         blocks = -(-n // LOCAL_SIZE)
         wide = min(blocks, MAX_GROUPS)

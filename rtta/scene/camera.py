@@ -253,6 +253,15 @@ def view_depth(window, proj: np.ndarray):
         return -(p[2, 3] - ndc * p[3, 3]) / (ndc * p[3, 2] - p[2, 2])
 
 
+def near_distance(proj: np.ndarray) -> float:
+    """`view_depth(0.0, proj)` (the near plane's distance) in scalar arithmetic: no numpy call,
+    for the ones made every frame."""
+    num, den = float(proj[2, 3]) + float(proj[3, 3]), float(proj[3, 2]) + float(proj[2, 2])
+    if den == 0.0:
+        return math.copysign(math.inf, num) if num else math.nan
+    return num / den
+
+
 def is_ortho(proj: np.ndarray) -> bool:
     """Whether a GL projection matrix is orthographic (its w row is (0, 0, 0, 1))."""
     return bool(proj[3, 2] == 0.0 and proj[3, 3] == 1.0)

@@ -107,7 +107,21 @@ def test_a_refused_allocation_leaves_the_target_usable(gl, monkeypatch):
     assert (t.size, t.layers) == ((64, 64), 1)
     t.clear()
     assert t.read(parts=("depth",))["depth"].min() == 1.0
-    assert t.layers_within((64, 64)) == 2**20 // (64 * 64 * t.texel_bytes)
+    assert t.layers_within((64, 64)) == 2**20 // (64 * 64 * targets.MAX_TEXEL_BYTES)
+    assert t.layers_within((10, 100)) == 2**20 // (64 * 128 * targets.MAX_TEXEL_BYTES)  # 64-texel steps
+    t.release()
+
+
+def test_growth_over_the_limit_allocates_the_fit_alone(gl, monkeypatch):
+    """More layers of a smaller region than a large allocation holds: grown over both, they
+    would pass the memory limit; the fit alone does not, and is what is allocated."""
+    from rtta.gl import targets
+
+    monkeypatch.setattr(targets, "MIN_TARGET_BYTES", 2**20)
+    monkeypatch.setenv("RTTA_MEMORY_LIMIT_MB", "16")  # 8 MiB of targets
+    t = LayeredTarget(gl, (512, 512), 1)
+    assert t.ensure((64, 64), 40)
+    assert (t.size, t.layers) == ((64, 64), 40)
     t.release()
 
 

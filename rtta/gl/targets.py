@@ -16,6 +16,7 @@ from . import glraw
 
 SHRINK_AFTER_FRAMES = 60
 MIN_TARGET_BYTES = 512 * 2**20  # render targets may always take this much, whatever the scene limit
+MAX_TEXEL_BYTES = 24  # a LayeredTarget texel with normals and a stencil (texel_bytes' largest)
 
 
 def release_framebuffer(ctx: moderngl.Context, fbo) -> None:
@@ -37,6 +38,11 @@ def release_all(ctx: moderngl.Context, parts) -> None:
 def decode_normals(texels: np.ndarray) -> np.ndarray:
     """RGBA8 normal texels -> float32 view-space normals [..., 3] (as the shaders decode them)."""
     return texels[..., :3].astype(np.float32) / 255.0 * 2.0 - 1.0
+
+
+def _target_budget() -> int:
+    """Bytes the render targets may take: half of RTTA_MEMORY_LIMIT_MB, and always MIN_TARGET_BYTES."""
+    return max(memory_limit() // 2, MIN_TARGET_BYTES)
 
 
 def round_up(v: int, step: int) -> int:
@@ -94,14 +100,15 @@ class LayeredTarget:
         return 4 + 4 * self.normals + 4 + 4 + 4 * self.stencil
 
     def layers_within(self, size: tuple[int, int]) -> int:
-        """The most layers of `size` (as `ensure` would allocate it: 64-texel steps, at least the
-        allocation's size) the memory limit allows (half of RTTA_MEMORY_LIMIT_MB, and always
-        MIN_TARGET_BYTES): Algorithm 1 scales regions down to fit in them rather than fail.
-        Asked every frame: worked out again (the limit read again) when `size` or the allocation changes."""
-        key = (size, self.size, self.texel_bytes)
-        if self._layers_within[0] != key:
-            w, h = max(self.size[0], round_up(max(1, size[0]), 64)), max(self.size[1], round_up(max(1, size[1]), 64))
-            self._layers_within = key, max(1, max(memory_limit() // 2, MIN_TARGET_BYTES) // (w * h * self.texel_bytes))
+        """The most layers of `size` (in `ensure`'s 64-texel steps, with normals and a stencil
+        whether or not the target has them now) that the memory limit allows: Algorithm 1 scales
+        regions down to fit in them rather than fail. It depends on `size` alone (worked out, and
+        the limit read, when that changes): a bound that moved with sections or the allocation
+        would make the viewer's frames size the atlas anew ("ahead" keys on it), and pictures
+        differ by a texel's rounding."""
+        if self._layers_within[0] != size:
+            w, h = round_up(max(1, size[0]), 64), round_up(max(1, size[1]), 64)
+            self._layers_within = size, max(1, _target_budget() // (w * h * MAX_TEXEL_BYTES))
         return self._layers_within[1]
 
     def _allocate(self, size: tuple[int, int], layers: int) -> None:
@@ -110,7 +117,7 @@ class LayeredTarget:
         w, h = max(1, int(size[0])), max(1, int(size[1]))
         n = max(1, int(layers))
         need = w * h * n * self.texel_bytes
-        if need > max(memory_limit() // 2, MIN_TARGET_BYTES):
+        if need > _target_budget():
             raise RttaError(
                 f"the render targets would need {w}x{h}x{n} texels ({need / 2**20:,.0f} MiB), over half "
                 "the memory limit (RTTA_MEMORY_LIMIT_MB); use a smaller --size or --region-scale"
@@ -154,7 +161,10 @@ class LayeredTarget:
         w, h = self.size
         if need_w > w or need_h > h or need_l > self.layers:
             self._small_frames = 0
-            self._allocate((max(w, round_up(need_w, 64)), max(h, round_up(need_h, 64))), max(self.layers, need_l))
+            size, n = (max(w, round_up(need_w, 64)), max(h, round_up(need_h, 64))), max(self.layers, need_l)
+            if size[0] * size[1] * n * self.texel_bytes > _target_budget():  # grown over the limit: the fit alone
+                size, n = (round_up(need_w, 64), round_up(need_h, 64)), need_l
+            self._allocate(size, n)
             return True
         if need_w * need_h * need_l * 2 < w * h * self.layers:
             self._small_frames += 1

@@ -5,6 +5,7 @@ from __future__ import annotations
 import atexit
 import os
 import shutil
+import signal
 import tempfile
 
 import pytest
@@ -15,6 +16,12 @@ from rtta.gl.context import shared_context
 # the commands the tests run in subprocesses inherit it; removed when the session ends
 os.environ["RTTA_CACHE_DIR"] = tempfile.mkdtemp(prefix="rtta-test-cache-")
 atexit.register(shutil.rmtree, os.environ["RTTA_CACHE_DIR"], True)
+
+# Ctrl+C as a terminal sends it, whatever started the suite: a shell runs a background job with
+# SIGINT ignored, which rtta keeps (nohup's choice), and the processes the tests start inherit
+# it; the tests of interrupts (test_interrupts.py, the viewer's Ctrl+C) would then wait in vain
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 def pytest_addoption(parser):

@@ -1,12 +1,9 @@
-"""Sprite draws (RTTA paper, section 3.2, Figure 3): one point per object, expanded into a quad
-over its B_viewport (or the projected outline of its B_world), reading its own unoccluded
-atlas images. Every draw of compositing is one of these; `SpriteDraw` says which kind.
-
-`SpritePass.draw(ids, draw, style, records)` draws `ids` in order into the bound framebuffer,
-from the atlas, records and style buffers CompositePass bound (rtta.gl.bindings), with the
-frame's projector, lens and outline hull (`SpritePass.frame`). `ids` is a CPU list, or a
-`Listed`: a list on the GPU (compositing's GPU-driven draws, order_gpu.GpuOrder), drawn with the
-CPU's per-draw choices made per sprite in the shaders (UPSAMPLE_DYNAMIC) and no read of R.
+"""Sprite draws (RTTA paper, section 3.2, Figure 3): one point per object, expanded into a quad over its B_viewport
+(or the projected outline of its B_world), reading its own unoccluded atlas images; `SpriteDraw` says which kind.
+`SpritePass.draw(ids, draw, style, records)` draws `ids` in order into the bound framebuffer, from the atlas, records
+and style buffers CompositePass bound (rtta.gl.bindings), with the frame's projector, lens and outline hull
+(`SpritePass.frame`). `ids` is a CPU list, or a `Listed`: a list on the GPU (compositing's GPU-driven draws,
+order_gpu.GpuOrder), drawn with the CPU's per-draw choices made per sprite in the shaders and no read of R.
 """
 
 from __future__ import annotations
@@ -259,9 +256,11 @@ class SpritePass:
         hull = None if draw.kind is Kind.HALOS else self._hull
         hull_draws = self.hull_draws + (hull is not None)  # one list: one draw, whichever variant
         extra = {"u_upsample_below": UPSAMPLE_BELOW, "u_hull_min_area": float(HULL_MIN_AREA)}
+        held = self._state(draw)  # the variants' calls share it: set once, not once a variant
         for i, variant in variants:
             vao = self._use(variant, draw, style, records, hull, extra=extra)
-            self._render(vao, listed if i is None else (listed.command, listed.firsts[i]), draw)
+            self._issue(vao, listed if i is None else (listed.command, listed.firsts[i]))
+        self._defaults(*held)
         self.hull_draws = hull_draws
 
     def _listed_variants(self, listed: Listed, draw: SpriteDraw, style: Style, records, quad: bool) -> list:
@@ -352,8 +351,23 @@ class SpritePass:
         return vao
 
     def _render(self, vao: moderngl.VertexArray, count, draw: SpriteDraw) -> None:
-        """The draw's GL state around one draw call, then the defaults back: `count` points, a
-        Listed's count, or (command buffer, k): its k-th indirect command."""
+        """The draw's GL state around one draw call, then the defaults back."""
+        held = self._state(draw)
+        self._issue(vao, count)
+        self._defaults(*held)
+
+    @staticmethod
+    def _issue(vao: moderngl.VertexArray, count) -> None:
+        """One draw call: `count` points, a Listed's count, or (command buffer, k): its k-th command."""
+        if isinstance(count, Listed):
+            vao.render(moderngl.POINTS, vertices=count.count)
+        elif isinstance(count, tuple):
+            vao.render_indirect(count[0], moderngl.POINTS, count=1, first=count[1])
+        else:
+            vao.render(moderngl.POINTS, vertices=count)
+
+    def _state(self, draw: SpriteDraw) -> tuple:
+        """The GL state of `draw`'s calls (the framebuffer bound); what `_defaults` needs back."""
         flags = moderngl.NOTHING
         if draw.depth is not Depth.OFF:
             flags |= moderngl.DEPTH_TEST
@@ -368,12 +382,10 @@ class SpritePass:
         if masked:
             fbo.color_mask = (False, False, False, False)
         fbo.use()
-        if isinstance(count, Listed):
-            vao.render(moderngl.POINTS, vertices=count.count)
-        elif isinstance(count, tuple):
-            vao.render_indirect(count[0], moderngl.POINTS, count=1, first=count[1])
-        else:
-            vao.render(moderngl.POINTS, vertices=count)
+        return fbo, masked
+
+    def _defaults(self, fbo: moderngl.Framebuffer, masked: bool) -> None:
+        """The state `_state` changed, back to the defaults."""
         fbo.depth_mask = True
         self.ctx.depth_func = "<"
         if masked:

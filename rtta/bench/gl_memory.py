@@ -15,6 +15,7 @@ import ctypes
 import moderngl
 
 from ..gl.glraw import _lib
+from .reliability import live_names
 
 GL_BUFFER_SIZE = 0x8764
 GL_TEXTURE_WIDTH, GL_TEXTURE_HEIGHT, GL_TEXTURE_DEPTH, GL_TEXTURE_SAMPLES = 0x1000, 0x1001, 0x8071, 0x9106
@@ -26,17 +27,6 @@ GL_TEXTURE_TARGET = 0x1006
 GL_TEXTURE_CUBE_MAP, GL_TEXTURE_BUFFER = 0x8513, 0x8C2A
 MULTISAMPLE = (0x9100, 0x9102)  # GL_TEXTURE_2D_MULTISAMPLE(_ARRAY): one level
 MAX_LEVELS = 15  # of a texture of up to 16384 texels a side
-
-
-def _names(is_name: str, gen: str) -> list[int]:
-    """The live names of a kind: glIs* over every name handed out so far."""
-    gl = _lib()
-    top = ctypes.c_uint(0)
-    getattr(gl, gen)(1, ctypes.byref(top))
-    getattr(gl, gen.replace("Gen", "Delete"))(1, ctypes.byref(top))
-    fn = getattr(gl, is_name)
-    fn.restype = ctypes.c_ubyte
-    return [name for name in range(1, top.value) if fn(ctypes.c_uint(name))]
 
 
 def _ints(fn, name: int, pnames, level: int | None = None) -> list[int]:
@@ -89,13 +79,13 @@ def gl_bytes(ctx: moderngl.Context) -> dict[str, int]:
     """
     gl = _lib()
     out = {"buffers": 0, "textures": 0, "renderbuffers": 0}
-    for name in _names("glIsBuffer", "glGenBuffers"):
+    for name in live_names("buffers"):
         size = ctypes.c_int64(0)
         gl.glGetNamedBufferParameteri64v(ctypes.c_uint(name), ctypes.c_uint(GL_BUFFER_SIZE), ctypes.byref(size))
         out["buffers"] += size.value
-    for name in _names("glIsTexture", "glGenTextures"):
+    for name in live_names("textures"):
         out["textures"] += _texture_bytes(name)
-    for name in _names("glIsRenderbuffer", "glGenRenderbuffers"):
+    for name in live_names("renderbuffers"):
         pnames = (GL_RENDERBUFFER_WIDTH, GL_RENDERBUFFER_HEIGHT, GL_RENDERBUFFER_SAMPLES)
         w, h, samples = _ints(gl.glGetNamedRenderbufferParameteriv, name, pnames)
         bits = sum(_ints(gl.glGetNamedRenderbufferParameteriv, name, RENDERBUFFER_BITS))

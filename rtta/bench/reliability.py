@@ -54,17 +54,20 @@ def _newest_name(gen: str | None, delete: str) -> int:
     return int(name.value)
 
 
+def live_names(kind: str) -> list[int]:
+    """The live names of a kind of GL object (a key of _CENSUS): glIs* over every name
+    handed out so far."""
+    is_name, gen, delete = _CENSUS[kind]
+    top = _newest_name(gen, delete)
+    fn = getattr(_lib(), is_name)
+    fn.restype = ctypes.c_ubyte
+    return [name for name in range(1, top) if fn(ctypes.c_uint(name))]
+
+
 def gl_census(ctx: moderngl.Context) -> dict[str, int]:
     """Live GL objects per kind in this context (moderngl's own and raw ones alike)."""
-    gl = _lib()
-    gl.glUseProgram(0)  # a deleted program still in use would count as live
-    out = {}
-    for kind, (is_name, gen, delete) in _CENSUS.items():
-        top = _newest_name(gen, delete)
-        fn = getattr(gl, is_name)
-        fn.restype = ctypes.c_ubyte
-        out[kind] = sum(1 for name in range(1, top) if fn(ctypes.c_uint(name)))
-    return out
+    _lib().glUseProgram(0)  # a deleted program still in use would count as live
+    return {kind: len(live_names(kind)) for kind in _CENSUS}
 
 
 def random_camera(rng: np.random.Generator, scene: Scene) -> tuple[Camera, str]:

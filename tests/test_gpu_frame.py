@@ -224,3 +224,24 @@ def test_the_viewer_reads_r_only_at_rest(make_renderer, demo_scene):
     assert records_to_read(host) is rec  # read already: nothing more to wait for
     host.records = None
     assert records_to_read(host) is None
+
+
+def test_stages_are_timed_only_when_measuring(make_renderer, demo_scene):
+    """`measure` records each stage a frame ran (post only in ghosted-ao); off, nothing is
+    recorded; a stage that raises records nothing and leaves the next frame timed."""
+    r = make_renderer(demo_scene)
+    cam = Camera.orbit(demo_scene.center, demo_scene.radius, 30, 20, 2.2)
+    r.capture(cam, (96, 64))
+    r.composite("ghosted", Style(focus={0}))
+    assert r.timings == {}
+    r.measure = True
+    r.capture(cam, (96, 64), normals=True)
+    r.composite("ghosted-ao", Style(focus={0}))
+    assert set(r.timings) == {"parameterize", "capture", "composite", "post"}
+    assert all(np.isfinite(v) and v >= 0 for v in r.timings.values())
+    r.timings.clear()
+    with pytest.raises(ValueError):
+        r.composite("no such mode")
+    assert "composite" not in r.timings
+    r.composite("ghosted")
+    assert set(r.timings) == {"composite"}

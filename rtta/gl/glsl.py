@@ -148,7 +148,12 @@ def set_uniforms(prog: moderngl.Program | moderngl.ComputeShader, values: dict) 
     values : dict
         Uniform name -> value, as `set_uniform` takes it; names the program lacks are skipped.
     """
-    held, names = _held(prog)
+    held = prog.extra  # _held(prog), without its call
+    if held is None:
+        held = prog.extra = {}
+    names = held.get("__members__")
+    if names is None:
+        names = held["__members__"] = frozenset(prog)
     for name, value in values.items():
         if name in names and (name not in held or held[name] != value):
             held[name] = value

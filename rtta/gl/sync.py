@@ -35,5 +35,6 @@ def synchronous(ctx: moderngl.Context) -> bool:
 def barrier(ctx: moderngl.Context, bits: int) -> None:
     """glMemoryBarrier(bits) after compute writes that a later dispatch or draw's vertex,
     geometry or indirect stage reads; nothing on a synchronous driver (the module's docstring)."""
-    if not synchronous(ctx):
+    known = getattr(ctx, "_rtta_synchronous", None)  # synchronous(ctx), without its call
+    if not (synchronous(ctx) if known is None else known):
         ctx.memory_barrier(bits)

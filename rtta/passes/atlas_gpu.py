@@ -288,16 +288,12 @@ class GpuParameterize:
     def _bind(self, gpu: GpuScene, uniforms: dict) -> None:
         """The uniforms that changed (most stay from frame to frame: the matrix alone moves),
         the state reset and the buffers bound."""
-        for name, value in uniforms.items():
-            if self._uniforms.get(name) == value:
-                continue
-            self._uniforms[name] = value
-            for prog in self.programs.values():
-                if glsl.has(prog, name):
-                    if isinstance(value, bytes):
-                        glsl.uniform(prog, name).write(value)
-                    else:
-                        glsl.uniform(prog, name).value = value
+        changed = {name: value for name, value in uniforms.items() if self._uniforms.get(name) != value}
+        if changed:
+            self._uniforms.update(changed)
+            for prog in self.programs.values():  # (the ones holding any: __members__ as set_uniforms keeps them)
+                if prog.extra is None or not prog.extra["__members__"].isdisjoint(changed):
+                    glsl.set_uniforms(prog, changed)
         self.state.write(self._start)
         self.classes.clear()
         assert self.corners is not None and self.scales is not None and self.items is not None
@@ -351,7 +347,8 @@ class GpuParameterize:
                     self.ctx.memory_barrier(moderngl.SHADER_STORAGE_BARRIER_BIT | moderngl.COMMAND_BARRIER_BIT)
         for stage in (PLACE_SECOND, RECORD):
             programs[stage].run(groups)
-            sync.barrier(self.ctx, moderngl.SHADER_STORAGE_BARRIER_BIT | moderngl.BUFFER_UPDATE_BARRIER_BIT)
+            if wait:
+                self.ctx.memory_barrier(moderngl.SHADER_STORAGE_BARRIER_BIT | moderngl.BUFFER_UPDATE_BARRIER_BIT)
 
     def _rounds(self, groups: int) -> np.void:
         """ROUNDS rounds, placing and the records; the state, a read that waits for the GPU."""

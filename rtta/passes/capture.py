@@ -57,7 +57,7 @@ class ScenePass:
         """The pass's program for untextured or textured scenes, writing a normal image or
         not (to match the target: LayeredTarget.normals), with the `variant` defines that are
         true (e.g. REGION_CLIP); compiled on first use."""
-        on = tuple(sorted(k for k, v in variant.items() if v))
+        on = tuple(sorted(filter(variant.get, variant)))  # the true ones
         key = (textured, normals, on)
         if key not in self._programs:
             geometry, fragment, defines = self._source
@@ -95,11 +95,12 @@ class ScenePass:
         return self._bind(gpu)
 
     def prepare(
-        self, gpu: GpuScene, view: np.ndarray, proj: np.ndarray, target: LayeredTarget, **variant: bool
+        self, gpu: GpuScene, view, proj, target: LayeredTarget, matrices: tuple | None = None, **variant: bool
     ) -> moderngl.VertexArray:
         """setup() without the per-object work (culling, sections): for draws whose lists the
-        GPU built (rtta.passes.draw_lists), a placement without sections."""
-        self.program = self._program(gpu, view, proj, target, variant)
+        GPU built (rtta.passes.draw_lists), a placement without sections. `matrices`: view and
+        proj as mat_bytes made them (a frame's draws make them once)."""
+        self.program = self._program(gpu, view, proj, target, variant, matrices)
         return self._bind(gpu)
 
     def _bind(self, gpu: GpuScene) -> moderngl.VertexArray:
@@ -110,14 +111,14 @@ class ScenePass:
         self.ctx.depth_func = "<"
         return gpu.vao(self.program)
 
-    def _program(self, gpu: GpuScene, view, proj, target: LayeredTarget | None, variant: dict) -> moderngl.Program:
+    def _program(self, gpu: GpuScene, view, proj, target, variant: dict, matrices=None) -> moderngl.Program:
         """The program for `variant` and the scene's placement (rtta.passes.sections), its
-        matrices and the placement's uniforms set."""
+        matrices (`matrices`: as mat_bytes made them) and the placement's uniforms set."""
         placement = gpu.placement
         extra = {**(placement.variant() if placement is not None else {}), **variant}
         program = self.program_for(gpu.textured, target is None or target.normals, **extra)
-        glsl.uniform(program, "u_view").write(mat_bytes(view))
-        glsl.uniform(program, "u_proj").write(mat_bytes(proj))
+        view_bytes, proj_bytes = matrices or (mat_bytes(view), mat_bytes(proj))
+        glsl.set_uniforms(program, {"u_view": view_bytes, "u_proj": proj_bytes})
         if placement is not None:
             placement.apply(program, proj @ view)
         if self.binder is not None and not variant.get("CAP_COUNT"):  # the count writes the stencil alone

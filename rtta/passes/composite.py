@@ -118,10 +118,10 @@ class CompositePass:
         reads R back (GpuRecords.read)."""
         if lens is not None and mode not in LENS_MODES:
             lens = None
-        try:
-            mode = Mode(mode)
-        except ValueError:
-            raise ValueError(f"unknown mode {mode!r}; modes: {', '.join(MODES)}") from None
+        found: Mode | None = Mode._value2member_map_.get(mode) if isinstance(mode, str) else None  # type: ignore[assignment]
+        if found is None:  # (Mode(mode): 3 calls)
+            raise ValueError(f"unknown mode {mode!r}; modes: {', '.join(MODES)}")
+        mode = found
         inv_view_proj = None  # (P V)^-1 once per render, for every draw that rebuilds world positions
         if projection is not None or lens is not None:
             if view_proj is None:
@@ -131,7 +131,7 @@ class CompositePass:
             projection=projection,
             lens=lens,
             inv_view_proj=inv_view_proj,
-            hull=None if eye is None or view_proj is None else (mat_bytes(view_proj), tuple(float(v) for v in eye)),
+            hull=None if eye is None or view_proj is None else (mat_bytes(view_proj), tuple(np.asarray(eye).tolist())),
             ortho_near=ortho_near,
         )
         self._pixel_order_idle += 1

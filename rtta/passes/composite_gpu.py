@@ -44,6 +44,8 @@ class GpuDraws:
         self.order = GpuOrder(ctx)
         self._tiles: TileBlend | None = None
         self.styles_key: tuple | None = None  # what the style buffer holds (None: unknown)
+        self._drawn = Listed(self.order.ids, command=self.order.command)  # the sort's list (its buffers stay)
+        self._focus: dict[tuple, Listed] = {}  # focus_drawn's lists, per focus list
 
     def styles(self, buf: moderngl.Buffer, style: Style, mode: Mode, n: int) -> None:
         """Build and upload the style parameters into `buf` where they changed (the ghosted
@@ -59,7 +61,7 @@ class GpuDraws:
         `focus` (a CPU list, flagged in `styles`): its commands are written too (`focus_drawn`)."""
         listed = 0 if focus is None else focus.count
         self.order.every(count=n, records=gpu.records, bounds=gpu.bounds, styles=styles, focus=listed)
-        return Listed(self.order.ids, command=self.order.command)
+        return self._drawn
 
     def sorted(
         self, *, n: int, gpu, view, styles: moderngl.Buffer, focus: Listed | None = None, context: bool = True
@@ -76,13 +78,18 @@ class GpuDraws:
             exclude_focus=context,
             focus=listed,
         )
-        return Listed(self.order.ids, command=self.order.command)
+        return self._drawn
 
     def focus_drawn(self, focus: Listed) -> Listed:
         """The focus list drawn by the three commands the last `sorted` or `everyone` wrote for
         it: the GPU picks the variant (every region at scale 1, none upsampled, or each sprite
         choosing) without a read."""
-        return Listed(focus.ids, focus.count, self.order.command, firsts=FOCUS_COMMANDS, variants="focus")
+        key = (focus.ids.glo, focus.count)
+        drawn = self._focus.get(key)
+        if drawn is None:
+            drawn = Listed(focus.ids, focus.count, self.order.command, firsts=FOCUS_COMMANDS, variants="focus")
+            self._focus = {key: drawn}  # the last one alone
+        return drawn
 
     @property
     def tiles(self) -> TileBlend:

@@ -26,6 +26,7 @@ import numpy as np
 
 from ..gl import glraw, glsl, sync
 from ..gl.bindings import Storage
+from ..gl.glsl import mat_bytes
 from ..gl.gpu import GpuScene
 from ..gl.indirect import COMMAND_BYTES, IndirectCountDraw
 from ..gl.targets import LayeredTarget
@@ -110,22 +111,24 @@ class CaptureLists:
         self.ranges.bind_to_storage_buffer(Storage.DRAW_RANGES)
         self.commands.bind_to_storage_buffer(Storage.DRAW_COMMANDS)
         self.counts.bind_to_storage_buffer(Storage.DRAW_COUNTS)
-        row = np.asarray(view, np.float64)[2]
         values = {
             "u_count": n,
             "u_capacity": self.capacity,
             "u_viewport": (float(viewport[0]), float(viewport[1])),
-            "u_view_z": (float(row[0]), float(row[1]), float(row[2]), float(row[3])),
+            "u_view_z": tuple(np.asarray(view, np.float64)[2].tolist()),
             "u_near": near_distance(proj),
             "u_cull_closed": bool(gpu.cull_closed),
             "u_clip_all": bool(clip_all),
         }
         glsl.set_uniforms(self.program, values)
-        sync.barrier(self.ctx, GL_SHADER_STORAGE_BARRIER_BIT)  # R written by Algorithm 1's shaders
+        wait = not sync.synchronous(self.ctx)  # (sync.barrier's test, once)
+        if wait:
+            self.ctx.memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT)  # R written by Algorithm 1's shaders
         blocks = -(-n // LOCAL_SIZE)
         wide = min(blocks, MAX_GROUPS)
         self.program.run(wide, -(-blocks // wide))
-        sync.barrier(self.ctx, GL_COMMAND_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT)
+        if wait:
+            self.ctx.memory_barrier(GL_COMMAND_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT)
 
     def draw(self, vao: moderngl.VertexArray, program: moderngl.Program, which: int) -> None:
         """Draw list `which` (`kind()`) with `program` and `vao` in one call, its length as
@@ -202,16 +205,17 @@ def draw_from_lists(capture, lists: CaptureLists, gpu: GpuScene, view, proj, atl
     setup and, culled and double-sided, one indirect-count draw each. The geometry-shader path
     clips every object (one variant)."""
     clip_all = capture.path == "gs"
-    for clip in (True,) if clip_all else (False, True):
-        vao = capture.prepare(gpu, view, proj, atlas, REGION_CLIP=clip and not clip_all)
-        glraw.set_clip_distances(4, clip)
-        try:
+    matrices = (mat_bytes(view), mat_bytes(proj))  # once for both variants
+    try:
+        for clip in (True,) if clip_all else (False, True):
+            vao = capture.prepare(gpu, view, proj, atlas, matrices, REGION_CLIP=clip and not clip_all)
+            glraw.set_clip_distances(4, clip)
             for cull in (True, False):
                 capture.cull(cull)
-                lists.draw(vao, capture.program, kind(cull, clip))
-        finally:
-            capture.cull(False)
-            glraw.set_clip_distances(4, False)
+                lists.draw(vao, capture.program, 2 * clip + (not cull))  # kind(cull, clip)
+    finally:
+        capture.cull(False)
+        glraw.set_clip_distances(4, False)
 
 
 def capture_from_records(capture, gpu: GpuScene, view, proj, atlas: LayeredTarget, records) -> None:

@@ -82,6 +82,7 @@ class GpuOrder:
         self.offsets = ctx.buffer(reserve=12)
         self._offsets_of: np.ndarray | None = None  # the offsets uploaded (compared by identity)
         self.dispatches = 0  # of the last sort
+        self._radix_for: tuple | None = None  # (tiles, the passes' programs and groups) of the last radix sort
         self._wait = not sync.synchronous(ctx)  # barriers between dispatches (sync.barrier)
 
     def _program(self, stage: int, offsets: bool = False) -> moderngl.ComputeShader:
@@ -173,12 +174,18 @@ class GpuOrder:
         self.counts.bind_to_storage_buffer(Storage.SORT_COUNTS)
         self.keys_out.bind_to_storage_buffer(Storage.SORT_KEYS_OUT)  # both sides bound: the GPU
         self.ids_out.bind_to_storage_buffer(Storage.SORT_IDS_OUT)  # counts the passes and picks
-        stages = [(self._program(stage), groups) for stage, groups in ((COUNT, tiles), (SCAN, 1), (SCATTER, tiles))]
-        for prog, _ in stages:
-            glsl.set_uniform(prog, "u_tiles", tiles)
+        if self._radix_for is None or self._radix_for[0] != tiles:  # the passes' programs, for this length
+            stages = [(self._program(stage), groups) for stage, groups in ((COUNT, tiles), (SCAN, 1), (SCATTER, tiles))]
+            for prog, _ in stages:
+                glsl.set_uniform(prog, "u_tiles", tiles)
+            self._radix_for = (tiles, stages)
+        wait, ctx = self._wait, self.ctx  # _run's work inlined: 24 dispatches, no call each
         for _ in range(32 // RADIX_BITS):
-            for prog, groups in stages:
-                self._run(prog, groups)
+            for prog, groups in self._radix_for[1]:
+                if wait:
+                    ctx.memory_barrier(moderngl.SHADER_STORAGE_BARRIER_BIT)
+                prog.run(group_x=groups)
+        self.dispatches += 3 * (32 // RADIX_BITS)
 
     def _bitonic(self, length: int) -> None:
         """The (key, id) pairs sorted by a bitonic network."""
@@ -216,8 +223,7 @@ class GpuOrder:
 
     def _commands(self, total: int, focus: int = 0) -> None:
         prog = self._program(COMMANDS)
-        glsl.set_uniform(prog, "u_total", total)
-        glsl.set_uniform(prog, "u_focus", focus)
+        glsl.set_uniforms(prog, {"u_total": total, "u_focus": focus})
         self._run(prog, 1)
         sync.barrier(self.ctx, moderngl.COMMAND_BARRIER_BIT | moderngl.SHADER_STORAGE_BARRIER_BIT)
 
@@ -236,12 +242,15 @@ class GpuOrder:
             styles.bind_to_storage_buffer(Storage.STYLES)
         moved = self._upload_offsets(offsets)
         prog = self._program(KEYS, moved)
-        glsl.set_uniform(prog, "u_count", count)
-        glsl.set_uniform(prog, "u_length", length)
-        glsl.set_uniform(prog, "u_depth_row", tuple(float(v) for v in np.asarray(view, np.float64)[2]))
-        glsl.set_uniform(prog, "u_focus_flags", styles is not None)
-        glsl.set_uniform(prog, "u_exclude_focus", styles is not None and exclude_focus)
-        glsl.set_uniform(prog, "u_upsample_below", UPSAMPLE_BELOW)
+        uniforms = {
+            "u_count": count,
+            "u_length": length,
+            "u_depth_row": tuple(np.asarray(view, np.float64)[2].tolist()),
+            "u_focus_flags": styles is not None,
+            "u_exclude_focus": styles is not None and exclude_focus,
+            "u_upsample_below": UPSAMPLE_BELOW,
+        }
+        glsl.set_uniforms(prog, uniforms)
         self._run(prog, length // STEP_GROUP)
         return length
 
@@ -261,3 +270,4 @@ class GpuOrder:
         for obj in [*self.programs.values(), *bufs]:
             obj.release()
         self.programs.clear()
+        self._radix_for = None

@@ -11,7 +11,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 from dataclasses import dataclass
-from enum import Enum
+from enum import StrEnum
 from typing import Literal
 
 import moderngl
@@ -27,7 +27,7 @@ UPSAMPLE_BELOW = 0.999  # regions with fewer texels per pixel are upsampled
 STAGES = {"vertex_shader": "composite.vert", "geometry_shader": "composite.geom", "fragment_shader": "composite.frag"}
 
 
-class Kind(Enum):
+class Kind(StrEnum):  # (a StrEnum hashes in C: a draw's key is hashed every frame)
     """What a draw does with its sprites (composite.frag's MODE_* defines)."""
 
     OPAQUE = "opaque"  # depth sprites: the STD picture reconstructed, depth written (MODE_SPRITE)
@@ -38,7 +38,7 @@ class Kind(Enum):
     HALOS = "halos"  # a halo around each object where the context lies behind it (MODE_HALO)
 
 
-class Depth(Enum):
+class Depth(StrEnum):
     """How a draw uses the depth buffer."""
 
     OFF = "off"  # neither tested nor written
@@ -49,7 +49,8 @@ class Depth(Enum):
 
 @dataclass(frozen=True)
 class SpriteDraw:
-    """One kind of sprite draw; the named constructors give the combinations compositing uses.
+    """One kind of sprite draw; the named constructors give the combinations compositing uses
+    (one instance per choice, cached: frames make them without a call to __init__).
 
     Attributes
     ----------
@@ -88,31 +89,37 @@ class SpriteDraw:
             raise ValueError(f"only collected sprites fetch their first surfaces, not {self.kind.value}")
 
     @classmethod
+    @functools.cache
     def opaque(cls, *, shaded: bool = False, outlined: bool = False) -> SpriteDraw:
         """Depth sprites over the target (`sprites`; the ghosted focus)."""
         return cls(Kind.OPAQUE, Depth.NEAREST, shaded=shaded, outlined=outlined)
 
     @classmethod
+    @functools.cache
     def depths(cls, *, farthest: bool, cut: bool, outlined: bool = False) -> SpriteDraw:
         """The nearest (or farthest) sprite depth per pixel, into a depth-only target."""
         return cls(Kind.OPAQUE, Depth.FARTHEST if farthest else Depth.NEAREST, cut=cut, outlined=outlined)
 
     @classmethod
+    @functools.cache
     def transparent(cls) -> SpriteDraw:
         """Every object blended with its opacity, over nothing opaque (`transparent`)."""
         return cls(Kind.BLENDED)
 
     @classmethod
+    @functools.cache
     def context(cls, *, desaturate: float, shaded: bool) -> SpriteDraw:
         """The ghosted context: faded, desaturated, blended behind-tested against the focus, cut by a lens."""
         return cls(Kind.BLENDED, Depth.TESTED, shaded=shaded, cut=True, desaturate=desaturate)
 
     @classmethod
+    @functools.cache
     def outlines(cls) -> SpriteDraw:
         """The highlighted objects' silhouettes, seen through everything."""
         return cls(Kind.OUTLINES)
 
     @classmethod
+    @functools.cache
     def halos(cls) -> SpriteDraw:
         """Halos around the focus objects, where the context lies behind them."""
         return cls(Kind.HALOS, Depth.TESTED)
@@ -254,14 +261,20 @@ class SpritePass:
         if variants is None:  # the variants' programs: made once per kind of draw, not every frame
             variants = self._listed[key] = self._listed_variants(listed, draw, style, records, quad)
         hull = None if draw.kind is Kind.HALOS else self._hull
-        hull_draws = self.hull_draws + (hull is not None)  # one list: one draw, whichever variant
-        extra = {"u_upsample_below": UPSAMPLE_BELOW, "u_hull_min_area": float(HULL_MIN_AREA)}
+        values = self._values(draw, style, records, hull)  # the same for each variant's program
+        values["u_upsample_below"], values["u_hull_min_area"] = UPSAMPLE_BELOW, float(HULL_MIN_AREA)
         held = self._state(draw)  # the variants' calls share it: set once, not once a variant
-        for i, variant in variants:
-            vao = self._use(variant, draw, style, records, hull, extra=extra)
-            self._issue(vao, listed if i is None else (listed.command, listed.firsts[i]))
+        for i, (prog, vao, name, projector, lens_on) in variants:
+            self.passes.append(name)
+            glsl.set_uniforms(prog, values)
+            if projector or lens_on:
+                self._bind_cuts(prog, projector, lens_on)
+            if i is None:
+                vao.render(moderngl.POINTS, vertices=listed.count)
+            else:
+                vao.render_indirect(listed.command, moderngl.POINTS, count=1, first=listed.firsts[i])
         self._defaults(*held)
-        self.hull_draws = hull_draws
+        self.hull_draws += hull is not None  # one list: one draw, whichever variant
 
     def _listed_variants(self, listed: Listed, draw: SpriteDraw, style: Style, records, quad: bool) -> list:
         """(which of `listed.firsts`, or None for a CPU list's count; `_variant`) per draw call."""
@@ -303,13 +316,10 @@ class SpritePass:
         halo = draw.kind is Kind.HALOS
         hull = None if halo or draw.upsample or self._hull is None or not worth_outlines(records, ids) else self._hull
         margin = hull_margin(records.scale[ids]) if hull is not None else 0.0
-        vao = self._setup(defines, draw, style, records, hull, margin)
-        self._render(vao, len(ids), draw)
-
-    def _setup(self, defines, draw: SpriteDraw, style: Style, records, hull, margin: float = 0.0):
-        """The draw's program with its uniforms set (`hull`: (P V bytes, eye) or None, `margin`
-        its growth in pixels); returns its vertex array."""
-        return self._use(self._variant(defines), draw, style, records, hull, margin)
+        vao = self._use(self._variant(defines), draw, style, records, hull, margin)
+        held = self._state(draw)  # the draw's GL state around its call, then the defaults back
+        vao.render(moderngl.POINTS, vertices=len(ids))
+        self._defaults(*held)
 
     def _variant(self, defines: dict[str, bool]) -> tuple:
         """(program, vertex array, pass name, projector on, lens on) of a draw's defines."""
@@ -317,14 +327,20 @@ class SpritePass:
         prog, vao = self._program(**dict.fromkeys(on, True))
         return prog, vao, _pass_name(on), defines["PROJECTOR"], defines["LENS"]
 
-    def _use(self, variant: tuple, draw: SpriteDraw, style: Style, records, hull, margin=0.0, extra=None):
-        """A `_variant`'s uniforms set for this draw (and `extra` ones); returns its vertex array."""
+    def _use(self, variant: tuple, draw: SpriteDraw, style: Style, records, hull, margin=0.0):
+        """A `_variant`'s uniforms set for this draw (`hull`: (P V bytes, eye) or None, `margin`
+        its growth in pixels); returns its vertex array."""
         prog, vao, name, projector, lens_on = variant
-        projection = self._projection if projector else None
-        lens = self._lens if lens_on else None
         self.passes.append(name)
-        viewport = records.viewport
-        values = {  # the ones a variant does not use were dropped by the compiler (set_uniforms skips them)
+        self.hull_draws += hull is not None
+        glsl.set_uniforms(prog, self._values(draw, style, records, hull, margin))
+        if projector or lens_on:
+            self._bind_cuts(prog, projector, lens_on)
+        return vao
+
+    def _values(self, draw: SpriteDraw, style: Style, records, hull, margin=0.0) -> dict:
+        viewport = records.viewport  # (set_uniforms skips the uniforms a variant's compiler dropped)
+        values = {  # a draw's uniforms
             "u_viewport": (float(viewport[0]), float(viewport[1])),
             "u_hull": hull is not None,
             "u_desaturate": draw.desaturate,
@@ -335,36 +351,21 @@ class SpritePass:
             "u_halo_color": tuple(style.halo_color),
             "u_ortho_depth": (0.0, 0.0) if self.ortho_near is None else (1.0, self.ortho_near),
         }
-        if projection is not None or lens is not None:
+        if self._projection is not None or self._lens is not None:
             values["u_inv_view_proj"] = self._inv_view_proj
         if hull is not None:
-            self.hull_draws += 1
             values["u_view_proj"], values["u_eye"] = hull
             values["u_hull_margin"] = margin  # UPSAMPLE_DYNAMIC: each sprite's own
-        glsl.set_uniforms(prog, values if extra is None else {**values, **extra})
-        if projection is not None:
-            pass_, projector, origin = projection
-            pass_.bind(prog, projector, origin)
-        if lens is not None:
-            lens_pass, lens_, origin = lens
+        return values
+
+    def _bind_cuts(self, prog: moderngl.Program, projector: bool, lens_on: bool) -> None:
+        """The frame's projector and lens bound for a variant that reads them."""
+        if projector and self._projection is not None:
+            pass_, projector_, origin = self._projection
+            pass_.bind(prog, projector_, origin)
+        if lens_on and self._lens is not None:
+            lens_pass, lens_, origin = self._lens
             lens_pass.bind(prog, lens_, origin)
-        return vao
-
-    def _render(self, vao: moderngl.VertexArray, count, draw: SpriteDraw) -> None:
-        """The draw's GL state around one draw call, then the defaults back."""
-        held = self._state(draw)
-        self._issue(vao, count)
-        self._defaults(*held)
-
-    @staticmethod
-    def _issue(vao: moderngl.VertexArray, count) -> None:
-        """One draw call: `count` points, a Listed's count, or (command buffer, k): its k-th command."""
-        if isinstance(count, Listed):
-            vao.render(moderngl.POINTS, vertices=count.count)
-        elif isinstance(count, tuple):
-            vao.render_indirect(count[0], moderngl.POINTS, count=1, first=count[1])
-        else:
-            vao.render(moderngl.POINTS, vertices=count)
 
     def _state(self, draw: SpriteDraw) -> tuple:
         """The GL state of `draw`'s calls (the framebuffer bound); what `_defaults` needs back."""

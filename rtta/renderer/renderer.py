@@ -5,9 +5,7 @@ frees them. It never creates a context: it takes a moderngl.Context.
 
 from __future__ import annotations
 
-import time
 import warnings
-from contextlib import contextmanager
 
 import moderngl
 import numpy as np
@@ -31,6 +29,7 @@ from ..scene.camera import Camera, ortho_near, outline_eye
 from ..scene.model import Scene
 from .placing import Staging
 from .settings import Settings, blend_on, parameterize_on
+from .stages import stages_of
 
 
 class Renderer:
@@ -78,20 +77,10 @@ class Renderer:
         self.staging = Staging()  # sections and explode (rtta.renderer.placing)
         self.measure = False  # time each stage (waits for the GPU after each)
         self.timings: dict[str, float] = {}  # stage -> ms of its last run, when measuring
+        self.stages = stages_of(self)  # `with self.stages[name]:` times a stage when measuring
         self.warnings: list[str] = []  # what was degraded (each said once)
         self.python_warnings = True  # also say it through warnings.warn (a viewer shows `warnings`)
         self._throttle = glraw.Throttle()  # one flushed batch in flight (glraw.Throttle)
-
-    @contextmanager
-    def _timed(self, stage: str):
-        """Record the stage's wall time in `timings` (with ctx.finish(), so GPU work counts)."""
-        if not self.measure:
-            yield
-            return
-        t0 = time.perf_counter()
-        yield
-        self.ctx.finish()
-        self.timings[stage] = (time.perf_counter() - t0) * 1e3
 
     def matrices(self, camera: Camera, viewport: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
         camera, message = camera.depth_limited()
@@ -193,9 +182,14 @@ class Renderer:
         return self.atlas.normals_written
 
     def capture_pass(self, path: CapturePathName | CapturePath | None = None) -> CapturePass:
-        path = self.caps.capture_path(path or self.settings.capture_path)
+        requested = path or self.settings.capture_path
+        known = self._capture.get(requested) if requested.__class__ is str else None  # "auto" as well:
+        if known is not None:  # the path it resolves to never changes for a context
+            return known
+        path = self.caps.capture_path(requested)
         if path not in self._capture:
             self._capture[path] = CapturePass(self.ctx, path)
+        self._capture[requested] = self._capture[path]
         return self._capture[path]
 
     def capture(
@@ -219,9 +213,9 @@ class Renderer:
         self.last = None  # R of the last frame is read back before the GPU writes over it only if a caller holds it
         self.captured_focus = self.scaled_for(focus)
         self._view = (camera, viewport, path)
-        with self._timed("parameterize"):
+        with self.stages["parameterize"]:
             records = self.parameterize(camera, viewport, (view, proj), self.captured_focus, thin)
-        with self._timed("capture"):
+        with self.stages["capture"]:
             self.capture_pass(path).render(
                 gpu=self.gpu, records=records, view=view, proj=proj, atlas=self.atlas, normals=normals, ids=ids
             )
@@ -255,11 +249,11 @@ class Renderer:
         if self.lens is not None and mode in LENS_MODES:
             if self._lens_pass is None:
                 self._lens_pass = LensPass(self.ctx)
-            with self._timed("lens"):
+            with self.stages["lens"]:
                 self._lens_pass.textures(self.lens)  # built once per lens geometry, before compositing
             lens = (self._lens_pass, self.lens, origin)
         fallbacks = self._composite.fallbacks
-        with self._timed("composite"):
+        with self.stages["composite"]:
             self._composite.render(
                 atlas=self.atlas,
                 records=records,
@@ -292,7 +286,7 @@ class Renderer:
             return None
         if self._projector_pass is None:
             self._projector_pass = ProjectorPass(self.ctx)
-        with self._timed("projector"):
+        with self.stages["projector"]:
             self._projector_pass.render(gpu=self.gpu, projector=self.projector, ranges=self.shown_ranges())
         return self._projector_pass, self.projector
 
@@ -303,7 +297,7 @@ class Renderer:
             raise RuntimeError("post_process() needs a capture() first")
         records, _, proj = self.last
         self._post = self._post or AtlasPostPass(self.ctx)
-        with self._timed("post"):
+        with self.stages["post"]:
             self._post.shade(
                 atlas=self.atlas, records=records, gpu=self.gpu, proj=proj, style=style, capture=self._captures
             )
@@ -325,7 +319,7 @@ class Renderer:
         self.place(focus)
         view, proj = self.matrices(camera, viewport)
         projection = self._projection()
-        with self._timed("std"):
+        with self.stages["std"]:
             self._std.render(
                 gpu=self.gpu,
                 view=view,
@@ -378,7 +372,7 @@ class Renderer:
         self.gpu.keep_held()  # records a caller holds are read back while R is there
         self._throttle.release()
         for p in [
-            *self._capture.values(),
+            *{id(p): p for p in self._capture.values()}.values(),  # "auto" names one of them
             self._std,
             self._rtt,
             self._composite,

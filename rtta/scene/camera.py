@@ -41,6 +41,7 @@ def parse_orbit(text: str, option: str = "--camera", given: str | None = None) -
 UP_AXES = ("y", "z")
 Projection = Literal["perspective", "ortho"]
 PROJECTIONS: tuple[str, ...] = get_args(Projection)
+_I3, _I4 = np.identity(3), np.identity(4)  # copied: np.identity is three Python calls
 ORTHO_EYE = 2.0  # an orthographic eye stands this many radii before the bounding sphere's centre
 
 
@@ -50,7 +51,7 @@ def up_basis(up: str = "y") -> np.ndarray:
     from -Y, the CAD front view."""
     if up not in UP_AXES:
         raise ValueError(f"up axis must be one of {', '.join(UP_AXES)}, got {up!r}")
-    return np.identity(3) if up == "y" else np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
+    return _I3.copy() if up == "y" else np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
 
 
 def fit_distance(
@@ -182,7 +183,7 @@ class Camera:
             self.eye = self.eye + shift
             self.near, self.far = (ORTHO_EYE - 1.01) * radius, (ORTHO_EYE + 1.01) * radius
             return self
-        d = float(np.linalg.norm(np.asarray(center, np.float64) - self.eye))
+        d = _length(np.asarray(center, np.float64) - self.eye)
         far = (d + radius) * 1.01
         near = max(d - radius * 1.01, far * NEAR_RATIO)
         self.near, self.far = near, far
@@ -216,7 +217,7 @@ class Camera:
             s = _cross(f, np.array([1.0, 0.0, 0.0] if abs(f[0]) < 0.9 else [0.0, 0.0, 1.0]))
         s /= _length(s)
         u = _cross(s, f)
-        m = np.identity(4)
+        m = _I4.copy()
         m[0, :3], m[1, :3], m[2, :3] = s, u, -f
         m[:3, 3] = -m[:3, :3] @ eye
         return m

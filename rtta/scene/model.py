@@ -81,35 +81,32 @@ class Scene:
     def vertex_count(self) -> int:
         return int(self.positions.shape[0])
 
-    @property
-    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        """The scene's box (lo, hi), reduced once per box arrays (frames ask for it often)."""
+    def _reduced(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]:
+        """(lo, hi, low, high, centre, radius) of the box arrays, once per arrays (frames ask often)."""
         made, lo, hi = self._corners.get("bounds"), self.aabb_min, self.aabb_max
         if made is None or made[0] is not lo or made[1] is not hi:
-            made = self._corners["bounds"] = (lo, hi, lo.min(axis=0), hi.max(axis=0))
-        return made[2].copy(), made[3].copy()
+            low, high = lo.min(axis=0), hi.max(axis=0)
+            r = float(np.linalg.norm(high - low) / 2.0)
+            r = r if r > 0 else max(1e-6, float(np.abs(low).max()) * 1e-7)
+            made = self._corners["bounds"] = (lo, hi, low, high, (low + high) / 2.0, r)
+        return made
 
     @property
-    def center(self) -> np.ndarray:
-        lo, hi = self.bounds
-        return (lo + hi) / 2.0
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """The scene's box (lo, hi)."""
+        return self._reduced()[2].copy(), self._corners["bounds"][3].copy()
 
-    @property
-    def radius(self) -> float:
-        """Bounding-sphere radius about the bounds centre (never zero)."""
-        lo, hi = self.bounds
-        r = float(np.linalg.norm(hi - lo) / 2.0)
-        return r if r > 0 else max(1e-6, float(np.abs(lo).max()) * 1e-7)
+    center = property(lambda self: self._reduced()[4].copy(), doc="The centre of `bounds`.")
+    radius = property(lambda self: self._reduced()[5], doc="Bounding-sphere radius about `center` (never zero).")
 
     def box_corners(self, kind: BoundsName | Bounds = "aabb") -> np.ndarray:
         """B_world as 8 corners per object, relative to origin: float64 [N, 8, 3] for 'aabb'
         (the paper's axis-aligned boxes); [2, N, 8, 3] for 'obb': the AABBs and the
         principal-axes boxes, whose projections parameterization intersects (both enclose
         the object, so the intersection does too, and it is never larger than the AABB's)."""
-        try:
-            bounds = Bounds(kind)
-        except ValueError:
-            raise ValueError(f"unknown bounds '{kind}' (choose from {', '.join(BOUNDS)})") from None
+        bounds = Bounds._value2member_map_.get(kind) if isinstance(kind, str) else None  # Bounds(kind): 3 calls
+        if bounds is None:
+            raise ValueError(f"unknown bounds '{kind}' (choose from {', '.join(BOUNDS)})")
         if Bounds.AABB not in self._corners:  # stored planar [3, 8, N]: parameterize projects rows
             lo = (self.aabb_min - self.origin).T[:, None, :]
             hi = (self.aabb_max - self.origin).T[:, None, :]

@@ -20,15 +20,16 @@
 //            third (each sprite choosing)
 // Or a stable LSD radix sort of the keys (ids in ascending order to start: ties stay by id),
 // RADIX_BITS a pass, over tiles of TILE = 256 * PER elements (u_tiles of them). The pass is
-// counted on the GPU (command[PASS_NEXT], zeroed with the buffer; stage 7 moves it on), so the
-// CPU sets no uniform and binds no buffer between passes: even passes read keys/ids and write
-// keys_out/ids_out, odd passes the other way round (an even number of passes ends in keys/ids).
+// counted on the GPU (command[PASS_NOW], zeroed with the buffer; the last work group of stage 8
+// to finish moves it on), so the CPU sets no uniform and binds no buffer between passes: even
+// passes read keys/ids and write keys_out/ids_out, odd passes the other way round (an even
+// number of passes ends in keys/ids). Two dispatches a pass:
 //   STAGE 6 (per tile): each digit's count in the tile, into counts[digit * u_tiles + tile]
-//   STAGE 7 (one work group): counts -> their exclusive prefix sums (digit-major: each
-//            tile's first place for each digit)
-//   STAGE 8 (per tile): the tile sorted by digit in shared memory (each invocation's PER
-//            elements in order, its places from a scan of the per-invocation counts), each
-//            element written at its tile's place for its digit plus its rank there
+//   STAGE 8 (per tile): the tile's first place for each digit summed from the counts (those of
+//            the smaller digits, and of its digit in the tiles before: no scan dispatch between),
+//            the tile sorted by digit in shared memory (each invocation's PER elements in
+//            order, its places from a scan of the per-invocation counts), each element written
+//            at its tile's place for its digit plus its rank there
 // Counts come from shared atomics (their sums do not depend on the order) and places from
 // scans: the result is the same on every driver.
 // OFFSETS: per-object offsets (x, y, z float triples) added to the bounds centres.
@@ -62,8 +63,8 @@ uniform uint u_tiles;   // the radix passes' tiles
 #define UPSAMPLED 16
 #define FOCUS_UPSAMPLED 17
 #define FOCUS_SCALED 18
-#define PASS_NOW 35   // the radix pass stage 8 sorts by (stage 7 writes it)
-#define PASS_NEXT 36  // the radix pass stages 6 and 7 count and scan for
+#define PASS_NOW 35   // the radix pass stages 6 and 8 count and sort by
+#define PASS_DONE 36  // stage 8's work groups done with the pass (the last resets it)
 layout(std430, binding = BINDING_COMPOSITE_COMMAND) buffer CommandBuffer { uint command[37]; };
 
 bool after(uint ka, uint ia, uint kb, uint ib) { return ka > kb || (ka == kb && ia > ib); }
@@ -170,7 +171,7 @@ void scan_parts(uint t) {
 shared uint s_count[DIGITS];
 void main() {
     uint t = gl_LocalInvocationID.x, tile = gl_WorkGroupID.x;
-    pass_index = command[PASS_NEXT];
+    pass_index = command[PASS_NOW];
     if (t < uint(DIGITS)) s_count[t] = 0u;
     memoryBarrierShared();
     barrier();
@@ -180,34 +181,34 @@ void main() {
     if (t < uint(DIGITS)) counts[t * u_tiles + tile] = s_count[t];
 }
 
-#elif STAGE == 7
-void main() {
-    uint t = gl_LocalInvocationID.x, total = uint(DIGITS) * u_tiles;
-    uint per = (total + 255u) / 256u, first = min(t * per, total), last = min(first + per, total);
-    uint sum = 0u;
-    for (uint i = first; i < last; ++i) sum += counts[i];
-    s_part[t] = sum;
+#else
+shared uint s_place[DIGITS * 256];  // digit-major: [digit][invocation]
+shared uint s_total[DIGITS], s_before[DIGITS], s_first[DIGITS];
+
+// s_first: the tile's first place for each digit (the counts of the smaller digits, then of
+// its digit in the tiles before), each invocation summing a few counts
+void first_places(uint t, uint tile) {
+    if (t < uint(DIGITS)) s_total[t] = s_before[t] = 0u;
     memoryBarrierShared();
     barrier();
-    scan_parts(t);
-    uint at = s_part[t] - sum;  // exclusive
-    for (uint i = first; i < last; ++i) {
-        uint c = counts[i];
-        counts[i] = at;
-        at += c;
+    for (uint i = t; i < uint(DIGITS) * u_tiles; i += 256u) {
+        uint d = i / u_tiles, c = counts[i];
+        atomicAdd(s_total[d], c);
+        if (i - d * u_tiles < tile) atomicAdd(s_before[d], c);
     }
-    if (t == 0u) {  // the scatter sorts by this pass; the next count by the next
-        uint p = command[PASS_NEXT];
-        command[PASS_NOW] = p;
-        command[PASS_NEXT] = p + 1u;
+    memoryBarrierShared();
+    barrier();
+    if (t < uint(DIGITS)) {
+        uint at = s_before[t];
+        for (uint d = 0u; d < t; ++d) at += s_total[d];
+        s_first[t] = at;
     }
 }
 
-#else
-shared uint s_place[DIGITS * 256];  // digit-major: [digit][invocation]
 void main() {
     uint t = gl_LocalInvocationID.x, tile = gl_WorkGroupID.x, base = tile * uint(TILE) + t * uint(PER);
     pass_index = command[PASS_NOW];
+    first_places(t, tile);
     uint k[PER], id[PER], n[DIGITS];
     for (uint d = 0u; d < uint(DIGITS); ++d) n[d] = 0u;
     for (uint e = 0u; e < uint(PER); ++e) {
@@ -238,9 +239,16 @@ void main() {
     for (uint e = 0u; e < uint(PER); ++e) {
         uint d = digit(k[e]);
         // the tile's place for the digit, plus the element's rank among the tile's of that digit
-        uint place = counts[d * u_tiles + tile] + s_place[d * 256u + t] - s_place[d * 256u] + n[d];
+        uint place = s_first[d] + s_place[d * 256u + t] - s_place[d * 256u] + n[d];
         n[d] += 1u;
         put(place, k[e], id[e]);
+    }
+    // the last work group to finish moves the pass on: every group read it at its start
+    memoryBarrierBuffer();
+    barrier();
+    if (t == 0u && atomicAdd(command[PASS_DONE], 1u) == u_tiles - 1u) {
+        command[PASS_DONE] = 0u;
+        command[PASS_NOW] = pass_index + 1u;
     }
 }
 #endif

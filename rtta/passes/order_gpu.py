@@ -6,8 +6,8 @@ of it is read back, and the CPU's work per frame does not grow with the objects.
 
 Two sorts give the same order on every driver (`GpuOrder.method`; "auto", the default, takes
 bitonic up to BLOCK objects, one dispatch in shared memory, and radix above):
-"radix": a stable LSD radix sort of the keys, 4 bits a pass (8 passes of 3
-dispatches, 26 in all at any count), the ids starting in ascending order so ties stay by id;
+"radix": a stable LSD radix sort of the keys, 4 bits a pass (8 passes of 2
+dispatches, 18 in all at any count), the ids starting in ascending order so ties stay by id;
 "bitonic": over (key, id) pairs padded to a power of two (unique pairs: one order), the steps
 within a block of BLOCK elements in shared memory (dispatches grow with log² of the count:
 38 at 100,000). On llvmpipe (2 shared cores) radix took 1/4 to 1/6 of bitonic's time.
@@ -22,8 +22,8 @@ from ..gl import glsl, sync
 from ..gl.bindings import Storage
 from .sprites import UPSAMPLE_BELOW
 
-KEYS, BLOCK_SORT, STEP, BLOCK_MERGE, COMMANDS, COUNT, SCAN, SCATTER = 1, 2, 3, 4, 5, 6, 7, 8  # the shader's stages
-# three DrawArrays commands 5 uints apart, four counts, the focus list's three commands, the radix pass (2)
+KEYS, BLOCK_SORT, STEP, BLOCK_MERGE, COMMANDS, COUNT, SCATTER = 1, 2, 3, 4, 5, 6, 8  # the shader's stages
+# three DrawArrays commands 5 uints apart, four counts, the focus list's three commands, the radix pass, its groups done
 COMMAND_WORDS = 37
 # the focus list's commands (20-byte steps): every focus region at scale 1, none upsampled, some
 FOCUS_COMMANDS = (4, 5, 6)
@@ -53,7 +53,7 @@ class GpuOrder:
         An OpenGL 4.3+ context (compute shaders).
     method : {"auto", "radix", "bitonic"}, default "auto"
         The sort (the module's docstring); all give `back_to_front`'s order. "auto": bitonic
-        up to BLOCK objects (one dispatch: on llvmpipe, 26 radix dispatches cost a small
+        up to BLOCK objects (one dispatch: on llvmpipe, 26 radix dispatches, as there were, cost a small
         scene's frame 30-40% more), radix above.
 
     Attributes
@@ -175,17 +175,17 @@ class GpuOrder:
         self.keys_out.bind_to_storage_buffer(Storage.SORT_KEYS_OUT)  # both sides bound: the GPU
         self.ids_out.bind_to_storage_buffer(Storage.SORT_IDS_OUT)  # counts the passes and picks
         if self._radix_for is None or self._radix_for[0] != tiles:  # the passes' programs, for this length
-            stages = [(self._program(stage), groups) for stage, groups in ((COUNT, tiles), (SCAN, 1), (SCATTER, tiles))]
+            stages = [(self._program(stage), tiles) for stage in (COUNT, SCATTER)]
             for prog, _ in stages:
                 glsl.set_uniform(prog, "u_tiles", tiles)
             self._radix_for = (tiles, stages)
-        wait, ctx = self._wait, self.ctx  # _run's work inlined: 24 dispatches, no call each
+        wait, ctx = self._wait, self.ctx  # _run's work inlined: 16 dispatches, no call each
         for _ in range(32 // RADIX_BITS):
             for prog, groups in self._radix_for[1]:
                 if wait:
                     ctx.memory_barrier(moderngl.SHADER_STORAGE_BARRIER_BIT)
                 prog.run(group_x=groups)
-        self.dispatches += 3 * (32 // RADIX_BITS)
+        self.dispatches += 2 * (32 // RADIX_BITS)
 
     def _bitonic(self, length: int) -> None:
         """The (key, id) pairs sorted by a bitonic network."""

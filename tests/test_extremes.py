@@ -144,3 +144,30 @@ def test_view_and_outline_eye_match_numpy(projection):
             cam.eye - origin,
             atol=1e-6 * (1 + np.abs(cam.eye - origin).max()),
         )
+
+
+@pytest.mark.parametrize("up_axis", ["y", "z"])
+def test_orbit_matches_the_spherical_formula(up_axis):
+    """Camera.orbit (scalar math) against numpy's spherical coordinates over wide angles; a
+    non-finite angle is refused with RttaError rather than making a NaN camera."""
+    from rtta.errors import RttaError
+    from rtta.scene.camera import up_basis
+
+    rng = np.random.default_rng(11)
+    basis = up_basis(up_axis)
+    for _ in range(200):
+        az, el, dist = rng.uniform(-1e6, 1e6), rng.uniform(-90, 90), rng.uniform(0.1, 10)
+        a, e = np.radians(az), np.radians(el)
+        cam = Camera.orbit([1.0, -2.0, 3.0], 2.5, az, el, dist, up_axis=up_axis)
+        eye = np.array([1.0, -2.0, 3.0]) + basis @ [np.sin(a) * np.cos(e), np.sin(e), np.cos(a) * np.cos(e)] * (
+            dist * 2.5
+        )
+        np.testing.assert_allclose(cam.eye, eye, atol=1e-9)
+        np.testing.assert_allclose(
+            cam.up, basis @ [-np.sin(a) * np.sin(e), np.cos(e), -np.cos(a) * np.sin(e)], atol=1e-12
+        )
+    for bad in (np.nan, np.inf, -np.inf):
+        with pytest.raises(RttaError, match="finite"):
+            Camera.orbit([0.0, 0, 0], 1.0, bad, 0.0, 2.0)
+        with pytest.raises(RttaError, match="finite"):
+            Camera.orbit([0.0, 0, 0], 1.0, 0.0, bad, 2.0)

@@ -153,10 +153,13 @@ class Camera:
         perspective view at dist shows at the centre (module docstring)."""
         if projection not in PROJECTIONS:
             raise RttaError(f"projection must be one of {', '.join(PROJECTIONS)}, got {projection!r}")
-        a, e = np.radians(az), np.radians(el)
+        if not (math.isfinite(az) and math.isfinite(el)):
+            raise RttaError(f"orbit angles must be finite degrees, got azimuth {az} and elevation {el}")
+        a, e = math.radians(az), math.radians(el)  # (scalars: math, not numpy's ufuncs, a frame makes one)
+        sa, ca, se, ce = math.sin(a), math.cos(a), math.sin(e), math.cos(e)
         basis = up_basis(up_axis)
-        direction = basis @ np.array([np.sin(a) * np.cos(e), np.sin(e), np.cos(a) * np.cos(e)])
-        up = basis @ np.array([-np.sin(a) * np.sin(e), np.cos(e), -np.cos(a) * np.sin(e)])  # never degenerate
+        direction = basis @ np.array([sa * ce, se, ca * ce])
+        up = basis @ np.array([-sa * se, ce, -ca * se])  # never degenerate
         center = np.asarray(center, np.float64)
         cam = cls(eye=center + direction * (dist * radius), target=center, up=up, fov_y=fov_y, kind=projection)
         return cam.fit_depth(center, radius)

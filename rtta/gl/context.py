@@ -144,10 +144,9 @@ class Capabilities:
 
     def capture_path(self, requested: CapturePathName | CapturePath = "auto") -> CapturePath:
         """The path `requested`, or for 'auto' 'vs' where the layer extension exists, else the paper's 'gs'."""
-        try:
-            path = CapturePath(requested)
-        except ValueError:
-            raise RttaError(f"capture path must be one of {', '.join(CAPTURE_PATHS)}, got {requested!r}") from None
+        path: CapturePath | None = CapturePath._value2member_map_.get(requested) if isinstance(requested, str) else None  # type: ignore[assignment]
+        if path is None:
+            raise RttaError(f"capture path must be one of {', '.join(CAPTURE_PATHS)}, got {requested!r}")
         if path is CapturePath.VS and not self.vertex_layer:
             raise RttaError(f"capture path 'vs' needs {LAYER_EXTENSION}, which {self.renderer} lacks")
         if path is not CapturePath.AUTO:

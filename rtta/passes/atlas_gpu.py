@@ -291,9 +291,8 @@ class GpuParameterize:
         changed = {name: value for name, value in uniforms.items() if self._uniforms.get(name) != value}
         if changed:
             self._uniforms.update(changed)
-            for prog in self.programs.values():  # (the ones holding any: __members__ as set_uniforms keeps them)
-                if prog.extra is None or not prog.extra["__members__"].isdisjoint(changed):
-                    glsl.set_uniforms(prog, changed)
+            for prog in self.programs.values():  # (set_uniforms skips the names a program lacks)
+                glsl.set_uniforms(prog, changed)
         self.state.write(self._start)
         self.classes.clear()
         assert self.corners is not None and self.scales is not None and self.items is not None

@@ -45,7 +45,6 @@ class GpuDraws:
         self._tiles: TileBlend | None = None
         self.styles_key: tuple | None = None  # what the style buffer holds (None: unknown)
         self._drawn = Listed(self.order.ids, command=self.order.command)  # the sort's list (its buffers stay)
-        self._focus: dict[tuple, Listed] = {}  # focus_drawn's lists, per focus list
 
     def styles(self, buf: moderngl.Buffer, style: Style, mode: Mode, n: int) -> None:
         """Build and upload the style parameters into `buf` where they changed (the ghosted
@@ -84,12 +83,7 @@ class GpuDraws:
         """The focus list drawn by the three commands the last `sorted` or `everyone` wrote for
         it: the GPU picks the variant (every region at scale 1, none upsampled, or each sprite
         choosing) without a read."""
-        key = (focus.ids.glo, focus.count)
-        drawn = self._focus.get(key)
-        if drawn is None:
-            drawn = Listed(focus.ids, focus.count, self.order.command, firsts=FOCUS_COMMANDS, variants="focus")
-            self._focus = {key: drawn}  # the last one alone
-        return drawn
+        return Listed(focus.ids, focus.count, self.order.command, firsts=FOCUS_COMMANDS, variants="focus")
 
     @property
     def tiles(self) -> TileBlend:

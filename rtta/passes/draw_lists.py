@@ -212,7 +212,7 @@ def draw_from_lists(capture, lists: CaptureLists, gpu: GpuScene, view, proj, atl
             glraw.set_clip_distances(4, clip)
             for cull in (True, False):
                 capture.cull(cull)
-                lists.draw(vao, capture.program, 2 * clip + (not cull))  # kind(cull, clip)
+                lists.draw(vao, capture.program, kind(cull, clip))
     finally:
         capture.cull(False)
         glraw.set_clip_distances(4, False)

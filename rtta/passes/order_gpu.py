@@ -82,7 +82,6 @@ class GpuOrder:
         self.offsets = ctx.buffer(reserve=12)
         self._offsets_of: np.ndarray | None = None  # the offsets uploaded (compared by identity)
         self.dispatches = 0  # of the last sort
-        self._radix_for: tuple | None = None  # (tiles, the passes' programs and groups) of the last radix sort
         self._wait = not sync.synchronous(ctx)  # barriers between dispatches (sync.barrier)
 
     def _program(self, stage: int, offsets: bool = False) -> moderngl.ComputeShader:
@@ -174,17 +173,15 @@ class GpuOrder:
         self.counts.bind_to_storage_buffer(Storage.SORT_COUNTS)
         self.keys_out.bind_to_storage_buffer(Storage.SORT_KEYS_OUT)  # both sides bound: the GPU
         self.ids_out.bind_to_storage_buffer(Storage.SORT_IDS_OUT)  # counts the passes and picks
-        if self._radix_for is None or self._radix_for[0] != tiles:  # the passes' programs, for this length
-            stages = [(self._program(stage), tiles) for stage in (COUNT, SCATTER)]
-            for prog, _ in stages:
-                glsl.set_uniform(prog, "u_tiles", tiles)
-            self._radix_for = (tiles, stages)
+        stages = (self._program(COUNT), self._program(SCATTER))
+        for prog in stages:
+            glsl.set_uniform(prog, "u_tiles", tiles)
         wait, ctx = self._wait, self.ctx  # _run's work inlined: 16 dispatches, no call each
         for _ in range(32 // RADIX_BITS):
-            for prog, groups in self._radix_for[1]:
+            for prog in stages:
                 if wait:
                     ctx.memory_barrier(moderngl.SHADER_STORAGE_BARRIER_BIT)
-                prog.run(group_x=groups)
+                prog.run(group_x=tiles)
         self.dispatches += 2 * (32 // RADIX_BITS)
 
     def _bitonic(self, length: int) -> None:
@@ -270,4 +267,3 @@ class GpuOrder:
         for obj in [*self.programs.values(), *bufs]:
             obj.release()
         self.programs.clear()
-        self._radix_for = None

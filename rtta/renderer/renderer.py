@@ -182,14 +182,9 @@ class Renderer:
         return self.atlas.normals_written
 
     def capture_pass(self, path: CapturePathName | CapturePath | None = None) -> CapturePass:
-        requested = path or self.settings.capture_path
-        known = self._capture.get(requested) if requested.__class__ is str else None  # "auto" as well:
-        if known is not None:  # the path it resolves to never changes for a context
-            return known
-        path = self.caps.capture_path(requested)
+        path = self.caps.capture_path(path or self.settings.capture_path)
         if path not in self._capture:
             self._capture[path] = CapturePass(self.ctx, path)
-        self._capture[requested] = self._capture[path]
         return self._capture[path]
 
     def capture(
@@ -372,7 +367,7 @@ class Renderer:
         self.gpu.keep_held()  # records a caller holds are read back while R is there
         self._throttle.release()
         for p in [
-            *{id(p): p for p in self._capture.values()}.values(),  # "auto" names one of them
+            *self._capture.values(),
             self._std,
             self._rtt,
             self._composite,

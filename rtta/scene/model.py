@@ -94,7 +94,8 @@ class Scene:
     @property
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """The scene's box (lo, hi)."""
-        return self._reduced()[2].copy(), self._corners["bounds"][3].copy()
+        made = self._reduced()
+        return made[2].copy(), made[3].copy()
 
     center = property(lambda self: self._reduced()[4].copy(), doc="The centre of `bounds`.")
     radius = property(lambda self: self._reduced()[5], doc="Bounding-sphere radius about `center` (never zero).")

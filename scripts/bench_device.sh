@@ -3,7 +3,8 @@
 # ends well inside a lease: scripts/bench_device.sh [--local] [STEP ...]
 # STEPs (default: all, in this order): snapshots capture composite frame tests tiny profile viewer
 # viewer_tests scale; on request also profile100k (a 100,000-part frame under cProfile) and
-# timers (GPU time per stage from timer queries, 10,000 and 100,000 parts), stages (per dispatch)
+# timers (GPU time per stage from timer queries, 10,000 and 100,000 parts), stages (per dispatch),
+# demo (the demo's dispatches and draws)
 # and blends (the compute blend against sprites).
 #
 # Made for this workplace's `device` tool, whose machines have an NVIDIA driver and Python
@@ -74,9 +75,9 @@ m.save('$OUT/modes.png')\""
 wanted capture && step 60 capture python3 -m rtta bench capture --json "$OUT/capture.json"
 wanted composite && step 90 composite python3 -m rtta bench composite --scene demo "$DATA/engine_2cyl.glb" \
     "$DATA/cycloidal.glb" table1-580 --json "$OUT/composite.json"
-GL_TESTS="api batch bounds capture capture_lists capture_outputs closure composite composite_gpu explode export extremes
+GL_TESTS="api batch blend_tiles bounds capture capture_lists capture_outputs closure composite composite_gpu explode export extremes
     gl_features glsl gpu_frame gpu_parameterize importance ldi lens material outline_sprites pixel_order post projector
-    references sections targets wrong_pictures"
+    references sections targets thin_gpu views wrong_pictures"
 # The GPU-driven frame against the CPU path: Python, wall and GPU ms per stage (issue 43).
 wanted frame && step 150 frame python3 -m rtta bench frame --parts 1000,10000,100000 --scene "$DATA/engine_2cyl.glb" \
     --json "$OUT/frame.json"
@@ -99,6 +100,11 @@ wanted stages && step 150 stages bash -c "
     for f in /tmp/asm1k.glb /tmp/asm10k.glb /tmp/asm100k.glb '$DATA/engine_2cyl.glb'; do python3 '$ROOT/scripts/gpu_timers.py' \$f --stages; done &&
     for f in /tmp/asm1k.glb '$DATA/engine_2cyl.glb'; do python3 '$ROOT/scripts/gpu_timers.py' \$f --stages --fused-max 0; done &&
     python3 '$ROOT/scripts/gpu_timers.py' /tmp/asm10k.glb --stages --parameterize cpu"
+# The demo's frame, 1024²: GPU ms per dispatch and draw of ghosted and ghosted-ao, both paths.
+wanted demo && step 90 demo bash -c "for m in ghosted ghosted-ao; do for p in gpu cpu; do
+    python3 '$ROOT/scripts/gpu_timers.py' --mode \$m --size 1024x1024 --stages --parameterize \$p; done; done &&
+    for opt in --sync '--sync --no-hull' '--sync --fused-max 0'; do
+    python3 '$ROOT/scripts/gpu_timers.py' --mode ghosted-ao --size 1024x1024 --stages \$opt; done"
 # The compute blend against the sprites it replaces (Settings.blend), GPU ms per stage, SPAN 1, 2, 4.
 wanted blends && step 120 blends bash -c "
     python3 -c \"from rtta.scene.generators.assembly import write_assembly as w; w('/tmp/asm1k.glb', 1000); w('/tmp/asm10k.glb', 10000); w('/tmp/asm100k.glb', 100000)\" &&

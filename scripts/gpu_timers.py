@@ -15,7 +15,7 @@ import numpy as np
 
 from rtta.gl import glraw, glsl
 from rtta.gl.context import shared_context
-from rtta.passes import blend_tiles, capture, composite, sprites
+from rtta.passes import blend_tiles, capture, composite, post, sprites
 from rtta.renderer.renderer import Renderer, Settings
 from rtta.scene.camera import Camera
 from rtta.scene.loader import load_scene_or_demo
@@ -122,6 +122,7 @@ def main() -> None:
     sprites.SpritePass._run = timers.wrap(kind, sprites.SpritePass._run)
     listed = lambda args, kw: f"composite listed {args[2].kind.value}"  # noqa: E731
     sprites.SpritePass.draw_listed = timers.wrap(listed, sprites.SpritePass.draw_listed)
+    post.AtlasPostPass.render = timers.wrap("post (AO, edges)", post.AtlasPostPass.render)
     Renderer.parameterize = timers.wrap("parameterize", Renderer.parameterize)
     Renderer.composite = timers.wrap("composite (all)", Renderer.composite)
     blend_tiles.TileBlend.draw = timers.wrap("composite blend_tiles", blend_tiles.TileBlend.draw)

@@ -12,10 +12,12 @@ import trimesh
 from rtta.gl.readback import map_back
 from rtta.passes import oit
 from rtta.passes.composite import BACKGROUND, Style
+from rtta.renderer.settings import Settings
 from rtta.scene.camera import Camera
 from rtta.scene.model import from_meshes
 
 VP = (200, 150)
+RASTER = Settings(blend="raster")  # object order as sprites on every GPU, as the CPU branch blends it
 
 
 @pytest.fixture(params=["fetched", "lists"], autouse=True)
@@ -89,7 +91,7 @@ def test_pixel_order_overflow_keeps_nearest(make_renderer, monkeypatch):
     """Over the node bound the frame falls back to object order: counted, and said once (a
     warning, and in Renderer.warnings), however many frames fall back."""
     scene = _nested_scene()
-    r = make_renderer(scene)
+    r = make_renderer(scene, RASTER)  # the same blend as the fallback (a compute blend differs by 1/255)
     cam = Camera.orbit(scene.center, scene.radius, 10, 15, 2.0)
     r.capture(cam, VP)
     by_object = r.composite("transparent", Style(order="object")).read()[0].copy()
@@ -130,7 +132,7 @@ def test_a_view_too_large_for_the_lists_blends_in_object_order(make_renderer, mo
     """The lists' per-pixel targets (12 bytes a pixel) over LISTS_MAX_BYTES: object order,
     counted, and said with the view's size (not as too many surfaces)."""
     scene = _nested_scene()
-    r = make_renderer(scene)
+    r = make_renderer(scene, RASTER)  # the same blend as the fallback (a compute blend differs by 1/255)
     r.capture(Camera.orbit(scene.center, scene.radius, 10, 15, 2.0), VP)
     by_object = r.composite("transparent", Style(order="object")).read()[0].copy()
     monkeypatch.setattr(oit, "FETCH_MAX_BYTES", 0)

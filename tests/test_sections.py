@@ -203,6 +203,7 @@ def test_dataset_takes_the_flags(gl, tmp_path, capsys):
 
     from rtta.cli.main import main
 
+    pytest.importorskip("pycocotools")  # the dataset's masks (rtta[dataset]; CI installs it)
     common = ["dataset", "--views", "1", "--size", "96x72", "--no-progress", "--seed", "3"]
     assert main([*common, "--out", str(tmp_path / "whole")]) == 0
     assert (

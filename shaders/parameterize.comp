@@ -59,6 +59,12 @@ layout(std430, binding = BINDING_PARAM_SCALES) readonly buffer Scales { double w
 layout(std430, binding = BINDING_PARAM_OFFSETS) readonly buffer Offsets { double offsets[]; };  // explode, xyz
 layout(std430, binding = BINDING_PARAM_ITEMS) buffer Items { Item items[]; };
 layout(std430, binding = BINDING_PARAM_CLASSES) coherent buffer Classes { Class classes[CLASSES]; };
+#if STAGE == 9  // one work group: the classes in shared memory (thread 0's layout loops wait on L2 otherwise)
+shared Class cls[CLASSES];
+#define CLASS cls
+#else
+#define CLASS classes
+#endif
 layout(std430, binding = BINDING_PARAM_SHELVES) coherent buffer Shelves { uvec2 shelves[]; };  // layer, y
 layout(std430, binding = BINDING_PARAM_STATE) coherent buffer State {
     uint done;       // 1: the regions fit
@@ -128,12 +134,12 @@ void project(int i) {
         double first = min(wanted[i], min(room.x / inner.x, room.y / inner.y));
         ivec2 size = ivec2(max(ceil(inner * (first * factor) - 1.0e-9LF), dvec2(1.0))) + 2 * u_border;
         int c = height_class(size.y);
-        atomicMax(classes[c].height, uint(size.y));
+        atomicMax(CLASS[c].height, uint(size.y));
         if (2 * size.x <= u_atlas_max.x) {
-            it.place = ivec4(int(atomicAdd(classes[c].strip, uint(size.x))), 0, 0, 1);
+            it.place = ivec4(int(atomicAdd(CLASS[c].strip, uint(size.x))), 0, 0, 1);
         } else {
-            it.place = ivec4(int(atomicAdd(classes[c].wide, 1u)), 0, 0, 0);
-            atomicAdd(classes[c].wide_w, uint(size.x));
+            it.place = ivec4(int(atomicAdd(CLASS[c].wide, 1u)), 0, 0, 0);
+            atomicAdd(CLASS[c].wide_w, uint(size.x));
         }
         it.size = ivec4(size, c, 1);
         it.scale = dvec2(first, 0.0);
@@ -158,15 +164,15 @@ uvec2 next_fit(uint h, inout uint layer, inout uint y, inout uint top) {
 void strip_shelves(bool second, uint width, uint first, inout uint layer, inout uint y, inout uint top) {
     uint base = 0u;
     for (int c = CLASSES - 1; c >= 0; c--) {
-        if (second) classes[c].base2 = base; else classes[c].base = base;
-        base += second ? classes[c].strip2 : classes[c].strip;
+        if (second) CLASS[c].base2 = base; else CLASS[c].base = base;
+        base += second ? CLASS[c].strip2 : CLASS[c].strip;
     }
     uint count = (base + width - 1u) / width;
     int c = CLASSES - 1;
     for (uint s = 0u; s < count; s++) {
         uint at = s * width;
-        while (c > 0 && (second ? classes[c].base2 + classes[c].strip2 : classes[c].base + classes[c].strip) <= at) c--;
-        shelves[first + s] = next_fit(classes[c].height, layer, y, top);
+        while (c > 0 && (second ? CLASS[c].base2 + CLASS[c].strip2 : CLASS[c].base + CLASS[c].strip) <= at) c--;
+        shelves[first + s] = next_fit(CLASS[c].height, layer, y, top);
     }
     if (!second) shelves1 = count;
 }
@@ -175,7 +181,7 @@ void layout_first() {
     uint layer = 0u, y = 0u, top = 0u;
     double total = 0.0;
     for (int c = 0; c < CLASSES; c++) {
-        total += (double(classes[c].strip) + double(classes[c].wide_w)) * double(classes[c].height);
+        total += (double(CLASS[c].strip) + double(CLASS[c].wide_w)) * double(CLASS[c].height);
     }
     area = total;
     strip_shelves(false, uint(u_atlas_max.x), 0u, layer, y, top);
@@ -188,10 +194,10 @@ void place_first(int i) {
     Item it = items[i];
     if (it.size.w == 0 || it.place.w != 1) return;
     uint W = uint(u_atlas_max.x), w = uint(it.size.x);
-    uint at = classes[it.size.z].base + uint(it.place.x);
+    uint at = CLASS[it.size.z].base + uint(it.place.x);
     if (at / W != (at + w - 1u) / W) {  // would cross its shelf's end: to the second strip
         atomicMax(wide2, w);
-        items[i].place = ivec4(int(atomicAdd(classes[it.size.z].strip2, w)), 0, 0, 2);
+        items[i].place = ivec4(int(atomicAdd(CLASS[it.size.z].strip2, w)), 0, 0, 2);
         return;
     }
     uvec2 shelf = shelves[at / W];
@@ -208,17 +214,17 @@ void layout_second() {
         some = true;
     }
     for (int c = CLASSES - 1; c >= 0; c--) {  // a shelf per wide region, class by class
-        uint hc = classes[c].height, count = classes[c].wide;
+        uint hc = CLASS[c].height, count = CLASS[c].wide;
         if (count == 0u) continue;
         if (y + hc > H) {
             layer += 1u;
             y = 0u;
         }
         uint per = H / hc, first = (H - y) / hc;
-        classes[c].layer = layer;
-        classes[c].y = y;
-        classes[c].first = first;
-        classes[c].per_layer = per;
+        CLASS[c].layer = layer;
+        CLASS[c].y = y;
+        CLASS[c].first = first;
+        CLASS[c].per_layer = per;
         some = true;
         if (count <= first) {
             y += count * hc;
@@ -248,14 +254,14 @@ void layout_second() {
     rounds += 1u;
     wide2 = 0u;
     for (int c = 0; c < CLASSES; c++) {
-        classes[c].height = classes[c].strip = classes[c].strip2 = classes[c].wide = classes[c].wide_w = 0u;
+        CLASS[c].height = CLASS[c].strip = CLASS[c].strip2 = CLASS[c].wide = CLASS[c].wide_w = 0u;
     }
 }
 
 void place_second(int i) {
     Item it = items[i];
     if (it.size.w == 0) return;
-    Class k = classes[it.size.z];
+    Class k = CLASS[it.size.z];
     if (it.place.w == 2) {
         uint at = k.base2 + uint(it.place.x);
         uvec2 shelf = shelves[shelves1 + at / cap2];
@@ -332,14 +338,17 @@ void thin_cut_classes() {
 #if STAGE == 9
 uniform int u_rounds;
 
-// what the invocations wrote to the coherent buffers (classes, shelves, state) seen by all
+// what the invocations wrote to the coherent buffers (shelves, state) and the classes seen by all
 void stage_done() {
     memoryBarrierBuffer();
+    memoryBarrierShared();
     barrier();
 }
 
 void main() {
     int t = int(gl_LocalInvocationIndex);
+    for (int c = t; c < CLASSES; c += LOCAL_SIZE) cls[c] = classes[c];
+    stage_done();
     for (int r = 0; r < u_rounds; r++) {  // rounds after the fit change nothing (done), as dispatched ones
         for (int i = t; i < u_count; i += LOCAL_SIZE) if (done == 0u) project(i);
         stage_done();
@@ -353,6 +362,7 @@ void main() {
     for (int i = t; i < u_count; i += LOCAL_SIZE) if (done == 1u) place_second(i);
     stage_done();
     for (int i = t; i < u_count; i += LOCAL_SIZE) write_record(i);
+    for (int c = t; c < CLASSES; c += LOCAL_SIZE) classes[c] = cls[c];
 }
 #else
 void main() {

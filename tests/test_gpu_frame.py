@@ -252,3 +252,23 @@ def test_stages_are_timed_only_when_measuring(make_renderer, demo_scene):
     assert "composite" not in r.timings
     r.composite("ghosted")
     assert set(r.timings) == {"composite"}
+
+
+@pytest.mark.parametrize(("mode", "kicks"), [("ghosted-ao", 3), ("ghosted", 2), ("transparent", 2)])
+def test_a_gpu_gets_the_commands_between_stages(make_renderer, demo_scene, monkeypatch, mode, kicks):
+    """On a GPU (an asynchronous driver) the frame flushes after packing, after AO and after the
+    sort, so the GPU works while the CPU makes the next commands; llvmpipe gets no flush."""
+    from rtta.gl import glraw
+
+    flushed = []
+    monkeypatch.setattr(glraw, "flush_commands", lambda: flushed.append(1))
+    r = make_renderer(demo_scene, Settings(parameterize="gpu"))
+    r.atlas_sizing = "ahead"
+    style = Style(focus=frozenset({1}), order="object")
+    cam = Camera.orbit(demo_scene.center, demo_scene.radius, 30, 20, 2.2)
+    for synchronous, want in ((True, 0), (False, kicks)):
+        monkeypatch.setattr(r.ctx, "_rtta_synchronous", synchronous, raising=False)
+        r.capture(cam, (96, 72), focus=style.focus, normals=r.needs_normals(mode))
+        r.composite(mode, style)
+        assert len(flushed) == want and r._composite.gpu_driven
+        flushed.clear()

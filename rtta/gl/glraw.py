@@ -101,6 +101,11 @@ def read_texels(glo: int, points: np.ndarray, depth: bool) -> np.ndarray:
     return out
 
 
+def flush_commands() -> None:
+    """glFlush: the commands queued so far handed to the GPU (sync.kick)."""
+    _lib().glFlush()
+
+
 def clear_depth(value: float = 1.0) -> None:
     """Clear the depth attachment of the bound framebuffer (all layers)."""
     _lib().glClearBufferfv(GL_DEPTH, 0, (ctypes.c_float * 1)(value))

@@ -23,7 +23,7 @@ import moderngl
 import numpy as np
 
 from ..atlas.parameterize import Records
-from ..gl import glraw
+from ..gl import glraw, sync
 from ..gl.bindings import Storage, Texture
 from ..gl.glsl import mat_bytes
 from ..gl.gpu import GpuScene
@@ -224,11 +224,13 @@ class CompositePass:
             draw(every, SpriteDraw.opaque(), style, records)
         elif mode is Mode.TRANSPARENT:
             ordered = self._gpu.sorted(n=n, gpu=gpu, view=view, styles=self.styles, focus=focused, context=False)
+            sync.kick(self.ctx)
             self._bind(atlas, gpu, target, records)
             self._blend_listed(ordered, SpriteDraw.transparent(), style, records, target)
         else:
             with_ao = _use_post(mode, post)
             context = self._gpu.sorted(n=n, gpu=gpu, view=view, styles=self.styles, focus=focused)
+            sync.kick(self.ctx)  # a GPU sorts while the draws are made
             self._bind(atlas, gpu, target, records)
             if focused is not None:  # with their outlines (at depth 0: nothing drawn after covers them)
                 opaque = SpriteDraw.opaque(shaded=with_ao, outlined=outlined)

@@ -186,9 +186,7 @@ class AtlasPostPass:
             "u_ao_strength": float(style.ao_strength),
             "u_edge_width": int(style.edge_width),
         }
-        for name, value in uniforms.items():
-            if glsl.has(prog, name):  # the compiler drops what a variant does not use
-                prog[name].value = value
+        glsl.set_uniforms(prog, uniforms)  # those the variant holds, and changed since its last draw
         # quads at depth 1 pass only where the capture wrote the object (depth < 1):
         # empty texels of the rectangles are never shaded nor written
         self.ctx.enable_only(moderngl.DEPTH_TEST)

@@ -210,6 +210,7 @@ class Renderer:
         self._view = (camera, viewport, path)
         with self.stages["parameterize"]:
             records = self.parameterize(camera, viewport, (view, proj), self.captured_focus, thin)
+            sync.kick(self.ctx)  # a GPU packs while the capture's draws are made
         with self.stages["capture"]:
             self.capture_pass(path).render(
                 gpu=self.gpu, records=records, view=view, proj=proj, atlas=self.atlas, normals=normals, ids=ids
@@ -236,6 +237,8 @@ class Renderer:
             self._composite = CompositePass(self.ctx)
         self._composite.blend = blend_on(self.settings.blend, sync.renderer(self.ctx))
         post = self.post_process(style) if mode == Mode.GHOSTED_AO else None
+        if post is not None:
+            sync.kick(self.ctx)  # a GPU shades while the compositing is made
         origin = self.scene.origin
         projection = self._projection()
         if projection is not None:

@@ -4,7 +4,7 @@
 # STEPs (default: all, in this order): snapshots capture composite frame tests tiny profile viewer
 # viewer_tests scale; on request also profile100k (a 100,000-part frame under cProfile) and
 # timers (GPU time per stage from timer queries, 10,000 and 100,000 parts), stages (per dispatch),
-# demo (the demo's dispatches and draws)
+# demo (the demo's dispatches and draws), kick (the flushes between stages against none)
 # and blends (the compute blend against sprites).
 #
 # Made for this workplace's `device` tool, whose machines have an NVIDIA driver and Python
@@ -105,6 +105,12 @@ wanted demo && step 90 demo bash -c "for m in ghosted ghosted-ao; do for p in gp
     python3 '$ROOT/scripts/gpu_timers.py' --mode \$m --size 1024x1024 --stages --parameterize \$p; done; done &&
     for opt in --sync '--sync --no-hull' '--sync --fused-max 0'; do
     python3 '$ROOT/scripts/gpu_timers.py' --mode ghosted-ao --size 1024x1024 --stages \$opt; done"
+# The frame's flushes between stages (sync.kick) against none, on the demo, paired runs.
+wanted kick && step 60 kick bash -c "for k in off on off on; do python3 -c \"
+import rtta.gl.sync as s
+if '\$k' == 'off': s.kick = lambda ctx: None
+from rtta.cli.main import main
+print('kick \$k'); main(['bench', 'composite', '--scene', 'demo'])\"; done"
 # The compute blend against the sprites it replaces (Settings.blend), GPU ms per stage, SPAN 1, 2, 4.
 wanted blends && step 120 blends bash -c "
     python3 -c \"from rtta.scene.generators.assembly import write_assembly as w; w('/tmp/asm1k.glb', 1000); w('/tmp/asm10k.glb', 10000); w('/tmp/asm100k.glb', 100000)\" &&

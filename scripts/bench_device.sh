@@ -42,6 +42,8 @@ else
 fi
 STEPS=${*:-snapshots capture composite frame tests tiny profile viewer viewer_tests scale}
 ROOT=$PWD DATA=$PWD/.gpudata TESTS=$PWD/tests
+# the tests look for the shared scenes beside the checkout (../shared/data): the carried ones there
+[ -e "$ROOT/../shared/data" ] || { mkdir -p "$ROOT/../shared" && ln -s "$DATA" "$ROOT/../shared/data"; }
 cd /tmp        # import the installed rtta (with its shaders and assets), not the checkout's
 
 step() {    # step SECONDS NAME COMMAND...

@@ -1,7 +1,7 @@
 """Where a frame's wall time goes on the CPU side: FRAMES frames of MODE on SCENE (the demo
 by default), each capture + composite + finish, under cProfile; prints ms per frame with and
 without the profiler and the functions with the most cumulative time.
-python scripts/profile_frame.py [SCENE] [--mode ghosted-ao] [--frames 200] [--size 1024x1024]"""
+python scripts/profile_frame.py [SCENE] [--mode ghosted-ao] [--frames 200] [--size 1024x1024] [--sizing ahead]"""
 
 from __future__ import annotations
 
@@ -24,11 +24,13 @@ def main() -> None:
     p.add_argument("--frames", type=int, default=200)
     p.add_argument("--size", default="1024x1024")
     p.add_argument("--top", type=int, default=30)
+    p.add_argument("--sizing", default="ahead", choices=("ahead", "exact"), help="the atlas's (ahead: as the viewer)")
     a = p.parse_args()
     ctx = shared_context()
     scene = load_scene_or_demo(a.scene)
     viewport = tuple(int(v) for v in a.size.split("x"))
     r = Renderer(ctx, scene)
+    r.atlas_sizing = a.sizing
     style = Style(focus={0, scene.count // 2})
 
     def frames(n: int) -> float:

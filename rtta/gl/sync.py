@@ -50,6 +50,5 @@ def barrier(ctx: moderngl.Context, bits: int) -> None:
 def kick(ctx: moderngl.Context) -> None:
     """glFlush on a GPU: the commands so far start while the CPU makes the next ones; nothing
     on a synchronous driver (the module's docstring)."""
-    known = getattr(ctx, "_rtta_synchronous", None)  # synchronous(ctx), without its call
-    if not (synchronous(ctx) if known is None else known):
+    if not synchronous(ctx):
         glraw.flush_commands()

@@ -4,7 +4,11 @@ from __future__ import annotations
 
 import re
 import unicodedata
+from enum import StrEnum
 from pathlib import Path
+from typing import TypeVar
+
+E = TypeVar("E", bound=StrEnum)
 
 _ESCAPED = {"\n": "\\n", "\r": "\\r", "\t": "\\t"}
 
@@ -33,6 +37,13 @@ class RttaError(Exception):
         self.path = None if path is None else str(path)
         self.message = message
         super().__init__(f"{self.path}: {message}" if self.path else message)
+
+
+def member(kind: type[E], value: object) -> E | None:
+    """The member of the option enum `kind` that `value` (a member or its string) names, else
+    None, for the caller's own error: a dict lookup, where `kind(value)` takes three Python calls
+    and raises (options are looked up every frame; issue 43 counts a frame's calls)."""
+    return kind._value2member_map_.get(value) if isinstance(value, str) else None  # type: ignore[return-value]
 
 
 def printable(text: object) -> str:

@@ -8,7 +8,7 @@ from typing import Literal
 
 import moderngl
 
-from ..errors import RttaError
+from ..errors import RttaError, member
 
 LAYER_EXTENSION = "GL_ARB_shader_viewport_layer_array"
 
@@ -144,7 +144,7 @@ class Capabilities:
 
     def capture_path(self, requested: CapturePathName | CapturePath = "auto") -> CapturePath:
         """The path `requested`, or for 'auto' 'vs' where the layer extension exists, else the paper's 'gs'."""
-        path: CapturePath | None = CapturePath._value2member_map_.get(requested) if isinstance(requested, str) else None  # type: ignore[assignment]
+        path = member(CapturePath, requested)
         if path is None:
             raise RttaError(f"capture path must be one of {', '.join(CAPTURE_PATHS)}, got {requested!r}")
         if path is CapturePath.VS and not self.vertex_layer:

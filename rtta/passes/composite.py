@@ -23,6 +23,7 @@ import moderngl
 import numpy as np
 
 from ..atlas.parameterize import Records
+from ..errors import member
 from ..gl import glraw, sync
 from ..gl.bindings import Storage, Texture
 from ..gl.glsl import mat_bytes
@@ -118,8 +119,8 @@ class CompositePass:
         reads R back (GpuRecords.read)."""
         if lens is not None and mode not in LENS_MODES:
             lens = None
-        found: Mode | None = Mode._value2member_map_.get(mode) if isinstance(mode, str) else None  # type: ignore[assignment]
-        if found is None:  # (Mode(mode): 3 calls)
+        found = member(Mode, mode)
+        if found is None:
             raise ValueError(f"unknown mode {mode!r}; modes: {', '.join(MODES)}")
         mode = found
         inv_view_proj = None  # (P V)^-1 once per render, for every draw that rebuilds world positions

@@ -14,6 +14,8 @@ from typing import Literal, TypeVar
 
 import numpy as np
 
+from ..errors import member
+
 
 class Mode(StrEnum):
     """Compositing modes (RTTA paper, section 3.2; docs/modes.md)."""
@@ -74,10 +76,10 @@ def choice(kind: type[E], value: str, what: str) -> E:
     ValueError
         `value` is none of them: "<what> must be one of <choices>, got <value>".
     """
-    found = kind._value2member_map_.get(value) if isinstance(value, str) else None  # kind(value): 3 calls
+    found = member(kind, value)
     if found is None:
         raise ValueError(f"{what} must be one of {', '.join(kind)}, got {value!r}")
-    return found  # type: ignore[return-value]
+    return found
 
 
 @dataclass

@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import RttaError, printable
+from ..errors import RttaError, member, printable
 from .bounds import BOUNDS, Bounds, BoundsName
 from .closure import closed_objects
 from .meshes_check import checked_colors, checked_parts
@@ -105,7 +105,7 @@ class Scene:
         (the paper's axis-aligned boxes); [2, N, 8, 3] for 'obb': the AABBs and the
         principal-axes boxes, whose projections parameterization intersects (both enclose
         the object, so the intersection does too, and it is never larger than the AABB's)."""
-        bounds = Bounds._value2member_map_.get(kind) if isinstance(kind, str) else None  # Bounds(kind): 3 calls
+        bounds = member(Bounds, kind)
         if bounds is None:
             raise ValueError(f"unknown bounds '{kind}' (choose from {', '.join(BOUNDS)})")
         if Bounds.AABB not in self._corners:  # stored planar [3, 8, N]: parameterize projects rows

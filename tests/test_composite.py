@@ -336,3 +336,42 @@ def test_per_pixel_lists_are_released_when_unused(make_renderer, demo_scene):
     r.composite("ghosted", Style(focus={1}))
     assert r._composite._pixel_order is None
     assert np.array_equal(r.composite("transparent", Style()).read()[0], first)
+
+
+def test_sprite_draws_apply_their_masks_to_the_framebuffer_bound(make_renderer, demo_scene, monkeypatch):
+    """SpritePass._state sets the depth and colour masks on `ctx.fbo` and binds it again only for
+    a colour mask (moderngl applies one to a framebuffer of one attachment at its next `use()`).
+    At every sprite draw of every mode, in object and pixel order (the surfaces listed, where the
+    context is drawn with its colour masked), GL's own binding and masks are the draw's."""
+    import ctypes
+
+    from rtta.gl import glraw
+    from rtta.passes import oit
+    from rtta.passes.sprites import SpritePass
+
+    GL_DRAW_FRAMEBUFFER_BINDING, GL_DEPTH_WRITEMASK, GL_COLOR_WRITEMASK = 0x8CA6, 0x0B72, 0x0C23
+    seen, state = [], SpritePass._state
+
+    def checked(self, draw):
+        held = state(self, draw)
+        gl, bound, depth, colour = glraw._lib(), ctypes.c_int(-1), ctypes.c_ubyte(9), (ctypes.c_ubyte * 4)()
+        gl.glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, ctypes.byref(bound))
+        gl.glGetBooleanv(GL_DEPTH_WRITEMASK, ctypes.byref(depth))
+        gl.glGetBooleani_v(GL_COLOR_WRITEMASK, 0, colour)
+        fbo, colours = self.ctx.fbo, tuple(map(bool, colour))
+        mask = fbo.color_mask  # per attachment: a tuple of them, or the one's (none: depth only)
+        mask = (mask[0] if isinstance(mask[0], tuple) else mask) if mask else colours
+        seen.append(((bound.value, bool(depth.value), colours), (fbo.glo, fbo.depth_mask, tuple(mask))))
+        return held
+
+    monkeypatch.setattr(SpritePass, "_state", checked)
+    monkeypatch.setattr(oit, "first_fetched", lambda ctx: False)  # the lists: the masked context draw
+    cam = Camera.orbit(demo_scene.center, demo_scene.radius, *DEFAULT_ORBIT)
+    for path in ("cpu", "gpu"):
+        r = make_renderer(demo_scene, Settings(parameterize=path))
+        r.capture(cam, VP)
+        for mode in MODES:
+            for order in ("object", "pixel"):
+                r.composite(mode, Style(focus={1, 5}, order=order))
+    assert any(not want[2][0] for _, want in seen), "no draw masked its colour"
+    assert all(got == want for got, want in seen), [s for s in seen if s[0] != s[1]]

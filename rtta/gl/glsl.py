@@ -170,6 +170,11 @@ def has(prog: moderngl.Program | moderngl.ComputeShader, name: str) -> bool:
     return name in _held(prog)[1]
 
 
+def members(prog: moderngl.Program | moderngl.ComputeShader) -> frozenset[str]:
+    """The names of `prog`'s members (uniforms, blocks, attributes), kept as `has` keeps them."""
+    return _held(prog)[1]
+
+
 def _held(prog: moderngl.Program | moderngl.ComputeShader) -> tuple[dict, frozenset]:
     """`prog.extra` (made on first use) and the program's member names, kept there."""
     held = prog.extra

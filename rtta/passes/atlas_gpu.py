@@ -34,9 +34,7 @@ from ..gl.gpu import GpuScene
 from .thin_gpu import CUT, RANK, GpuThinning
 
 LOCAL_SIZE = 64
-CLASSES = 128  # height classes (parameterize.comp)
-CLASS_BYTES = 48
-ITEM_BYTES = 80
+CLASSES, CLASS_BYTES, ITEM_BYTES = 128, 48, 80  # height classes (parameterize.comp), their and an item's bytes
 ROUNDS = 2  # rounds of projection and layout dispatched before the state is read ("exact")
 AHEAD_ROUNDS = 4  # rounds dispatched per frame when nothing is read ("ahead")
 MAX_ROUNDS = 64  # as the CPU path's loop
@@ -90,6 +88,7 @@ class GpuParameterize:
         self._wanted = np.zeros(0)
         self._wanted_key: object = None
         self._uniforms: dict[str, object] = {}  # as the programs hold them
+        self._holders: dict[frozenset, list] = {}  # the programs holding any of some uniforms
         self.layers = 0  # "ahead": the layers allocated (0: none yet, the next frame is exact)
         self._ahead_of: tuple | None = None  # (viewport, atlas_max, max_layers) the allocation is for
         self._late_pending = False  # a state was copied aside and not read yet
@@ -265,7 +264,7 @@ class GpuParameterize:
                 self.programs[stage] = self.ctx.compute_shader(
                     glsl.load("parameterize.comp", STAGE=stage, LOCAL_SIZE=LOCAL_SIZE)
                 )
-            self._thinning, self._uniforms = GpuThinning(self.ctx), {}  # the new programs' uniforms set
+            self._thinning, self._uniforms, self._holders = GpuThinning(self.ctx), {}, {}  # the new programs' set
         return self._thinning
 
     def _ahead_layers(self, viewport: tuple[int, int], atlas_max: tuple[int, int], max_layers: int) -> int:
@@ -291,7 +290,11 @@ class GpuParameterize:
         changed = {name: value for name, value in uniforms.items() if self._uniforms.get(name) != value}
         if changed:
             self._uniforms.update(changed)
-            for prog in self.programs.values():  # (set_uniforms skips the names a program lacks)
+            names = frozenset(changed)  # most frames: the matrix alone, which two stages hold
+            holders = self._holders.get(names)
+            if holders is None:
+                holders = self._holders[names] = [p for p in self.programs.values() if names & glsl.members(p)]
+            for prog in holders:
                 glsl.set_uniforms(prog, changed)
         self.state.write(self._start)
         self.classes.clear()

@@ -368,7 +368,10 @@ class SpritePass:
             lens_pass.bind(prog, lens_, origin)
 
     def _state(self, draw: SpriteDraw) -> tuple:
-        """The GL state of `draw`'s calls (the framebuffer bound); what `_defaults` needs back."""
+        """The GL state of `draw`'s calls; what `_defaults` needs back. The masks are set on
+        `ctx.fbo`, the framebuffer bound: moderngl applies a depth mask to it at once, and a
+        colour mask at once only where it has several attachments, else at its next `use()`.
+        So it is bound again only for a colour mask (~20 µs a call on NVIDIA)."""
         flags = moderngl.NOTHING
         if draw.depth is not Depth.OFF:
             flags |= moderngl.DEPTH_TEST
@@ -382,7 +385,7 @@ class SpritePass:
         masked = draw.kind is Kind.COLLECTED and not draw.fetched  # else the collect framebuffer masks it
         if masked:
             fbo.color_mask = (False, False, False, False)
-        fbo.use()
+            fbo.use()
         return fbo, masked
 
     def _defaults(self, fbo: moderngl.Framebuffer, masked: bool) -> None:
@@ -391,6 +394,7 @@ class SpritePass:
         self.ctx.depth_func = "<"
         if masked:
             fbo.color_mask = (True, True, True, True)
+            fbo.use()
 
     def release(self) -> None:
         for obj in [*self._vaos.values(), *self._programs.values(), self.order]:

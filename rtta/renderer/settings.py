@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import os
 import re
 from dataclasses import dataclass
@@ -96,8 +97,10 @@ def parameterize_on(parameterize: ParameterizeName | ParameterizeOn) -> str:
     return str(parameterize)
 
 
+@functools.lru_cache(maxsize=16)
 def blend_on(blend: BlendName, renderer: str) -> Literal["raster", "compute"]:
-    """`Settings.blend` resolved for the GL_RENDERER string `renderer`."""
+    """`Settings.blend` resolved for the GL_RENDERER string `renderer` (asked every frame:
+    cached, a C call where it is known)."""
     if blend == "auto":
         return "compute" if _FEW_ROPS.search(renderer) else "raster"
     return blend

@@ -82,13 +82,20 @@ layout(location = 0) out vec4 out_color;
 // The atlas is depth-keyed (targets.py): empty texels have depth 1 and stale colour.
 bool covered(ivec3 s) { return !outside(s.xy) && texelFetch(u_depth, s, 0).r < 1.0; }
 
+// Whether atlas texel `s` lies beyond the viewport: in the border past an edge where the view
+// cuts the object. What lies there is unknown, and the cut is no silhouette.
+bool beyond(ivec3 s) {
+    vec2 px = g_map.zw + (vec2(s.xy) + 0.5 - g_map.xy) / g_scale;
+    return any(lessThan(px, vec2(0.0))) || any(greaterThan(px, u_viewport));
+}
+
 // Whether atlas texel `t` is on the object's silhouette: its own (inside B_atlas and
-// covered) with a texel within u_outline_width (square window) that is not.
+// covered) with a texel within u_outline_width (square window) that is not, and is in view.
 bool silhouette(ivec3 t) {
     if (!covered(t)) return false;
     for (int dy = -u_outline_width; dy <= u_outline_width; ++dy)
         for (int dx = -u_outline_width; dx <= u_outline_width; ++dx)
-            if (!covered(t + ivec3(dx, dy, 0))) return true;
+            if (!covered(t + ivec3(dx, dy, 0)) && !beyond(t + ivec3(dx, dy, 0))) return true;
     return false;
 }
 
@@ -110,7 +117,9 @@ bool quad_silhouette(ivec3 t) {
     vec2 own_row = odd.y == 1 ? g.wz : g.xy, away_row = odd.y == 1 ? g.xy : g.wz;
     vec4 c = odd.x == 1 ? vec4(own_row.x, own_row.y, away_row.x, away_row.y)
                         : vec4(own_row.y, own_row.x, away_row.y, away_row.x);     // (own, ax, ay, axy)
-    vec4 e = vec4(greaterThanEqual(c, vec4(1.0)));      // empty
+    vec4 e = vec4(greaterThanEqual(c, vec4(1.0)));      // empty (and in view: beyond() is none)
+    e *= vec4(bvec4(!beyond(t), !beyond(t + ivec3(away.x, 0, 0)), !beyond(t + ivec3(0, away.y, 0)),
+                    !beyond(t + ivec3(away, 0))));
     vec2 s = vec2(1 - 2 * odd);
     vec4 px = e + s.x * dFdxFine(e);                     // the partner across x: (own, ., ay, .)
     vec4 py = e + s.y * dFdyFine(e);                     // across y: (own, ax, ., .)

@@ -5,7 +5,9 @@
 // shading and silhouettes. Drawn as one quad per object over its atlas rectangle
 // (post.geom), where a texel is either the object's or empty; the atlas is depth-keyed
 // (targets.py): a texel is empty exactly where its depth is 1, whatever its normal holds.
-// A neighbour outside the rectangle counts as empty. So no id is fetched at all. The quads
+// A neighbour outside the rectangle counts as empty, so no id is fetched at all, except one
+// beyond the viewport (an object cut by the view's edge): nothing is known of it, and the cut is
+// no silhouette, so it makes no edge (as AO, which takes no sample from empty texels). The quads
 // lie at depth 1 and are tested '>' against the atlas depth, so only covered texels (and
 // the helpers of their 2x2 quads) are shaded.
 // AO: 8 samples per 2x2 quad of texels, 2 taken by each texel around itself and summed
@@ -45,6 +47,9 @@ float view_distance(float d) {
 vec3 normal_at(ivec3 t) { return texelFetch(u_normal, t, 0).xyz * 2.0 - 1.0; }
 
 bool outside(ivec2 t) { return any(lessThan(t, g_rect.xy)) || any(greaterThan(t, g_rect.zw)); }
+
+// whether texel t's centre lies beyond the viewport (its region's border past a cut edge)
+bool beyond(ivec2 t) { return any(greaterThan(abs(g_map.xy + (vec2(t) + 0.5) * g_map.zw), vec2(1.0))); }
 
 // texel with window depth `d` -> view-space position
 vec3 view_position(ivec2 t, float d) {
@@ -98,14 +103,16 @@ float edge_with(vec4 q) {
     return max(smoothstep(0.01, 0.03, jump), smoothstep(0.2, 0.5, bend));
 }
 
-// edge strength towards the texel at offset `o` whose depth is `d`
+// edge strength towards the texel at offset `o` whose depth is `d` (none beyond the view)
 float edge_at(ivec2 o, float d) {
     ivec3 s = ivec3(g_t.xy + o, g_t.z);
+    if (beyond(s.xy)) return 0.0;
     return outside(s.xy) || d >= 1.0 ? 1.0 : edge_with(vec4(normal_at(s), view_distance(d)));
 }
 
 float edge_towards(ivec2 o) {
     ivec3 s = ivec3(g_t.xy + o, g_t.z);
+    if (beyond(s.xy)) return 0.0;
     return outside(s.xy) ? 1.0 : edge_at(o, texelFetch(u_depth, s, 0).r);
 }
 
@@ -147,9 +154,11 @@ void main() {
 #ifdef EDGE_QUAD
     // the quad partner (x ^ 1, y ^ 1) from the derivatives, the other side fetched
     ivec2 partner = g_t.xy + 1 - 2 * odd;
-    float ex = partner.x < g_rect.x || partner.x > g_rect.z || partner_empty.x != 0.0 ? 1.0
+    float ex = beyond(ivec2(partner.x, g_t.y)) ? 0.0
+             : partner.x < g_rect.x || partner.x > g_rect.z || partner_empty.x != 0.0 ? 1.0
              : edge_with(odd.x == 0 ? nd + ddx : nd - ddx);
-    float ey = partner.y < g_rect.y || partner.y > g_rect.w || partner_empty.y != 0.0 ? 1.0
+    float ey = beyond(ivec2(g_t.x, partner.y)) ? 0.0
+             : partner.y < g_rect.y || partner.y > g_rect.w || partner_empty.y != 0.0 ? 1.0
              : edge_with(odd.y == 0 ? nd + ddy : nd - ddy);
     float edge = max(max(ex, ey), max(edge_at(ivec2(away.x, 0), depth_x), edge_at(ivec2(0, away.y), depth_y)));
 #else

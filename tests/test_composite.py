@@ -252,10 +252,15 @@ def test_stale_atlas_texels_never_show(make_renderer, demo_scene):
 
 def _silhouettes(records, covered: np.ndarray, oid: int, width: int) -> np.ndarray:
     """The object's texels in its B_atlas with a texel within `width` (square window) that
-    is outside B_atlas or empty: what the outline pass draws, in numpy."""
+    is outside B_atlas or empty, and in view: what the outline pass draws, in numpy (at scale 1).
+    Texels beyond the viewport (where the view cuts the object) make no silhouette."""
     x, y, w, h = records.atlas_rect[oid]
     own = np.zeros((h + 2 * width, w + 2 * width), bool)  # outside B_atlas: not the object's
     own[width:-width, width:-width] = covered[records.layer[oid], y : y + h, x : x + w]
+    # texel (border + i, border + j) of B_atlas shows pixel (x0 + i, y0 + j)
+    (x0, y0), (vw, vh) = records.viewport_rect[oid, :2].astype(int) - records.border, records.viewport
+    px, py = x0 + np.arange(-width, w + width), y0 + np.arange(-width, h + width)
+    own |= ((px < 0) | (px >= vw))[None, :] | ((py < 0) | (py >= vh))[:, None]
     near_other = np.zeros((h, w), bool)
     for dy in range(-width, width + 1):
         for dx in range(-width, width + 1):
@@ -273,7 +278,8 @@ def test_outlines_match_numpy_silhouettes(make_renderer, demo_scene, border, wid
     object's own atlas region mapped back through T^-1. With border 0 the regions touch, so
     a silhouette next to B_atlas's edge is found only if texels beyond it count as empty
     (not the neighbouring object's); close up (distance 0.6) parts cross the viewport's edge,
-    so their regions are full up to B_atlas's edge. A wide outline reaches past a 1-texel border.
+    so their regions are full up to B_atlas's edge, and the cut there is no silhouette (no
+    outline frames the image). A wide outline reaches past a 1-texel border.
     `sprites` draws outlines in a pass of their own, `ghosted` in the focus sprites' pass;
     width 1 with a border takes the quad-derivative silhouette (OUTLINE_QUAD) in both."""
     from rtta.renderer.renderer import Settings

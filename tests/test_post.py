@@ -62,9 +62,18 @@ class AtlasFrame:
         x = np.clip(yx[:, 1], 0, self.shape[2] - 1)
         return image[self.covered[:, 0], y, x]
 
+    def beyond(self, yx: np.ndarray) -> np.ndarray:
+        """Whether texel yx (of each covered texel's object) lies beyond the viewport."""
+        ids = self.ids[tuple(self.covered.T)]
+        rec, vp = self.rec, np.asarray(self.rec.viewport, np.float32)
+        scale = rec.scale[ids].astype(np.float32)[:, None]
+        origin = (rec.viewport_rect[ids, :2] - (rec.atlas_rect[ids, :2] + rec.border) / scale) / vp * 2 - 1
+        return (np.abs(origin + (yx[:, ::-1] + 0.5) * (2.0 / (scale * vp))) > 1.0).any(-1)
+
     def edges(self, width: int) -> np.ndarray:
         """Per covered texel: max over the 4 neighbours at `width` of silhouette (outside the
-        rectangle or empty), relative depth jump and crease."""
+        rectangle or empty), relative depth jump and crease; none towards a neighbour beyond
+        the viewport (an object cut by the view's edge)."""
         p = self.fetch(self.normal, self.covered[:, 1:])
         n_p, d_p = _normalize(p[:, :3]), p[:, 3]
         out = np.zeros(len(p), np.float32)
@@ -74,7 +83,8 @@ class AtlasFrame:
             jump = np.abs(q[:, 3] - d_p) / d_p
             bend = 1.0 - (n_p * _normalize(q[:, :3])).sum(-1)
             e = np.maximum(_smoothstep(0.01, 0.03, jump), _smoothstep(0.2, 0.5, bend))
-            out = np.maximum(out, np.where(self.inside(yx) & (self.fetch(self.depth, yx) < 1.0), e, 1.0))
+            e = np.where(self.inside(yx) & (self.fetch(self.depth, yx) < 1.0), e, 1.0)
+            out = np.maximum(out, np.where(self.beyond(yx), 0.0, e))
         return out
 
     def view_position(self, ids: np.ndarray, yx: np.ndarray, d: np.ndarray) -> np.ndarray:
@@ -119,10 +129,14 @@ class AtlasFrame:
 SENTINEL = 77
 
 
+CLOSE = (35.0, 25.0, 0.8)  # inside the bounding sphere: objects cut by the viewport's edges
+
+
+@pytest.mark.parametrize("orbit", [DEFAULT_ORBIT, CLOSE])
 @pytest.mark.parametrize("edge_width, border", [(1, 1), (1, 0), (2, 1), (2, 2), (3, 1)])
-def test_post_process_matches_numpy(make_renderer, demo_scene, edge_width, border):
+def test_post_process_matches_numpy(make_renderer, demo_scene, edge_width, border, orbit):
     r = make_renderer(demo_scene, Settings(border=border))
-    cam = Camera.orbit(demo_scene.center, demo_scene.radius, *DEFAULT_ORBIT)
+    cam = Camera.orbit(demo_scene.center, demo_scene.radius, *orbit)
     records = r.capture(cam, VP)
     style = Style(edge_width=edge_width, ao_radius=12.0, ao_strength=1.5, ao_objects="all")
     post = r.post_process(style)
@@ -152,4 +166,10 @@ def test_post_process_matches_numpy(make_renderer, demo_scene, edge_width, borde
     assert (got[empty] == SENTINEL / 255.0).all()
     assert not (got[at] == SENTINEL / 255.0).all(-1).any()  # every covered texel was written
     assert 0.02 < (frame.edges(edge_width) > 0.5).mean() < 0.6  # edges exist, not everywhere
+    if orbit == CLOSE:  # where the view cuts an object, its texels next to the cut are no silhouette
+        cut = np.zeros(len(frame.covered), bool)
+        for o in ((0, edge_width), (0, -edge_width), (edge_width, 0), (-edge_width, 0)):
+            cut |= frame.beyond(frame.covered[:, 1:] + o)
+        assert cut.sum() > 200
+        assert (got[..., 1][at][cut] > 0.5).mean() < 0.5, "the viewport's edge drawn as a silhouette"
     assert (frame.ambient_occlusion(style.ao_radius, style.ao_strength) < 0.9).mean() > 0.01

@@ -146,6 +146,8 @@ def cmd_dataset(args: argparse.Namespace) -> int:
     load = load_options(args)
     if not 1 <= args.views <= 1_000_000 or args.workers < 1 or args.min_visible < 0:
         raise RttaError("--views must be 1..1000000, --workers at least 1, --min-visible at least 0")
+    if args.seed < 0:  # numpy's seeds are non-negative
+        raise RttaError(f"--seed must be a non-negative integer, got {args.seed}")
     staging = staging_of(args)  # checked before any scene is read
     opts = Options(
         scenes=args.scenes,

@@ -118,6 +118,7 @@ def cmd_ldi(args: argparse.Namespace) -> int:
     center, extent = (vertices.min(axis=0) + vertices.max(axis=0)) / 2, float(np.ptp(vertices, axis=0).max())
     if points is not None:  # parity is unchanged by moving and scaling both: test at unit size,
         points = (points - center) / extent  # so float32 depths work for meshes at 1e-30 or 1e12 units
+        points = np.clip(points, -4.0, 4.0)  # the mesh lies within ±0.5: points beyond stay outside, in float32
     ctx = shared_context()
     ldi = build(ctx, (vertices - center) / extent, faces, args.resolution)
     packed = compress(ldi)

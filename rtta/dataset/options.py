@@ -23,7 +23,7 @@ import numpy as np
 from ..errors import RttaError
 from ..outputs import atomic_write
 from ..scene.camera import Camera
-from ..scene.readers import MESHES
+from ..scene.readers import MAX_COORDINATE, MESHES
 from . import coco
 
 FORMAT = "rtta-dataset 1"
@@ -184,16 +184,27 @@ def parse_cameras(path: str) -> list[dict]:
                 cam.update(up=[float(v) for v in c.get("up", [0, 1, 0])], fov=fov)
                 ok = all(len(cam[k]) == 3 for k in ("eye", "target", "up")) and cam["eye"] != cam["target"]
             ok = ok and 0 < fov < 180 and np.isfinite([v for x in cam.values() for v in np.ravel(x)]).all()
+            ok = ok and _in_range(cam)
         except (AttributeError, KeyError, TypeError, ValueError, OverflowError):  # 10**400: found by fuzzing
             ok = False
         if not ok:
             raise RttaError(
                 f'camera {i}: expected {{"orbit": [AZ, EL, DIST>0], "fov": F}} or '
-                '{"eye": [x,y,z], "target": [x,y,z], "up": [x,y,z], "fov": F} with 0 < F < 180',
+                '{"eye": [x,y,z], "target": [x,y,z], "up": [x,y,z], "fov": F} with 0 < F < 180 '
+                f"(AZ, EL within ±1e6 degrees, DIST 1e-6 to 1e6 radii, x, y, z within ±{MAX_COORDINATE:.0e})",
                 path,
             )
         out.append(cam)
     return out
+
+
+def _in_range(cam: dict) -> bool:
+    """An orbit as --camera takes it; eye and target where scenes may lie (±MAX_COORDINATE:
+    beyond, the view's matrices overflow and the eye meets the target in float)."""
+    if "orbit" in cam:
+        az, el, dist = cam["orbit"]
+        return max(abs(az), abs(el)) <= 1e6 and 1e-6 <= dist <= 1e6
+    return max(abs(v) for k in ("eye", "target") for v in cam[k]) <= MAX_COORDINATE
 
 
 def items_of(s: dict, shard: tuple[int, int]) -> list[tuple[int, int]]:

@@ -146,7 +146,8 @@ def grouped_sums(
     return out
 
 
-PAIR_BLOCK = 1 << 21  # corner pairs per block of _pair_sums (bounds its temporary memory)
+# corner pairs per block of _pair_sums (bounds its memory); the most corners at a position compared pairwise
+PAIR_BLOCK, MAX_PAIR_CORNERS = 1 << 21, 2048
 
 
 def _pair_sums(
@@ -155,7 +156,9 @@ def _pair_sums(
     """grouped_sums by comparing every pair of corners at a position. Positions are taken
     by their corner count s, all positions of one count as dense [P, s] blocks: the s x s
     dot products, the within-angle mask and the masked sums are whole-block products, so
-    each corner's normal and weight are gathered once, not once per partner."""
+    each corner's normal and weight are gathered once, not once per partner. Over PAIR_BLOCK
+    pairs a position is compared some rows at a time; over MAX_PAIR_CORNERS corners (a 40,000-
+    sided cone's apex: 1.6e9 pairs) each keeps its own face's normal, as a symmetric apex sums."""
     small = position.max(initial=0) < 1 << 16  # a pass's positions mostly are: radix sort, O(n)
     order = np.argsort(position.astype(np.uint16) if small else position, kind="stable")
     sorted_pos = position[order]
@@ -165,6 +168,10 @@ def _pair_sums(
     out = np.empty((len(order), 3))
     for s in np.unique(sizes).tolist():
         first = starts[sizes == s]
+        if s * s > PAIR_BLOCK:  # one position at a time
+            for at, own in ((at, faces[at : at + s]) for at in first.tolist()):
+                out[order[at : at + s]] = fn[own] if s > MAX_PAIR_CORNERS else _wide_sums(own, unit, fn, cos_limit)
+            continue
         step = max(1, PAIR_BLOCK // (s * s))
         for b in range(0, len(first), step):
             corners = first[b : b + step, None] + np.arange(s)  # [P, s] sorted corners
@@ -175,6 +182,17 @@ def _pair_sums(
             dots += u[:, :, None, 2] * u[:, None, :, 2]  # [P, s, s]
             near = (dots >= cos_limit).astype(np.float64)
             out[order[corners.reshape(-1)]] = np.matmul(near, w).reshape(-1, 3)
+    return out
+
+
+def _wide_sums(faces: np.ndarray, unit: np.ndarray, fn: np.ndarray, cos_limit: float) -> np.ndarray:
+    """_pair_sums at one position of many corners (their `faces`), a block of rows at a time."""
+    u, w = unit[faces], fn[faces]
+    out = np.empty((len(faces), 3))
+    for r in range(0, len(faces), rows := max(1, PAIR_BLOCK // len(faces))):
+        dots = u[r : r + rows, None, 0] * u[None, :, 0] + u[r : r + rows, None, 1] * u[None, :, 1]
+        dots += u[r : r + rows, None, 2] * u[None, :, 2]
+        out[r : r + rows] = np.matmul((dots >= cos_limit).astype(np.float64), w)
     return out
 
 

@@ -9,9 +9,11 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import RttaError, reason
+from ..files import max_objects
 from . import Assembly, check_archive, hidden, unit_name
 
 MAX_DEPTH = 256
+WALK_PER_OBJECT = 50  # nodes the walk may visit per object a file may make (as glTF's)
 
 
 def read(path: Path) -> Assembly:
@@ -31,17 +33,39 @@ def read(path: Path) -> Assembly:
     if dae.scene is None:
         raise RttaError("the COLLADA file has no scene", path)
     hiders: dict[str, None] = {}  # nodes whose singular transform hid a geometry, in file order
+    walk = _Walk(path)
     for node in dae.scene.nodes:
-        _visit(node, np.identity(4), (), out, 0, (hiders, None))
+        _visit(node, np.identity(4), (), out, 0, (hiders, None), walk)
     hidden.note_hidden(list(hiders), len(out.names), path, out.warnings)
     return out
+
+
+class _Walk:
+    """What the node walk may still do: <instance_node> makes the tree a graph, and node k
+    holding node k+1 twice 40 times over is 2^40 paths in a few KiB; the walk stops with an
+    error once it visited more nodes, or made more parts, than a file of its size may."""
+
+    def __init__(self, path: Path) -> None:
+        self.path, self.objects = path, max_objects(path)
+        self.visits = self.objects * WALK_PER_OBJECT
+
+    def step(self, out: Assembly) -> None:
+        self.visits -= 1
+        if self.visits < 0 or len(out.names) > self.objects:
+            raise RttaError(
+                f"the COLLADA node graph makes over {self.objects:,} parts or {self.objects * WALK_PER_OBJECT:,} "
+                "node visits (nodes instanced many times over, or in a cycle)",
+                self.path,
+            )
 
 
 def _label(node) -> str:
     return str(getattr(node, "name", None) or getattr(node, "id", None) or "node")
 
 
-def _visit(node, parent: np.ndarray, groups: tuple[str, ...], out: Assembly, depth: int, hiding: tuple) -> None:
+def _visit(
+    node, parent: np.ndarray, groups: tuple[str, ...], out: Assembly, depth: int, hiding: tuple, walk: _Walk
+) -> None:
     """The node's geometries and its children's. Below a singular transform (a zero scale)
     nothing is drawn; `hiding` is (the names of the nodes that hid a geometry, the node whose
     transform flattens this subtree or None)."""
@@ -49,6 +73,7 @@ def _visit(node, parent: np.ndarray, groups: tuple[str, ...], out: Assembly, dep
 
     if depth > MAX_DEPTH:
         return
+    walk.step(out)
     if isinstance(node, scene.NodeNode):  # <instance_node>: the referenced node, here
         node = node.node
     if not isinstance(node, scene.Node):
@@ -59,7 +84,7 @@ def _visit(node, parent: np.ndarray, groups: tuple[str, ...], out: Assembly, dep
     hider = hider or (name if hidden.singular(m) else None)
     geometries = [c for c in node.children if isinstance(c, scene.GeometryNode)]
     for k, g in enumerate(geometries):
-        v, f, color = _geometry(g)
+        v, f, color = _geometry(g, walk.path)
         if len(f) and hider is not None:
             hiders[hider] = None
         elif len(f):
@@ -68,14 +93,24 @@ def _visit(node, parent: np.ndarray, groups: tuple[str, ...], out: Assembly, dep
             out.add(label, world, f, color, groups)
     for child in node.children:
         if isinstance(child, scene.Node | scene.NodeNode):
-            _visit(child, m, (*groups, name), out, depth + 1, (hiders, hider))
+            _visit(child, m, (*groups, name), out, depth + 1, (hiders, hider), walk)
 
 
-def _geometry(gnode) -> tuple[np.ndarray, np.ndarray, list[float] | None]:
+def _geometry(gnode, path: Path) -> tuple[np.ndarray, np.ndarray, list[float] | None]:
     """Triangles of one geometry instance, in its node's frame, and its first material colour."""
+    from collada.polylist import Polylist
+
     vs, fs, base, color = [], [], 0, None
     materials = {m.symbol: m.target for m in (gnode.materials or [])}
     for prim in gnode.geometry.primitives:
+        if isinstance(prim, Polylist):  # pycollada allocates for sum(vcount), before any check
+            counts = np.asarray(prim.vcounts, np.int64)
+            if len(prim.index) and (counts.min(initial=0) < 0 or int(counts.sum()) != len(prim.index)):
+                raise RttaError(
+                    f"COLLADA geometry '{gnode.geometry.id}' has polygon sizes (<vcount>) that add up to "
+                    f"{int(counts.sum()):,} corners, but its <p> has {len(prim.index):,}",
+                    path,
+                )
         tri = prim.triangleset() if hasattr(prim, "triangleset") else prim
         if not hasattr(tri, "vertex_index") or tri.vertex is None or tri.vertex_index is None:
             continue

@@ -115,7 +115,8 @@ class _Records:
 
     def _record(self, mesh, textures: TextureTable) -> Decoded | None:
         if isinstance(mesh, Decoded):  # read directly: trimesh need not even be imported
-            return replace(mesh, normals=None) if self.smooth and mesh.normals is not None else mesh
+            usable = mesh.normals is not None and not self.smooth and _usable_normals(mesh.normals)
+            return mesh if mesh.normals is None or usable else replace(mesh, normals=None)
         import trimesh
 
         self.trimesh = True
@@ -356,9 +357,15 @@ def _file_normals(mesh) -> np.ndarray | None:
         n = np.asarray(mesh.vertex_normals, np.float64)
     except Exception:
         return None
-    if n.shape != mesh.vertices.shape or not np.isfinite(n).all():
+    if n.shape != mesh.vertices.shape or not _usable_normals(n):
         return None
     return n.astype(np.float32)
+
+
+def _usable_normals(n: np.ndarray) -> bool:
+    """Finite, and none of zero length (which no renormalising can make a direction: the
+    shaders' normalize() would give NaN); else the normals are made as for a file without."""
+    return bool(np.isfinite(n).all() and (np.abs(n).max(axis=1, initial=0.0) > 0).all())
 
 
 def _file_has_normals(mesh) -> bool:

@@ -12,6 +12,7 @@ import numpy as np
 from lxml import etree
 
 from ...errors import RttaError, reason
+from ..files import max_objects
 from ..precheck import ZIP_ERRORS
 from . import Assembly, check_archive, hidden
 from .trimesh_io import as_scene
@@ -61,7 +62,39 @@ def _products(path: Path) -> dict[str, str]:
             )
     except (KeyError, AttributeError, etree.XMLSyntaxError, *ZIP_ERRORS) as exc:  # a damaged member too
         raise RttaError(f"cannot read 3DXML file (no readable product structure: {str(exc)[:120]})", path) from None
+    _check_paths(doc, path)
     return {r.get("id", ""): r.get("name") or r.get("id", "") for r in doc.iter("{*}Reference3D")}
+
+
+def _check_paths(doc, path: Path) -> None:
+    """The product structure is a graph (a Reference3D instanced by several): trimesh places
+    one part per path from the root to a representation, all of them listed (2^40 from 40
+    references each holding the next twice). Counted here first, per reference once: more
+    parts than a file of this size may make, or a cycle, is an error."""
+    structure = doc.find("{*}ProductStructure")
+    root = structure.get("root") if structure is not None else None
+    children: dict[str, list[str]] = {}
+    for inst in [*doc.iter("{*}Instance3D"), *doc.iter("{*}InstanceRep")]:
+        parent, child = inst.findtext("{*}IsAggregatedBy"), inst.findtext("{*}IsInstanceOf")
+        if parent and child:
+            children.setdefault(parent.strip(), []).append(child.strip())
+    reps = {r.get("id", "") for r in doc.iter("{*}ReferenceRep")}
+    limit, paths, open_ = max_objects(path), {}, set()
+    stack: list[tuple[str | None, bool]] = [(root, False)]
+    while stack:  # depth first without recursion; (node, True): its children are counted
+        node, counted = stack.pop()
+        if counted:
+            open_.discard(node)
+            paths[node] = min(limit + 1, (node in reps) + sum(paths[c] for c in children.get(node, [])))
+        elif node in open_:  # reached again below itself
+            raise RttaError("3DXML product structure has a cycle (a reference that holds itself)", path)
+        elif node not in paths:
+            open_.add(node)
+            stack += [(node, True)] + [(c, False) for c in children.get(node or "", [])]
+    if paths.get(root, 0) > limit:
+        raise RttaError(
+            f"3DXML product structure places over {limit:,} parts (references instanced many times over)", path
+        )
 
 
 def _color(mesh) -> list[float] | None:

@@ -66,6 +66,28 @@ def test_nan_base_colour_is_drawn_as_one(tmp_path, gl):
     assert centre[0] > 60 and centre[1] < 20 and centre[2] < 20, centre  # red, shaded; not black
 
 
+@pytest.mark.parametrize("bad", [float("nan"), float("inf"), 7.0])
+def test_vertex_colours_that_are_no_colours_are_drawn_as_one(tmp_path, gl, bad):
+    """A float COLOR_0 of NaN, infinity or beyond 1 (red otherwise): the component is drawn as 1
+    (NaN, infinite) or clamped, as a base colour factor, with one warning; trimesh alone made a
+    NaN black and transparent."""
+    doc, binary = box_doc()
+    colors = np.tile(np.float32([1.0, 0.0, 0.0, 1.0]), (24, 1))
+    colors[:, 3] = bad  # alpha
+    colors[:, 1] = np.float32(-bad) if bad == 7.0 else colors[:, 1]  # below 0: clamped to 0
+    doc["bufferViews"].append({"buffer": 0, "byteOffset": len(binary), "byteLength": colors.nbytes})
+    doc["accessors"].append({"bufferView": 3, "componentType": 5126, "count": 24, "type": "VEC4"})
+    doc["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"] = 3
+    binary += colors.tobytes()
+    doc["buffers"][0]["byteLength"] = len(binary)
+    (tmp_path / "c.glb").write_bytes(glb(doc, binary))
+    scene = load_scene(tmp_path / "c.glb", cache=False)
+    assert np.allclose(scene.colors[0], [1.0, 0.0, 0.0, 1.0]), scene.colors[0]
+    assert any("vertex colour" in w for w in scene.warnings), scene.warnings
+    centre = _render(tmp_path / "c.glb")[36, 48]
+    assert centre[0] > 60 and centre[1] < 20 and centre[2] < 20, centre  # red, shaded; not black
+
+
 def test_fan_and_second_parent_are_drawn(tmp_path, gl):
     from bad_gltf import _fan_file
 

@@ -28,9 +28,18 @@ from ...errors import RttaError
 from ..files import TextureBudget, image_problem, local_file, max_objects, memory_limit, read_limited
 from ..precheck import check_size
 from . import draco, gltf_graph
-from .gltf_check import COMPONENT_BYTES, TYPE_WIDTH, check
+from .gltf_check import COMPONENT_BYTES, FLOAT, TYPE_WIDTH, check
 from .gltf_document import read_document
-from .gltf_read import Decoded, decode, densify_sparse, extension, transform_texcoords, view_bytes
+from .gltf_read import (
+    Decoded,
+    accessor_array,
+    append_view,
+    decode,
+    densify_sparse,
+    extension,
+    transform_texcoords,
+    view_bytes,
+)
 from .gltf_rewrite import fan_indices, geometry_name, rewrite
 
 BUFFER_COPIES = 4  # the file, the rewritten blob, trimesh's slices of it, the GLB it reads
@@ -98,6 +107,7 @@ def prepare(path: Path) -> Prepared:
     transform_texcoords(doc, out.pairs, out.buffers, out.warnings)
     out.images = _images(doc, out.buffers, path, out)
     _colors(doc, out.warnings)
+    _vertex_colors(doc, out.pairs, out.buffers, out.warnings)
     per_mesh: dict[int, list[int]] = {}
     for m, p in out.pairs:
         per_mesh.setdefault(m, []).append(p)
@@ -300,4 +310,28 @@ def _colors(doc: dict, warnings: list[str]) -> None:
         warnings.append(
             f"{len(fixed)} material(s) with a baseColorFactor that is NaN, infinite or outside [0, 1] "
             "(NaN and infinite components drawn as 1, the rest clamped): " + ", ".join(fixed[:5])
+        )
+
+
+def _vertex_colors(doc: dict, pairs: list, buffers: list[bytes], warnings: list[str]) -> None:
+    """Float COLOR_0 made drawable as base colour factors are (`_colors`): NaN and infinite
+    components become 1, the rest are clamped to [0, 1], into an accessor of its own; trimesh
+    would cast NaN to 0, a black, transparent object. Said once."""
+    fixed = set()
+    for m, p in pairs:
+        i = doc["meshes"][m]["primitives"][p]["attributes"].get("COLOR_0")
+        acc = None if i is None else doc["accessors"][i]
+        if acc is None or i in fixed or acc["componentType"] != FLOAT or "bufferView" not in acc:
+            continue
+        colors = accessor_array(doc, i, buffers)
+        if np.isfinite(colors).all() and colors.min(initial=0.0) >= 0.0 and colors.max(initial=0.0) <= 1.0:
+            continue
+        clean = np.clip(np.nan_to_num(colors, nan=1.0, posinf=1.0, neginf=1.0), 0.0, 1.0).astype(np.float32)
+        acc["bufferView"], acc["byteOffset"] = append_view(doc, buffers, clean.tobytes()), 0
+        fixed.add(i)
+    if fixed:
+        warnings.append(
+            f"{len(fixed)} vertex colour accessor(s) with values that are NaN, infinite or outside [0, 1] "
+            "(NaN and infinite components drawn as 1, the rest clamped): accessors "
+            + ", ".join(map(str, sorted(fixed)[:5]))
         )

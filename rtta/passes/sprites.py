@@ -368,16 +368,11 @@ class SpritePass:
             lens_pass.bind(prog, lens_, origin)
 
     def _state(self, draw: SpriteDraw) -> tuple:
-        """The GL state of `draw`'s calls; what `_defaults` needs back. The masks are set on
-        `ctx.fbo`, the framebuffer bound: moderngl applies a depth mask to it at once, and a
-        colour mask at once only where it has several attachments, else at its next `use()`.
-        So it is bound again only for a colour mask (~20 µs a call on NVIDIA)."""
-        flags = moderngl.NOTHING
-        if draw.depth is not Depth.OFF:
-            flags |= moderngl.DEPTH_TEST
-        if draw.kind in (Kind.BLENDED, Kind.COLLECTED_BLENDED, Kind.HALOS):
-            flags |= moderngl.BLEND
-        self.ctx.enable_only(flags)
+        """The GL state of `draw`'s calls; what `_defaults` needs back. `ctx.fbo` is bound again
+        only for a colour mask: moderngl applies one of a single attachment at `use()` alone."""
+        blended = draw.kind in (Kind.BLENDED, Kind.COLLECTED_BLENDED, Kind.HALOS)
+        tested = draw.depth is not Depth.OFF
+        self.ctx.enable_only((moderngl.DEPTH_TEST if tested else 0) | (moderngl.BLEND if blended else 0))
         self.ctx.depth_func = ">" if draw.depth is Depth.FARTHEST else "<"
         self.ctx.blend_func = moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA
         fbo = self.ctx.fbo

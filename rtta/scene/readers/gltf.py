@@ -320,8 +320,10 @@ def _vertex_colors(doc: dict, pairs: list, buffers: list[bytes], warnings: list[
     fixed = set()
     for m, p in pairs:
         i = doc["meshes"][m]["primitives"][p]["attributes"].get("COLOR_0")
-        acc = None if i is None else doc["accessors"][i]
-        if acc is None or i in fixed or acc["componentType"] != FLOAT or "bufferView" not in acc:
+        if i is None or i in fixed:
+            continue
+        acc = doc["accessors"][i]
+        if acc["componentType"] != FLOAT or "bufferView" not in acc:
             continue
         colors = accessor_array(doc, i, buffers)
         if np.isfinite(colors).all() and colors.min(initial=0.0) >= 0.0 and colors.max(initial=0.0) <= 1.0:

@@ -85,7 +85,7 @@ def _check_paths(doc, path: Path) -> None:
         node, counted = stack.pop()
         if counted:
             open_.discard(node)
-            paths[node] = min(limit + 1, (node in reps) + sum(paths[c] for c in children.get(node, [])))
+            paths[node] = min(limit + 1, (node in reps) + sum(paths[c] for c in children.get(node or "", [])))
         elif node in open_:  # reached again below itself
             raise RttaError("3DXML product structure has a cycle (a reference that holds itself)", path)
         elif node not in paths:

@@ -146,8 +146,7 @@ def grouped_sums(
     return out
 
 
-# corner pairs per block of _pair_sums (bounds its memory); the most corners at a position compared pairwise
-PAIR_BLOCK, MAX_PAIR_CORNERS = 1 << 21, 2048
+PAIR_BLOCK, MAX_PAIR_CORNERS = 1 << 21, 2048  # pairs per block (memory); most corners at a position compared
 
 
 def _pair_sums(

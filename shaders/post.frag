@@ -112,8 +112,7 @@ float edge_at(ivec2 o, float d) {
 
 float edge_towards(ivec2 o) {
     ivec3 s = ivec3(g_t.xy + o, g_t.z);
-    if (beyond(s.xy)) return 0.0;
-    return outside(s.xy) ? 1.0 : edge_at(o, texelFetch(u_depth, s, 0).r);
+    return edge_at(o, outside(s.xy) ? 1.0 : texelFetch(u_depth, s, 0).r);   // (fetched inside alone)
 }
 
 void main() {

@@ -62,13 +62,16 @@ class AtlasFrame:
         x = np.clip(yx[:, 1], 0, self.shape[2] - 1)
         return image[self.covered[:, 0], y, x]
 
-    def beyond(self, yx: np.ndarray) -> np.ndarray:
-        """Whether texel yx (of each covered texel's object) lies beyond the viewport."""
-        ids = self.ids[tuple(self.covered.T)]
+    def ndc(self, ids: np.ndarray, yx: np.ndarray) -> np.ndarray:
+        """Viewport NDC (x, y) of texel yx's centre, in the region of object `ids` (post.geom's g_map)."""
         rec, vp = self.rec, np.asarray(self.rec.viewport, np.float32)
         scale = rec.scale[ids].astype(np.float32)[:, None]
         origin = (rec.viewport_rect[ids, :2] - (rec.atlas_rect[ids, :2] + rec.border) / scale) / vp * 2 - 1
-        return (np.abs(origin + (yx[:, ::-1] + 0.5) * (2.0 / (scale * vp))) > 1.0).any(-1)
+        return origin + (yx[:, ::-1] + 0.5) * (2.0 / (scale * vp))
+
+    def beyond(self, yx: np.ndarray) -> np.ndarray:
+        """Whether texel yx (of each covered texel's object) lies beyond the viewport."""
+        return (np.abs(self.ndc(self.ids[tuple(self.covered.T)], yx)) > 1.0).any(-1)
 
     def edges(self, width: int) -> np.ndarray:
         """Per covered texel: max over the 4 neighbours at `width` of silhouette (outside the
@@ -88,12 +91,7 @@ class AtlasFrame:
         return out
 
     def view_position(self, ids: np.ndarray, yx: np.ndarray, d: np.ndarray) -> np.ndarray:
-        rec, P = self.rec, self.proj
-        scale = rec.scale[ids].astype(np.float32)[:, None]
-        vp = np.asarray(rec.viewport, np.float32)
-        step = 2.0 / (scale * vp)
-        origin = (rec.viewport_rect[ids, :2] - (rec.atlas_rect[ids, :2] + rec.border) / scale) / vp * 2 - 1
-        ndc = origin + (yx[:, ::-1] + 0.5) * step
+        P, ndc = self.proj, self.ndc(ids, yx)
         z = -P[2, 3] / (d * 2.0 - 1.0 + P[2, 2])
         return np.stack([-z * ndc[:, 0] / P[0, 0], -z * ndc[:, 1] / P[1, 1], z], -1)
 

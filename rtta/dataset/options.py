@@ -22,7 +22,7 @@ import numpy as np
 
 from ..errors import RttaError
 from ..outputs import atomic_write
-from ..scene.camera import Camera
+from ..scene.camera import Camera, orbit_in_range
 from ..scene.readers import MAX_COORDINATE, MESHES
 from . import coco
 
@@ -202,8 +202,7 @@ def _in_range(cam: dict) -> bool:
     """An orbit as --camera takes it; eye and target where scenes may lie (±MAX_COORDINATE:
     beyond, the view's matrices overflow and the eye meets the target in float)."""
     if "orbit" in cam:
-        az, el, dist = cam["orbit"]
-        return max(abs(az), abs(el)) <= 1e6 and 1e-6 <= dist <= 1e6
+        return orbit_in_range(*cam["orbit"])
     return max(abs(v) for k in ("eye", "target") for v in cam[k]) <= MAX_COORDINATE
 
 

@@ -30,12 +30,18 @@ def parse_orbit(text: str, option: str = "--camera", given: str | None = None) -
         az, el, dist = (float(x) for x in text.split(","))
     except ValueError:
         raise RttaError(f"{option} expects AZ,EL,DIST (three numbers), got '{given}'") from None
-    if not all(np.isfinite([az, el, dist])) or not 1e-6 <= dist <= 1e6 or max(abs(az), abs(el)) > 1e6:
+    if not orbit_in_range(az, el, dist):
         raise RttaError(
             f"{option} '{given}': AZ and EL must be finite degrees (|value| up to 1e6) and DIST "
             "between 1e-6 and 1e6 scene radii"
         )
     return az, el, dist
+
+
+def orbit_in_range(az: float, el: float, dist: float) -> bool:
+    """Whether an orbit is one `--camera` takes: finite angles up to 1e6 degrees and DIST
+    between 1e-6 and 1e6 scene radii."""
+    return bool(np.isfinite([az, el, dist]).all()) and 1e-6 <= dist <= 1e6 and max(abs(az), abs(el)) <= 1e6
 
 
 UP_AXES = ("y", "z")

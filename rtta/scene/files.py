@@ -27,6 +27,9 @@ MAX_OBJECTS_LARGE = 1_000_000  # and never more than this
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tga", ".tif", ".tiff", ".gif", ".webp")
 
 
+WALK_PER_OBJECT = 50  # nodes (node paths) a reader's graph walk may visit per object a file may make
+
+
 def max_objects(path: Path, extra_bytes: int = 0) -> int:
     """Objects the scene file at `path` (with `extra_bytes` of files it refers to, such as a
     glTF's buffers) may make: 10,000, or for larger files one per 256 bytes (up to 1,000,000).

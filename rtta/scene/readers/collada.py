@@ -9,11 +9,10 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import RttaError, reason
-from ..files import max_objects
+from ..files import WALK_PER_OBJECT, max_objects
 from . import Assembly, check_archive, hidden, unit_name
 
 MAX_DEPTH = 256
-WALK_PER_OBJECT = 50  # nodes the walk may visit per object a file may make (as glTF's)
 
 
 def read(path: Path) -> Assembly:

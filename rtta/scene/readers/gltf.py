@@ -17,7 +17,6 @@ import base64
 import binascii
 import io
 import json
-import math
 import struct
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -293,30 +292,38 @@ def _base_textures(doc: dict) -> list[int]:
     return out
 
 
+DRAWN_AS = "(NaN and infinite components drawn as 1, the rest clamped)"
+
+
+def _drawable(values) -> np.ndarray:
+    """Colour components as drawn: NaN or infinite ones 1 (glTF's default factor), the rest
+    clamped to [0, 1]."""
+    v = np.asarray(values, np.float64)
+    return np.where(np.isfinite(v), np.clip(v, 0.0, 1.0), 1.0)
+
+
 def _colors(doc: dict, warnings: list[str]) -> None:
-    """Base colour factors made drawable: NaN or infinite components become 1 (glTF's
-    default), others are clamped to [0, 1]; each change is said once."""
+    """Base colour factors made drawable (`_drawable`); each change is said once."""
     fixed = []
     for i, mat in enumerate(doc.get("materials", [])):
         pbr = mat.get("pbrMetallicRoughness", {})
         factor = pbr.get("baseColorFactor")
         if factor is None:
             continue
-        clean = [min(max(v, 0.0), 1.0) if math.isfinite(v) else 1.0 for v in factor]
+        clean = _drawable(factor).tolist()
         if clean != factor:
             fixed.append(mat.get("name") or f"materials[{i}]")
             pbr["baseColorFactor"] = clean
     if fixed:
         warnings.append(
             f"{len(fixed)} material(s) with a baseColorFactor that is NaN, infinite or outside [0, 1] "
-            "(NaN and infinite components drawn as 1, the rest clamped): " + ", ".join(fixed[:5])
+            f"{DRAWN_AS}: " + ", ".join(fixed[:5])
         )
 
 
 def _vertex_colors(doc: dict, pairs: list, buffers: list[bytes], warnings: list[str]) -> None:
-    """Float COLOR_0 made drawable as base colour factors are (`_colors`): NaN and infinite
-    components become 1, the rest are clamped to [0, 1], into an accessor of its own; trimesh
-    would cast NaN to 0, a black, transparent object. Said once."""
+    """Float COLOR_0 made drawable as base colour factors are (`_drawable`), into an accessor
+    of its own; trimesh would cast NaN to 0, a black, transparent object. Said once."""
     fixed = set()
     for m, p in pairs:
         i = doc["meshes"][m]["primitives"][p]["attributes"].get("COLOR_0")
@@ -326,14 +333,13 @@ def _vertex_colors(doc: dict, pairs: list, buffers: list[bytes], warnings: list[
         if acc["componentType"] != FLOAT or "bufferView" not in acc:
             continue
         colors = accessor_array(doc, i, buffers)
-        if np.isfinite(colors).all() and colors.min(initial=0.0) >= 0.0 and colors.max(initial=0.0) <= 1.0:
+        clean = _drawable(colors)
+        if np.array_equal(clean, colors):
             continue
-        clean = np.clip(np.nan_to_num(colors, nan=1.0, posinf=1.0, neginf=1.0), 0.0, 1.0).astype(np.float32)
-        acc["bufferView"], acc["byteOffset"] = append_view(doc, buffers, clean.tobytes()), 0
+        acc["bufferView"], acc["byteOffset"] = append_view(doc, buffers, clean.astype(np.float32).tobytes()), 0
         fixed.add(i)
     if fixed:
         warnings.append(
             f"{len(fixed)} vertex colour accessor(s) with values that are NaN, infinite or outside [0, 1] "
-            "(NaN and infinite components drawn as 1, the rest clamped): accessors "
-            + ", ".join(map(str, sorted(fixed)[:5]))
+            f"{DRAWN_AS}: accessors " + ", ".join(map(str, sorted(fixed)[:5]))
         )

@@ -11,11 +11,10 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import RttaError
-from ..files import MAX_OBJECTS_LARGE
+from ..files import MAX_OBJECTS_LARGE, WALK_PER_OBJECT
 from . import hidden
 
 MAX_DEPTH = 1000  # levels of the node graph
-WALK_PER_OBJECT = 50  # node paths the walk may follow per object a file may make
 
 
 def local_transforms(nodes: list) -> np.ndarray:

@@ -12,8 +12,9 @@ and reused; or a `Renderer` on a moderngl context of your own, for control over 
 from .atlas.parameterize import Records, parameterize
 from .errors import RttaError
 from .gl.context import Capabilities, create_headless_context
-from .passes.capture import CapturePass, RttPass, StdPass
+from .passes.capture import CapturePass
 from .passes.composite import Style
+from .passes.direct import RttPass, StdPass
 from .renderer.api import Capture, capture, snapshot
 from .renderer.pick import Pick, pick
 from .renderer.renderer import Renderer, Settings

@@ -1,10 +1,16 @@
 #version 430
-// defines: TEXTURED SECTIONS
+// defines: TEXTURED SECTIONS REGION_GUARD
 // The paper's path (Figure 4): displace each triangle into its atlas region and route it to its layer.
+// REGION_GUARD (an extreme zoom, rtta.passes.guard): each triangle is first cut to its region's
+// guard planes here, so the rasterizer never clips the huge ones; scene.frag keeps the region.
 #include "records.glsl"
 
 layout(triangles) in;
+#ifdef REGION_GUARD
+layout(triangle_strip, max_vertices = 7) out;
+#else
 layout(triangle_strip, max_vertices = 3) out;
+#endif
 
 #ifdef SECTIONS
 in VertexData { vec3 normal; flat int object; flat vec3 color; vec3 world; } gs_in[];
@@ -23,9 +29,16 @@ layout(location = 7) flat in int v_material_layer[];
 layout(location = 7) flat out int g_material_layer;
 #endif
 
+#ifdef REGION_GUARD
+#include "guard_clip.glsl"
+#endif
+
 void main() {
     Record r = records[gs_in[0].object];
     if (r.info.y == 0) return;  // culled: not packed, emits nothing
+#ifdef REGION_GUARD
+    if (guard_cut(r)) return;  // cut and emitted, or wholly outside
+#endif
     for (int i = 0; i < 3; ++i) {
         vec4 clip_pos = gl_in[i].gl_Position;
         float d[4];

@@ -1,5 +1,6 @@
 #version 430
-// defines: PROJECTOR TEXTURED SEPARATE NO_NORMAL SECTIONS CAP_COUNT CAP_DRAW
+// defines: PROJECTOR TEXTURED SEPARATE NO_NORMAL SECTIONS CAP_COUNT CAP_DRAW REGION_GUARD
+// REGION_GUARD: the capture at an extreme zoom keeps its region's texels alone (records.glsl)
 // SECTIONS, CAP_COUNT, CAP_DRAW: cut, capped (section.glsl)
 // Multiple render targets: shaded colour, view-space normal (RGBA8: n * 0.5 + 0.5; the view
 // distance post-processing needs comes from the depth), object id (depth is the depth
@@ -40,6 +41,9 @@ layout(location = 2) out int out_id;
 
 
 void main() {
+#ifdef REGION_GUARD
+    if (!region_holds(gl_FragCoord.xy, records[fs_in.object])) discard;
+#endif
     float len_n = length(fs_in.normal);
     vec3 n = len_n > 1e-20 ? fs_in.normal / len_n : vec3(0.0, 0.0, 1.0);
     if (!gl_FrontFacing) n = -n;

@@ -1,5 +1,5 @@
 #version 430
-// defines: CAPTURE_VS CAPTURE_GS PROJECTOR TEXTURED REGION_CLIP PLACED SECTIONS
+// defines: CAPTURE_VS CAPTURE_GS PROJECTOR TEXTURED REGION_CLIP REGION_GUARD PLACED SECTIONS
 // PLACED, SECTIONS: exploded and cut (section.glsl)
 // One vertex shader for STD/RTT (no define), the RTTA vertex-shader path (CAPTURE_VS,
 // needs GL_ARB_shader_viewport_layer_array) and the RTTA geometry-shader path (CAPTURE_GS).

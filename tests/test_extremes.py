@@ -8,6 +8,7 @@ import trimesh
 from checks import check_frame
 
 from rtta.bench.compare import near_edges
+from rtta.renderer.placing import make_staging
 from rtta.scene.camera import Camera
 from rtta.scene.generators.generate import random_scene
 from rtta.scene.model import from_meshes
@@ -171,3 +172,22 @@ def test_orbit_matches_the_spherical_formula(up_axis):
             Camera.orbit([0.0, 0, 0], 1.0, bad, 0.0, 2.0)
         with pytest.raises(RttaError, match="finite"):
             Camera.orbit([0.0, 0, 0], 1.0, 0.0, bad, 2.0)
+
+
+@pytest.mark.parametrize("path", PATHS)
+@pytest.mark.parametrize("height", [1e-5, 1e-6])
+@pytest.mark.parametrize("section", [None, "z=0.599995"])
+def test_ortho_zoomed_past_float32_clipping(make_renderer, path, height, section):
+    """An orthographic view `height` scene radii high on a corner where two boxes meet (cut
+    and capped just below it): the parts' triangles reach clip coordinates of ~1e6, beyond
+    what float32 clips to the region planes within a pixel; the guard (rtta.passes.guard)
+    keeps every region whole. Failed without it: STD and the atlas differed at ~160 px."""
+    scene = from_meshes([("a", *_box(2.0, np.zeros(3)), None), ("b", *_box(1.0, np.array([1.5, 0.2, 0.1])), None)])
+    corner = np.array([1.0, 0.7, 0.6])  # b's corner on a's face
+    eye = corner + np.array([0.4, 0.5, 1.0])
+    cam = Camera(eye=eye, target=corner, up=np.array([0.0, 1, 0]), kind="ortho", height=height * scene.radius)
+    r = make_renderer(scene)
+    if section is not None:
+        r.staging = make_staging([section], "solid")
+    out = check_frame(r, cam.fit_depth(scene.center, scene.radius), (320, 240), path)
+    assert out["visible"] == 2 and r.capture_pass(path).guard > 0

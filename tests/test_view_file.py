@@ -75,6 +75,11 @@ BAD = [
         "distance must be in (0, 1e12]",
     ),
     ("target", '{"rtta_view": 1, "camera": {"az": 0, "el": 0, "distance": 1, "target": [0], "fov": 45}}', "target"),
+    (  # overflowed the view matrix: a blank picture and "far/near inf/inf"
+        "far target",
+        '{"rtta_view": 1, "camera": {"az": 0, "el": 0, "distance": 1, "target": [1e300,0,0], "fov": 45}}',
+        "each within 1e12",
+    ),
     ("mode", '{"rtta_view": 1, "mode": "xray"}', "mode must be one of"),
     ("projection", '{"rtta_view": 1, "projection": "ortho"}', "projection needs a camera"),
     ("focus", '{"rtta_view": 1, "focus": "hub"}', "focus must be a list of object or group names"),

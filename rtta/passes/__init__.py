@@ -7,8 +7,9 @@ the unbatched and BVH-chunked STD passes for textured scenes; picking from atlas
 Imports the gl, atlas and scene layers only.
 """
 
-from .capture import CapturePass, RttPass, StdPass
+from .capture import CapturePass
 from .composite import MODES, CompositePass, CompositeTarget, Style
+from .direct import RttPass, StdPass
 from .post import AtlasPostPass
 
 __all__ = ["MODES", "AtlasPostPass", "CapturePass", "CompositePass", "CompositeTarget", "RttPass", "StdPass", "Style"]

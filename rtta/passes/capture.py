@@ -1,13 +1,14 @@
-"""Render passes, one class each, with explicit inputs and outputs.
+"""The capture: scene passes, and the RTTA pass that draws every object into its region.
 
+- `ScenePass`: a program from scene.vert, its variants, culling, sections' caps and draws
+  of index runs, shared by every pass that draws the batched scene.
 - `CapturePass` (RTTA): the whole batch in ONE pass into the layered atlas, each vertex displaced
   by its object's T to its layer (vertex- or geometry-shader path); regions on the viewport's
-  edge alone are clipped. With R on the GPU, so are the draw lists (rtta.passes.draw_lists).
-- `StdPass`: the scene drawn normally into one target (baseline STD).
-- `RttPass`: each object drawn alone into its own full-viewport target (baseline RTT).
+  edge alone are clipped (at an extreme zoom, to a guard: rtta.passes.guard). With R on the
+  GPU, so are the draw lists (rtta.passes.draw_lists).
 
-All three cull the back faces of closed objects (Scene.closed) wholly beyond the near
-plane, which are never seen.
+The direct renders STD and RTT are in rtta.passes.direct. All cull the back faces of closed
+objects (Scene.closed) wholly beyond the near plane, which are never seen.
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ from ..gl.targets import LayeredTarget
 from ..scene.closure import beyond_near
 from . import sections
 from .draw_lists import CaptureLists, capture_from_records, draw_from_lists, draws_from_lists
+from .guard import RegionGuard
 
 DIRECT_RUNS = 1  # more runs of visible objects than this: one indirect multi-draw
 
@@ -36,6 +38,7 @@ class ScenePass:
     (or another fragment shader, e.g. depth.frag for the projector's shadow map)."""
 
     disjoint = False  # objects may share texels (STD): caps are made one object at a time
+    guard = 0.0  # the region planes' guard (CapturePass: an extreme zoom's, rtta.passes.guard)
 
     def __init__(
         self, ctx: moderngl.Context, geometry: str | None = None, fragment: str = "scene.frag", **defines: object
@@ -119,6 +122,8 @@ class ScenePass:
         program = self.program_for(gpu.textured, target is None or target.normals, **extra)
         view_bytes, proj_bytes = matrices or (mat_bytes(view), mat_bytes(proj))
         glsl.set_uniforms(program, {"u_view": view_bytes, "u_proj": proj_bytes})
+        if extra.get("REGION_GUARD"):  # an extreme zoom (rtta.passes.guard)
+            glsl.set_uniforms(program, {"u_region_guard": self.guard, "u_atlas_size": target.size})
         if placement is not None:
             placement.apply(program, proj @ view)
         if self.binder is not None and not variant.get("CAP_COUNT"):  # the count writes the stencil alone
@@ -249,6 +254,7 @@ class CapturePass(ScenePass):
         self.frames = 0
         self.lists: CaptureLists | None = None  # made on the first frame of R on the GPU
         self.gpu_lists_used = False  # whether the last frame drew from GPU-built lists
+        self._guards, self._guarded = RegionGuard(), None  # an extreme zoom (rtta.passes.guard)
         if self.path is CapturePath.VS:
             super().__init__(ctx, CAPTURE_VS=True)
         else:
@@ -273,6 +279,12 @@ class CapturePass(ScenePass):
         reads ids and reads normals only for AO, edges and the projector; picking reads depths."""
         tw, th, td = records.atlas_size
         self.frames += 1
+        self.guard = self._guards.of(gpu, view, proj, records.viewport)
+        if self.guard > 0 and self.path is CapturePath.VS:  # the geometry shader cuts to the guard
+            self._guarded = self._guarded or CapturePass(self.ctx, CapturePath.GS)
+            self._guarded.render(gpu=gpu, records=records, view=view, proj=proj, atlas=atlas, normals=normals, ids=ids)
+            self.gpu_lists_used = self._guarded.gpu_lists_used
+            return
         self.gpu_lists_used = td > 0 and draws_from_lists(records, gpu)
         lists = None
         if self.gpu_lists_used:  # built before the clear: llvmpipe's memory barrier waits for all queued work
@@ -296,105 +308,7 @@ class CapturePass(ScenePass):
 
     def release(self) -> None:
         super().release()
-        if self.lists is not None:
-            self.lists.release()
-            self.lists = None
-
-
-class StdPass(ScenePass):
-    """STD, the direct render: the scene drawn normally into a one-layer target of the viewport.
-
-    The reference every "x STD" figure is held against. With `projection` (ProjectorPass,
-    Projector), painted by the projector per fragment. `Renderer.std` runs it.
-
-    Parameters
-    ----------
-    ctx : moderngl.Context
-        An OpenGL 4.3 core context.
-    """
-
-    def __init__(self, ctx: moderngl.Context) -> None:
-        super().__init__(ctx)
-        self._painted: ScenePass | None = None
-
-    def render(
-        self,
-        *,
-        gpu: GpuScene,
-        view: np.ndarray,
-        proj: np.ndarray,
-        target: LayeredTarget,
-        viewport: tuple[int, int],
-        projection=None,
-        objects: np.ndarray | None = None,
-    ) -> None:
-        """objects: bool [n], the objects to draw (None: all)."""
-        target.ensure(viewport, 1)
-        target.clear()
-        scene_pass: ScenePass = self
-        if projection is not None:
-            if self._painted is None:
-                self._painted = ScenePass(self.ctx, PROJECTOR=True)
-            scene_pass = self._painted
-        if projection is not None:  # every program the pass draws with (sections: several)
-            pass_, projector = projection
-            scene_pass.binder = lambda program: pass_.bind(program, projector, gpu.scene.origin)
-        vao = scene_pass.setup(gpu, view, proj, target)
-        target.bind((0, 0, *viewport))
-        scene_pass.draw_objects(vao, gpu, objects)
-
-    def release(self) -> None:
-        super().release()
-        if self._painted is not None:
-            self._painted.release()
-
-
-class RttPass(ScenePass):
-    """RTT, the per-object baseline: every listed object drawn alone into a full-viewport target.
-
-    One target is reused: after each object is drawn, `consume(object_id, target)` is called
-    (read it back, composite it...), as an application of plain RTT would. `Renderer.rtt` runs
-    it; the tests hold every atlas region against it.
-
-    Parameters
-    ----------
-    ctx : moderngl.Context
-        An OpenGL 4.3 core context.
-    """
-
-    def __init__(self, ctx: moderngl.Context) -> None:
-        super().__init__(ctx)
-
-    def render(
-        self,
-        *,
-        gpu: GpuScene,
-        view: np.ndarray,
-        proj: np.ndarray,
-        target: LayeredTarget,
-        viewport: tuple[int, int],
-        objects,
-        consume: Callable[[int, LayeredTarget], None] | None = None,
-    ) -> None:
-        target.ensure(viewport, 1)
-        vao = self.setup(gpu, view, proj, target)
-        ranges, closed = gpu.scene.index_ranges, self._cullable
-        one = np.zeros(gpu.scene.count, bool)
-        try:
-            for oid in objects:
-                target.clear()
-                target.bind((0, 0, *viewport))
-                if self._capped is not None:  # as STD caps them (draw_objects)
-                    one[oid] = True
-                    self.draw_objects(vao, gpu, one)
-                    one[oid] = False
-                    if consume is not None:
-                        consume(int(oid), target)
-                    continue
-                first, count = ranges[oid]
-                self.cull(bool(closed[oid]))  # as draw_objects does
-                vao.render(moderngl.TRIANGLES, vertices=int(count), first=int(first))
-                if consume is not None:
-                    consume(int(oid), target)
-        finally:
-            self.cull(False)
+        for part in (self.lists, self._guarded):
+            if part is not None:
+                part.release()
+        self.lists = self._guarded = None

@@ -208,7 +208,10 @@ def draw_from_lists(capture, lists: CaptureLists, gpu: GpuScene, view, proj, atl
     matrices = (mat_bytes(view), mat_bytes(proj))  # once for both variants
     try:
         for clip in (True,) if clip_all else (False, True):
-            vao = capture.prepare(gpu, view, proj, atlas, matrices, REGION_CLIP=clip and not clip_all)
+            guard = clip and capture.guard > 0  # (rtta.passes.guard)
+            vao = capture.prepare(
+                gpu, view, proj, atlas, matrices, REGION_CLIP=clip and not clip_all, REGION_GUARD=guard
+            )
             glraw.set_clip_distances(4, clip)
             for cull in (True, False):
                 capture.cull(cull)
@@ -235,7 +238,8 @@ def _draw(capture, gpu: GpuScene, view, proj, atlas: LayeredTarget, objects: np.
     clipped to their regions or not, in one call (ScenePass.draw_objects: one per kind)."""
     if not objects.any():
         return
-    vao = capture.setup(gpu, view, proj, atlas, REGION_CLIP=clip and capture.path == "vs")
+    guard = clip and capture.guard > 0  # an extreme zoom (rtta.passes.guard)
+    vao = capture.setup(gpu, view, proj, atlas, REGION_CLIP=clip and capture.path == "vs", REGION_GUARD=guard)
     glraw.set_clip_distances(4, clip)
     try:
         capture.draw_objects(vao, gpu, None if objects.all() else objects)

@@ -20,8 +20,9 @@ from ..gl.targets import LayeredTarget
 from ..ldi.lens import Lens, LensPass
 from ..passes import oit
 from ..passes.atlas_gpu import GpuParameterize, Sizing
-from ..passes.capture import CapturePass, RttPass, StdPass
+from ..passes.capture import CapturePass
 from ..passes.composite import LENS_MODES, CompositePass, CompositeTarget, Style
+from ..passes.direct import RttPass, StdPass
 from ..passes.post import AtlasPostPass
 from ..passes.projector import Projector, ProjectorPass
 from ..passes.style import Mode, ModeName

@@ -17,8 +17,8 @@ rtta-view) reads it. Version 1 holds (every key but "rtta_view" optional)::
     }
 
 camera: orbit angles in degrees (about the file's up axis, as --camera), the distance and the
-target in world units (the camera is rebuilt bit for bit: a view file renders what its
-snapshot rendered), the vertical field of view; focus, hidden and opacity name objects or
+target in world units, up to 1e12 (the camera is rebuilt bit for bit: a view file renders
+what its snapshot rendered), the vertical field of view; focus, hidden and opacity name objects or
 groups as the flags do; style holds the compositing flags (`options.CORE_STYLE`); sections and
 explode hold the cutaway and exploded-view flags (null: none) as `{"planes": [SPEC, ...],
 "caps": ..., "scope": ...}` and `{"factor": F, "scope": ...}`. A key version 1 does not know is
@@ -174,8 +174,8 @@ def _orbit(camera: Any, projection: Any) -> Orbit:
     az, el, distance, fov, target = (camera[k] for k in ("az", "el", "distance", "fov", "target"))
     if not all(_number(v) for v in (az, el, distance, fov)) or max(abs(az), abs(el)) > 1e6:
         raise ValueError("camera: az, el, distance and fov must be finite numbers (angles up to 1e6 degrees)")
-    if not (isinstance(target, list) and len(target) == 3 and all(_number(v) for v in target)):
-        raise ValueError("camera.target must be three finite numbers [x, y, z]")
+    if not (isinstance(target, list) and len(target) == 3 and all(_number(v) and abs(v) <= 1e12 for v in target)):
+        raise ValueError("camera.target must be three finite numbers [x, y, z], each within 1e12 (world units)")
     if not 0 < distance <= 1e12 or not 1.0 <= fov <= 170.0:
         raise ValueError(f"camera: distance must be in (0, 1e12] and fov in [1, 170], got {distance!r}, {fov!r}")
     projection = _choice(projection, PROJECTIONS, "projection")

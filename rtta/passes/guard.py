@@ -1,0 +1,81 @@
+"""The region guard: the capture at an extreme zoom keeps every region whole.
+
+An object that meets the viewport's edge is clipped to its region by four planes
+(records.glsl, `region_clip_distances`). Zoomed in far enough, its triangles reach clip
+coordinates of a million viewport NDC units or more (an orthographic view of a part 1e-5
+scene radii high), and float32 clipping against those planes misses them by a few pixels:
+the capture lost the top rows of such regions (2.5 rows at 1920x1080, 1e-5 radii; nothing
+at 1e-4). Where the scene can reach that far (`clip_reach`), the planes stand `region_guard`
+NDC further out, a few hundred times the error, and the fragment shader keeps the region's
+own texels alone (`region_holds`: the planes' test made exactly, per fragment). Frames that
+are not zoomed in so far draw as before, without the discard.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..scene.camera import is_ortho, near_distance
+
+GUARD_AT = 2.0**23  # reach x max(W, H): float32's clipping error reaches a quarter pixel
+GUARD_SHARE = 2.0**-19  # the guard per unit of reach, ~200x the error measured (module docstring)
+MAX_GUARD = 2.0**40  # (an infinite reach: the planes as far as float32 keeps them apart)
+
+
+def clip_reach(view: np.ndarray, proj: np.ndarray, center, radius: float) -> float:
+    """The largest |x / w| or |y / w| (viewport NDC) that a sphere reaches in front of the
+    near plane: how far beyond the viewport a scene of that bounding sphere can be drawn.
+
+    Parameters
+    ----------
+    view, proj : numpy.ndarray
+        The 4x4 view and projection matrices (the sphere's centre in the view's frame).
+    center : array_like
+        The sphere's centre [3].
+    radius : float
+        Its radius.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> ortho = np.diag([1e5, 1e5, -1.0, 1.0])
+    >>> clip_reach(np.eye(4), ortho, [0.0, 0.0, -1.0], 1.0)
+    100000.0
+    """
+    c = view[:3, :3] @ np.asarray(center, np.float64) + view[:3, 3]
+    lateral = math.hypot(float(c[0]), float(c[1])) + float(radius)
+    scale = max(abs(float(proj[0, 0])), abs(float(proj[1, 1])))
+    if is_ortho(proj):
+        return lateral * scale
+    closest = max(-float(c[2]) - float(radius), near_distance(proj))
+    return lateral * scale / closest if closest > 0 else math.inf
+
+
+def region_guard(reach: float, viewport: tuple[int, int]) -> float:
+    """How far (viewport NDC) the region planes stand out for a scene of `reach` (clip_reach)
+    drawn at `viewport` (W, H); 0.0: at the regions themselves, no guard needed."""
+    if not reach * max(viewport) > GUARD_AT:  # (NaN: no guard)
+        return 0.0
+    return min(reach * GUARD_SHARE, MAX_GUARD)
+
+
+class RegionGuard:
+    """A capture pass's guard for each frame (`of`), the scene's bounding sphere (its parts'
+    offsets included: an exploded view) worked out once per scene and placement."""
+
+    def __init__(self) -> None:
+        self._sphere: tuple[object, object, np.ndarray, float] | None = None
+
+    def of(self, gpu, view: np.ndarray, proj: np.ndarray, viewport: tuple[int, int]) -> float:
+        """region_guard for drawing `gpu`'s scene (a GpuScene) with `view` and `proj`."""
+        scene, placement = gpu.scene, gpu.placement
+        serial = None if placement is None else placement.serial
+        if self._sphere is None or self._sphere[0] is not scene or self._sphere[1] != serial:
+            spread = 0.0
+            if placement is not None and placement.offsets is not None and len(placement.offsets):
+                spread = float(np.sqrt((np.asarray(placement.offsets, np.float64) ** 2).sum(axis=1).max()))
+            self._sphere = (scene, serial, scene.center - scene.origin, scene.radius + spread)
+        _, _, center, radius = self._sphere
+        return region_guard(clip_reach(view, proj, center, radius), viewport)

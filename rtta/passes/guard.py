@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-from ..scene.camera import is_ortho, near_distance
+from ..scene.camera import near_distance
 
 GUARD_AT = 2.0**23  # reach x max(W, H): float32's clipping error reaches a quarter pixel
 GUARD_SHARE = 2.0**-19  # the guard per unit of reach, ~200x the error measured (module docstring)
@@ -44,12 +44,18 @@ def clip_reach(view: np.ndarray, proj: np.ndarray, center, radius: float) -> flo
     >>> clip_reach(np.eye(4), ortho, [0.0, 0.0, -1.0], 1.0)
     100000.0
     """
-    c = view[:3, :3] @ np.asarray(center, np.float64) + view[:3, 3]
-    lateral = math.hypot(float(c[0]), float(c[1])) + float(radius)
-    scale = max(abs(float(proj[0, 0])), abs(float(proj[1, 1])))
-    if is_ortho(proj):
+    return _reach(view, proj, np.append(np.asarray(center, np.float64), 1.0), float(radius))
+
+
+def _reach(view: np.ndarray, proj: np.ndarray, center4: np.ndarray, radius: float) -> float:
+    """clip_reach with the centre homogeneous (a frame's few calls: once per capture)."""
+    x, y, z, _ = (view @ center4).tolist()
+    p = proj.tolist()
+    lateral = math.hypot(x, y) + radius
+    scale = max(abs(p[0][0]), abs(p[1][1]))
+    if p[3][2] == 0.0 and p[3][3] == 1.0:  # orthographic (camera.is_ortho)
         return lateral * scale
-    closest = max(-float(c[2]) - float(radius), near_distance(proj))
+    closest = max(-z - radius, near_distance(proj))
     return lateral * scale / closest if closest > 0 else math.inf
 
 
@@ -76,6 +82,7 @@ class RegionGuard:
             spread = 0.0
             if placement is not None and placement.offsets is not None and len(placement.offsets):
                 spread = float(np.sqrt((np.asarray(placement.offsets, np.float64) ** 2).sum(axis=1).max()))
-            self._sphere = (scene, serial, scene.center - scene.origin, scene.radius + spread)
-        _, _, center, radius = self._sphere
-        return region_guard(clip_reach(view, proj, center, radius), viewport)
+            center4 = np.append(scene.center - scene.origin, 1.0)
+            self._sphere = (scene, serial, center4, float(scene.radius) + spread)
+        _, _, center4, radius = self._sphere
+        return region_guard(_reach(view, proj, center4, radius), viewport)

@@ -1,7 +1,9 @@
 """USD (.usd, .usda, .usdc, .usdz) through usd-core: every Mesh prim is an object, its prim
 path the tree; instances are expanded (instance proxies, each named after its instance
 prim); the stage's metersPerUnit and upAxis are kept. Layers the file refers to (sublayers,
-references, payloads) must lie in its folder: no absolute paths, no URLs."""
+references, payloads) must lie in its folder: no absolute paths, no URLs. What the instances
+expand to is counted per prototype before any is expanded, and bounded as the other readers'
+node walks are (rtta.scene.files.max_objects, WALK_PER_OBJECT)."""
 
 from __future__ import annotations
 
@@ -14,6 +16,8 @@ import numpy as np
 from ...errors import RttaError, reason
 from ...outputs import signals_held
 from ..batch import fans
+from ..files import WALK_PER_OBJECT, max_objects
+from ..precheck import check_size
 from . import Assembly, check_archive, hidden, native_output, unit_name
 
 MAX_LAYERS = 256
@@ -25,7 +29,7 @@ def read(path: Path) -> Assembly:
 
     if path.suffix.lower() == ".usdz":
         check_archive(path)
-    _check_layers(path)
+    layer_bytes = _check_layers(path)
     with native_output() as said:
         try:
             stage = Usd.Stage.Open(str(path))
@@ -33,6 +37,7 @@ def read(path: Path) -> Assembly:
             stage, said = None, [*said, _error_text(exc)]
     if stage is None:
         raise RttaError(f"cannot read USD file ({_short(chr(10).join(said))})", path)
+    _check_expansion(stage, path, layer_bytes)
     out = Assembly(
         unit=unit_name(float(UsdGeom.GetStageMetersPerUnit(stage))),
         up_axis="z" if UsdGeom.GetStageUpAxis(stage) == UsdGeom.Tokens.z else "y",
@@ -102,8 +107,9 @@ def _short(text: str) -> str:
     return re.sub(r"\s+", " ", cause).strip()[:160]
 
 
-def _check_layers(path: Path) -> None:
-    """Refuse layer references that leave the file's folder (checked before the stage composes)."""
+def _check_layers(path: Path) -> int:
+    """Refuse layer references that leave the file's folder (checked before the stage composes).
+    Returns the bytes of the layers `path` refers to."""
     from pxr import Sdf
 
     folder = path.resolve().parent
@@ -134,6 +140,7 @@ def _check_layers(path: Path) -> None:
             if not target.is_file():
                 raise RttaError(f"layer reference '{asset}' is missing", path)
             todo.append(target)
+    return sum(p.stat().st_size for p in seen - {path.resolve()})
 
 
 def _check_text(layer: Path, path: Path) -> None:
@@ -166,6 +173,71 @@ def _check_text(layer: Path, path: Path) -> None:
 
 def _which(layer: Path, path: Path) -> str:
     return "" if layer == path.resolve() else f"layer '{layer.name}' it refers to is "
+
+
+def _check_expansion(stage, path: Path, layer_bytes: int) -> None:
+    """Refuse a stage whose traversal through its instances would visit more prims, or make
+    more parts, vertices or triangles, than a file of its size may (prototypes that instance
+    prototypes: ten levels of ten instances each are 10^10 parts in 18 KB). Counted once per
+    prototype, innermost first, before any instance is expanded."""
+    objects = max_objects(path, layer_bytes)
+    parts, prims, vertices, triangles = _expansion(stage, path)
+    if parts > objects or prims > objects * WALK_PER_OBJECT:
+        raise RttaError(
+            f"the USD stage, its instances expanded, makes {parts:,} parts in {prims:,} prims, over the "
+            f"{objects:,} parts or {objects * WALK_PER_OBJECT:,} prims a file of its size may make",
+            path,
+        )
+    check_size(vertices, triangles, path, "the USD stage, its instances expanded, has")
+
+
+def _expansion(stage, path: Path) -> tuple[int, ...]:
+    """(parts, prims, vertices, triangles) that reading `stage` through its instance proxies
+    meets: each prototype's own, plus its instances' prototypes' times their number."""
+    own: dict = {}  # prototype path (or '/') -> (its own counts, {prototype path: instances in it})
+    total: dict = {}  # prototype path -> its counts, its instances' included
+    stack = [stage.GetPseudoRoot()]
+    while stack:
+        key = stack[-1].GetPath()
+        if key in total:
+            stack.pop()
+            continue
+        if key not in own:
+            own[key] = _own_counts(stack[-1])
+        counts, inside = own[key]
+        waiting = [p for p in inside if p not in total]
+        if any(p in own for p in waiting):  # scanned, not summed: a prototype below itself
+            raise RttaError("the USD stage's instances hold themselves (a cycle)", path)
+        if waiting:
+            stack += [stage.GetPrimAtPath(p) for p in waiting]
+            continue
+        stack.pop()
+        total[key] = tuple(c + sum(n * total[p][i] for p, n in inside.items()) for i, c in enumerate(counts))
+    return total[stage.GetPseudoRoot().GetPath()]
+
+
+def _own_counts(root) -> tuple[tuple[int, ...], dict]:
+    """`root`'s (parts, prims, vertices, triangles) below it, without entering its instances,
+    and how many instances of each prototype it holds. The root is not counted: traversal
+    meets an instance prim, never its prototype's root, nor the stage's pseudo-root."""
+    from pxr import Usd, UsdGeom
+
+    parts = prims = vertices = triangles = 0
+    inside: dict = {}
+    for prim in Usd.PrimRange(root):  # the default predicate: instances are not entered
+        prims += 1
+        if prim.IsInstance():
+            key = prim.GetPrototype().GetPath()
+            inside[key] = inside.get(key, 0) + 1
+        if prim.IsA(UsdGeom.Mesh):
+            mesh = UsdGeom.Mesh(prim)
+            points, counts, index = (
+                a.Get() for a in (mesh.GetPointsAttr(), mesh.GetFaceVertexCountsAttr(), mesh.GetFaceVertexIndicesAttr())
+            )
+            parts += 1
+            vertices += len(points or ())
+            triangles += max(len(index or ()) - 2 * len(counts or ()), 0)
+    return (parts, prims - 1, vertices, triangles), inside
 
 
 def _mesh(mesh) -> tuple[np.ndarray, np.ndarray]:

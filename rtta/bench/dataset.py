@@ -23,6 +23,7 @@ from ..dataset.options import Options, camera_for, part_path, settings
 from ..dataset.run import Writer, produce_view
 from ..dataset.view import render_rtt, render_rtta
 from ..gl.context import shared_context
+from ..outputs import write_text
 from ..renderer.renderer import Renderer
 from ..scene.generators.generate import random_scene, table1_scene
 from ..scene.model import Scene
@@ -160,11 +161,12 @@ def run_bench(
         shutil.rmtree(tmp, ignore_errors=True)
     _print(rows, gl_renderer, size, views, appearance)
     if json_path:
-        Path(json_path).write_text(
+        write_text(
+            json_path,
             json.dumps(
                 {"renderer": gl_renderer, "size": list(size), "views": views, "appearance": appearance, "scenes": rows},
                 indent=1,
-            )
+            ),
         )
     return 0
 

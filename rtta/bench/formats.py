@@ -12,7 +12,9 @@ from pathlib import Path
 from typing import TypeVar
 
 from ..errors import RttaError
+from ..outputs import write_text
 from ..scene import readers
+from ..scene.files import regular_file
 from ..scene.loader import load_scene
 from .tables import print_table
 
@@ -52,7 +54,10 @@ def library_load(path: Path) -> None:
 
 def _files(paths: list[str]) -> list[Path]:
     if paths:
-        return [Path(p) for p in paths]
+        files = [Path(p) for p in paths]
+        for path in files:  # missing or unreadable: one line, before the libraries' own errors
+            regular_file(path, "scene file")
+        return files
     if not SHARED.is_dir():
         raise RttaError(f"no files given and {SHARED} does not exist")
     known = readers.SUFFIXES
@@ -98,5 +103,5 @@ def run_formats(paths: list[str], json_path: str | None = None) -> int:
         f"({'within' if worst <= OVERHEAD_S else 'OVER'} the {OVERHEAD_S:g} s bound)"
     )
     if json_path:
-        Path(json_path).write_text(json.dumps({"columns": COLUMNS, "rows": rows}, indent=1))
+        write_text(json_path, json.dumps({"columns": COLUMNS, "rows": rows}, indent=1))
     return 0 if worst <= OVERHEAD_S else 1

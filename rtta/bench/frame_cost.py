@@ -18,6 +18,7 @@ import time
 
 import numpy as np
 
+from ..outputs import write_text
 from ..passes.style import ModeName, Style
 from ..renderer.renderer import Renderer
 from ..renderer.settings import Settings
@@ -169,7 +170,5 @@ def run_frame(
                 rows.append({"scene": path.name, **frame_costs(ctx, scene, viewport, mode, frames, rounds=3)})
                 print_costs(rows[-1:], renderer, viewport, header=len(rows) == 1)
     if json_path:
-        Path(json_path).write_text(
-            json.dumps({"renderer": renderer, "viewport": list(viewport), "rows": rows}, indent=1)
-        )
+        write_text(json_path, json.dumps({"renderer": renderer, "viewport": list(viewport), "rows": rows}, indent=1))
     return 0

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..outputs import write_text
 from .tables import print_table
 
 GPU_REPEATS = 9  # the GPU paths take ~15 ms: more repeats steady the best on a noisy VM
@@ -180,7 +181,8 @@ def run_ldi(quick: bool = False, points: int = 1_000_000, resolution: int = 512,
         ],
     )
     if json_path:
-        Path(json_path).write_text(
+        write_text(
+            json_path,
             json.dumps(
                 {
                     "renderer": renderer,
@@ -189,6 +191,6 @@ def run_ldi(quick: bool = False, points: int = 1_000_000, resolution: int = 512,
                     "resolution": error,
                 },
                 indent=1,
-            )
+            ),
         )
     return 0

@@ -9,10 +9,10 @@ import json
 import platform
 from dataclasses import replace
 from functools import partial
-from pathlib import Path
 
 from ..gl.context import shared_context
 from ..gl.targets import LayeredTarget
+from ..outputs import write_text
 from ..passes.batching import ChunkedStdPass, SeparatePass
 from ..renderer.renderer import Renderer
 from ..scene.camera import Camera
@@ -108,7 +108,8 @@ def run_material(
         f"({ratio:.2f}x); BVH leaves: {memory['bvh_leaves']}"
     )
     if json_path:
-        Path(json_path).write_text(
+        write_text(
+            json_path,
             json.dumps(
                 {
                     "renderer": renderer,
@@ -117,6 +118,6 @@ def run_material(
                     "memory": memory,
                 },
                 indent=1,
-            )
+            ),
         )
     return 0

@@ -9,10 +9,10 @@ import json
 import platform
 import sys
 import time
-from pathlib import Path
 
 from ..errors import RttaError
 from ..gl.context import shared_context
+from ..outputs import write_text
 from ..renderer.renderer import Renderer
 from ..scene.generators.generate import random_scene
 from .reliability import drift, soak, sweep
@@ -131,5 +131,5 @@ def run_reliability(
         "counted with glIs* over every name handed out"
     )
     if json_path:
-        Path(json_path).write_text(json.dumps(report, indent=1))
+        write_text(json_path, json.dumps(report, indent=1))
     return 1 if failed else 0

@@ -18,6 +18,7 @@ import numpy as np
 from ..atlas.packing import pack_shelves
 from ..atlas.parameterize import parameterize
 from ..gl.context import shared_context
+from ..outputs import write_text
 from ..renderer.renderer import Renderer
 from ..scene.camera import Camera, Projection
 from ..scene.generators.generate import TABLE1, random_scene, table1_scene
@@ -128,7 +129,8 @@ def run_capture(
     paths = param_gpu.param_paths(ctx, param_gpu.counts_for(quick, full), viewport, frames)
     param_gpu.print_paths(paths)
     if json_path:
-        Path(json_path).write_text(
+        write_text(
+            json_path,
             json.dumps(
                 {
                     "renderer": renderer,
@@ -138,7 +140,7 @@ def run_capture(
                     "paths": paths,
                 },
                 indent=1,
-            )
+            ),
         )
     return 0
 
@@ -259,9 +261,7 @@ def run_composite(
     rows = [composite_row(ctx, name, scene, viewport, frames, projection=projection) for name, scene in named]
     _print_composite(rows, f"{renderer}; {projection}", viewport, frames)
     if json_path:
-        Path(json_path).write_text(
-            json.dumps({"renderer": renderer, "viewport": list(viewport), "scenes": rows}, indent=1)
-        )
+        write_text(json_path, json.dumps({"renderer": renderer, "viewport": list(viewport), "scenes": rows}, indent=1))
     return 0
 
 
@@ -362,5 +362,5 @@ def run_packing(quick: bool = False, json_path: str | None = None) -> int:
             f"{r.get('rpack_util', float('nan')):>6.3f}"
         )
     if json_path:
-        Path(json_path).write_text(json.dumps({"rows": rows}, indent=1))
+        write_text(json_path, json.dumps({"rows": rows}, indent=1))
     return 0

@@ -25,6 +25,7 @@ import numpy as np
 from ..atlas.parameterize import parameterize
 from ..errors import RttaError
 from ..gl.context import shared_context
+from ..outputs import write_text
 from ..renderer.renderer import Renderer
 from ..scene.camera import Camera
 from ..scene.generators.assembly import write_assembly
@@ -174,9 +175,7 @@ def run_scale(
             _print_row(row, len(rows) == 1, renderer, viewport)
     print_costs([r["cost"] for r in rows], renderer, viewport)
     if json_path:
-        Path(json_path).write_text(
-            json.dumps({"renderer": renderer, "viewport": list(viewport), "scenes": rows}, indent=1)
-        )
+        write_text(json_path, json.dumps({"renderer": renderer, "viewport": list(viewport), "scenes": rows}, indent=1))
     return 0
 
 

@@ -103,6 +103,12 @@ def add_parsers(sub):
 
 def cmd_bench(args) -> int:
     from ..bench import render as bench
+    from ..outputs import check_file
+
+    if getattr(args, "json", None):  # a --json that cannot be written fails before the benchmark
+        check_file(
+            args.json, [*(getattr(args, "files", None) or []), *(getattr(args, "scene", None) or [])], what="--json"
+        )
 
     if args.bench == "capture":
         return bench.run_capture(

@@ -209,7 +209,7 @@ def _interrupted(*_) -> None:
 def _merge(args: argparse.Namespace) -> int:
     """rtta dataset merge INPUT... --out FILE: folders give their shard files (or annotations.json)."""
     from ..dataset import coco
-    from ..outputs import atomic_write
+    from ..outputs import check_file, write_text
 
     inputs: list[Path] = []
     for arg in args.scenes[1:]:
@@ -228,12 +228,11 @@ def _merge(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if any(out.resolve() == p.resolve() for p in inputs):
         raise RttaError("--out is one of the inputs; write the merged file elsewhere", out)
+    check_file(out)  # a file this user may write (a folder, a read-only file: refused)
     if out.exists() and not _ours(out):
         raise RttaError("exists and is not an annotations file written by rtta; not replaced", out)
-    if not out.parent.is_dir():
-        raise RttaError("parent directory does not exist", out.parent)
     doc = coco.merge(inputs, out)
-    atomic_write(out, lambda tmp: Path(tmp).write_text(coco.dumps(doc), encoding="utf-8"))
+    write_text(out, coco.dumps(doc))
     print(f"wrote {out}: {len(doc['images'])} images, {len(doc['annotations'])} annotations from {len(inputs)} file(s)")
     return 0
 

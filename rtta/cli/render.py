@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from contextlib import suppress
 from pathlib import Path
 
 from ..errors import RttaError, printable
@@ -117,13 +118,14 @@ def cmd_snapshot(args) -> int:
     from ..renderer.options import make_style
     from ..renderer.placing import check_staging
     from ..renderer.snapshot import SNAPSHOT_MODES, parse_opacities, render_modes, resolve_names, write_pngs
+    from ..renderer.view_file import view_writer
 
     args.saved_view = saved_view_of(args)  # --view-file's (its mode, focus... replace the flags), or the flags'
     if args.mode not in SNAPSHOT_MODES:
         raise RttaError(f"--mode must be one of {', '.join(SNAPSHOT_MODES)}, got '{args.mode}'")
     viewport = parse_size(args.size)
-    if args.save_view:
-        check_file(args.save_view, [args.scene, args.view_file], suffix=".json", what="--save-view")
+    if args.save_view:  # checked as a view file, before the work
+        view_writer(args.saved_view, args.save_view, [args.scene, args.view_file])
     staging = staging_of(args)
     _snapshot_targets(args, [args.scene, *_projector_files(args)])  # refused outputs fail before the work
     scene = load(args)
@@ -155,18 +157,24 @@ def cmd_snapshot(args) -> int:
         raise RttaError(str(exc)) from None
     finally:
         renderer.release()
-    if args.all_modes:
+    inputs = [*scene.inputs, *_projector_files(args)]
+    also = [(args.save_view, view_writer(args.saved_view, args.save_view, inputs))] if args.save_view else []
+    made = None
+    if args.all_modes and not Path(args.all_modes).is_dir():
         try:
-            Path(args.all_modes).mkdir(exist_ok=True)
+            Path(args.all_modes).mkdir()
+            made = Path(args.all_modes)
         except OSError as exc:
             raise os_error(exc, args.all_modes) from None
-    for path in write_pngs(images, targets):
+    try:
+        written = write_pngs(images, targets, also)
+    except BaseException:
+        if made is not None:  # the folder this run made, empty again
+            with suppress(OSError):
+                made.rmdir()
+        raise
+    for path in written:
         print(f"wrote {printable(path)}")
-    if args.save_view:
-        from ..renderer.view_file import write_view
-
-        saved = write_view(args.saved_view, args.save_view, [*scene.inputs, *_projector_files(args)])
-        print(f"wrote {printable(saved)}")
     return 0
 
 

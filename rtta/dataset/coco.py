@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import RttaError
+from ..errors import RttaError, reason
 
 FILE_FIELDS = ("file_name", "depth_file", "visible_id_file")
 
@@ -171,7 +171,7 @@ def read_document(path: Path) -> dict:
     try:
         doc = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise RttaError(f"cannot read annotations ({exc})", path) from None
+        raise RttaError(f"cannot read annotations ({reason(exc)})", path) from None
     if not isinstance(doc, dict) or not all(
         isinstance(doc.get(k), list) for k in ("images", "annotations", "categories")
     ):

@@ -14,13 +14,14 @@ import glob
 import json
 import os
 import zlib
+from contextlib import suppress
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..errors import RttaError
+from ..errors import RttaError, reason
 from ..outputs import atomic_write
 from ..scene.camera import Camera, orbit_in_range
 from ..scene.readers import MAX_COORDINATE, MESHES
@@ -80,6 +81,10 @@ def expand_scenes(args: list[str]) -> list[str]:
                 raise RttaError("matches no file", arg)
             found += hits
         elif Path(arg).is_dir():
+            try:
+                os.listdir(arg)
+            except OSError as exc:
+                raise RttaError(f"cannot list the folder ({reason(exc)})", arg) from None
             hits = sorted(str(p) for p in Path(arg).rglob("*") if p.suffix.lower() in MESHES and p.is_file())
             if not hits:
                 raise RttaError(f"folder holds no scene file ({', '.join(MESHES)})", arg)
@@ -166,7 +171,7 @@ def parse_cameras(path: str) -> list[dict]:
     try:
         data = json.loads(Path(path).read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise RttaError(f"cannot read cameras ({exc})", path) from None
+        raise RttaError(f"cannot read cameras ({reason(exc)})", path) from None
     except RecursionError:  # found by fuzzing (issue 42)
         raise RttaError("cannot read cameras (JSON nested too deeply)", path) from None
     if not isinstance(data, list) or not data:
@@ -229,27 +234,33 @@ def complete(out: Path, key: str, view: int) -> bool:
     return part_path(out, key, view).is_file() and (out / view_dir(key, view) / "rgb.png").is_file()
 
 
-def prepare_out(out: Path, s: dict) -> None:
+def prepare_out(out: Path, s: dict, annotations: str = "annotations.json") -> None:
     """Create `out` or check that it holds a dataset of these same settings; a folder with
-    other files in it is never written into."""
+    other files in it is never written into, nor one (or an `annotations` file) this user may
+    not write."""
     if out.exists() and not out.is_dir():
         raise RttaError("exists and is not a directory", out)
     if not out.parent.is_dir():
-        raise RttaError("parent directory does not exist", out.parent)
+        raise RttaError("is not a folder" if out.parent.exists() else "parent directory does not exist", out.parent)
     marker = out / "dataset.json"
     doc = {"format": FORMAT, "settings": s}
     # listed before the marker is looked for: another shard writes nothing but the marker's
     # temporary until its marker is in place, so what the listing saw is then explained
     if out.is_dir() and any(not _marker_temporary(p) for p in list(out.iterdir())) and not marker.exists():
         raise RttaError("is not empty and holds no rtta dataset (dataset.json): choose a new or empty folder", out)
-    out.mkdir(exist_ok=True)
+    if not os.access(out if out.exists() else out.parent, os.W_OK | os.X_OK):  # before any work
+        raise RttaError("cannot write (Permission denied)", out)
+    if (out / annotations).is_file() and not os.access(out / annotations, os.W_OK):
+        raise RttaError("is read-only; it will not be replaced", out / annotations)
+    made = not out.exists()
     try:
+        out.mkdir(exist_ok=True)
         atomic_write(marker, lambda tmp: Path(tmp).write_text(coco.dumps(doc)), overwrite=False)
     except FileExistsError:
         try:
             old = json.loads(marker.read_text(encoding="utf-8"))
-        except (OSError, json.JSONDecodeError):
-            raise RttaError("unreadable dataset.json", out) from None
+        except (OSError, json.JSONDecodeError) as exc:
+            raise RttaError(f"cannot read dataset.json ({reason(exc)})", out) from None
         new = json.loads(coco.dumps(doc))
         if old != new:
             theirs = old.get("settings", {}) if isinstance(old, dict) else {}
@@ -259,6 +270,11 @@ def prepare_out(out: Path, s: dict) -> None:
                 "choose another --out, or the same settings to resume",
                 out,
             ) from None
+    except BaseException:
+        if made:  # a full disk: the folder this run made goes again (unless another shard wrote into it)
+            with suppress(OSError):
+                out.rmdir()
+        raise
 
 
 def _marker_temporary(entry: Path) -> bool:

@@ -13,6 +13,7 @@ from pathlib import Path
 
 from ..errors import RttaError, printable
 from ..outputs import atomic_write
+from ..scene.files import regular_file
 from . import coco
 from . import options as ds
 from .objects import object_meta
@@ -301,8 +302,12 @@ def run(opts: Options, how: Run, scenes: dict | None = None) -> int:
     """Render the shard's missing views, then assemble its annotations; 0, or 2 when a scene
     could not be read (after the others with keep_going, at once without)."""
     paths = ds.expand_scenes(opts.scenes)
+    if not how.keep_going:  # a scene that cannot be read stops the run: before anything is written
+        for path in paths:
+            if path not in (scenes or {}):
+                regular_file(Path(path), "scene file")
     s = ds.settings(opts, paths)
-    ds.prepare_out(how.out, s)
+    ds.prepare_out(how.out, s, ds.annotations_name(how.shard))
     items = ds.items_of(s, how.shard)
     keys = [sc["key"] for sc in s["scenes"]]
     todo = [it for it in items if not complete(how.out, keys[it[0]], it[1])]

@@ -8,15 +8,14 @@ the renderer's arrays (GL, row 0 at the bottom) are flipped once on the way in.
 
 from __future__ import annotations
 
-import os
 import shutil
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 from PIL import Image
 
+from ..outputs import staging_dir
 from ..renderer.export import replace_dir, world_matrices
 from ..renderer.renderer import Renderer
 from ..scene.camera import Camera, view_depth
@@ -191,7 +190,7 @@ def write_view(
     objects/<id>.png for the objects in `keep` with appearance, written into a temporary
     folder beside `folder` and renamed into place (an older `folder` is replaced whole)."""
     folder.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", dir=folder.parent))
+    tmp = staging_dir(folder)  # an error names the view's folder, not the temporary
     try:
         Image.fromarray(view.rgb).save(tmp / "rgb.png", compress_level=PNG_LEVEL)
         if depth_format == "npy":
@@ -213,17 +212,10 @@ def write_view(
             (tmp / "objects").mkdir()
         for oid, color in crops:
             Image.fromarray(color).save(tmp / "objects" / f"{oid:05d}.png", compress_level=PNG_LEVEL)
-        os.chmod(tmp, 0o777 & ~_umask())
         replace_dir(tmp, folder)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
 
 
 def view_files(folder_rel: str, depth_format: str, big: bool) -> dict:

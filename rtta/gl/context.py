@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 from enum import StrEnum
+from pathlib import Path
 from typing import Literal
 
 import moderngl
@@ -11,6 +13,7 @@ import moderngl
 from ..errors import RttaError, member
 
 LAYER_EXTENSION = "GL_ARB_shader_viewport_layer_array"
+_MESA_CACHE_VARIABLES = ("MESA_SHADER_CACHE_DIR", "MESA_GLSL_CACHE_DIR", "XDG_CACHE_HOME")
 
 
 class CapturePath(StrEnum):
@@ -48,6 +51,7 @@ def create_headless_context() -> moderngl.Context:
     >>> ctx.version_code >= 430
     True
     """
+    _quiet_shader_cache()
     try:
         # (moderngl's stubs type every keyword setting as a dict; backend is a string)
         ctx = moderngl.create_standalone_context(backend="egl", require=430)  # pyright: ignore[reportArgumentType]
@@ -62,6 +66,30 @@ def create_headless_context() -> moderngl.Context:
             "install Mesa (libegl1 libgl1-mesa-dri) or a GPU driver"
         ) from None
     return ctx
+
+
+def _quiet_shader_cache() -> None:
+    """Mesa keeps compiled shaders in $MESA_SHADER_CACHE_DIR, else $XDG_CACHE_HOME, else
+    ~/.cache (the passwd entry's home), making that folder and its mesa_shader_cache; where it
+    cannot, it prints a line of its own on stderr at every start. Its cache is then turned off
+    instead, silently, as rtta's scene cache is: a cache is no reason for a message."""
+    if any(os.environ.get(k) for k in ("MESA_SHADER_CACHE_DISABLE", "MESA_GLSL_CACHE_DISABLE")):
+        return
+    base = next((os.environ[k] for k in _MESA_CACHE_VARIABLES if os.environ.get(k)), None)
+    if base is None:
+        try:
+            import pwd
+
+            base = os.path.join(pwd.getpwuid(os.getuid()).pw_dir, ".cache")
+        except (ImportError, KeyError, OSError):
+            base = os.path.join(os.path.expanduser("~"), ".cache")
+    folder = Path(base) / "mesa_shader_cache"
+    for _ in range(2):  # Mesa makes the cache folder and the one it lies in, no more
+        if folder.exists():
+            break
+        folder = folder.parent
+    if not (folder.is_dir() and os.access(folder, os.W_OK | os.X_OK)):
+        os.environ["MESA_SHADER_CACHE_DISABLE"] = "true"
 
 
 def _offered_version() -> str | None:

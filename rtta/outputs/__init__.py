@@ -1,11 +1,12 @@
 """Output files, and PNGs of GL arrays (row 0 = bottom) as images (top row first).
 
-This is the one place that decides whether an output path may be written, and how outputs
-are committed: every command (export, snapshot, ldi) and the viewer's screenshots ask here.
-An output never replaces an input of the same run (the scene file and the files it refers
-to, a projector image, a points file), never replaces a folder that `rtta export` did not
-write (recognised by its records.json and its file names), and never a mount point. Outputs
-are written beside their place and renamed into it; `committing()` marks that rename (signals
+This is the one place that decides whether an output path may be written (the checks live
+in rtta.outputs.paths, re-exported here), and how outputs are committed: every command
+(export, snapshot, ldi) and the viewer's screenshots ask here. An output never replaces an
+input of the same run (the scene file and the files it refers to, a projector image, a
+points file), never replaces a folder that `rtta export` did not write (recognised by its
+records.json and its file names), never a mount point, and never a file or folder the user
+made read-only. Outputs are written beside their place and renamed into it; `committing()` marks that rename (signals
 wait while it happens); once the output that ends a command is in place, SIGINT/SIGTERM/
 SIGHUP no longer interrupt the run (it finishes and says so). Before that,
 `install_signal_handlers()` turns those signals into `Interrupted`, so every `finally` that
@@ -15,26 +16,19 @@ removes a temporary runs.
 from __future__ import annotations
 
 import os
-import re
 import shutil
 import signal
-import stat
 import tempfile
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 from PIL import Image
 
-from ..errors import RttaError, reason
+from ..errors import RttaError
+from .paths import EXPORT_FILE, NAME_MAX, PATH_MAX, check_file, check_folder, check_into_folder, os_error  # noqa: F401 (re-exported: every caller asks rtta.outputs)
 
-NAME_MAX = 255  # bytes in one path component (Linux, macOS)
-PATH_MAX = 4096
-EXPORT_FILE = re.compile(
-    r"^(records\.json|atlas_color_\d+\.png|atlas_(depth|id)\.npy|std_color\.png|"
-    r"std_(depth|id)\.npy)$"
-)
 SIGNALS = tuple(s for s in (getattr(signal, n, None) for n in ("SIGINT", "SIGTERM", "SIGHUP")) if s is not None)
 
 
@@ -156,154 +150,16 @@ def signals_held() -> Iterator[None]:
         raise Interrupted(_State.requested)
 
 
-# ---- paths ----------------------------------------------------------------------------
-def os_error(exc: OSError, path: str | Path, doing: str = "cannot write") -> RttaError:
-    """An OSError as one line naming the path (read-only or full file system, permissions ...)."""
-    return RttaError(f"{doing} ({reason(exc)})", path)
-
-
-def _check_name(path: Path, what: str) -> None:
-    text = str(path)
-    if "\0" in text:
-        raise RttaError(f"{what} contains a NUL byte", text.replace("\0", "\\0"))
-    raw = os.fsencode(text)
-    if len(raw) >= PATH_MAX:
-        raise RttaError(f"{what} is longer than {PATH_MAX} bytes", text[:80] + "...")
-    for part in path.parts:
-        if len(os.fsencode(part)) > NAME_MAX:
-            raise RttaError(f"{what}: a name in the path is longer than {NAME_MAX} bytes", path)
-
-
-def _resolved(path: Path) -> Path:
-    try:
-        return path.resolve()
-    except (OSError, RuntimeError) as exc:  # a symlink loop
-        raise RttaError(f"cannot resolve the path ({exc})", path) from None
-
-
-def _same(a: Path, b: Path) -> bool:
-    try:
-        return a == b or (a.exists() and b.exists() and os.path.samefile(a, b))
-    except OSError:
-        return False
-
-
-def _inputs(inputs: Iterable[str | Path] | None) -> list[Path]:
-    out = []
-    for p in inputs or ():
-        if p is None:
-            continue
-        try:
-            out.append(Path(p).resolve())
-        except (OSError, RuntimeError, ValueError):
-            continue
-    return out
-
-
-def _parent_dir(path: Path) -> Path:
-    parent = _resolved(path).parent
-    if not parent.is_dir():
-        raise RttaError("parent directory does not exist", path.parent)
-    return parent
-
-
-def check_file(
-    path: str | Path, inputs: Iterable[str | Path] | None = (), *, suffix: str | None = None, what: str = "--out"
-) -> Path:
-    """RttaError unless `path` may be (re)written as a file: a name the file system takes,
-    the wanted suffix, an existing folder as parent, not a folder, FIFO, device or mount
-    point itself, and not any input of this run (also through links)."""
-    path = Path(path)
-    _check_name(path, what)
-    if suffix and path.suffix.lower() != suffix:
-        raise RttaError(f"{what} must name a {suffix} file", path)
-    _parent_dir(path)
-    real = _resolved(path)
-    try:
-        st = os.stat(path)
-    except FileNotFoundError:
-        st = None
-    except OSError as exc:
-        raise os_error(exc, path, "cannot inspect the output") from None
-    if st is not None:
-        if stat.S_ISDIR(st.st_mode):
-            raise RttaError(f"is a folder; {what} takes a {suffix or ''} file".replace("  ", " "), path)
-        if not stat.S_ISREG(st.st_mode):
-            raise RttaError(f"is not a regular file (a device, FIFO or socket); {what} will not replace it", path)
-        if os.path.ismount(path):
-            raise RttaError("is a mount point; it cannot be replaced", path)
-    for source in _inputs(inputs):
-        if _same(real, source):
-            raise RttaError(f"is an input of this run; {what} must not replace it", path)
-    return path
-
-
-def check_folder(path: str | Path, inputs: Iterable[str | Path] | None = (), *, what: str = "--out") -> Path:
-    """RttaError unless folder `path` may be replaced by an export: it does not exist, or it is
-    empty, or it holds only what `rtta export` writes (records.json and the images); it is
-    not a mount point, not the current folder or one above it, and holds no input."""
-    path = Path(path)
-    _check_name(path, what)
-    _parent_dir(path)
-    real = _resolved(path)
-    for source in _inputs(inputs):
-        if source == real or real in source.parents:
-            raise RttaError(f"holds an input of this run ({source.name}); {what} must not replace it", path)
-    if not path.exists() and not path.is_symlink():
-        return path
-    if not path.is_dir() or path.is_symlink():
-        raise RttaError(f"exists and is not a folder; {what} takes a folder", path)
-    if os.path.ismount(path):
-        raise RttaError("is a mount point; it cannot be replaced", path)
-    cwd = Path.cwd().resolve()
-    if real == cwd or real in cwd.parents:
-        raise RttaError(f"is the current folder or holds it; {what} must name a folder of its own", path)
-    try:
-        names = sorted(os.listdir(path))
-    except OSError as exc:
-        raise os_error(exc, path, "cannot list the folder") from None
-    if not names:
-        return path
-    if "records.json" not in names:
-        raise RttaError(
-            f"is a folder that rtta export did not write (no records.json); {what} will not replace it", path
-        )
-    foreign = [n for n in names if not EXPORT_FILE.match(n) or not (path / n).is_file()]
-    if foreign:
-        listed = ", ".join(foreign[:3]) + (" ..." if len(foreign) > 3 else "")
-        raise RttaError(f"holds files rtta export does not write ({listed}); {what} will not replace it", path)
-    return path
-
-
-def check_into_folder(
-    folder: str | Path,
-    names: Iterable[str],
-    inputs: Iterable[str | Path] | None = (),
-    *,
-    suffix: str | None = None,
-    what: str = "--all-modes",
-) -> list[Path]:
-    """The files `names` inside `folder` (made if missing), each checked like check_file."""
-    folder = Path(folder)
-    _check_name(folder, what)
-    if folder.exists() and not folder.is_dir():
-        raise RttaError(f"exists and is not a folder; {what} takes a folder", folder)
-    if not folder.exists():
-        _parent_dir(folder)
-        for n in names:  # a folder still to be made holds no input
-            _check_name(folder / n, what)
-        return [folder / n for n in names]
-    return [check_file(folder / n, inputs, suffix=suffix, what=what) for n in names]
-
-
 # ---- writing ------------------------------------------------------------------------------
 def staging_dir(target: Path) -> Path:
     """A new hidden folder beside `target` to write into before it is renamed into place."""
     with quiet_signals():
         try:
-            return Path(tempfile.mkdtemp(prefix=f".{target.name[:64]}.", dir=target.parent))
+            folder = Path(tempfile.mkdtemp(prefix=f".{target.name[:64]}.", dir=target.parent))
         except OSError as exc:
             raise os_error(exc, target) from None
+        os.chmod(folder, 0o777 & ~_umask())  # mkdtemp makes 0700; an output gets the user's usual mode
+        return folder
 
 
 def remove_tree(path: Path) -> None:
@@ -332,6 +188,12 @@ def replace_dir(new: Path, target: Path, *, final: bool = False) -> None:
     remove_tree(old)
 
 
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
 # ---- PNGs -----------------------------------------------------------------------------------
 def to_image(rgba_gl: np.ndarray) -> Image.Image:
     return Image.fromarray(np.ascontiguousarray(rgba_gl[::-1]))
@@ -343,36 +205,78 @@ def atomic_write(
     """Let `write(tmp)` fill a temporary file beside `path`, then move it into place: an old
     file stays whole until the new one is complete. With overwrite=False an existing file is
     a FileExistsError, checked atomically (hard link), so a file that appears meanwhile is
-    never replaced either. Other OS errors (read-only or full file system, permissions) are
-    an RttaError naming `path`; the temporary is removed in every case, signals included
-    (see rtta.outputs)."""
+    never replaced either. A file the user made read-only is not replaced, and other OS
+    errors (read-only or full file system, permissions) are an RttaError naming `path`; the
+    temporary is removed in every case, signals included (see rtta.outputs)."""
     path = Path(path)
     if not overwrite and path.exists():
         raise FileExistsError(path)
+    staged: list[str] = []
+    try:
+        _stage(path, write, staged)
+        with committing(final):
+            try:
+                if overwrite:
+                    os.replace(staged[0], path)
+                else:
+                    os.link(staged[0], path)
+            except FileExistsError:
+                raise
+            except OSError as exc:
+                raise os_error(exc, path) from None
+    finally:
+        _unlink(staged)
+    return path
+
+
+def atomic_write_all(outputs: list[tuple[str | Path, Callable[[str], object]]], *, final: bool = False) -> list[Path]:
+    """atomic_write for files that belong together (snapshot's PNGs and its --save-view):
+    every temporary is filled first, then all are renamed into place while signals wait, so a
+    failure (a full disk) leaves no new file and every old one whole."""
+    paths = [Path(path) for path, _ in outputs]
+    staged: list[str] = []
+    try:
+        for path, (_, write) in zip(paths, outputs, strict=True):
+            _stage(path, write, staged)
+        with committing(final):
+            for path, tmp in zip(paths, staged, strict=True):
+                try:
+                    os.replace(tmp, path)
+                except OSError as exc:
+                    raise os_error(exc, path) from None
+    finally:
+        _unlink(staged)
+    return paths
+
+
+def _stage(path: Path, write: Callable[[str], object], staged: list[str]) -> None:
+    """A temporary file beside `path` (added to `staged`, which the caller removes) that
+    `write(tmp)` fills."""
+    if path.is_file() and not os.access(path, os.W_OK):
+        raise RttaError("is read-only; it will not be replaced", path)
     with quiet_signals():
         try:
             fd, tmp = tempfile.mkstemp(prefix=f".{path.name[:64]}.", suffix=path.suffix[:16], dir=path.parent)
         except OSError as exc:
             raise os_error(exc, path) from None
         os.close(fd)
+        staged.append(tmp)
     try:
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; a saved file gets the user's usual mode
+        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; a saved file gets the user's usual mode
         write(tmp)
-        with committing(final):
-            if overwrite:
-                os.replace(tmp, path)
-            else:
-                os.link(tmp, path)
-    except FileExistsError:
-        raise
     except OSError as exc:
         raise os_error(exc, path) from None
-    finally:
-        with quiet_signals():
+
+
+def _unlink(temporaries: list[str]) -> None:
+    with quiet_signals():
+        for tmp in temporaries:
             Path(tmp).unlink(missing_ok=True)
-    return path
+
+
+def write_text(path: str | Path, text: str) -> Path:
+    """`text` into `path` (UTF-8), atomically (see atomic_write)."""
+    return atomic_write(path, lambda tmp: Path(tmp).write_text(text, encoding="utf-8"))
 
 
 def save_png(path: str | Path, rgba_gl: np.ndarray, *, overwrite: bool = True, final: bool = False) -> Path:

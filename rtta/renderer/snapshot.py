@@ -11,7 +11,7 @@ import numpy as np
 
 from ..errors import RttaError
 from ..ldi.lens import SHAPES, Lens, LensShape, default_placement
-from ..outputs import save_png
+from ..outputs import atomic_write_all, to_image
 from ..passes.composite import BACKGROUND, MODES, Style
 from ..passes.projector import Projector, default_image, load_image
 from ..scene.camera import Camera, parse_orbit
@@ -122,7 +122,12 @@ def render_modes(renderer: Renderer, camera: Camera, viewport: tuple[int, int], 
     return out
 
 
-def write_pngs(images: dict, paths: dict) -> list[Path]:
-    """Each image to its path atomically; the last one ends the command (see rtta.outputs)."""
-    modes = list(images)
-    return [save_png(paths[mode], images[mode], final=k == len(modes) - 1) for k, mode in enumerate(modes)]
+def write_pngs(images: dict, paths: dict, also: Sequence[tuple] = ()) -> list[Path]:
+    """Each image to its path, and each (path, write) of `also` (a --save-view), all of them or
+    none (a full disk leaves no new file and every old one whole); their renames end the
+    command (see rtta.outputs)."""
+
+    def png(rgba_gl: np.ndarray):
+        return lambda tmp: to_image(rgba_gl).save(tmp, format="PNG")
+
+    return atomic_write_all([*((paths[mode], png(image)) for mode, image in images.items()), *also], final=True)

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import json
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -149,18 +150,23 @@ def parse_view(doc: Any) -> SavedView:
 def write_view(view: SavedView, path: str | Path, inputs=()) -> Path:
     """Write `view` to `path` atomically. An existing file is replaced only when it is a view
     file itself (never a user's other JSON); an input of the run never."""
+    return atomic_write(path, view_writer(view, path, inputs))
+
+
+def view_writer(view: SavedView, path: str | Path, inputs=()) -> Callable[[str], None]:
+    """write_view's checks of `path` (RttaError), then what writes `view` (as it is when
+    called) into atomic_write's temporary file."""
     path = check_file(path, inputs, suffix=".json", what="--save-view")
     if path.exists():
         try:
             read_view(path)
         except RttaError:
             raise RttaError("exists and is not an rtta view file; --save-view will not replace it", path) from None
-    text = json.dumps(view.to_json(), indent=1) + "\n"
 
     def write(tmp: str) -> None:
-        Path(tmp).write_text(text, encoding="utf-8")
+        Path(tmp).write_text(json.dumps(view.to_json(), indent=1) + "\n", encoding="utf-8")
 
-    return atomic_write(path, write)
+    return write
 
 
 def _orbit(camera: Any, projection: Any) -> Orbit:

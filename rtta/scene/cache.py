@@ -329,9 +329,11 @@ def _decode(data: mmap.mmap, key: dict, source: str) -> Scene | None:
 
 
 def _inputs_unchanged(inputs: list) -> bool:
+    """Every file the scene was read from has its size and mtime still, and this user may
+    still read it (else the load says why, as it would without the cache)."""
     for p, size, mtime_ns in inputs:
         try:
-            if _stat(Path(p)) != (size, mtime_ns):
+            if _stat(Path(p)) != (size, mtime_ns) or not os.access(p, os.R_OK):
                 return False
         except OSError:
             return False

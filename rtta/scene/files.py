@@ -56,7 +56,8 @@ def memory_limit() -> int:
 
 
 def regular_file(path: Path, what: str = "file") -> int:
-    """The size of `path`; RttaError unless it is an existing regular file (links followed)."""
+    """The size of `path`; RttaError unless it is an existing regular file (links followed)
+    that this user may read (so that every reader says the same when it may not)."""
     try:
         st = os.stat(path)
     except FileNotFoundError:
@@ -72,6 +73,11 @@ def regular_file(path: Path, what: str = "file") -> int:
     if not stat.S_ISREG(st.st_mode):
         must = f"; the {what} must be a file" if what.strip() else ""
         raise RttaError(f"is not a regular file (a FIFO, device or socket){must}", path)
+    try:
+        with open(path, "rb"):
+            pass
+    except OSError as exc:
+        raise RttaError(f"cannot read the {what} ({reason(exc)})", path) from None
     return st.st_size
 
 
@@ -100,6 +106,7 @@ def read_limited(target: Path, path: Path, what: str) -> bytes:
         size = regular_file(target, what)
     except RttaError as exc:
         problem = "is missing" if exc.message.startswith("no such file") else exc.message
+        problem = problem.replace(f"cannot read the {what} (", "cannot be read (")
         raise RttaError(f"{what} {problem}", path) from None
     if size > min(MAX_FILE_BYTES, memory_limit()):
         raise RttaError(f"{what} has {size:,} bytes, over the memory limit (RTTA_MEMORY_LIMIT_MB)", path)

@@ -128,3 +128,18 @@ def test_rtta_error_is_unchanged(capsys):
 
     assert run_command(handler, type("Args", (), {})()) == 2
     assert capsys.readouterr().err == "rtta: error: model.glb: a reason\n"
+
+
+def test_a_command_sees_stdout_as_a_stream(capsys):
+    """Inside a command, sys.stdout is guarded (its write errors are one line) but still a
+    stream: a library asking its descriptor or encoding (a native reader silencing fd 1) gets
+    them. The guard's __getattr__ sat in another function and did nothing."""
+    seen = {}
+
+    def handler(args) -> int:
+        seen["encoding"], seen["tty"] = sys.stdout.encoding, sys.stdout.isatty()
+        seen["fileno"] = sys.stdout.fileno
+        return 0
+
+    assert run_command(handler, None) == 0  # type: ignore[arg-type]
+    assert seen["encoding"] and seen["tty"] in (True, False) and callable(seen["fileno"])

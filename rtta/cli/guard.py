@@ -58,6 +58,11 @@ class _GuardedStdout:
         except OSError as exc:
             raise StdoutError(exc.strerror or "an input/output error") from None
 
+    def __getattr__(self, name):  # the rest as the stream has it (fileno, isatty, encoding...)
+        if self._stream is None:
+            raise AttributeError(name)
+        return getattr(self._stream, name)
+
 
 def hold_closed_streams() -> None:
     """A process started with standard input, output or error closed (`>&-`, `2>&-`): /dev/null
@@ -77,9 +82,6 @@ def hold_closed_streams() -> None:
                 pass
     if sys.stderr is None:
         sys.stderr = open(os.devnull, "w")  # noqa: SIM115 (for the rest of the process)
-
-    def __getattr__(self, name):
-        return getattr(self._stream, name)
 
 
 def say(kind: str, text: str, path: str | None = None) -> None:

@@ -213,3 +213,27 @@ def test_the_cli_says_the_reader_ran_out_of_memory_in_one_line(tmp_path):
         "damaged; RTTA_READER_MEMORY_MB=MIB allows more)"
     )
     assert not (tmp_path / "o.png").exists()
+
+
+def test_a_small_file_instancing_more_parts_on_purpose_loads_with_rtta_max_parts(tmp_path, monkeypatch, capsys):
+    """12,000 nodes sharing one box mesh in a 0.5 MB GLB: over the 10,000 parts a file of its
+    size may make (a refusal that names the override), loaded whole with RTTA_MAX_PARTS; a bad
+    value is one line."""
+    from bad_gltf import box_doc, glb
+
+    from rtta.cli.main import main
+    from rtta.scene.loader import load_scene
+
+    nodes = [{"name": "root", "children": list(range(1, 12_001))}]
+    nodes += [{"mesh": 0, "name": f"bolt{i}", "translation": [i % 100, i // 100, 0]} for i in range(12_000)]
+    path = tmp_path / "bolts.glb"
+    path.write_bytes(glb(*box_doc(nodes)))
+    assert main(["info", str(path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "RTTA_MAX_PARTS=N allows more" in err[0], err
+    monkeypatch.setenv("RTTA_MAX_PARTS", "20000")
+    assert load_scene(path, cache=False).count == 12_000
+    monkeypatch.setenv("RTTA_MAX_PARTS", "lots")
+    assert main(["info", str(path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "RTTA_MAX_PARTS must be a whole number" in err[0], err

@@ -24,6 +24,9 @@ TEXTURE_BYTES_PER_PIXEL = 12  # decoded RGBA, the atlas copy, its mip levels
 MAX_OBJECTS = 10_000  # objects any scene file may make (loading costs ~0.25 ms each, OBJ ~0.5)
 BYTES_PER_OBJECT = 256  # larger files: one object per this many bytes of the file
 MAX_OBJECTS_LARGE = 1_000_000  # and never more than this
+PARTS_ENV = "RTTA_MAX_PARTS"  # parts any file may make, replacing the rule above (max_objects)
+MAX_PARTS_SET = 5_000_000  # (the glTF graph walk counts up to 10 x MAX_OBJECTS_LARGE)
+PARTS_HINT = f"{PARTS_ENV}=N allows more"
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tga", ".tif", ".tiff", ".gif", ".webp")
 
 
@@ -35,7 +38,17 @@ def max_objects(path: Path, extra_bytes: int = 0) -> int:
     glTF's buffers) may make: 10,000, or for larger files one per 256 bytes (up to 1,000,000).
     A small file cannot take minutes through instancing or many tiny objects (a GLB of 50,000
     shared-mesh nodes in 2 MB took 63 s to snapshot), while a real 100,000-part assembly
-    (tens of MB of geometry) loads."""
+    (tens of MB of geometry) loads. RTTA_MAX_PARTS (1 to 5,000,000) replaces the rule, for a
+    small file that instances more on purpose (PARTS_HINT in every refusal says so)."""
+    raw = os.environ.get(PARTS_ENV, "").strip()
+    if raw:
+        try:
+            parts = int(raw)
+        except ValueError:
+            parts = 0
+        if not 1 <= parts <= MAX_PARTS_SET:
+            raise RttaError(f"{PARTS_ENV} must be a whole number of parts from 1 to {MAX_PARTS_SET:,}, got '{raw}'")
+        return parts
     try:
         size = path.stat().st_size + extra_bytes
     except OSError:

@@ -16,7 +16,7 @@ import zlib
 from pathlib import Path
 
 from ..errors import RttaError, reason
-from .files import MAX_OBJECTS_LARGE, max_objects, memory_limit
+from .files import MAX_OBJECTS_LARGE, PARTS_HINT, max_objects, memory_limit
 
 # what reading a damaged zip archive raises (3MF, 3DXML, ZAE): the directory, or a member's
 # compressed data (deflate, lzma), unreadable
@@ -184,5 +184,7 @@ def _threemf_graph(stream, head: bytes, path: Path) -> None:
     limit = max_objects(path)
     if total > limit:
         raise RttaError(
-            f"3MF build makes {total:,} objects through its components (at most {limit:,} for a file of its size)", path
+            f"3MF build makes {total:,} objects through its components (at most {limit:,} for a file of its "
+            f"size; {PARTS_HINT})",
+            path,
         )

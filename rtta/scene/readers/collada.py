@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import RttaError, reason
-from ..files import WALK_PER_OBJECT, max_objects
+from ..files import PARTS_HINT, WALK_PER_OBJECT, max_objects
 from . import Assembly, check_archive, hidden, unit_name
 
 MAX_DEPTH = 256
@@ -53,7 +53,7 @@ class _Walk:
         if self.visits < 0 or len(out.names) > self.objects:
             raise RttaError(
                 f"the COLLADA node graph makes over {self.objects:,} parts or {self.objects * WALK_PER_OBJECT:,} "
-                "node visits (nodes instanced many times over, or in a cycle)",
+                f"node visits (nodes instanced many times over, or in a cycle; {PARTS_HINT})",
                 self.path,
             )
 

@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import RttaError
-from ..files import TextureBudget, image_problem, local_file, max_objects, memory_limit, read_limited
+from ..files import PARTS_HINT, TextureBudget, image_problem, local_file, max_objects, memory_limit, read_limited
 from ..precheck import check_size
 from . import draco, gltf_graph
 from .gltf_check import COMPONENT_BYTES, FLOAT, TYPE_WIDTH, check
@@ -122,7 +122,9 @@ def prepare(path: Path) -> Prepared:
     ]
     if len(out.instances) > limit:
         raise RttaError(
-            f"the node graph makes {len(out.instances):,} objects (at most {limit:,} for a file of its size)", path
+            f"the node graph makes {len(out.instances):,} objects (at most {limit:,} for a file of its size; "
+            f"{PARTS_HINT})",
+            path,
         )
     _check_size(doc, walk, out.pairs, path)
     return out

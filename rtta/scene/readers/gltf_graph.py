@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import RttaError
-from ..files import MAX_OBJECTS_LARGE, WALK_PER_OBJECT
+from ..files import MAX_OBJECTS_LARGE, PARTS_HINT, WALK_PER_OBJECT
 from . import hidden
 
 MAX_DEPTH = 1000  # levels of the node graph
@@ -151,14 +151,14 @@ def _measure(nodes: list, roots: list[int], path: Path, limit: int) -> list[int]
     if total > limit:
         raise RttaError(
             f"glTF node graph has {total:,} or more node paths to meshes (at most {limit:,} objects "
-            "for a file of its size)",
+            f"for a file of its size; {PARTS_HINT})",
             path,
         )
     steps = sum(walked[r] for r in roots)
     if steps > WALK_PER_OBJECT * limit:
         raise RttaError(
             f"glTF node graph has {steps:,} or more node paths to walk to its meshes (at most "
-            f"{WALK_PER_OBJECT * limit:,} for a file of its size)",
+            f"{WALK_PER_OBJECT * limit:,} for a file of its size; {PARTS_HINT})",
             path,
         )
     return meshes

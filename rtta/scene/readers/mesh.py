@@ -15,7 +15,7 @@ import numpy as np
 
 from ...errors import RttaError
 from .. import batch
-from ..files import SafeResolver, max_objects
+from ..files import PARTS_HINT, SafeResolver, max_objects
 from ..model import Scene, from_batch
 from ..precheck import BYTES_PER_TRIANGLE, BYTES_PER_VERTEX, check_size, memory_limit, precheck
 from ..textures import TextureTable
@@ -163,7 +163,7 @@ def _items(path: Path, suffix: str) -> tuple[list[str], list[Path], list[tuple]]
         if len(names) > limit:
             raise RttaError(
                 f"OBJ file has {len(names):,} objects ('o' statements, or 'g' groups where there are "
-                f"fewer than two; at most {limit:,} for a file of its size)",
+                f"fewer than two; at most {limit:,} for a file of its size; {PARTS_HINT})",
                 path,
             )
         decoded = obj_read.decode(data, names)

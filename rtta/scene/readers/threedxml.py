@@ -12,7 +12,7 @@ import numpy as np
 from lxml import etree
 
 from ...errors import RttaError, reason
-from ..files import max_objects
+from ..files import PARTS_HINT, max_objects
 from ..precheck import ZIP_ERRORS
 from . import Assembly, check_archive, hidden
 from .trimesh_io import as_scene
@@ -93,7 +93,8 @@ def _check_paths(doc, path: Path) -> None:
             stack += [(node, True)] + [(c, False) for c in children.get(node or "", [])]
     if paths.get(root, 0) > limit:
         raise RttaError(
-            f"3DXML product structure places over {limit:,} parts (references instanced many times over)", path
+            f"3DXML product structure places over {limit:,} parts (references instanced many times over; {PARTS_HINT})",
+            path,
         )
 
 

@@ -16,7 +16,7 @@ import numpy as np
 from ...errors import RttaError, reason
 from ...outputs import signals_held
 from ..batch import fans
-from ..files import WALK_PER_OBJECT, max_objects
+from ..files import PARTS_HINT, WALK_PER_OBJECT, max_objects
 from ..precheck import check_size
 from . import Assembly, check_archive, hidden, native_output, unit_name
 
@@ -185,7 +185,7 @@ def _check_expansion(stage, path: Path, layer_bytes: int) -> None:
     if parts > objects or prims > objects * WALK_PER_OBJECT:
         raise RttaError(
             f"the USD stage, its instances expanded, makes {parts:,} parts in {prims:,} prims, over the "
-            f"{objects:,} parts or {objects * WALK_PER_OBJECT:,} prims a file of its size may make",
+            f"{objects:,} parts or {objects * WALK_PER_OBJECT:,} prims a file of its size may make ({PARTS_HINT})",
             path,
         )
     check_size(vertices, triangles, path, "the USD stage, its instances expanded, has")

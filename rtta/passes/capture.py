@@ -122,7 +122,7 @@ class ScenePass:
         program = self.program_for(gpu.textured, target is None or target.normals, **extra)
         view_bytes, proj_bytes = matrices or (mat_bytes(view), mat_bytes(proj))
         glsl.set_uniforms(program, {"u_view": view_bytes, "u_proj": proj_bytes})
-        if extra.get("REGION_GUARD"):  # an extreme zoom (rtta.passes.guard)
+        if extra.get("REGION_GUARD") and target is not None:  # the capture at an extreme zoom (passes.guard)
             glsl.set_uniforms(program, {"u_region_guard": self.guard, "u_atlas_size": target.size})
         if placement is not None:
             placement.apply(program, proj @ view)

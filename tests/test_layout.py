@@ -72,3 +72,18 @@ def test_viewer_is_in_the_base_install():
     assert scripts.get("rtta-view") == "viewer:cli" and scripts.get("rtta") == "rtta.cli.main:main"
     import imgui_bundle  # noqa: F401  (installed with rtta itself)
     import moderngl_window  # noqa: F401
+
+
+def test_every_package_is_installed():
+    """pyproject.toml lists the packages setuptools installs: a new one left out is missing from
+    the wheel and CI's install (rtta.outputs was, when it became a package)."""
+    import tomllib
+
+    listed = set(tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["tool"]["setuptools"]["packages"])
+    found = {
+        ".".join(init.parent.relative_to(ROOT).parts)
+        for top in ("rtta", "viewer")
+        for init in (ROOT / top).rglob("__init__.py")
+        if "__pycache__" not in init.parts
+    }
+    assert found <= listed, sorted(found - listed)

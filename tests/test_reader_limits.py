@@ -237,3 +237,32 @@ def test_a_small_file_instancing_more_parts_on_purpose_loads_with_rtta_max_parts
     assert main(["info", str(path)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "RTTA_MAX_PARTS must be a whole number" in err[0], err
+
+
+def _step_structure(levels: int, width: int) -> str:
+    """A STEP file whose product structure uses each level's definition `width` times in the one
+    above, `levels` deep (no geometry: the check runs before OpenCASCADE)."""
+    lines = [f"#{k + 1}=PRODUCT_DEFINITION('d{k}','',#100,#200);" for k in range(levels + 1)]
+    n = 1000
+    for k in range(levels):
+        for _ in range(width):
+            lines.append(f"#{n}=NEXT_ASSEMBLY_USAGE_OCCURRENCE('NAUO{n}','','',#{k + 1},#{k + 2},$);")
+            n += 1
+    head = "ISO-10303-21;\nHEADER;\nFILE_DESCRIPTION((''),'2;1');\nENDSEC;\nDATA;\n"
+    return head + "\n".join(lines) + "\nENDSEC;\nEND-ISO-10303-21;\n"
+
+
+def test_a_step_structure_placing_too_many_parts_is_refused_before_opencascade(tmp_path, capsys):
+    """Ten levels of ten occurrences each: 10^10 parts in 9 KB, refused in one line before
+    cascadio expands them; RTTA_MAX_PARTS names the way round; a modest structure passes the check."""
+    from rtta.cli.main import main
+    from rtta.scene.readers import step
+
+    path = tmp_path / "bomb.step"
+    path.write_text(_step_structure(10, 10))
+    t0 = time.perf_counter()
+    assert main(["info", str(path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "STEP product structure places over 10,000 parts" in err[0], err
+    assert "RTTA_MAX_PARTS" in err[0] and time.perf_counter() - t0 < 30
+    step._check_occurrences(step._children(_step_structure(3, 10)), path)  # 1,000 parts: fine

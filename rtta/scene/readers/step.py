@@ -19,6 +19,7 @@ import numpy as np
 
 from ...errors import RttaError
 from ...outputs import signals_held
+from ..files import PARTS_HINT, max_objects
 from . import Assembly, native_output, srgb_from_linear
 
 UNITS_M = {"mm": 1e-3, "cm": 1e-2, "m": 1.0, "km": 1e3, "in": 0.0254, "ft": 0.3048, "um": 1e-6}
@@ -34,6 +35,8 @@ def read(path: Path) -> Assembly:
     data = path.read_bytes()
     text = data.decode("latin-1")
     _check_text(text, path)
+    children = _children(text)
+    _check_occurrences(children, path)  # before OpenCASCADE expands them
     with signals_held():  # a signal during a native module's initialisation crashes it
         import cascadio
 
@@ -45,7 +48,7 @@ def read(path: Path) -> Assembly:
         raise RttaError(f"cannot read STEP file ({why})", path)
     unit = length_unit(text)
     out = Assembly(unit=unit, up_axis="z")
-    _walk(glb, out, 1.0 / UNITS_M.get(unit, 1.0), _product_names(text), path)
+    _walk(glb, out, 1.0 / UNITS_M.get(unit, 1.0), _product_names(text, children), path)
     return out
 
 
@@ -105,11 +108,46 @@ def _entities(text: str, kind: str) -> dict[int, list[str]]:
     return out
 
 
-def _product_names(text: str) -> dict[tuple, str]:
-    """Sub-assembly names by the sorted names of the parts below them (with repeats)."""
+def _ref(a: str) -> int:
+    return int(a[1:]) if re.fullmatch(r"#\d{1,18}", a) else -1  # '#', '#x': no reference (fuzzing, issue 42)
 
-    def ref(a: str) -> int:
-        return int(a[1:]) if re.fullmatch(r"#\d{1,18}", a) else -1  # '#', '#x': no reference (fuzzing, issue 42)
+
+def _children(text: str) -> dict[int, list[int]]:
+    """The product structure: each product definition's children, one per occurrence
+    (NEXT_ASSEMBLY_USAGE_OCCURRENCE: relating, then related)."""
+    children: dict[int, list[int]] = {}
+    for a in _entities(text, "NEXT_ASSEMBLY_USAGE_OCCURRENCE").values():
+        if len(a) > 4:
+            children.setdefault(_ref(a[3]), []).append(_ref(a[4]))
+    return children
+
+
+def _check_occurrences(children: dict[int, list[int]], path: Path) -> None:
+    """RttaError when the product structure places more parts than a file of its size may make
+    (max_objects): a part used ten times in an assembly used ten times in one ... ten levels deep
+    is 10^10 parts in a few KB, which OpenCASCADE would expand into memory before anything else."""
+    limit = max_objects(path)
+    memo: dict[int, int] = {}
+
+    def placed(pd: int, depth: int) -> int:  # leaf occurrences below pd, at most limit + 1
+        if pd not in memo:
+            kids = children.get(pd, []) if depth <= 64 else []  # a cycle stops here (OpenCASCADE's own check)
+            memo[pd] = min(sum(placed(k, depth + 1) for k in kids), limit + 1) if kids else 1
+        return memo[pd]
+
+    used = {k for kids in children.values() for k in kids}
+    total = sum(placed(root, 0) for root in children if root not in used)
+    if total > limit:
+        raise RttaError(
+            f"STEP product structure places over {limit:,} parts (assemblies used many times over; "
+            f"at most {limit:,} for a file of its size; {PARTS_HINT})",
+            path,
+        )
+
+
+def _product_names(text: str, children: dict[int, list[int]]) -> dict[tuple, str]:
+    """Sub-assembly names by the sorted names of the parts below them (with repeats);
+    `children`: the product structure (_children)."""
 
     def unquote(a: str) -> str:
         return a[1:-1].replace("''", "'") if len(a) >= 2 and a[0] == "'" else ""
@@ -121,12 +159,8 @@ def _product_names(text: str) -> dict[tuple, str]:
     }
     name_of = {}
     for k, a in _entities(text, "PRODUCT_DEFINITION").items():
-        f = formations.get(ref(a[2])) if len(a) > 2 else None
-        name_of[k] = products.get(ref(f[2]), "") if f and len(f) > 2 else ""
-    children: dict[int, list[int]] = {}
-    for a in _entities(text, "NEXT_ASSEMBLY_USAGE_OCCURRENCE").values():
-        if len(a) > 4:
-            children.setdefault(ref(a[3]), []).append(ref(a[4]))
+        f = formations.get(_ref(a[2])) if len(a) > 2 else None
+        name_of[k] = products.get(_ref(f[2]), "") if f and len(f) > 2 else ""
     memo: dict[int, Counter] = {}
 
     def leaves(pd: int, depth: int = 0) -> Counter:

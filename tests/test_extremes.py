@@ -181,7 +181,8 @@ def test_ortho_zoomed_past_float32_clipping(make_renderer, path, height, section
     """An orthographic view `height` scene radii high on a corner where two boxes meet (cut
     and capped just below it): the parts' triangles reach clip coordinates of ~1e6, beyond
     what float32 clips to the region planes within a pixel; the guard (rtta.passes.guard)
-    keeps every region whole. Failed without it: STD and the atlas differed at ~160 px."""
+    keeps every region whole. Failed without it: STD and the atlas differed at ~160 px; and
+    with the guard's atlas size taken from the textures, larger than the part drawn (the sweep)."""
     scene = from_meshes([("a", *_box(2.0, np.zeros(3)), None), ("b", *_box(1.0, np.array([1.5, 0.2, 0.1])), None)])
     corner = np.array([1.0, 0.7, 0.6])  # b's corner on a's face
     eye = corner + np.array([0.4, 0.5, 1.0])
@@ -189,5 +190,6 @@ def test_ortho_zoomed_past_float32_clipping(make_renderer, path, height, section
     r = make_renderer(scene)
     if section is not None:
         r.staging = make_staging([section], "solid")
+    r.capture(Camera.orbit(scene.center, scene.radius, 30, 20, 2.0), (900, 700), path=path)  # atlas textures grow
     out = check_frame(r, cam.fit_depth(scene.center, scene.radius), (320, 240), path)
     assert out["visible"] == 2 and r.capture_pass(path).guard > 0

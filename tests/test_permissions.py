@@ -203,6 +203,7 @@ def test_an_unwritable_shader_cache_is_silent(tmp_path):
         text=True,
         timeout=120,
         env=env,
+        cwd=tmp_path,  # not a checkout's root, whose rtta/ would shadow the installed package
     )
     assert proc.returncode == 0 and all(line.startswith("rtta: ") for line in proc.stderr.splitlines()), proc.stderr
 

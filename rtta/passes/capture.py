@@ -39,6 +39,7 @@ class ScenePass:
 
     disjoint = False  # objects may share texels (STD): caps are made one object at a time
     guard = 0.0  # the region planes' guard (CapturePass: an extreme zoom's, rtta.passes.guard)
+    drawn_size = (1, 1)  # the atlas layers' part drawn into (CapturePass: R's atlas_size; the textures may be larger)
 
     def __init__(
         self, ctx: moderngl.Context, geometry: str | None = None, fragment: str = "scene.frag", **defines: object
@@ -122,8 +123,8 @@ class ScenePass:
         program = self.program_for(gpu.textured, target is None or target.normals, **extra)
         view_bytes, proj_bytes = matrices or (mat_bytes(view), mat_bytes(proj))
         glsl.set_uniforms(program, {"u_view": view_bytes, "u_proj": proj_bytes})
-        if extra.get("REGION_GUARD") and target is not None:  # the capture at an extreme zoom (passes.guard)
-            glsl.set_uniforms(program, {"u_region_guard": self.guard, "u_atlas_size": target.size})
+        if extra.get("REGION_GUARD"):  # the capture at an extreme zoom (passes.guard)
+            glsl.set_uniforms(program, {"u_region_guard": self.guard, "u_atlas_size": self.drawn_size})
         if placement is not None:
             placement.apply(program, proj @ view)
         if self.binder is not None and not variant.get("CAP_COUNT"):  # the count writes the stencil alone
@@ -279,7 +280,7 @@ class CapturePass(ScenePass):
         reads ids and reads normals only for AO, edges and the projector; picking reads depths."""
         tw, th, td = records.atlas_size
         self.frames += 1
-        self.guard = self._guards.of(gpu, view, proj, records.viewport)
+        self.guard, self.drawn_size = self._guards.of(gpu, view, proj, records.viewport), (tw, th)
         if self.guard > 0 and self.path is CapturePath.VS:  # the geometry shader cuts to the guard
             self._guarded = self._guarded or CapturePass(self.ctx, CapturePath.GS)
             self._guarded.render(gpu=gpu, records=records, view=view, proj=proj, atlas=atlas, normals=normals, ids=ids)

@@ -5,7 +5,7 @@ An object that meets the viewport's edge is clipped to its region by four planes
 coordinates of a million viewport NDC units or more (an orthographic view of a part 1e-5
 scene radii high), and float32 clipping against those planes misses them by a few pixels:
 the capture lost the top rows of such regions (2.5 rows at 1920x1080, 1e-5 radii; nothing
-at 1e-4). Where the scene can reach that far (`clip_reach`), the planes stand `region_guard`
+at 1e-4). Where the scene can reach that far (`clip_reach`, in pixels), the planes stand `region_guard`
 NDC further out, a few hundred times the error, and the fragment shader keeps the region's
 own texels alone (`region_holds`: the planes' test made exactly, per fragment). Frames that
 are not zoomed in so far draw as before, without the discard.
@@ -19,13 +19,13 @@ import numpy as np
 
 from ..scene.camera import near_distance
 
-GUARD_AT = 2.0**23  # reach x max(W, H): float32's clipping error reaches a quarter pixel
+GUARD_AT = 2.0**23  # reach in pixels (NDC reach x viewport side): float32's error nears a quarter pixel
 GUARD_SHARE = 2.0**-19  # the guard per unit of reach, ~200x the error measured (module docstring)
 MAX_GUARD = 2.0**40  # (an infinite reach: the planes as far as float32 keeps them apart)
 
 
-def clip_reach(view: np.ndarray, proj: np.ndarray, center, radius: float) -> float:
-    """The largest |x / w| or |y / w| (viewport NDC) that a sphere reaches in front of the
+def clip_reach(view: np.ndarray, proj: np.ndarray, center, radius: float) -> tuple[float, float]:
+    """The largest |x / w| and |y / w| (viewport NDC) that a sphere reaches in front of the
     near plane: how far beyond the viewport a scene of that bounding sphere can be drawn.
 
     Parameters
@@ -40,31 +40,31 @@ def clip_reach(view: np.ndarray, proj: np.ndarray, center, radius: float) -> flo
     Examples
     --------
     >>> import numpy as np
-    >>> ortho = np.diag([1e5, 1e5, -1.0, 1.0])
+    >>> ortho = np.diag([1e5, 2e5, -1.0, 1.0])
     >>> clip_reach(np.eye(4), ortho, [0.0, 0.0, -1.0], 1.0)
-    100000.0
+    (100000.0, 200000.0)
     """
     return _reach(view, proj, np.append(np.asarray(center, np.float64), 1.0), float(radius))
 
 
-def _reach(view: np.ndarray, proj: np.ndarray, center4: np.ndarray, radius: float) -> float:
+def _reach(view: np.ndarray, proj: np.ndarray, center4: np.ndarray, radius: float) -> tuple[float, float]:
     """clip_reach with the centre homogeneous (a frame's few calls: once per capture)."""
     x, y, z, _ = (view @ center4).tolist()
     p = proj.tolist()
     lateral = math.hypot(x, y) + radius
-    scale = max(abs(p[0][0]), abs(p[1][1]))
-    if p[3][2] == 0.0 and p[3][3] == 1.0:  # orthographic (camera.is_ortho)
-        return lateral * scale
-    closest = max(-z - radius, near_distance(proj))
-    return lateral * scale / closest if closest > 0 else math.inf
+    if not (p[3][2] == 0.0 and p[3][3] == 1.0):  # perspective (camera.is_ortho): over the closest depth
+        closest = max(-z - radius, near_distance(proj))
+        lateral = lateral / closest if closest > 0 else math.inf
+    return lateral * abs(p[0][0]), lateral * abs(p[1][1])
 
 
-def region_guard(reach: float, viewport: tuple[int, int]) -> float:
-    """How far (viewport NDC) the region planes stand out for a scene of `reach` (clip_reach)
-    drawn at `viewport` (W, H); 0.0: at the regions themselves, no guard needed."""
-    if not reach * max(viewport) > GUARD_AT:  # (NaN: no guard)
+def region_guard(reach: tuple[float, float], viewport: tuple[int, int]) -> float:
+    """How far (viewport NDC) the region planes stand out for a scene of `reach` (clip_reach,
+    x and y) drawn at `viewport` (W, H); 0.0: at the regions themselves, no guard needed."""
+    pixels = max(reach[0] * viewport[0], reach[1] * viewport[1])  # (NaN: no guard)
+    if not pixels > GUARD_AT:
         return 0.0
-    return min(reach * GUARD_SHARE, MAX_GUARD)
+    return min(max(reach) * GUARD_SHARE, MAX_GUARD)
 
 
 class RegionGuard:

@@ -61,7 +61,12 @@ def fuzz_step(data: bytes) -> None:
     except RttaError:
         pass  # the scans below run on what passed and what did not alike
     step.length_unit(text)
-    step._product_names(text)
+    children = step._children(text)
+    step._product_names(text, children)
+    try:
+        step._check_occurrences(children, Path("input.step"))
+    except RttaError:
+        pass
 
 
 IFC_TYPES = (

@@ -75,7 +75,8 @@ def test_step_shared_product_structure_is_counted_not_unfolded():
     from rtta.scene.readers import step
 
     start = time.perf_counter()
-    names = step._product_names(_shared_levels(64))
+    text = _shared_levels(64)
+    names = step._product_names(text, step._children(text))
     assert time.perf_counter() - start < 0.5
     assert names[(("leaf", 2**64),)] == "leaf" and names[(("leaf", 2),)] == "leaf"
 
@@ -85,8 +86,9 @@ def test_step_reference_that_is_not_a_number():
     from rtta.scene.readers import step
 
     text = _shared_levels(1).replace("#101,$);", "#,$);").replace("#100,", "#x1,", 1)
-    assert step._product_names(text) == {(("", 1),): "leaf"}  # one usage left, of no product
-    assert step._product_names(_shared_levels(1)) == {(("leaf", 2),): "leaf"}
+    assert step._product_names(text, step._children(text)) == {(("", 1),): "leaf"}  # one usage left, of no product
+    one = _shared_levels(1)
+    assert step._product_names(one, step._children(one)) == {(("leaf", 2),): "leaf"}
 
 
 def test_ifc_aggregation_cycle_without_a_container():

@@ -1,14 +1,17 @@
 """USD (.usd, .usda, .usdc, .usdz) through usd-core: every Mesh prim is an object, its prim
 path the tree; instances are expanded (instance proxies, each named after its instance
-prim); the stage's metersPerUnit and upAxis are kept. Layers the file refers to (sublayers,
-references, payloads) must lie in its folder: no absolute paths, no URLs. What the instances
-expand to is counted per prototype before any is expanded, and bounded as the other readers'
-node walks are (rtta.scene.files.max_objects, WALK_PER_OBJECT)."""
+prim; PointInstancers' instances by rtta.scene.readers.usd_instancers); the stage's
+metersPerUnit and upAxis are kept. Layers the file refers to (sublayers, references,
+payloads) must lie in its folder: no absolute paths, no URLs. What the instances expand to
+is counted per prototype before any is expanded, and bounded as the other readers' node
+walks are (rtta.scene.files.max_objects, WALK_PER_OBJECT). A value usd-core cannot read
+(a damaged binary layer) is one short line."""
 
 from __future__ import annotations
 
 import codecs
 import re
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -18,14 +21,18 @@ from ...outputs import signals_held
 from ..batch import fans
 from ..files import PARTS_HINT, WALK_PER_OBJECT, max_objects
 from ..precheck import check_size
-from . import Assembly, check_archive, hidden, native_output, unit_name
+from . import Assembly, check_archive, hidden, native_output, unit_name, usd_instancers
 
 MAX_LAYERS = 256
 
 
+class _Unreadable(Exception):
+    """An attribute whose value usd-core cannot read (a damaged layer); the message names it."""
+
+
 def read(path: Path) -> Assembly:
     with signals_held():  # a signal during a native module's initialisation crashes it
-        from pxr import Usd, UsdGeom
+        from pxr import Tf, Usd  # pyright: ignore[reportAttributeAccessIssue]  (usd-core's stubs lack Tf)
 
     if path.suffix.lower() == ".usdz":
         check_archive(path)
@@ -37,24 +44,37 @@ def read(path: Path) -> Assembly:
             stage, said = None, [*said, _error_text(exc)]
     if stage is None:
         raise RttaError(f"cannot read USD file ({_short(chr(10).join(said))})", path)
+    try:
+        return _read(stage, path, layer_bytes)
+    except _Unreadable as exc:
+        raise RttaError(str(exc), path) from None
+    except Tf.ErrorException as exc:
+        raise RttaError(f"cannot read the USD stage ({_short(_error_text(exc))})", path) from None
+
+
+def _read(stage, path: Path, layer_bytes: int) -> Assembly:
+    """The stage's meshes, its instances' and its PointInstancers' expanded, in world space."""
+    from pxr import Usd, UsdGeom
+
     _check_expansion(stage, path, layer_bytes)
     out = Assembly(
         unit=unit_name(float(UsdGeom.GetStageMetersPerUnit(stage))),
         up_axis="z" if UsdGeom.GetStageUpAxis(stage) == UsdGeom.Tokens.z else "y",
     )
     cache = UsdGeom.XformCache(Usd.TimeCode.Default())
-    prototypes: dict = {}  # prototype prim path -> (points, triangles, colour): read once for all its instances
+    known: dict = {}  # prototype prim path -> (points, triangles, colour): read once for all its instances
     hiders: dict[str, None] = {}  # prims whose singular transform hid a mesh, in file order
-    for prim in Usd.PrimRange.Stage(stage, Usd.TraverseInstanceProxies(Usd.PrimDefaultPredicate)):
+    ctx = usd_instancers.Context(cache, partial(_mesh_of, known=known), _get, out.warnings, path)
+    prims = iter(Usd.PrimRange.Stage(stage, Usd.TraverseInstanceProxies(Usd.PrimDefaultPredicate)))
+    for prim in prims:
+        if prim.IsA(UsdGeom.PointInstancer):
+            prims.PruneChildren()  # its prototypes are drawn through it (Hydra culls its children)
+            if UsdGeom.Imageable(prim).ComputeVisibility() != UsdGeom.Tokens.invisible:
+                _instanced(prim, ctx, out, hiders)
+            continue
         if not prim.IsA(UsdGeom.Mesh) or UsdGeom.Imageable(prim).ComputeVisibility() == UsdGeom.Tokens.invisible:
             continue
-        if prim.IsInstanceProxy():
-            key = prim.GetPrimInPrototype().GetPath()
-            if key not in prototypes:
-                prototypes[key] = (*_mesh(UsdGeom.Mesh(prim)), _color(prim))
-            v, f, color = prototypes[key]
-        else:
-            (v, f), color = _mesh(UsdGeom.Mesh(prim)), _color(prim)
+        v, f, color = _mesh_of(prim, known) if prim.IsInstanceProxy() else (*_mesh(UsdGeom.Mesh(prim)), _color(prim))
         if not len(f):
             continue
         m = np.array(cache.GetLocalToWorldTransform(prim), np.float64)  # row vectors: p @ M
@@ -65,6 +85,41 @@ def read(path: Path) -> Assembly:
         out.add(name, v @ m[:3, :3] + m[3, :3], f, color, groups)
     hidden.note_hidden(list(hiders), len(out.names), path, out.warnings)
     return out
+
+
+def _instanced(prim, ctx: usd_instancers.Context, out: Assembly, hiders: dict) -> None:
+    """Add the parts of the PointInstancer `prim`; an instance whose transform is singular
+    is noted as a hider (the instancer's topmost singular prim where its own transform is)."""
+    world = np.array(ctx.cache.GetLocalToWorldTransform(prim), np.float64)
+    flat = bool(hidden.singular(world.T))
+    for part in usd_instancers.parts(prim, world, ctx):
+        m = part.matrix
+        if hidden.singular(m.T):
+            hiders[_hider(prim, ctx.cache) if flat else part.instance] = None
+            continue
+        v, f, color = part.mesh
+        out.add(part.name, v @ m[:3, :3] + m[3, :3], f, color, part.groups)
+
+
+def _mesh_of(prim, known: dict) -> tuple:
+    """(points, triangles, colour) of a mesh prim, read once per prim of a prototype."""
+    from pxr import UsdGeom
+
+    key = prim.GetPrimInPrototype().GetPath() if prim.IsInstanceProxy() else prim.GetPath()
+    if key not in known:
+        known[key] = (*_mesh(UsdGeom.Mesh(prim)), _color(prim))
+    return known[key]
+
+
+def _get(attr):
+    """The attribute's value at the default time; _Unreadable, naming it, where usd-core
+    cannot read it (pxr.Tf.ErrorException, whose text holds C++ places)."""
+    from pxr import Tf  # pyright: ignore[reportAttributeAccessIssue]  (as in read)
+
+    try:
+        return attr.Get()
+    except Tf.ErrorException as exc:
+        raise _Unreadable(f"cannot read the value of {attr.GetPath()} ({_short(_error_text(exc))})") from None
 
 
 def _hider(prim, cache) -> str:
@@ -218,33 +273,43 @@ def _expansion(stage, path: Path) -> tuple[int, ...]:
 
 def _own_counts(root) -> tuple[tuple[int, ...], dict]:
     """`root`'s (parts, prims, vertices, triangles) below it, without entering its instances,
-    and how many instances of each prototype it holds. The root is not counted: traversal
-    meets an instance prim, never its prototype's root, nor the stage's pseudo-root."""
+    and how many instances of each prototype it holds: native ones, and a PointInstancer's
+    (each instance one prim more; its children are its prototypes, drawn only through it).
+    The stage's pseudo-root and a native prototype's root are not counted (traversal meets an
+    instance prim, never its prototype's root); a PointInstancer's prototype's root is."""
     from pxr import Usd, UsdGeom
 
+    top = root.IsPseudoRoot() or root.IsPrototype()
     parts = prims = vertices = triangles = 0
     inside: dict = {}
-    for prim in Usd.PrimRange(root):  # the default predicate: instances are not entered
+    walk = iter(Usd.PrimRange(root) if top else usd_instancers.prototype_range(root, through_instances=False))
+    for prim in walk:  # the default predicate: instances are not entered
         prims += 1
         if prim.IsInstance():
             key = prim.GetPrototype().GetPath()
             inside[key] = inside.get(key, 0) + 1
-        if prim.IsA(UsdGeom.Mesh):
+        if prim.IsA(UsdGeom.PointInstancer):
+            walk.PruneChildren()
+            count, each = usd_instancers.instance_counts(prim, _get)
+            prims += count
+            for key, n in each.items():
+                inside[key] = inside.get(key, 0) + n
+        elif prim.IsA(UsdGeom.Mesh):
             mesh = UsdGeom.Mesh(prim)
             points, counts, index = (
-                a.Get() for a in (mesh.GetPointsAttr(), mesh.GetFaceVertexCountsAttr(), mesh.GetFaceVertexIndicesAttr())
+                _get(a) for a in (mesh.GetPointsAttr(), mesh.GetFaceVertexCountsAttr(), mesh.GetFaceVertexIndicesAttr())
             )
             parts += 1
             vertices += len(points or ())
             triangles += max(len(index or ()) - 2 * len(counts or ()), 0)
-    return (parts, prims - 1, vertices, triangles), inside
+    return (parts, prims - int(top), vertices, triangles), inside
 
 
 def _mesh(mesh) -> tuple[np.ndarray, np.ndarray]:
     """Points and polygons fan-triangulated (USD faces are convex polygons)."""
-    points = mesh.GetPointsAttr().Get()
-    counts = mesh.GetFaceVertexCountsAttr().Get()
-    index = mesh.GetFaceVertexIndicesAttr().Get()
+    points = _get(mesh.GetPointsAttr())
+    counts = _get(mesh.GetFaceVertexCountsAttr())
+    index = _get(mesh.GetFaceVertexIndicesAttr())
     if points is None or counts is None or index is None or not len(points):
         return np.zeros((0, 3)), np.zeros((0, 3), np.int64)
     v = np.asarray(points, np.float64).reshape(-1, 3)
@@ -274,7 +339,7 @@ def _name(prim) -> tuple[str, tuple[str, ...]]:
 def _color(prim) -> list[float] | None:
     from pxr import UsdGeom
 
-    value = UsdGeom.PrimvarsAPI(prim).GetPrimvar("displayColor").Get() if prim else None
+    value = _get(UsdGeom.PrimvarsAPI(prim).GetPrimvar("displayColor").GetAttr()) if prim else None
     if value is None or not len(value):
         return None
     c = [float(x) for x in value[0]][:3]

@@ -44,10 +44,12 @@ float guard_distance(vec4 p, vec4 r, int k) {
 void cut_by(vec4 r, int k) {
     vec4 pos[GUARD_CORNERS];
     vec3 bary[GUARD_CORNERS];
+    float dist[GUARD_CORNERS];  // each corner's distance to plane k, once
+    for (int i = 0; i < g_count; ++i) dist[i] = guard_distance(g_pos[i], r, k);
     int m = 0;
     for (int i = 0; i < g_count; ++i) {
         int j = i + 1 == g_count ? 0 : i + 1;
-        float di = guard_distance(g_pos[i], r, k), dj = guard_distance(g_pos[j], r, k);
+        float di = dist[i], dj = dist[j];
         if (di >= 0.0) {
             pos[m] = g_pos[i];
             bary[m] = g_bary[i];

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import shlex
 import subprocess
 import sys
 import time
@@ -315,3 +316,24 @@ def test_reference_warnings_name_the_file_once(corpus):
             assert quoted is None or note.count(f"'{quoted}'") == 1, note
     assert any("'/etc/passwd' is outside the scene's folder" in n for n in notes["obj_mtllib_absolute.obj"])
     assert any("'fifo.mtl' is not a regular file" in n for n in notes["fifo_mtllib.obj"])
+
+
+@pytest.mark.parametrize("first", ["cow.glb", "my part.stp", "plain"])
+def test_a_scene_where_the_command_goes_says_what_to_run(first, tmp_path, capsys, monkeypatch):
+    """`rtta FILE` (as a viewer is called): one line naming the file and the commands that open
+    it, quoted for the shell; a word that is no scene keeps argparse's message."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "plain").write_bytes(b"")  # a file without a scene suffix is still a file
+    assert main([first, "--mode", "ghosted"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"rtta: error: {first}: a command comes first")
+    assert f"`rtta-view {shlex.quote(first)}`" in err[0] and f"rtta snapshot {shlex.quote(first)} -o" in err[0]
+    assert main(["nonsense"]) == 2
+    assert "invalid choice: 'nonsense'" in capsys.readouterr().err
+
+
+def test_out_has_a_short_form(tmp_path, gl):
+    """`-o` is `--out` (snapshot; export, dataset and ldi take it too)."""
+    out = tmp_path / "demo.png"
+    assert main(["snapshot", "-o", str(out), "--size", "64x48"]) == 0
+    assert out.stat().st_size > 0

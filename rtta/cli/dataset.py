@@ -29,6 +29,7 @@ def add_parsers(sub, bench_sub, common: tuple) -> None:
         help="scene files, folders or globs (default: the demo); 'merge INPUT...' joins annotation files",
     )
     p.add_argument(
+        "-o",
         "--out",
         required=True,
         help="dataset folder (created; resumed when it holds the same "

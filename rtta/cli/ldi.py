@@ -20,7 +20,7 @@ def add_parser(sub) -> None:
     p = sub.add_parser("ldi", help="classify points inside/outside a closed mesh with a layered depth image")
     p.add_argument("mesh", help="closed mesh: a scene file, or shape:NAME (sphere, box, torus, torus-knot, vase)")
     p.add_argument("--points", help="float array [N, 3] (.npy) of world points")
-    p.add_argument("--out", help="bool array [N] (.npy) written atomically: True = inside")
+    p.add_argument("-o", "--out", help="bool array [N] (.npy) written atomically: True = inside")
     p.add_argument("--resolution", type=int, default=512, help="LDI resolution N (N x N texels)")
     p.add_argument("--compressed", action="store_true", help="test against the compressed depth ranges")
     p.add_argument("--stats", action="store_true", help="print the seed's table row for this mesh")

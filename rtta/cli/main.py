@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import re
+import shlex
 import sys
 
 from ..errors import RttaError
@@ -54,6 +55,29 @@ def section_values(argv: list[str]) -> list[str]:
     return out
 
 
+COMMANDS = ("export", "snapshot", "info", "bench", "ldi", "dataset")
+
+
+def _scene_first(argv: list[str]) -> RttaError | None:
+    """The error for `rtta FILE` (a scene where the command goes, as a viewer is called): what
+    to run instead; None where the first argument is no scene file."""
+    from pathlib import Path
+
+    from ..scene.readers import SUFFIXES
+
+    first = argv[0] if argv else ""
+    if not first or first.startswith("-") or first in COMMANDS:
+        return None
+    if Path(first).suffix.lower() not in SUFFIXES and not Path(first).is_file():
+        return None
+    name = shlex.quote(first)
+    return RttaError(
+        f"a command comes first: `rtta-view {name}` opens it, `rtta snapshot {name} -o view.png` renders it "
+        "(`rtta --help` lists the commands)",
+        first,
+    )
+
+
 def main(argv: list[str] | None = None) -> int:
     from ..memory import steady_heap
     from .dataset import cmd_dataset
@@ -61,10 +85,11 @@ def main(argv: list[str] | None = None) -> int:
 
     if argv is None:  # the whole process: `rtta info x.glb >&-` must not hand fd 1 to a file it opens
         hold_closed_streams()
+    argv = sys.argv[1:] if argv is None else argv
     try:
-        args = build_parser().parse_args(section_values(sys.argv[1:] if argv is None else argv))
+        args = build_parser().parse_args(section_values(argv))
     except RttaError as exc:
-        say("error", str(exc))
+        say("error", str(_scene_first(argv) or exc))
         return 2
     steady_heap()
     handler = {

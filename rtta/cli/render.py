@@ -19,7 +19,7 @@ def add_parsers(sub) -> None:
     view_args(p)
     cutaway_args(p)
     view_file_args(p)
-    p.add_argument("--out", required=True, help="output folder (replaced atomically)")
+    p.add_argument("-o", "--out", required=True, help="output folder (replaced atomically)")
     p = sub.add_parser("snapshot", help="render STD or a composite mode to PNG, headless")
     scene_arg(p)
     view_args(p)
@@ -83,7 +83,7 @@ def add_parsers(sub) -> None:
     )
     p.add_argument("--lens-at", default=None, metavar="X,Y,Z", help="lens centre in world units (default: the focus)")
     out = p.add_mutually_exclusive_group(required=True)
-    out.add_argument("--out", help="PNG file to write")
+    out.add_argument("-o", "--out", help="PNG file to write")
     out.add_argument("--all-modes", metavar="DIR", help="write <mode>.png for every mode into DIR")
 
 

@@ -180,3 +180,28 @@ def test_a_ctrl_c_while_the_window_is_made_waits_until_it_is_made(tmp_path):
         [sys.executable, "-c", _WINDOW_INTERRUPTED], capture_output=True, text=True, timeout=120, env=env, cwd=tmp_path
     )
     assert proc.stdout.strip() == "interrupted after [(64, 48), 'current']", proc.stdout + proc.stderr[-2000:]
+
+
+_IMPORT_INTERRUPTED = """
+import builtins, os, signal, sys
+real = builtins.__import__
+def interrupted(name, *args, **kwargs):  # Ctrl-C while Python imports rtta, as at 0.2 s after the start
+    if name == "rtta":
+        os.kill(os.getpid(), signal.SIGINT)
+    return real(name, *args, **kwargs)
+builtins.__import__ = interrupted
+sys.argv = ["rtta-view"]
+from viewer import cli
+cli()
+"""
+
+
+def test_a_ctrl_c_while_the_viewer_imports_rtta_is_quiet(tmp_path):
+    """rtta-view interrupted before rtta's handlers are in (its imports take a tenth of a
+    second): exit 130 and nothing on stderr, as a Ctrl-C later; it printed Python's traceback."""
+    repo = str(Path(__file__).resolve().parents[1])
+    env = {**os.environ, "PYTHONPATH": repo}
+    proc = subprocess.run(
+        [sys.executable, "-c", _IMPORT_INTERRUPTED], capture_output=True, text=True, timeout=120, env=env, cwd=tmp_path
+    )
+    assert proc.returncode == 130 and proc.stderr == "", proc.stderr[-2000:]

@@ -167,8 +167,10 @@ def cli() -> None:
     """The command: rtta's signal handlers for the whole run (SIGINT, SIGTERM, SIGHUP raise
     KeyboardInterrupt, held while native code that must not be cut runs: rtta.outputs), and
     Ctrl-C, while starting or drawing, closes the viewer quietly."""
-    from rtta import outputs
-
+    try:
+        from rtta import outputs  # numpy and the rest: a tenth of a second, before any handler is in
+    except KeyboardInterrupt:
+        sys.exit(130)
     old = outputs.install_signal_handlers()
     try:
         code = main()

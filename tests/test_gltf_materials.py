@@ -76,3 +76,17 @@ def test_nan_in_fields_rtta_does_not_read_is_no_traceback(tmp_path):
     doc["accessors"][1]["normalized"] = float("nan")
     (tmp_path / "n.glb").write_bytes(glb(doc, binary))
     assert load_scene(tmp_path / "n.glb").count == 1
+
+
+def test_a_ktx2_only_texture_keeps_the_material_colour_and_says_so(tmp_path):
+    """KHR_texture_basisu (KTX2) images cannot be decoded here: the objects keep their base
+    colour factor, and a warning names the texture (it was left out silently)."""
+    doc_texture = {"extensions": {"KHR_texture_basisu": {"source": 0}}}
+    material = {"pbrMetallicRoughness": {"baseColorFactor": [0.2, 0.6, 0.9, 1.0], "baseColorTexture": {"index": 0}}}
+    ktx2 = b"\xabKTX 20\xbb\r\n\x1a\n" + bytes(64)
+    scene = _box_with(material, tmp_path, ktx2, texture=doc_texture)
+    plain = _box_with({"pbrMetallicRoughness": {"baseColorFactor": [0.2, 0.6, 0.9, 1.0]}}, tmp_path)
+    assert not scene.textured
+    np.testing.assert_array_equal(scene.colors, plain.colors)
+    said = [w for w in scene.warnings if "KHR_texture_basisu" in w]
+    assert len(said) == 1 and "texture 0" in said[0] and "material colour" in said[0], scene.warnings

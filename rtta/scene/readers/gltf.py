@@ -230,6 +230,15 @@ def _images(doc: dict, buffers: list, path: Path, out: Prepared) -> dict[int, by
     objects keep their material colour; trimesh never opens a file itself."""
     images, textures = doc.get("images", []), doc.get("textures", [])
     used = sorted({textures[t]["source"] for t in _base_textures(doc) if "source" in textures[t]})
+    for t in sorted({t for t in _base_textures(doc) if "source" not in textures[t]}):
+        found = textures[t].get("extensions")
+        found = found if isinstance(found, dict) else {}
+        kinds = sorted(k for k, v in found.items() if isinstance(v, dict) and "source" in v)
+        if kinds:  # KHR_texture_basisu (KTX2), MSFT_texture_dds: images that Pillow cannot decode
+            out.warnings.append(
+                f"texture {t} has only {', '.join(kinds)} images, which rtta cannot decode; objects using it "
+                "keep their material colour"
+            )
     good, budget = {}, TextureBudget()
     for i in used:
         image = images[i]

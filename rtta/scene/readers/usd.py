@@ -1,7 +1,10 @@
 """USD (.usd, .usda, .usdc, .usdz) through usd-core: every Mesh prim is an object, its prim
 path the tree; instances are expanded (instance proxies, each named after its instance
 prim; PointInstancers' instances by rtta.scene.readers.usd_instancers); the stage's
-metersPerUnit and upAxis are kept. Layers the file refers to (sublayers, references,
+metersPerUnit and upAxis are kept. Every value is read at one time code, the stage's start
+time code (else its values' earliest), and prims are drawn by purpose: `default` and
+`render`, never `guide`, `proxy` only where no `render` part is drawn
+(rtta.scene.readers.usd_stage says why). Layers the file refers to (sublayers, references,
 payloads) must lie in its folder: no absolute paths, no URLs. What the instances expand to
 is counted per prototype before any is expanded, and bounded as the other readers' node
 walks are (rtta.scene.files.max_objects, WALK_PER_OBJECT). A value usd-core cannot read
@@ -21,7 +24,7 @@ from ...outputs import signals_held
 from ..batch import fans
 from ..files import PARTS_HINT, WALK_PER_OBJECT, max_objects
 from ..precheck import check_size
-from . import Assembly, check_archive, hidden, native_output, unit_name, usd_instancers
+from . import Assembly, check_archive, hidden, native_output, unit_name, usd_instancers, usd_stage
 
 MAX_LAYERS = 256
 
@@ -53,71 +56,83 @@ def read(path: Path) -> Assembly:
 
 
 def _read(stage, path: Path, layer_bytes: int) -> Assembly:
-    """The stage's meshes, its instances' and its PointInstancers' expanded, in world space."""
+    """The stage's meshes, its instances' and its PointInstancers' expanded, in world space,
+    at the time and of the purposes rtta.scene.readers.usd_stage chooses."""
     from pxr import Usd, UsdGeom
 
+    time = usd_stage.read_time(stage)
     _check_expansion(stage, path, layer_bytes)
     out = Assembly(
         unit=unit_name(float(UsdGeom.GetStageMetersPerUnit(stage))),
         up_axis="z" if UsdGeom.GetStageUpAxis(stage) == UsdGeom.Tokens.z else "y",
     )
-    cache = UsdGeom.XformCache(Usd.TimeCode.Default())
+    cache = UsdGeom.XformCache(time)
     known: dict = {}  # prototype prim path -> (points, triangles, colour): read once for all its instances
-    hiders: dict[str, None] = {}  # prims whose singular transform hid a mesh, in file order
-    ctx = usd_instancers.Context(cache, partial(_mesh_of, known=known), _get, out.warnings, path)
+    drawn = usd_stage.Drawn()  # the parts and hiders, until it is known whether proxies are drawn
+    ctx = usd_instancers.Context(cache, partial(_mesh_of, known=known, time=time), _get, time, out.warnings, path)
     prims = iter(Usd.PrimRange.Stage(stage, Usd.TraverseInstanceProxies(Usd.PrimDefaultPredicate)))
-    for prim in prims:
+    for prim in prims:  # not pruned by purpose: a child's own purpose wins over its parent's
         if prim.IsA(UsdGeom.PointInstancer):
             prims.PruneChildren()  # its prototypes are drawn through it (Hydra culls its children)
-            if UsdGeom.Imageable(prim).ComputeVisibility() != UsdGeom.Tokens.invisible:
-                _instanced(prim, ctx, out, hiders)
+            if UsdGeom.Imageable(prim).ComputeVisibility(time) != UsdGeom.Tokens.invisible:
+                _instanced(prim, ctx, drawn)
             continue
-        if not prim.IsA(UsdGeom.Mesh) or UsdGeom.Imageable(prim).ComputeVisibility() == UsdGeom.Tokens.invisible:
+        if not prim.IsA(UsdGeom.Mesh) or UsdGeom.Imageable(prim).ComputeVisibility(time) == UsdGeom.Tokens.invisible:
             continue
-        v, f, color = _mesh_of(prim, known) if prim.IsInstanceProxy() else (*_mesh(UsdGeom.Mesh(prim)), _color(prim))
+        purpose = usd_stage.purpose(prim)
+        if purpose == usd_stage.GUIDE:
+            continue
+        v, f, color = (
+            _mesh_of(prim, known, time)
+            if prim.IsInstanceProxy()
+            else (*_mesh(UsdGeom.Mesh(prim), time), _color(prim, time))
+        )
         if not len(f):
             continue
         m = np.array(cache.GetLocalToWorldTransform(prim), np.float64)  # row vectors: p @ M
         if hidden.singular(m.T):
-            hiders[_hider(prim, cache)] = None
+            drawn.hider(_hider(prim, cache), purpose)
             continue
         name, groups = _name(prim)
-        out.add(name, v @ m[:3, :3] + m[3, :3], f, color, groups)
-    hidden.note_hidden(list(hiders), len(out.names), path, out.warnings)
+        drawn.add(purpose, name, v @ m[:3, :3] + m[3, :3], f, color, groups)
+    drawn.finish(out, path)
     return out
 
 
-def _instanced(prim, ctx: usd_instancers.Context, out: Assembly, hiders: dict) -> None:
-    """Add the parts of the PointInstancer `prim`; an instance whose transform is singular
-    is noted as a hider (the instancer's topmost singular prim where its own transform is)."""
+def _instanced(prim, ctx: usd_instancers.Context, drawn: usd_stage.Drawn) -> None:
+    """Add the parts of the PointInstancer `prim` but its guides; an instance whose transform
+    is singular is noted as a hider (the instancer's topmost singular prim where its own
+    transform is)."""
     world = np.array(ctx.cache.GetLocalToWorldTransform(prim), np.float64)
     flat = bool(hidden.singular(world.T))
     for part in usd_instancers.parts(prim, world, ctx):
+        if part.purpose == usd_stage.GUIDE:
+            continue
         m = part.matrix
         if hidden.singular(m.T):
-            hiders[_hider(prim, ctx.cache) if flat else part.instance] = None
+            drawn.hider(_hider(prim, ctx.cache) if flat else part.instance, part.purpose)
             continue
         v, f, color = part.mesh
-        out.add(part.name, v @ m[:3, :3] + m[3, :3], f, color, part.groups)
+        drawn.add(part.purpose, part.name, v @ m[:3, :3] + m[3, :3], f, color, part.groups)
 
 
-def _mesh_of(prim, known: dict) -> tuple:
-    """(points, triangles, colour) of a mesh prim, read once per prim of a prototype."""
+def _mesh_of(prim, known: dict, time) -> tuple:
+    """(points, triangles, colour) of a mesh prim at `time`, read once per prim of a prototype."""
     from pxr import UsdGeom
 
     key = prim.GetPrimInPrototype().GetPath() if prim.IsInstanceProxy() else prim.GetPath()
     if key not in known:
-        known[key] = (*_mesh(UsdGeom.Mesh(prim)), _color(prim))
+        known[key] = (*_mesh(UsdGeom.Mesh(prim), time), _color(prim, time))
     return known[key]
 
 
-def _get(attr):
-    """The attribute's value at the default time; _Unreadable, naming it, where usd-core
-    cannot read it (pxr.Tf.ErrorException, whose text holds C++ places)."""
+def _get(attr, time):
+    """The attribute's value at the Usd.TimeCode `time`; _Unreadable, naming it, where
+    usd-core cannot read it (pxr.Tf.ErrorException, whose text holds C++ places)."""
     from pxr import Tf  # pyright: ignore[reportAttributeAccessIssue]  (as in read)
 
     try:
-        return attr.Get()
+        return attr.Get(time)
     except Tf.ErrorException as exc:
         raise _Unreadable(f"cannot read the value of {attr.GetPath()} ({_short(_error_text(exc))})") from None
 
@@ -234,7 +249,9 @@ def _check_expansion(stage, path: Path, layer_bytes: int) -> None:
     """Refuse a stage whose traversal through its instances would visit more prims, or make
     more parts, vertices or triangles, than a file of its size may (prototypes that instance
     prototypes: ten levels of ten instances each are 10^10 parts in 18 KB). Counted once per
-    prototype, innermost first, before any instance is expanded."""
+    prototype, innermost first, before any instance is expanded, at the time the stage is
+    read at. Prims of every purpose are counted (guides and proxies too): an upper bound on
+    what is drawn."""
     objects = max_objects(path, layer_bytes)
     parts, prims, vertices, triangles = _expansion(stage, path)
     if parts > objects or prims > objects * WALK_PER_OBJECT:
@@ -276,9 +293,12 @@ def _own_counts(root) -> tuple[tuple[int, ...], dict]:
     and how many instances of each prototype it holds: native ones, and a PointInstancer's
     (each instance one prim more; its children are its prototypes, drawn only through it).
     The stage's pseudo-root and a native prototype's root are not counted (traversal meets an
-    instance prim, never its prototype's root); a PointInstancer's prototype's root is."""
+    instance prim, never its prototype's root); a PointInstancer's prototype's root is.
+    Values are read at the time the stage is drawn at (usd_stage.read_time, a function of the
+    stage alone); every purpose is counted."""
     from pxr import Usd, UsdGeom
 
+    time = usd_stage.read_time(root.GetStage())
     top = root.IsPseudoRoot() or root.IsPrototype()
     parts = prims = vertices = triangles = 0
     inside: dict = {}
@@ -290,14 +310,15 @@ def _own_counts(root) -> tuple[tuple[int, ...], dict]:
             inside[key] = inside.get(key, 0) + 1
         if prim.IsA(UsdGeom.PointInstancer):
             walk.PruneChildren()
-            count, each = usd_instancers.instance_counts(prim, _get)
+            count, each = usd_instancers.instance_counts(prim, _get, time)
             prims += count
             for key, n in each.items():
                 inside[key] = inside.get(key, 0) + n
         elif prim.IsA(UsdGeom.Mesh):
             mesh = UsdGeom.Mesh(prim)
             points, counts, index = (
-                _get(a) for a in (mesh.GetPointsAttr(), mesh.GetFaceVertexCountsAttr(), mesh.GetFaceVertexIndicesAttr())
+                _get(a, time)
+                for a in (mesh.GetPointsAttr(), mesh.GetFaceVertexCountsAttr(), mesh.GetFaceVertexIndicesAttr())
             )
             parts += 1
             vertices += len(points or ())
@@ -305,11 +326,11 @@ def _own_counts(root) -> tuple[tuple[int, ...], dict]:
     return (parts, prims - int(top), vertices, triangles), inside
 
 
-def _mesh(mesh) -> tuple[np.ndarray, np.ndarray]:
-    """Points and polygons fan-triangulated (USD faces are convex polygons)."""
-    points = _get(mesh.GetPointsAttr())
-    counts = _get(mesh.GetFaceVertexCountsAttr())
-    index = _get(mesh.GetFaceVertexIndicesAttr())
+def _mesh(mesh, time) -> tuple[np.ndarray, np.ndarray]:
+    """Points and polygons fan-triangulated (USD faces are convex polygons), at `time`."""
+    points = _get(mesh.GetPointsAttr(), time)
+    counts = _get(mesh.GetFaceVertexCountsAttr(), time)
+    index = _get(mesh.GetFaceVertexIndicesAttr(), time)
     if points is None or counts is None or index is None or not len(points):
         return np.zeros((0, 3)), np.zeros((0, 3), np.int64)
     v = np.asarray(points, np.float64).reshape(-1, 3)
@@ -336,10 +357,10 @@ def _name(prim) -> tuple[str, tuple[str, ...]]:
     return prim.GetName(), tuple(p for p in prim.GetPath().GetParentPath().pathString.split("/") if p)
 
 
-def _color(prim) -> list[float] | None:
+def _color(prim, time) -> list[float] | None:
     from pxr import UsdGeom
 
-    value = _get(UsdGeom.PrimvarsAPI(prim).GetPrimvar("displayColor").GetAttr()) if prim else None
+    value = _get(UsdGeom.PrimvarsAPI(prim).GetPrimvar("displayColor").GetAttr(), time) if prim else None
     if value is None or not len(value):
         return None
     c = [float(x) for x in value[0]][:3]

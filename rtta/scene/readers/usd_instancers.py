@@ -1,14 +1,18 @@
 """UsdGeom.PointInstancer for the USD reader (rtta.scene.readers.usd): every instance of a
 prototype (a prim subtree that the instancer's `prototypes` relationship names) becomes parts,
 placed by UsdGeom.PointInstancer.ComputeInstanceTransformsAtTime (positions, orientations,
-scales and the prototype root's own transform, at the default time code) and then by the
-instancer's own transform; the ids in invisibleIds and inactiveIds are left out.
+scales and the prototype root's own transform) and then by the instancer's own transform;
+the ids in invisibleIds and inactiveIds are left out. Every value is read at the time code
+the reader reads the stage at (rtta.scene.readers.usd_stage.read_time).
 
 As Hydra draws them: the instancer's children (its prototypes, by convention) are never drawn
 in place, and a prototype elsewhere is drawn in place only where the stage draws it anyway
 (a `def` prim, not an `over` or a `class`). Inside a prototype every active mesh that is not
 invisible (up to the prototype's root) is drawn, and instancers nested in a prototype are
 expanded too, their parts placed in each instance of the prototype (at most MAX_DEPTH deep).
+Each part has a purpose: its mesh's (UsdGeom.Imageable.ComputePurpose, which inherits through
+the prototype's ancestors in the stage), or the instancer's where the mesh's is `default`;
+guide meshes are not read, the reader leaves out guide parts and decides on proxy ones.
 
 Names (deterministic; unique while the meshes of a prototype have distinct names): instance i
 of prototype P of the instancer /a/I is the part 'P_i' in the group a/I when P makes one part;
@@ -27,7 +31,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ...errors import RttaError
-from . import native_output
+from . import native_output, usd_stage
 
 MAX_DEPTH = 32  # instancers nested in prototypes of instancers
 CHUNK = 1 << 22  # protoIndices counted this many at a time (np.bincount makes an int64 copy)
@@ -36,37 +40,42 @@ CHUNK = 1 << 22  # protoIndices counted this many at a time (np.bincount makes a
 class Part(NamedTuple):
     """One part an instancer makes: its name, its groups below the instancer's parent, its
     transform (row vectors, p @ matrix: prototype space to the instancer's, or to the world
-    once placed), its mesh (vertices, triangles, colour) and the instance it belongs to."""
+    once placed), its mesh (vertices, triangles, colour), the instance it belongs to and its
+    purpose (usd_stage.DEFAULT, RENDER or PROXY; GUIDE where its instancer's is)."""
 
     name: str
     groups: tuple[str, ...]
     matrix: np.ndarray
     mesh: tuple
     instance: str
+    purpose: str = usd_stage.DEFAULT
 
 
 @dataclass
 class Context:
     """What expanding the stage's instancers shares: the transform cache, the reader's mesh
-    function (prim -> (vertices, triangles, colour)), its `get` (attribute -> value), the
-    warnings, the file, and each prototype's parts, read once for all its instances."""
+    function (prim -> (vertices, triangles, colour)), its `get` ((attribute, time) -> value),
+    the Usd.TimeCode the stage is read at, the warnings, the file, and each prototype's parts,
+    read once for all its instances (keyed by the prototype and the purpose it inherits)."""
 
-    cache: Any  # UsdGeom.XformCache
+    cache: Any  # UsdGeom.XformCache at `time`
     mesh_of: Callable
     get: Callable
+    time: Any  # Usd.TimeCode
     warnings: list[str]
     path: Path
     known: dict = field(default_factory=dict)
 
 
-def instance_counts(prim, get: Callable) -> tuple[int, dict]:
-    """How many instances the PointInstancer `prim` makes (the length of its protoIndices),
-    and how many of them each prototype has (prototype path -> count; indices that name no
-    prototype are not counted, as the instancer is then not drawn)."""
+def instance_counts(prim, get: Callable, time) -> tuple[int, dict]:
+    """How many instances the PointInstancer `prim` makes at the Usd.TimeCode `time` (the
+    length of its protoIndices), and how many of them each prototype has (prototype path ->
+    count; indices that name no prototype are not counted, as the instancer is then not
+    drawn). Invisible and inactive ids are counted: an upper bound."""
     from pxr import UsdGeom
 
     instancer = UsdGeom.PointInstancer(prim)
-    index = get(instancer.GetProtoIndicesAttr())
+    index = get(instancer.GetProtoIndicesAttr(), time)
     if index is None or not len(index):
         return 0, {}
     targets = instancer.GetPrototypesRel().GetTargets()
@@ -103,7 +112,8 @@ def parts(prim, world: np.ndarray, ctx: Context) -> Iterator[Part]:
 
 
 def _instances(prim, ctx: Context, depth: int) -> Iterator[Part]:
-    """The parts of the instancer `prim` in its own space, each instance's in turn."""
+    """The parts of the instancer `prim` in its own space, each instance's in turn; a part
+    whose purpose is `default` takes the instancer's (as Hydra does)."""
     from pxr import UsdGeom
 
     instancer = UsdGeom.PointInstancer(prim)
@@ -111,12 +121,16 @@ def _instances(prim, ctx: Context, depth: int) -> Iterator[Part]:
     if not len(keep):
         return
     targets = instancer.GetPrototypesRel().GetTargets()
-    index = np.asarray(ctx.get(instancer.GetProtoIndicesAttr()))
-    stage, where = prim.GetStage(), prim.GetPath().pathString
+    index = np.asarray(ctx.get(instancer.GetProtoIndicesAttr(), ctx.time))
+    stage, where, own = prim.GetStage(), prim.GetPath().pathString, usd_stage.purpose(prim)
+    prototypes: dict[int, tuple] = {}  # prototype index -> (its root's name, its parts)
     for i in keep.tolist():
-        root = stage.GetPrimAtPath(targets[index[i]])
-        inside = _prototype(root, ctx, depth) if root else []
-        label = f"{root.GetName()}_{i}" if root else ""
+        k = int(index[i])
+        if k not in prototypes:
+            root = stage.GetPrimAtPath(targets[k])
+            prototypes[k] = (root.GetName(), _prototype(root, ctx, depth)) if root else ("", [])
+        name, inside = prototypes[k]
+        label = f"{name}_{i}"
         for part in inside:
             one = len(inside) == 1
             yield Part(
@@ -125,6 +139,7 @@ def _instances(prim, ctx: Context, depth: int) -> Iterator[Part]:
                 part.matrix @ transforms[i],
                 part.mesh,
                 f"{where}/{label}",
+                own if part.purpose == usd_stage.DEFAULT else part.purpose,
             )
 
 
@@ -133,9 +148,9 @@ def _transforms(instancer, ctx: Context) -> tuple[np.ndarray, np.ndarray]:
     indices of the instances drawn (not in invisibleIds or inactiveIds). usd-core's warnings
     on the instancer's data (an index with no prototype, arrays of the wrong length) become
     the reader's; where it computes no transforms, no instance is drawn."""
-    from pxr import Usd, UsdGeom
+    from pxr import UsdGeom
 
-    time, kind = Usd.TimeCode.Default(), UsdGeom.PointInstancer
+    time, kind = ctx.time, UsdGeom.PointInstancer
     with native_output() as said:
         matrices = instancer.ComputeInstanceTransformsAtTime(time, time, kind.IncludeProtoXform, kind.IgnoreMask)
         mask = instancer.ComputeMaskAtTime(time)
@@ -150,8 +165,11 @@ def _transforms(instancer, ctx: Context) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _prototype(root, ctx: Context, depth: int) -> list[Part]:
-    """The parts of the prototype at `root` in its own space, read once for all instances."""
+    """The parts of the prototype at `root` in its own space, read once for all instances
+    that inherit the same purpose (a prototype in native instances under prims of different
+    purposes has parts of different purposes)."""
     key = root.GetPrimInPrototype().GetPath() if root.IsInstanceProxy() else root.GetPath()
+    key = (key, usd_stage.inherited(root.GetParent()))
     if key not in ctx.known:
         if depth >= MAX_DEPTH:
             raise RttaError(f"the USD stage nests PointInstancers more than {MAX_DEPTH} deep", ctx.path)
@@ -161,13 +179,14 @@ def _prototype(root, ctx: Context, depth: int) -> list[Part]:
 
 def _walk(root, ctx: Context, depth: int) -> Iterator[Part]:
     """The meshes of the prototype at `root`, and its nested instancers' parts, in file order;
-    invisible prims and what lies below them left out."""
+    invisible prims and what lies below them left out, and guide meshes (a purpose of the
+    mesh's own is final)."""
     from pxr import UsdGeom
 
     prims = iter(prototype_range(root))
     for prim in prims:
         visibility = UsdGeom.Imageable(prim).GetVisibilityAttr()
-        if visibility and ctx.get(visibility) == UsdGeom.Tokens.invisible:
+        if visibility and ctx.get(visibility, ctx.time) == UsdGeom.Tokens.invisible:
             prims.PruneChildren()
             continue
         if prim.IsA(UsdGeom.PointInstancer):
@@ -176,10 +195,10 @@ def _walk(root, ctx: Context, depth: int) -> Iterator[Part]:
             matrix = _relative(prim, root, ctx)
             for part in _instances(prim, ctx, depth + 1):
                 yield part._replace(groups=(*below, *part.groups), matrix=part.matrix @ matrix)
-        elif prim.IsA(UsdGeom.Mesh):
+        elif prim.IsA(UsdGeom.Mesh) and (purpose := usd_stage.purpose(prim)) != usd_stage.GUIDE:
             mesh = ctx.mesh_of(prim)
             if len(mesh[1]):
-                yield Part(prim.GetName(), _below(prim, root)[:-1], _relative(prim, root, ctx), mesh, "")
+                yield Part(prim.GetName(), _below(prim, root)[:-1], _relative(prim, root, ctx), mesh, "", purpose)
 
 
 def _below(prim, root) -> tuple[str, ...]:

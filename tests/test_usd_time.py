@@ -134,3 +134,20 @@ def test_a_point_instancer_with_time_sampled_data(tmp_path):
     np.testing.assert_allclose(a.vertices[0], TRI + (0, 20, 0))  # positions at 3: halfway to y = 40
     np.testing.assert_allclose(a.vertices[1], TRI + (20, 20, 0))
     assert not a.warnings, a.warnings
+
+
+@pytest.mark.parametrize("start", ["nan", "inf", "-inf"])
+def test_a_start_time_code_that_is_not_finite_reads_the_first_samples(tmp_path, start):
+    """startTimeCode = nan read every value as none ('no parts'); a start that is not a finite
+    number reads as no range does: each attribute's first sample."""
+    path = _write(
+        tmp_path / "start.usda",
+        _mover(
+            "    double3 xformOp:translate.timeSamples = { 1: (1, 0, 0), 10: (10, 0, 0) }",
+            f"        point3f[] points.timeSamples = {{ 1: {_points(TRI)} }}",
+        ),
+        f"    startTimeCode = {start}\n    endTimeCode = 10\n",
+    )
+    a = _read(path)
+    assert a.names == ["m"], a.names
+    np.testing.assert_allclose(a.vertices[0], TRI + (1, 0, 0))

@@ -19,6 +19,7 @@ Xform is drawn).
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 from . import Assembly, hidden
@@ -30,8 +31,9 @@ def read_time(stage):
     """The Usd.TimeCode every value of `stage` is read at (the module's docstring says why)."""
     from pxr import Usd
 
-    if stage.HasAuthoredTimeCodeRange():
-        return Usd.TimeCode(stage.GetStartTimeCode())
+    start = stage.GetStartTimeCode()
+    if stage.HasAuthoredTimeCodeRange() and math.isfinite(start):  # at NaN every value reads as none
+        return Usd.TimeCode(start)
     return Usd.TimeCode.EarliestTime()
 
 

@@ -173,4 +173,4 @@ def test_api_refuses_like_the_cli(gl, demo_scene):
     with pytest.raises(RttaError, match="--explode"):
         rtta.capture(demo_scene, size=VP, explode=4.5)
     with pytest.raises(RttaError, match="--section"):
-        rtta.snapshot(demo_scene, size=VP, sections=["x"])
+        rtta.snapshot(demo_scene, size=VP, sections=["x=zz"])

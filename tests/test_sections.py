@@ -49,7 +49,44 @@ def test_specs_parse_alike():
     assert parse_section(" Z = -1 ").removes(np.array([[0, 0, 0], [0, 0, -2]])).tolist() == [True, False]
 
 
-@pytest.mark.parametrize("spec", ["w=1", "x=", "x=nan", "1,2,3", "0,0,0,1", "x=1e400", "a,b,c,d", "--x=1"])
+def test_specs_at_a_fraction_of_the_bounds():
+    """`x=P%` lies P% of the way across the scene's box on x, `x` alone halfway; `-x` keeps the
+    other side. Placed on a scene (`on`), they are the planes written in world units."""
+    bounds = (np.array([-2.0, 0.0, 10.0]), np.array([6.0, 4.0, 30.0]))
+    assert parse_section("x") == SectionPlane((1, 0, 0), 0.0, 0.5)
+    assert parse_section("x").on(bounds) == SectionPlane((1, 0, 0), 2.0)
+    assert parse_section("-x").on(bounds) == SectionPlane((-1, 0, 0), -2.0)
+    assert parse_section("y=25%").on(bounds) == parse_section("y=1")
+    assert parse_section("-z=10%").on(bounds) == parse_section("-z=12")
+    assert parse_section("x=3").on(bounds) == parse_section("x=3")  # in world units already
+    with pytest.raises(ValueError, match="on\\(scene.bounds\\)"):
+        parse_section("x").relative(np.zeros(3))  # a plane not placed never reaches a shader
+
+
+def test_a_plane_at_a_fraction_cuts_as_the_plane_in_world_units(gl, solids, tmp_path):
+    """snapshot with `x` and `-z=30%` is the snapshot with the same planes in world units (the
+    solids' box: x from -1 to 3.1, z from -1 to 1); the CLI takes `-x` as its own word, and a
+    saved view keeps the fractions (so one view file cuts any scene alike)."""
+    import json
+
+    from rtta.cli.main import main
+
+    lo, hi = solids.bounds
+    mid, low = float(lo[0] + 0.5 * (hi[0] - lo[0])), float(lo[2] + 0.3 * (hi[2] - lo[2]))
+    for mode in ("std", "ghosted"):
+        a = rtta.snapshot(solids, mode, size=VP, sections=["x", "-z=30%"], camera=(35, 25, 2.5))
+        b = rtta.snapshot(solids, mode, size=VP, sections=[f"x={mid!r}", f"-z={low!r}"], camera=(35, 25, 2.5))
+        assert np.array_equal(a, b), mode
+    whole = rtta.snapshot(solids, "std", size=VP, camera=(35, 25, 2.5))
+    assert (a != whole).any(axis=-1).mean() > 0.02  # it cuts
+    out, view = tmp_path / "a.png", tmp_path / "v.json"
+    assert main(["snapshot", "--size", "64x48", "--section", "-x", "--out", str(out), "--save-view", str(view)]) == 0
+    assert json.loads(view.read_text())["sections"]["planes"] == ["-x"]
+
+
+@pytest.mark.parametrize(
+    "spec", ["w=1", "x=", "x=nan", "1,2,3", "0,0,0,1", "x=1e400", "a,b,c,d", "--x=1", "w", "x=%", "x=abc%", "x%", ""]
+)
 def test_malformed_specs_refused(spec):
     with pytest.raises(RttaError, match="--section"):
         parse_section(spec)
@@ -215,7 +252,7 @@ def test_dataset_takes_the_flags(gl, tmp_path, capsys):
     rgb = sorted((tmp_path / "whole").rglob("rgb.png"))[0].relative_to(tmp_path / "whole")
     assert (tmp_path / "whole" / rgb).read_bytes() != (tmp_path / "cut" / rgb).read_bytes()
     capsys.readouterr()
-    assert main([*common, "--section", "x", "--out", str(tmp_path / "bad")]) == 2
+    assert main([*common, "--section", "x=1e400", "--out", str(tmp_path / "bad")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "--section expects" in err and not (tmp_path / "bad").exists()
 

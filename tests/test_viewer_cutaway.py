@@ -128,3 +128,20 @@ def test_saved_view_keeps_a_plane_along_a_normal(demo_scene, tmp_path):
     assert other.cutaway.normal == pytest.approx(state.cutaway.normal) and other.cutaway.axis == "off"
     assert other.cutaway.offset == pytest.approx(state.cutaway.offset)
     assert other.cutaway.spec(demo_scene) == state.cutaway.spec(demo_scene)
+
+
+@pytest.mark.parametrize("spec, axis, at", [("-x", "-x", 0.5), ("z=25%", "z", 0.25), ("y=150%", "y", 1.0)])
+def test_a_saved_view_may_place_its_plane_at_a_fraction(demo_scene, spec, axis, at):
+    """A view file's `x`, `-x` or `x=P%` (as `rtta snapshot --save-view` writes them) opens with
+    the viewer's slider there (it refused them: only x=V was read)."""
+    from viewer import saved
+    from viewer.orbit import Orbit
+    from viewer.state import ViewerState
+
+    o = Orbit.default(demo_scene.center, demo_scene.radius)
+    view = saved.capture(demo_scene, ViewerState(demo_scene.names, paths=demo_scene.paths), o)
+    view.sections = {"planes": [spec], "caps": "hatch", "scope": "all"}
+    state = ViewerState(demo_scene.names, paths=demo_scene.paths)
+    saved.apply(view, demo_scene, state, o)
+    assert (state.cutaway.axis, state.cutaway.caps, state.cutaway.normal) == (axis, "hatch", None)
+    assert state.cutaway.at == pytest.approx(at)

@@ -129,18 +129,21 @@ def _plane(view: SavedView, scene: Scene) -> tuple[str, float] | tuple[SectionPl
     if not view.sections or not view.sections.get("planes"):
         return None
     planes = view.sections["planes"]
-    m = re.fullmatch(r"\s*(-?[xyz])\s*=\s*([^,\s]+)\s*", planes[0]) if len(planes) == 1 else None
+    m = re.fullmatch(r"\s*(-?[xyz])\s*(?:=\s*([^,\s]+))?\s*", str(planes[0])) if len(planes) == 1 else None
     if m is None and len(planes) == 1 and str(planes[0]).count(",") == 3:
         return (parse_section(str(planes[0])),)
     try:
-        value = float(m.group(2)) if m else float("nan")
-    except ValueError:
-        value = float("nan")
-    if m is None or not np.isfinite(value):
-        one = "one plane along an axis (x=V, -z=V, ...) or a normal (nx,ny,nz,d)"
+        plane = parse_section(str(planes[0])) if m else None
+    except RttaError:
+        plane = None
+    if m is None or plane is None:
+        one = "one plane along an axis (x=V, -z=V, x=P%, x, ...) or a normal (nx,ny,nz,d)"
         raise RttaError(f"sections {planes}: the viewer shows {one}")
     lo, hi = scene.bounds
     k = "xyz".index(m.group(1)[-1])
+    if plane.at is not None:  # x=P% or x alone: the slider's place as it is
+        return m.group(1), float(np.clip(plane.at, 0.0, 1.0))
+    value = plane.d * plane.normal[k]
     return m.group(1), float(np.clip((value - lo[k]) / max(hi[k] - lo[k], 1e-30), 0.0, 1.0))
 
 

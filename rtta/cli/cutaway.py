@@ -18,8 +18,9 @@ def cutaway_args(p: argparse.ArgumentParser, scopes: bool = True) -> None:
         default=[],
         metavar="SPEC",
         help=f"cut the scene (up to {MAX_SECTIONS} planes): x=V removes what lies beyond V on the x axis "
-        "(y=V, z=V likewise; world units as `rtta info` prints the bounds), -x=V what lies below, "
-        "nx,ny,nz,d the points p with n.p > d",
+        "(y=V, z=V likewise; world units as `rtta info` prints the bounds), -x=V what lies below; "
+        "x=P%% places the plane P%% of the way across the scene's bounds, x alone halfway; "
+        "nx,ny,nz,d removes the points p with n.p > d",
     )
     p.add_argument(
         "--caps",

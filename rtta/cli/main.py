@@ -48,7 +48,7 @@ def section_values(argv: list[str]) -> list[str]:
     dash, which argparse would take for an option of its own."""
     out: list[str] = []
     for arg in argv:
-        if out and out[-1] == "--section" and re.fullmatch(r"-[xyzXYZ]=.*", arg):
+        if out and out[-1] == "--section" and re.fullmatch(r"-[xyzXYZ](=.*)?", arg):
             out[-1] = f"--section={arg}"
         else:
             out.append(arg)

@@ -60,7 +60,8 @@ class Placement:
         if offsets is not None:
             data[:n, :3] = offsets
         data[:n, 3] = cut.astype(np.float32) + 2.0 * capped
-        planes = np.array([p.relative(scene.origin) for p in cutaway.planes], np.float32).reshape(-1, 4)
+        bounds = scene.bounds  # planes at a fraction of them (x=P%) placed on this scene
+        planes = np.array([p.on(bounds).relative(scene.origin) for p in cutaway.planes], np.float32).reshape(-1, 4)
         hatch = 2.0 * scene.radius / HATCH_LINES
         return cls(offsets, removed, cut, capped, planes, caps, hatch, ctx.buffer(data.tobytes()))
 

@@ -3,8 +3,11 @@
 A `SectionPlane(normal, d)` removes the points p with normal·p > d (world coordinates, the
 file's units as `rtta info` prints its bounds). `parse_section` reads the CLI's SPEC:
 `x=V`, `y=V`, `z=V` (remove what lies beyond V on that axis), `-x=V`, `-y=V`, `-z=V` (remove
-what lies below V) or `nx,ny,nz,d`. `Cutaway` holds up to MAX_SECTIONS planes, the cap style
-and the scope; `cut_flags` and `removed` give what each object gets from it.
+what lies below V) or `nx,ny,nz,d`; `x=P%` places the plane P% of the way across the scene's
+bounds on that axis, and `x` alone halfway (a plane `at` a fraction, placed on a scene by
+`SectionPlane.on`, as the viewer's slider is: one spec cuts every scene of a dataset alike).
+`Cutaway` holds up to MAX_SECTIONS planes, the cap style and the scope; `cut_flags` and
+`removed` give what each object gets from it.
 """
 
 from __future__ import annotations
@@ -35,11 +38,15 @@ class SectionPlane:
     normal : tuple of float
         (nx, ny, nz), any non-zero length; stored unit length.
     d : float
-        Offset in world units (scaled with the normal).
+        Offset in world units (scaled with the normal); with `at`, none yet.
+    at : float, optional
+        An axis plane's place as a fraction of the scene's bounds on its axis (0: the low
+        side, 1: the high side), `d` to be worked out for a scene (`on`).
     """
 
     normal: tuple[float, float, float]
     d: float
+    at: float | None = None
 
     def __post_init__(self) -> None:
         n = np.asarray(self.normal, np.float64)
@@ -49,13 +56,28 @@ class SectionPlane:
         object.__setattr__(self, "normal", tuple(float(v) for v in n / length))
         object.__setattr__(self, "d", float(self.d) / length)
 
+    def on(self, bounds) -> SectionPlane:
+        """This plane placed on a scene whose box is `bounds` (lo, hi): itself unless it is `at`
+        a fraction of the box."""
+        if self.at is None:
+            return self
+        lo, hi = (np.asarray(b, np.float64) for b in bounds)
+        k = int(np.argmax(np.abs(self.normal)))
+        where = float(lo[k] + self.at * (hi[k] - lo[k]))
+        return SectionPlane(self.normal, where * self.normal[k])
+
     def removes(self, points: np.ndarray) -> np.ndarray:
         """bool [...]: which of the world points [..., 3] this plane removes."""
-        return np.asarray(points, np.float64) @ np.asarray(self.normal) > self.d
+        return np.asarray(points, np.float64) @ np.asarray(self.normal) > self._placed().d
 
     def relative(self, origin: np.ndarray) -> tuple[float, float, float, float]:
         """(n, d') for coordinates relative to `origin`: n·(p + origin) > d ⇔ n·p > d - n·origin."""
-        return (*self.normal, self.d - float(np.dot(self.normal, origin)))
+        return (*self.normal, self._placed().d - float(np.dot(self.normal, origin)))
+
+    def _placed(self) -> SectionPlane:
+        if self.at is not None:
+            raise ValueError(f"{self} lies at a fraction of a scene's bounds: place it with on(scene.bounds)")
+        return self
 
 
 def parse_section(spec: str) -> SectionPlane:
@@ -67,16 +89,18 @@ def parse_section(spec: str) -> SectionPlane:
         For anything else (the message quotes the SPEC and the accepted forms).
     """
     text = str(spec).strip().lower().replace(" ", "")
-    bad = RttaError(f"--section expects x=V, -x=V (y, z likewise) or nx,ny,nz,d, got '{spec}'")
+    bad = RttaError(f"--section expects x=V, x=P% or x (halfway), -x likewise (y, z too) or nx,ny,nz,d, got '{spec}'")
     axis, eq, value = text.partition("=")
     try:
-        if eq:
+        if eq or "," not in text:
             sign = -1.0 if axis[:1] == "-" else 1.0
             normal = _AXES.get(axis[1:] if axis[:1] in "-+" else axis)
-            v = float(value)
+            percent = not eq or value.endswith("%")
+            v = float(value.removesuffix("%")) if eq else 50.0
             if normal is None or not math.isfinite(v) or abs(v) > LIMIT:
                 raise bad
-            return SectionPlane((sign * normal[0], sign * normal[1], sign * normal[2]), sign * v)
+            signed = (sign * normal[0], sign * normal[1], sign * normal[2])
+            return SectionPlane(signed, 0.0, v / 100.0) if percent else SectionPlane(signed, sign * v)
         parts = [float(p) for p in text.split(",")]
     except ValueError:
         raise bad from None
@@ -134,7 +158,7 @@ class Cutaway:
         counts = np.bincount(scene.object_ids, minlength=n)
         starts = np.minimum(np.concatenate([[0], np.cumsum(counts)[:-1]]), scene.vertex_count - 1)
         shift = np.asarray(scene.origin, np.float64) + (0.0 if offsets is None else np.asarray(offsets, np.float64))
-        for plane in self.planes:
+        for plane in (p.on(scene.bounds) for p in self.planes):
             normal = np.asarray(plane.normal)
             dist = scene.positions @ normal.astype(np.float32)
             least = np.minimum.reduceat(dist, starts).astype(np.float64) + shift @ normal

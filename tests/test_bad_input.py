@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 from bad_inputs import Case, make_corpus, many_nodes_glb, many_objects_obj
 
+from rtta.cli.common import scene_after_names
 from rtta.cli.main import main
 from rtta.errors import printable
 
@@ -337,3 +338,36 @@ def test_out_has_a_short_form(tmp_path, gl):
     out = tmp_path / "demo.png"
     assert main(["snapshot", "-o", str(out), "--size", "64x48"]) == 0
     assert out.stat().st_size > 0
+
+
+def test_a_scene_after_a_list_of_names_is_the_scene(tmp_path, capsys, gl):
+    """`--focus hub model.glb`: argparse gives the list every word, the file too; with no scene
+    given, the last word naming a scene file is the scene (it was a part name looked up in the
+    demo: "no object named 'model.glb' in brake_assembly.glb")."""
+    import trimesh
+
+    from viewer import build_parser
+
+    path = tmp_path / "two.glb"
+    scene = trimesh.Scene()
+    for name, x in (("hub", 0.0), ("rim", 2.0)):
+        scene.add_geometry(
+            trimesh.creation.box((1, 1, 1)),
+            node_name=name,
+            transform=trimesh.transformations.translation_matrix((x, 0, 0)),
+        )
+    scene.export(path)
+    out = tmp_path / "a.png"
+    assert main(["snapshot", "--size", "64x48", "--mode", "ghosted", "--focus", "hub", str(path), "-o", str(out)]) == 0
+    assert (
+        main(["snapshot", "--size", "64x48", "--hide", "rim", "--opacity", "hub=0.5", str(path), "-o", str(out)]) == 0
+    )
+    capsys.readouterr()
+    assert main(["snapshot", "--focus", "hub", str(tmp_path / "gone.step"), "-o", str(out)]) == 2
+    assert capsys.readouterr().err.strip().endswith("gone.step: no such file")
+    args = build_parser().parse_args(["--focus", "hub", "rim", "m.IFC"])  # rtta-view reads its words alike
+    scene_after_names(args)
+    assert (args.scene, args.focus) == ("m.IFC", ["hub", "rim"])
+    args = build_parser().parse_args(["x.glb", "--focus", "hub", "m.glb"])  # a scene given: the names stay
+    scene_after_names(args)
+    assert (args.scene, args.focus) == ("x.glb", ["hub", "m.glb"])

@@ -85,3 +85,30 @@ def test_a_view_file_brings_its_style_section_and_explode(demo_scene, tmp_path, 
     cut = app.state.cutaway
     assert (cut.axis, cut.caps, cut.explode) == ("-y", "hatch", 0.5)
     assert cut.spec(demo_scene) is not None and app.state.style.context_opacity == pytest.approx(0.3)
+
+
+def test_section_caps_and_explode_flags_open_the_cutaway(demo_scene):
+    """rtta-view --section/--caps/--explode (as `rtta snapshot` takes them; one plane) reach the
+    cutaway panel: an axis plane at its place over the bounds, a plane along a normal, the
+    explode; bad values and a view file beside them are one-line errors."""
+    from rtta.cli.main import section_values  # as viewer.main reads its arguments: `-z=..` its own word
+
+    parsed = build_parser().parse_args(section_values(["--section", "-z=25%", "--caps", "hatch", "--explode", "0.5"]))
+    assert (parsed.section, parsed.caps, parsed.explode) == ("-z=25%", "hatch", "0.5")
+    app = _App(demo_scene)
+    apply_start(app, Start(section="-z=25%", caps="hatch", explode="0.5"))
+    cut = app.state.cutaway
+    assert (cut.axis, cut.at, cut.caps, cut.explode, cut.normal) == ("-z", 0.25, "hatch", 0.5, None)
+    lo, hi = demo_scene.bounds
+    app = _App(demo_scene)
+    apply_start(app, Start(section=f"y={float(lo[1] + 0.75 * (hi[1] - lo[1]))!r}"))
+    assert (app.state.cutaway.axis, app.state.cutaway.explode) == ("y", 0.0)
+    assert app.state.cutaway.at == pytest.approx(0.75)
+    app = _App(demo_scene)
+    apply_start(app, Start(section="0,0,2,0.1"))
+    assert app.state.cutaway.normal == pytest.approx((0, 0, 1)) and app.state.cutaway.offset == pytest.approx(0.05)
+    for bad, match in ((Start(section="w"), "--section expects"), (Start(explode="9"), "--explode")):
+        with pytest.raises(RttaError, match=match):
+            apply_start(_App(demo_scene), bad)
+    with pytest.raises(RttaError, match="--view-file gives the cutaway"):
+        apply_start(_App(demo_scene), Start(view_file="v.json", section="x"))

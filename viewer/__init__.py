@@ -62,20 +62,32 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--view-file", default=None, metavar="FILE.json", help="open on a view saved by `rtta snapshot --save-view`"
     )
+    p.add_argument(
+        "--section",
+        default=None,
+        metavar="SPEC",
+        help="open cut by one plane, as `rtta snapshot --section` takes it: x=V, -x=V, x=P%%, x (halfway), "
+        "y and z likewise, or nx,ny,nz,d (the cutaway panel moves it)",
+    )
+    p.add_argument("--caps", default="solid", metavar="solid|hatch|off", help="cut faces of closed parts")
+    p.add_argument("--explode", default="0", metavar="F", help="open exploded by F (0 to 4, as `rtta snapshot`)")
     add_load_options(p)
     return p
 
 
 def main(argv: list[str] | None = None) -> int:
-    from rtta.cli.main import load_options, parse_size
+    from rtta.cli.common import scene_after_names
+    from rtta.cli.main import load_options, parse_size, section_values
     from rtta.errors import RttaError, printable
     from rtta.memory import steady_heap
 
     try:
-        args = build_parser().parse_args(argv)
+        args = build_parser().parse_args(section_values(sys.argv[1:] if argv is None else argv))
     except RttaError as exc:
         print(f"rtta-view: error: {printable(exc)}", file=sys.stderr)
         return 2
+    if args.scene_opt is None:
+        scene_after_names(args)  # `rtta-view --focus hub model.glb`
     steady_heap()  # long sessions resize targets often: keep the heap from creeping
     if args.bench < 0:
         print(
@@ -98,6 +110,7 @@ def main(argv: list[str] | None = None) -> int:
     from .start import Start
 
     start = Start(args.focus, args.hide, args.camera, args.view, args.projection, args.view_file)
+    start.section, start.caps, start.explode = args.section, args.caps, args.explode
     try:
         size = parse_size(args.size)
         bench_modes = _modes(args.bench_modes)

@@ -17,7 +17,7 @@ from rtta.errors import RttaError
 from rtta.renderer.options import CORE_STYLE
 from rtta.renderer.view_file import SavedView, read_view, write_view
 from rtta.scene import framing
-from rtta.scene.cutaway import SectionPlane, parse_section
+from rtta.scene.cutaway import Caps, SectionPlane, parse_section
 from rtta.scene.select import resolve_names
 
 if TYPE_CHECKING:
@@ -120,6 +120,19 @@ class Views:
             path.unlink()
         except OSError as exc:
             raise RttaError(f"cannot remove the view ({exc.strerror or exc})", path) from None
+
+
+def stage(scene: Scene, state: ViewerState, section: str | None, caps: Caps, explode: str) -> None:
+    """rtta-view's --section, --caps and --explode into the viewer's cutaway state, checked as
+    a view file's are (one plane: the viewer shows one; its SPEC as `rtta snapshot` takes it)."""
+    from rtta.renderer.placing import make_staging
+
+    staging = make_staging([section] if section else [], caps, "all", explode)  # RttaError for a bad flag
+    view = SavedView(
+        sections={"planes": [section], "caps": caps, "scope": "all"} if section else None,
+        explode={"factor": staging.explode, "scope": "all"} if staging.explode > 0 else None,
+    )
+    _cutaway(view, _plane(view, scene), state)
 
 
 def _plane(view: SavedView, scene: Scene) -> tuple[str, float] | tuple[SectionPlane] | None:

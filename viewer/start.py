@@ -1,5 +1,6 @@
-"""The view rtta-view opens with: --focus, --hide, --mode, --camera, --view, --projection or a
---view-file saved by `rtta snapshot --save-view` (rtta.renderer.view_file)."""
+"""The view rtta-view opens with: --focus, --hide, --mode, --camera, --view, --projection,
+--section, --caps, --explode or a --view-file saved by `rtta snapshot --save-view`
+(rtta.renderer.view_file)."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ import numpy as np
 
 from rtta.errors import RttaError
 from rtta.scene.camera import Projection
+from rtta.scene.cutaway import Caps
 from rtta.scene.framing import StandardView
 
 
@@ -22,6 +24,9 @@ class Start:
     view: StandardView | None = None
     projection: Projection | None = None
     view_file: str | None = None
+    section: str | None = None  # one plane, as `rtta snapshot --section` takes it
+    caps: Caps = "solid"
+    explode: str = "0"
 
 
 def apply_start(app, start: Start) -> None:
@@ -35,6 +40,8 @@ def apply_start(app, start: Start) -> None:
     if start.view_file:
         if start.camera or start.view or start.projection:
             raise RttaError("--view-file gives the camera: leave out --camera, --view and --projection")
+        if start.section or start.explode != "0" or start.caps != "solid":
+            raise RttaError("--view-file gives the cutaway: leave out --section, --caps and --explode")
         saved = read_view(start.view_file)
         from .saved import apply as apply_view  # the viewer's saved views: style, sections, explode too
 
@@ -44,6 +51,9 @@ def apply_start(app, start: Start) -> None:
         return
     focus = resolve_names(scene, start.focus, "--focus")
     hidden = resolve_names(scene, start.hidden, "--hide")
+    from .saved import stage
+
+    stage(scene, app.state, start.section, start.caps, start.explode)
     if hidden:
         app.state.hide(hidden)
     if focus:

@@ -166,3 +166,24 @@ def camera_of(args, scene, viewport: tuple[int, int]):
         args.saved_view = saved_view_of(args)
     hidden = resolve_names(scene, args.hide, "--hide")
     return camera_of_view(args, args.saved_view, scene, viewport, hidden), hidden
+
+
+NAME_LISTS = ("focus", "hide", "opacity")  # options of one or more names (argparse's nargs="+")
+
+
+def scene_after_names(args, scene: str = "scene") -> None:
+    """`--focus hub model.glb`: a list option takes every word after it, the scene file too.
+    Where no scene is given, a list's last word that names a scene file (a suffix rtta reads)
+    is taken back as the scene (`args.<scene>`): the default scene, the demo, has no part of
+    such a name, and a file that is missing is then said to be."""
+    from pathlib import Path
+
+    from ..scene.readers import SUFFIXES
+
+    if getattr(args, scene, "") is not None:
+        return
+    for name in NAME_LISTS:
+        words = getattr(args, name, None)
+        if words and Path(words[-1]).suffix.lower() in SUFFIXES:
+            setattr(args, scene, words.pop())
+            return

@@ -10,7 +10,7 @@ import sys
 from ..errors import RttaError
 from .bench import add_parsers as add_bench
 from .bench import cmd_bench
-from .common import add_load_options, load_options, parse_size, scene_arg
+from .common import add_load_options, load_options, parse_size, scene_after_names, scene_arg
 from .common import load as _load
 from .guard import OneLineParser, hold_closed_streams, run_command, say
 from .render import add_parsers as add_render
@@ -91,6 +91,7 @@ def main(argv: list[str] | None = None) -> int:
     except RttaError as exc:
         say("error", str(_scene_first(argv) or exc))
         return 2
+    scene_after_names(args)
     steady_heap()
     handler = {
         "export": cmd_export,

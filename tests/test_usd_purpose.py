@@ -162,3 +162,16 @@ def PointInstancer "bolts"
     a = _read(tmp_path, body)
     assert a.names == ["tree_0", "rock_1", "bolt_1"], a.names
     np.testing.assert_allclose(a.vertices[2][0], [0, 40, 0])
+
+
+def test_a_purpose_the_schema_does_not_know_is_drawn_as_default(tmp_path):
+    """`purpose = "bogus"` (a token a file may author) is drawn as `default`, in place and inside
+    a native instance's prototype: naming the instances counted it and failed the whole file
+    ("tuple.index(x): x not in tuple")."""
+    proto = _group("proto", "", _mesh("a", "bogus"), _mesh("b", x=2), kind="Xform")
+    refs = "".join(
+        f'    def Xform "{w}" (\n        instanceable = true\n        references = </proto>\n    )\n    {{\n    }}\n'
+        for w in ("w1", "w2")
+    )
+    a = _read(tmp_path, f'def Xform "car"\n{{\n{refs}}}\n' + proto)
+    assert sorted(a.names) == ["a", "b", "w1_a", "w1_b", "w2_a", "w2_b"], a.names

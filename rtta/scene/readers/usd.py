@@ -1,14 +1,14 @@
 """USD (.usd, .usda, .usdc, .usdz) through usd-core: every Mesh prim is an object, its prim
-path the tree; instances are expanded (instance proxies, each named after its instance
-prim; PointInstancers' instances by rtta.scene.readers.usd_instancers); the stage's
-metersPerUnit and upAxis are kept. Every value is read at one time code, the stage's start
-time code (else its values' earliest), and prims are drawn by purpose: `default` and
-`render`, never `guide`, `proxy` only where no `render` part is drawn
-(rtta.scene.readers.usd_stage says why). Layers the file refers to (sublayers, references,
-payloads) must lie in its folder: no absolute paths, no URLs. What the instances expand to
-is counted per prototype before any is expanded, and bounded as the other readers' node
-walks are (rtta.scene.files.max_objects, WALK_PER_OBJECT). A value usd-core cannot read
-(a damaged binary layer) is one short line."""
+path the tree; instances are expanded (instance proxies, named after the innermost instance
+prim by rtta.scene.readers.usd_names; PointInstancers' instances by
+rtta.scene.readers.usd_instancers); the stage's metersPerUnit and upAxis are kept. Every
+value is read at one time code, the stage's start time code (else its values' earliest), and
+prims are drawn by purpose: `default` and `render`, never `guide`, `proxy` only where no
+`render` part is drawn (rtta.scene.readers.usd_stage says why). Layers the file refers to
+(sublayers, references, payloads) must lie in its folder: no absolute paths, no URLs. What
+the instances expand to is counted per prototype before any is expanded, and bounded as the
+other readers' node walks are (rtta.scene.files.max_objects, WALK_PER_OBJECT). A value
+usd-core cannot read (a damaged binary layer) is one short line."""
 
 from __future__ import annotations
 
@@ -24,7 +24,7 @@ from ...outputs import signals_held
 from ..batch import fans
 from ..files import PARTS_HINT, WALK_PER_OBJECT, max_objects
 from ..precheck import check_size
-from . import Assembly, check_archive, hidden, native_output, unit_name, usd_instancers, usd_stage
+from . import Assembly, check_archive, hidden, native_output, unit_name, usd_instancers, usd_names, usd_stage
 
 MAX_LAYERS = 256
 
@@ -70,6 +70,7 @@ def _read(stage, path: Path, layer_bytes: int) -> Assembly:
     known: dict = {}  # prototype prim path -> (points, triangles, colour): read once for all its instances
     drawn = usd_stage.Drawn()  # the parts and hiders, until it is known whether proxies are drawn
     ctx = usd_instancers.Context(cache, partial(_mesh_of, known=known, time=time), _get, time, out.warnings, path)
+    names = usd_names.Names(ctx.mesh_of, _get, time)
     prims = iter(Usd.PrimRange.Stage(stage, Usd.TraverseInstanceProxies(Usd.PrimDefaultPredicate)))
     for prim in prims:  # not pruned by purpose: a child's own purpose wins over its parent's
         if prim.IsA(UsdGeom.PointInstancer):
@@ -93,7 +94,7 @@ def _read(stage, path: Path, layer_bytes: int) -> Assembly:
         if hidden.singular(m.T):
             drawn.hider(_hider(prim, cache), purpose)
             continue
-        name, groups = _name(prim)
+        name, groups = names(prim)
         drawn.add(purpose, name, v @ m[:3, :3] + m[3, :3], f, color, groups)
     drawn.finish(out, path)
     return out
@@ -345,16 +346,6 @@ def _mesh(mesh, time) -> tuple[np.ndarray, np.ndarray]:
     else:
         starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
     return v, index[fans(starts, counts)[1]]
-
-
-def _name(prim) -> tuple[str, tuple[str, ...]]:
-    """An instance's mesh is named after its instance prim (both fingers' meshes are 'geom')."""
-    if prim.IsInstanceProxy():
-        owner = prim
-        while owner.IsInstanceProxy():
-            owner = owner.GetParent()
-        return owner.GetName(), tuple(str(p) for p in owner.GetPath().GetParentPath().pathString.split("/") if p)
-    return prim.GetName(), tuple(p for p in prim.GetPath().GetParentPath().pathString.split("/") if p)
 
 
 def _color(prim, time) -> list[float] | None:

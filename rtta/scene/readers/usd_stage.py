@@ -38,10 +38,11 @@ def read_time(stage):
 
 
 def purpose(prim) -> str:
-    """`prim`'s computed purpose: DEFAULT, RENDER, PROXY or GUIDE."""
+    """`prim`'s computed purpose: DEFAULT, RENDER, PROXY or GUIDE (a token the schema does not
+    know, which a file may author, as DEFAULT: drawn)."""
     from pxr import UsdGeom
 
-    return str(UsdGeom.Imageable(prim).ComputePurpose())
+    return _known(str(UsdGeom.Imageable(prim).ComputePurpose()))
 
 
 def inherited(prim) -> str:
@@ -49,7 +50,12 @@ def inherited(prim) -> str:
     above them authors one)."""
     from pxr import UsdGeom
 
-    return str(UsdGeom.Imageable(prim).ComputePurposeInfo().GetInheritablePurpose())
+    passed = str(UsdGeom.Imageable(prim).ComputePurposeInfo().GetInheritablePurpose())
+    return passed and _known(passed)
+
+
+def _known(token: str) -> str:
+    return token if token in (DEFAULT, RENDER, PROXY, GUIDE) else DEFAULT
 
 
 class Drawn:

@@ -168,7 +168,7 @@ def test_snapshot_all_modes(tmp_path):
         (["snapshot", "--out", "a.png", "--focus", "pad_iner"], "did you mean pad_inner"),
         (["snapshot", "--out", "a.png", "--mode", "xray"], "--mode must be one of"),
         (["snapshot", "--out", "a.png", "--opacity", "rotor=2"], "--opacity expects NAME=A"),
-        (["snapshot", "--out", "a.jpg"], "--out must name a .png"),
+        (["snapshot", "--out", "a.gif"], "--out must name a .png, .jpg"),
         (["snapshot", "--out", "nowhere/a.png"], "parent directory does not exist"),
     ],
 )
@@ -176,3 +176,20 @@ def test_snapshot_bad_input(tmp_path, args, needle):
     res = _run(args, tmp_path)
     assert res.returncode == 2 and needle in res.stderr and "Traceback" not in res.stderr
     assert len(res.stderr.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("suffix, kind", [(".jpg", "JPEG"), (".JPEG", "JPEG"), (".webp", "WEBP"), (".tiff", "TIFF")])
+def test_snapshot_writes_the_format_its_suffix_names(tmp_path, gl, suffix, kind):
+    """--out a.jpg, .webp, .tif: the format by the suffix (only PNG was taken), the same picture:
+    WebP and TIFF losslessly, JPEG within its compression (RGB, no alpha)."""
+    png, other = tmp_path / "a.png", tmp_path / f"a{suffix}"
+    for out in (png, other):
+        assert main(["snapshot", "--size", "96x72", "--mode", "ghosted", "--focus", "hub", "-o", str(out)]) == 0
+    with Image.open(other) as im:
+        assert im.format == kind and im.size == (96, 72)
+        got = np.asarray(im.convert("RGB")).astype(int)
+    want = np.asarray(Image.open(png).convert("RGB")).astype(int)
+    if kind == "JPEG":
+        assert np.abs(got - want).mean() < 3
+    else:
+        assert np.array_equal(got, want)

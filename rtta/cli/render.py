@@ -83,7 +83,7 @@ def add_parsers(sub) -> None:
     )
     p.add_argument("--lens-at", default=None, metavar="X,Y,Z", help="lens centre in world units (default: the focus)")
     out = p.add_mutually_exclusive_group(required=True)
-    out.add_argument("-o", "--out", help="PNG file to write")
+    out.add_argument("-o", "--out", help="image to write: .png, or .jpg, .webp, .tif by its suffix")
     out.add_argument("--all-modes", metavar="DIR", help="write <mode>.png for every mode into DIR")
 
 
@@ -179,11 +179,11 @@ def cmd_snapshot(args) -> int:
 
 
 def _snapshot_targets(args, inputs: list) -> dict:
-    """{mode: PNG path} for --out or --all-modes, each allowed by rtta.outputs."""
-    from ..renderer.snapshot import SNAPSHOT_MODES
+    """{mode: image path} for --out or --all-modes, each allowed by rtta.outputs."""
+    from ..renderer.snapshot import IMAGE_FORMATS, SNAPSHOT_MODES
 
     if args.out is not None:
-        return {args.mode: check_file(args.out, inputs, suffix=".png")}
+        return {args.mode: check_file(args.out, inputs, suffix=tuple(IMAGE_FORMATS))}
     paths = check_into_folder(args.all_modes, [f"{m}.png" for m in SNAPSHOT_MODES], inputs, suffix=".png")
     return dict(zip(SNAPSHOT_MODES, paths, strict=True))
 

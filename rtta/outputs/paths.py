@@ -100,7 +100,11 @@ def _writable(path: Path, what: str, *, replace: bool = False) -> None:
 
 
 def check_file(
-    path: str | Path, inputs: Iterable[str | Path] | None = (), *, suffix: str | None = None, what: str = "--out"
+    path: str | Path,
+    inputs: Iterable[str | Path] | None = (),
+    *,
+    suffix: str | tuple[str, ...] | None = None,
+    what: str = "--out",
 ) -> Path:
     """RttaError unless `path` may be (re)written as a file: a name the file system takes,
     the wanted suffix, an existing folder as parent that this user may write into, not a
@@ -108,8 +112,10 @@ def check_file(
     any input of this run (also through links)."""
     path = Path(path)
     _check_name(path, what)
-    if suffix and path.suffix.lower() != suffix:
-        raise RttaError(f"{what} must name a {suffix} file", path)
+    wanted = (suffix,) if isinstance(suffix, str) else suffix
+    if wanted and path.suffix.lower() not in wanted:
+        kinds = wanted[0] if len(wanted) == 1 else f"{', '.join(wanted[:-1])} or {wanted[-1]}"
+        raise RttaError(f"{what} must name a {kinds} file", path)
     _parent_dir(path)
     real = _resolved(path)
     try:

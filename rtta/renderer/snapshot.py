@@ -127,7 +127,24 @@ def write_pngs(images: dict, paths: dict, also: Sequence[tuple] = ()) -> list[Pa
     none (a full disk leaves no new file and every old one whole); their renames end the
     command (see rtta.outputs)."""
 
-    def png(rgba_gl: np.ndarray):
-        return lambda tmp: to_image(rgba_gl).save(tmp, format="PNG")
+    def image(rgba_gl: np.ndarray, path: Path):
+        return lambda tmp: save_image(to_image(rgba_gl), tmp, Path(path).suffix)
 
-    return atomic_write_all([*((paths[mode], png(image)) for mode, image in images.items()), *also], final=True)
+    writes = ((paths[mode], image(rgba, paths[mode])) for mode, rgba in images.items())
+    return atomic_write_all([*writes, *also], final=True)
+
+
+IMAGE_FORMATS = {".png": "PNG", ".jpg": "JPEG", ".jpeg": "JPEG", ".webp": "WEBP", ".tif": "TIFF", ".tiff": "TIFF"}
+
+
+def save_image(im, target, suffix: str) -> None:
+    """`im` (RGBA) written to `target` in the format of `suffix` (IMAGE_FORMATS): JPEG, which
+    has no alpha, over white (a snapshot is opaque), at quality 95; WebP lossless."""
+    kind = IMAGE_FORMATS[suffix.lower()]
+    if kind == "JPEG":
+        from PIL import Image
+
+        flat = Image.alpha_composite(Image.new("RGBA", im.size, (255, 255, 255, 255)), im).convert("RGB")
+        flat.save(target, format=kind, quality=95)
+    else:
+        im.save(target, format=kind, **({"lossless": True} if kind == "WEBP" else {}))

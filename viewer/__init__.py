@@ -109,8 +109,17 @@ def main(argv: list[str] | None = None) -> int:
     from .run import run
     from .start import Start
 
-    start = Start(args.focus, args.hide, args.camera, args.view, args.projection, args.view_file)
-    start.section, start.caps, start.explode = args.section, args.caps, args.explode
+    start = Start(
+        args.focus,
+        args.hide,
+        args.camera,
+        args.view,
+        args.projection,
+        args.view_file,
+        section=args.section,
+        caps=args.caps,
+        explode=args.explode,
+    )
     try:
         size = parse_size(args.size)
         bench_modes = _modes(args.bench_modes)

@@ -176,14 +176,19 @@ def scene_after_names(args, scene: str = "scene") -> None:
     Where no scene is given, a list's last word that names a scene file (a suffix rtta reads)
     is taken back as the scene (`args.<scene>`): the default scene, the demo, has no part of
     such a name, and a file that is missing is then said to be."""
-    from pathlib import Path
-
-    from ..scene.readers import SUFFIXES
-
     if getattr(args, scene, "") is not None:
         return
     for name in NAME_LISTS:
         words = getattr(args, name, None)
-        if words and Path(words[-1]).suffix.lower() in SUFFIXES:
+        if words and names_scene_file(words[-1]):
             setattr(args, scene, words.pop())
             return
+
+
+def names_scene_file(word: str) -> bool:
+    """Whether `word` names a file of a format rtta reads (by its suffix)."""
+    from pathlib import Path
+
+    from ..scene.readers import SUFFIXES
+
+    return Path(word).suffix.lower() in SUFFIXES

@@ -10,7 +10,7 @@ import sys
 from ..errors import RttaError
 from .bench import add_parsers as add_bench
 from .bench import cmd_bench
-from .common import add_load_options, load_options, parse_size, scene_after_names, scene_arg
+from .common import add_load_options, load_options, names_scene_file, parse_size, scene_after_names, scene_arg
 from .common import load as _load
 from .guard import OneLineParser, hold_closed_streams, run_command, say
 from .render import add_parsers as add_render
@@ -63,12 +63,10 @@ def _scene_first(argv: list[str]) -> RttaError | None:
     to run instead; None where the first argument is no scene file."""
     from pathlib import Path
 
-    from ..scene.readers import SUFFIXES
-
     first = argv[0] if argv else ""
     if not first or first.startswith("-") or first in COMMANDS:
         return None
-    if Path(first).suffix.lower() not in SUFFIXES and not Path(first).is_file():
+    if not names_scene_file(first) and not Path(first).is_file():
         return None
     name = shlex.quote(first)
     return RttaError(

@@ -158,7 +158,8 @@ class Cutaway:
         counts = np.bincount(scene.object_ids, minlength=n)
         starts = np.minimum(np.concatenate([[0], np.cumsum(counts)[:-1]]), scene.vertex_count - 1)
         shift = np.asarray(scene.origin, np.float64) + (0.0 if offsets is None else np.asarray(offsets, np.float64))
-        for plane in (p.on(scene.bounds) for p in self.planes):
+        bounds = scene.bounds  # planes at a fraction of them (x=P%) placed on this scene
+        for plane in (p.on(bounds) for p in self.planes):
             normal = np.asarray(plane.normal)
             dist = scene.positions @ normal.astype(np.float32)
             least = np.minimum.reduceat(dist, starts).astype(np.float64) + shift @ normal

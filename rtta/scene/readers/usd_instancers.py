@@ -184,11 +184,7 @@ def _walk(root, ctx: Context, depth: int) -> Iterator[Part]:
     from pxr import UsdGeom
 
     prims = iter(prototype_range(root))
-    for prim in prims:
-        visibility = UsdGeom.Imageable(prim).GetVisibilityAttr()
-        if visibility and ctx.get(visibility, ctx.time) == UsdGeom.Tokens.invisible:
-            prims.PruneChildren()
-            continue
+    for prim in visible(prims, ctx.get, ctx.time):
         if prim.IsA(UsdGeom.PointInstancer):
             prims.PruneChildren()
             below = _below(prim, root)
@@ -199,6 +195,20 @@ def _walk(root, ctx: Context, depth: int) -> Iterator[Part]:
             mesh = ctx.mesh_of(prim)
             if len(mesh[1]):
                 yield Part(prim.GetName(), _below(prim, root)[:-1], _relative(prim, root, ctx), mesh, "", purpose)
+
+
+def visible(prims, get: Callable, time) -> Iterator:
+    """The prims of the Usd.PrimRange iterator `prims` but those whose own visibility is
+    invisible at `time` and what lies below them (`get`: the reader's (attribute, time) ->
+    value). The caller may prune `prims` below a prim while it holds it."""
+    from pxr import UsdGeom
+
+    for prim in prims:
+        visibility = UsdGeom.Imageable(prim).GetVisibilityAttr()
+        if visibility and get(visibility, time) == UsdGeom.Tokens.invisible:
+            prims.PruneChildren()
+            continue
+        yield prim
 
 
 def _below(prim, root) -> tuple[str, ...]:

@@ -94,11 +94,7 @@ class Names:
 
         own, inside = [0, 0, 0], []
         prims = iter(Usd.PrimRange(root, Usd.PrimDefaultPredicate))  # the reader's, without instance proxies
-        for prim in prims:
-            visibility = UsdGeom.Imageable(prim).GetVisibilityAttr()
-            if visibility and self.get(visibility, self.time) == UsdGeom.Tokens.invisible:
-                prims.PruneChildren()
-                continue
+        for prim in usd_instancers.visible(prims, self.get, self.time):
             if prim.IsA(UsdGeom.PointInstancer):
                 prims.PruneChildren()
                 own[0] += usd_instancers.instance_counts(prim, self.get, self.time)[0]
